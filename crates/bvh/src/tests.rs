@@ -1,0 +1,120 @@
+use super::*;
+
+/// A small deterministic generator so tests need no dependency.
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f32 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+    fn vec(&mut self) -> Vec3 {
+        Vec3::new(self.next(), self.next(), self.next())
+    }
+}
+
+fn random_boxes(n: usize, seed: u64, max_r: f32) -> Vec<Aabb> {
+    let mut rng = Lcg(seed);
+    (0..n)
+        .map(|_| Aabb::around(rng.vec(), rng.next() * max_r))
+        .collect()
+}
+
+#[test]
+fn point_query_equals_brute_force() {
+    for &n in &[1usize, 2, 3, 17, 1000, 20_000] {
+        let prims = random_boxes(n, n as u64, 0.05);
+        let bvh = Bvh::build(&prims);
+        bvh.validate(&prims).unwrap();
+        let mut rng = Lcg(99);
+        for _ in 0..500 {
+            let p = rng.vec();
+            let mut got = Vec::new();
+            bvh.point_query(p, |i| got.push(i));
+            got.sort_unstable();
+            let want: Vec<u32> = (0..n as u32).filter(|&i| prims[i as usize].contains(p)).collect();
+            assert_eq!(got, want, "n = {n}, p = {p:?}");
+        }
+    }
+}
+
+#[test]
+fn ray_query_equals_brute_force() {
+    let prims = random_boxes(5000, 7, 0.03);
+    let bvh = Bvh::build(&prims);
+    let mut rng = Lcg(3);
+    for _ in 0..200 {
+        let o = rng.vec() * 3.0 - Vec3::ONE;
+        let d = (rng.vec() - Vec3::splat(0.5)).normalized();
+        let ray = Ray::new(o, d);
+        let t = Range1::new(0.0, 10.0);
+        let mut got = Vec::new();
+        bvh.ray_query(&ray, t, |i, _| got.push(i));
+        got.sort_unstable();
+        let want: Vec<u32> = (0..prims.len() as u32)
+            .filter(|&i| !prims[i as usize].clip_ray(&ray, t).is_empty())
+            .collect();
+        assert_eq!(got, want);
+    }
+}
+
+#[test]
+fn refit_after_growth_stays_valid_and_exact() {
+    let mut prims = random_boxes(3000, 5, 0.01);
+    let mut bvh = Bvh::build(&prims);
+    // Grow every box (a radius change): the topology stays, boxes update.
+    for b in prims.iter_mut() {
+        *b = Aabb::around(b.center(), b.extent().x * 4.0 + 0.02);
+    }
+    bvh.refit(&prims);
+    bvh.validate(&prims).unwrap();
+    let mut rng = Lcg(11);
+    for _ in 0..300 {
+        let p = rng.vec();
+        let mut got = Vec::new();
+        bvh.point_query(p, |i| got.push(i));
+        got.sort_unstable();
+        let want: Vec<u32> = (0..prims.len() as u32).filter(|&i| prims[i as usize].contains(p)).collect();
+        assert_eq!(got, want);
+    }
+}
+
+#[test]
+fn duplicates_and_degenerate_boxes() {
+    // All primitives at one point: keys are equal, the split falls back to the middle.
+    let prims = vec![Aabb::around(Vec3::splat(0.5), 0.1); 10_000];
+    let bvh = Bvh::build(&prims);
+    bvh.validate(&prims).unwrap();
+    let mut count = 0;
+    bvh.point_query(Vec3::splat(0.5), |_| count += 1);
+    assert_eq!(count, 10_000);
+    // Empty boxes are kept but never hit.
+    let mut prims = random_boxes(100, 1, 0.1);
+    prims[10] = Aabb::EMPTY;
+    let bvh = Bvh::build(&prims);
+    bvh.validate(&prims).unwrap();
+    bvh.point_query(prims[11].center(), |i| assert_ne!(i, 10));
+    // Zero primitives.
+    let bvh = Bvh::build(&[]);
+    bvh.validate(&[]).unwrap();
+    bvh.point_query(Vec3::ZERO, |_| panic!("empty tree visited"));
+}
+
+#[test]
+fn validate_catches_a_bad_box() {
+    let prims = random_boxes(100, 2, 0.1);
+    let bvh = Bvh::build(&prims);
+    let mut wrong = prims.clone();
+    wrong[5] = Aabb::around(Vec3::splat(5.0), 1.0);
+    assert!(bvh.validate(&wrong).is_err());
+}
+
+#[test]
+fn rebuild_reuses_buffers() {
+    let prims = random_boxes(10_000, 4, 0.01);
+    let mut bvh = Bvh::build(&prims);
+    let cap = bvh.nodes.capacity();
+    let fewer = random_boxes(8_000, 6, 0.01);
+    bvh.rebuild(&fewer);
+    bvh.validate(&fewer).unwrap();
+    assert_eq!(bvh.nodes.capacity(), cap);
+}

@@ -1,0 +1,118 @@
+//! Pinhole and orthographic cameras.
+//!
+//! Image convention everywhere: pixel (row, col), row 0 at the top, pixel
+//! centres at (col + 0.5, row + 0.5). The camera frame is `right`, `up`,
+//! `forward` (unit, orthogonal); rays leave through the image plane.
+
+use crate::math::{Aabb, Ray, Vec3};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Vertical field of view in degrees.
+    Perspective { fov_y_deg: f32 },
+    /// Half extents of the image plane in world units.
+    Orthographic { half_width: f32, half_height: f32 },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub eye: Vec3,
+    pub right: Vec3,
+    pub up: Vec3,
+    pub forward: Vec3,
+    pub projection: Projection,
+}
+
+/// A camera that cannot be built from the given vectors.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraError(pub String);
+
+impl std::fmt::Display for CameraError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+impl std::error::Error for CameraError {}
+
+impl Camera {
+    /// A camera at `eye` looking at `look_at`, with `up` as the approximate up
+    /// direction. Errors when the vectors are not finite, `eye == look_at`, or
+    /// `up` is parallel to the view direction.
+    pub fn look_at(
+        eye: Vec3,
+        look_at: Vec3,
+        up: Vec3,
+        projection: Projection,
+    ) -> Result<Camera, CameraError> {
+        if !(eye.is_finite() && look_at.is_finite() && up.is_finite()) {
+            return Err(CameraError("camera vectors must be finite".into()));
+        }
+        let forward = (look_at - eye).normalized();
+        if forward.length_squared() == 0.0 {
+            return Err(CameraError("camera eye and look-at point coincide".into()));
+        }
+        let right = forward.cross(up).normalized();
+        if right.length_squared() < 0.5 {
+            return Err(CameraError(
+                "camera up vector is parallel to the view direction".into(),
+            ));
+        }
+        if let Projection::Perspective { fov_y_deg } = projection
+            && !(fov_y_deg > 0.0 && fov_y_deg < 180.0)
+        {
+            return Err(CameraError(format!(
+                "field of view must be in (0, 180) degrees, got {fov_y_deg}"
+            )));
+        }
+        let up = right.cross(forward);
+        Ok(Camera {
+            eye,
+            right,
+            up,
+            forward,
+            projection,
+        })
+    }
+
+    /// A default view of `bounds`: from the +z side, tilted, far enough that
+    /// the bounding sphere fills the frame of a 30° perspective camera.
+    pub fn framing(bounds: &Aabb, aspect: f32) -> Camera {
+        let center = bounds.center();
+        let radius = (bounds.diagonal() * 0.5).max(1e-6);
+        let fov_y_deg: f32 = 30.0;
+        let half = (fov_y_deg.to_radians() * 0.5).tan();
+        // Fit the sphere in the narrower of the two image directions.
+        let fit = half * aspect.min(1.0);
+        let distance = radius / fit.atan().sin();
+        let dir = Vec3::new(0.35, 0.45, 1.0).normalized();
+        Camera::look_at(
+            center + dir * distance,
+            center,
+            Vec3::new(0.0, 1.0, 0.0),
+            Projection::Perspective { fov_y_deg },
+        )
+        .expect("framing camera is well formed")
+    }
+
+    /// The ray through image position (`x`, `y`) in pixels (continuous, so the
+    /// centre of pixel (row, col) is (col + 0.5, row + 0.5)) of a `width`×`height` image.
+    pub fn ray(&self, x: f32, y: f32, width: u32, height: u32) -> Ray {
+        let sx = 2.0 * x / width as f32 - 1.0;
+        let sy = 1.0 - 2.0 * y / height as f32;
+        match self.projection {
+            Projection::Perspective { fov_y_deg } => {
+                let half = (fov_y_deg.to_radians() * 0.5).tan();
+                let aspect = width as f32 / height as f32;
+                let dir = self.forward + self.right * (sx * half * aspect) + self.up * (sy * half);
+                Ray::new(self.eye, dir.normalized())
+            }
+            Projection::Orthographic {
+                half_width,
+                half_height,
+            } => Ray::new(
+                self.eye + self.right * (sx * half_width) + self.up * (sy * half_height),
+                self.forward,
+            ),
+        }
+    }
+}

@@ -1,0 +1,86 @@
+//! Plain data shared by every voxless crate: vectors, boxes, rays, value
+//! ranges, cameras, images, and the [`Volume`] trait — the one seam between
+//! data kinds (particles, AMR, tetrahedra) and integrators.
+//!
+//! Conventions: `f32` world coordinates; rays have unit directions so the ray
+//! parameter `t` is a distance; images are row-major with row 0 at the top and
+//! hold linear, premultiplied RGBA.
+
+pub mod camera;
+pub mod image;
+pub mod macrogrid;
+pub mod math;
+pub mod volume;
+
+pub use camera::{Camera, CameraError, Projection};
+pub use image::{Image, linear_to_srgb, srgb_to_linear};
+pub use macrogrid::MacroGrid;
+pub use math::{Aabb, Range1, Ray, Vec3};
+pub use volume::{Attribute, Interval, IntervalQuery, Sample, Volume, simpson};
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn macrogrid_intervals_cover_nonempty_cells_only() {
+        let b = Aabb::new(Vec3::ZERO, Vec3::splat(4.0));
+        let mut g = MacroGrid::with_cell_size(b, 1.0, 64);
+        assert_eq!(g.dims, [4, 4, 4]);
+        // Mark cells x = 1 and x = 3 on the row y = 0, z = 0 as occupied.
+        let i1 = g.index(1, 0, 0);
+        let i3 = g.index(3, 0, 0);
+        g.ranges[i1] = Range1::new(0.0, 1.0);
+        g.ranges[i3] = Range1::new(0.0, 2.0);
+        let ray = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::new(1.0, 0.0, 0.0));
+        let mut out = Vec::new();
+        g.intervals(&ray, Range1::new(0.0, 100.0), 0.1, &IntervalQuery::all(), &mut out);
+        assert_eq!(out.len(), 2);
+        assert!((out[0].t.lo - 2.0).abs() < 1e-5 && (out[0].t.hi - 3.0).abs() < 1e-5);
+        assert!((out[1].t.lo - 4.0).abs() < 1e-5 && (out[1].t.hi - 5.0).abs() < 1e-5);
+        // Adjacent occupied cells merge, with the union of their ranges.
+        let i2 = g.index(2, 0, 0);
+        g.ranges[i2] = Range1::new(0.5, 0.7);
+        out.clear();
+        g.intervals(&ray, Range1::new(0.0, 100.0), 0.1, &IntervalQuery::all(), &mut out);
+        assert_eq!(out.len(), 1);
+        assert_eq!(out[0].value_range, Range1::new(0.0, 2.0));
+        // An invisible range is a gap.
+        let hide = |r: Range1| r.hi > 1.5;
+        out.clear();
+        g.intervals(&ray, Range1::new(0.0, 100.0), 0.1, &IntervalQuery { is_visible: &hide }, &mut out);
+        assert_eq!(out.len(), 1);
+        assert!((out[0].t.lo - 4.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn macrogrid_diagonal_ray_visits_every_cell_once() {
+        let b = Aabb::new(Vec3::ZERO, Vec3::splat(8.0));
+        let mut g = MacroGrid::with_cell_size(b, 1.0, 64);
+        for r in g.ranges.iter_mut() {
+            *r = Range1::new(0.0, 1.0);
+        }
+        let ray = Ray::new(Vec3::new(-1.0, -0.7, -0.3), Vec3::new(1.0, 0.9, 0.8).normalized());
+        let mut out = Vec::new();
+        g.intervals(&ray, Range1::new(0.0, 1e9), 0.1, &IntervalQuery::all(), &mut out);
+        let clip = b.clip_ray(&ray, Range1::new(0.0, 1e9));
+        assert_eq!(out.len(), 1);
+        assert!((out[0].t.lo - clip.lo).abs() < 1e-4 && (out[0].t.hi - clip.hi).abs() < 1e-4);
+    }
+
+    #[test]
+    fn camera_rejects_degenerate_vectors() {
+        let p = Projection::Perspective { fov_y_deg: 40.0 };
+        assert!(Camera::look_at(Vec3::ZERO, Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0), p).is_err());
+        assert!(Camera::look_at(Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.0), p).is_err());
+        assert!(Camera::look_at(Vec3::splat(f32::NAN), Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0), p).is_err());
+    }
+
+    #[test]
+    fn srgb_round_trip() {
+        for i in 0..=100 {
+            let v = i as f32 / 100.0;
+            assert!((srgb_to_linear(linear_to_srgb(v)) - v).abs() < 1e-5);
+        }
+    }
+}

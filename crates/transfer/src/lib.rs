@@ -1,0 +1,365 @@
+//! Transfer functions: how a normalised field value in `[0, 1]` becomes a
+//! colour and an opacity.
+//!
+//! - [`Colormap`]: a named preset (exact published tables: viridis, inferno,
+//!   magma, plasma, cividis, gray, ParaView's cool-warm) or sparse sRGB control
+//!   points. Colours are given in sRGB, interpolated there (as ParaView and
+//!   matplotlib do), and handed out in linear RGB for compositing.
+//! - [`OpacityMap`]: sparse `(x, opacity)` control points, piecewise linear.
+//! - [`TransferFunction`]: both baked into lookup tables, plus a table of the
+//!   maximum opacity over any value range (the OSPRay approach). Integrators use
+//!   it to skip intervals whose value range is invisible.
+//! - [`ControlPoints`]: the sparse piecewise-linear map behind all of these,
+//!   reused by particle radius and weight maps.
+//!
+//! Invariant: `max_opacity(lo, hi)` is never below the opacity the lookup
+//! tables return for any `x` in `[lo, hi]`, so skipping on it never drops a
+//! visible sample.
+
+mod tables;
+
+use voxless_core::{Vec3, srgb_to_linear};
+
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum TransferError {
+    #[error("unknown colormap '{name}' (available: {})", COLORMAP_NAMES.join(", "))]
+    UnknownColormap { name: String },
+    #[error("unknown opacity preset '{name}' (available: {})", OPACITY_NAMES.join(", "))]
+    UnknownOpacity { name: String },
+    #[error("{what}: {message}")]
+    BadControlPoints { what: String, message: String },
+}
+
+/// Names accepted by [`Colormap::preset`].
+pub const COLORMAP_NAMES: &[&str] = &[
+    "viridis", "inferno", "magma", "plasma", "cividis", "gray", "cool-warm",
+];
+/// Names accepted by [`OpacityMap::preset`].
+pub const OPACITY_NAMES: &[&str] = &["linear", "constant", "ramp-high", "ramp-low"];
+
+/// A sparse, sorted piecewise-linear map `x → y` (constant beyond the ends).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ControlPoints {
+    points: Vec<(f32, f32)>,
+}
+
+impl ControlPoints {
+    /// `what` names the map in error messages ("opacity map", "radius map").
+    /// Points need finite coordinates and strictly increasing `x` (equal `x`
+    /// twice makes a step).
+    pub fn new(what: &str, points: &[(f32, f32)]) -> Result<Self, TransferError> {
+        let bad = |message: String| TransferError::BadControlPoints {
+            what: what.to_string(),
+            message,
+        };
+        if points.is_empty() {
+            return Err(bad("needs at least one control point".into()));
+        }
+        for (i, &(x, y)) in points.iter().enumerate() {
+            if !x.is_finite() || !y.is_finite() {
+                return Err(bad(format!("point {i} ({x}, {y}) is not finite")));
+            }
+            if i > 0 && x < points[i - 1].0 {
+                return Err(bad(format!(
+                    "x must not decrease: point {i} has x = {x} after {}",
+                    points[i - 1].0
+                )));
+            }
+        }
+        Ok(ControlPoints {
+            points: points.to_vec(),
+        })
+    }
+
+    pub fn points(&self) -> &[(f32, f32)] {
+        &self.points
+    }
+
+    pub fn eval(&self, x: f32) -> f32 {
+        let p = &self.points;
+        let i = p.partition_point(|&(px, _)| px <= x);
+        if i == 0 {
+            return p[0].1;
+        }
+        if i == p.len() {
+            return p[p.len() - 1].1;
+        }
+        let (x0, y0) = p[i - 1];
+        let (x1, y1) = p[i];
+        let s = if x1 > x0 { (x - x0) / (x1 - x0) } else { 1.0 };
+        y0 + s * (y1 - y0)
+    }
+
+    /// Largest `y` over all points (the map's maximum, since it is piecewise linear).
+    pub fn max_value(&self) -> f32 {
+        self.points.iter().map(|p| p.1).fold(f32::NEG_INFINITY, f32::max)
+    }
+}
+
+/// Colour control points in sRGB.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Colormap {
+    name: String,
+    /// (x, sRGB) sorted by x.
+    points: Vec<(f32, [f32; 3])>,
+}
+
+impl Colormap {
+    pub fn preset(name: &str) -> Result<Colormap, TransferError> {
+        let key = name.to_ascii_lowercase().replace('_', "-");
+        let table: &[[f32; 3]; 256] = match key.as_str() {
+            "viridis" => &tables::VIRIDIS,
+            "inferno" => &tables::INFERNO,
+            "magma" => &tables::MAGMA,
+            "plasma" => &tables::PLASMA,
+            "cividis" => &tables::CIVIDIS,
+            "gray" | "grey" | "greys" => &tables::GRAY,
+            "cool-warm" | "coolwarm" | "cool-to-warm" => &tables::COOL_WARM,
+            _ => {
+                return Err(TransferError::UnknownColormap {
+                    name: name.to_string(),
+                });
+            }
+        };
+        Ok(Colormap {
+            name: key,
+            points: table
+                .iter()
+                .enumerate()
+                .map(|(i, c)| (i as f32 / 255.0, *c))
+                .collect(),
+        })
+    }
+
+    /// Sparse sRGB control points `(x, [r, g, b])`, components in [0, 1].
+    pub fn from_points(points: &[(f32, [f32; 3])]) -> Result<Colormap, TransferError> {
+        for c in 0..3 {
+            let ch: Vec<(f32, f32)> = points.iter().map(|p| (p.0, p.1[c])).collect();
+            ControlPoints::new("colormap", &ch)?;
+        }
+        if let Some(p) = points.iter().find(|p| p.1.iter().any(|v| !(0.0..=1.0).contains(v))) {
+            return Err(TransferError::BadControlPoints {
+                what: "colormap".into(),
+                message: format!("colour {:?} at x = {} is outside [0, 1]", p.1, p.0),
+            });
+        }
+        Ok(Colormap {
+            name: "custom".into(),
+            points: points.to_vec(),
+        })
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// sRGB colour at `x` (clamped to the ends).
+    pub fn srgb(&self, x: f32) -> [f32; 3] {
+        let p = &self.points;
+        let i = p.partition_point(|q| q.0 <= x);
+        if i == 0 {
+            return p[0].1;
+        }
+        if i == p.len() {
+            return p[p.len() - 1].1;
+        }
+        let (x0, c0) = p[i - 1];
+        let (x1, c1) = p[i];
+        let s = if x1 > x0 { (x - x0) / (x1 - x0) } else { 1.0 };
+        [0, 1, 2].map(|k| c0[k] + s * (c1[k] - c0[k]))
+    }
+
+    /// Linear-RGB colour at `x`.
+    pub fn linear(&self, x: f32) -> Vec3 {
+        let c = self.srgb(x);
+        Vec3::new(srgb_to_linear(c[0]), srgb_to_linear(c[1]), srgb_to_linear(c[2]))
+    }
+}
+
+/// Opacity control points over the normalised value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OpacityMap(pub ControlPoints);
+
+impl OpacityMap {
+    pub fn preset(name: &str) -> Result<OpacityMap, TransferError> {
+        let pts: &[(f32, f32)] = match name.to_ascii_lowercase().as_str() {
+            "linear" | "ramp" => &[(0.0, 0.0), (1.0, 1.0)],
+            "constant" | "flat" => &[(0.0, 1.0), (1.0, 1.0)],
+            "ramp-high" => &[(0.0, 0.0), (0.5, 0.0), (1.0, 1.0)],
+            "ramp-low" => &[(0.0, 1.0), (1.0, 0.0)],
+            _ => {
+                return Err(TransferError::UnknownOpacity {
+                    name: name.to_string(),
+                });
+            }
+        };
+        Self::from_points(pts)
+    }
+
+    /// Opacities must lie in [0, 1].
+    pub fn from_points(points: &[(f32, f32)]) -> Result<OpacityMap, TransferError> {
+        let cp = ControlPoints::new("opacity map", points)?;
+        if let Some(p) = points.iter().find(|p| !(0.0..=1.0).contains(&p.1)) {
+            return Err(TransferError::BadControlPoints {
+                what: "opacity map".into(),
+                message: format!("opacity {} at x = {} is outside [0, 1]", p.1, p.0),
+            });
+        }
+        Ok(OpacityMap(cp))
+    }
+}
+
+/// Entries in the colour and opacity lookup tables.
+const LUT: usize = 1024;
+/// Bins of the max-opacity table.
+const BINS: usize = 256;
+
+/// A colormap and opacity map baked for fast lookup.
+#[derive(Clone, Debug)]
+pub struct TransferFunction {
+    colormap: Colormap,
+    opacity_map: OpacityMap,
+    color_lut: Vec<Vec3>,
+    opacity_lut: Vec<f32>,
+    /// `max_table[level][i]` = max opacity over bins `i .. i + 2^level`.
+    max_table: Vec<Vec<f32>>,
+}
+
+impl TransferFunction {
+    pub fn new(colormap: Colormap, opacity_map: OpacityMap) -> Self {
+        let at = |i: usize| i as f32 / (LUT - 1) as f32;
+        let color_lut: Vec<Vec3> = (0..LUT).map(|i| colormap.linear(at(i))).collect();
+        let opacity_lut: Vec<f32> = (0..LUT).map(|i| opacity_map.0.eval(at(i))).collect();
+        // Bin b covers x in [b/BINS, (b+1)/BINS]; lookups there interpolate
+        // between LUT entries whose segments overlap that span, so the bin max
+        // is the max over those entries — conservative for what `opacity` returns.
+        let bins: Vec<f32> = (0..BINS)
+            .map(|b| {
+                let lo = ((b as f32 / BINS as f32) * (LUT - 1) as f32).floor() as usize;
+                let hi = (((b + 1) as f32 / BINS as f32) * (LUT - 1) as f32).ceil() as usize;
+                opacity_lut[lo..=hi.min(LUT - 1)].iter().copied().fold(0.0, f32::max)
+            })
+            .collect();
+        let mut max_table = vec![bins];
+        let mut width = 1;
+        while width * 2 <= BINS {
+            let prev = max_table.last().unwrap();
+            let next: Vec<f32> = (0..=BINS - 2 * width)
+                .map(|i| prev[i].max(prev[i + width]))
+                .collect();
+            max_table.push(next);
+            width *= 2;
+        }
+        TransferFunction {
+            colormap,
+            opacity_map,
+            color_lut,
+            opacity_lut,
+            max_table,
+        }
+    }
+
+    /// Viridis with a linear opacity ramp.
+    pub fn default_for_density() -> Self {
+        TransferFunction::new(
+            Colormap::preset("viridis").unwrap(),
+            OpacityMap::preset("linear").unwrap(),
+        )
+    }
+
+    pub fn colormap(&self) -> &Colormap {
+        &self.colormap
+    }
+    pub fn opacity_map(&self) -> &OpacityMap {
+        &self.opacity_map
+    }
+
+    #[inline]
+    fn lut_pos(x: f32) -> (usize, f32) {
+        let f = x.clamp(0.0, 1.0) * (LUT - 1) as f32;
+        // NaN clamps to NaN; `as usize` maps it to 0.
+        let i = (f as usize).min(LUT - 2);
+        (i, (f - i as f32).clamp(0.0, 1.0))
+    }
+
+    /// Linear-RGB colour at normalised `x`.
+    #[inline]
+    pub fn color(&self, x: f32) -> Vec3 {
+        let (i, s) = Self::lut_pos(x);
+        self.color_lut[i] * (1.0 - s) + self.color_lut[i + 1] * s
+    }
+
+    /// Opacity in [0, 1] at normalised `x`.
+    #[inline]
+    pub fn opacity(&self, x: f32) -> f32 {
+        let (i, s) = Self::lut_pos(x);
+        self.opacity_lut[i] * (1.0 - s) + self.opacity_lut[i + 1] * s
+    }
+
+    /// An upper bound of `opacity(x)` over normalised `x` in `[lo, hi]`.
+    pub fn max_opacity(&self, lo: f32, hi: f32) -> f32 {
+        if !(lo <= hi) {
+            return 0.0;
+        }
+        let bin = |x: f32| ((x.clamp(0.0, 1.0) * BINS as f32) as usize).min(BINS - 1);
+        let (a, b) = (bin(lo), bin(hi));
+        // Sparse-table range maximum: two overlapping power-of-two windows.
+        let len = b - a + 1;
+        let level = (usize::BITS - 1 - len.leading_zeros()) as usize;
+        let w = 1 << level;
+        self.max_table[level][a].max(self.max_table[level][b + 1 - w])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_match_published_endpoints() {
+        let v = Colormap::preset("viridis").unwrap();
+        assert_eq!(v.srgb(0.0), [0.267004, 0.004874, 0.329415]);
+        assert_eq!(v.srgb(1.0), [0.993248, 0.906157, 0.143936]);
+        let cw = Colormap::preset("cool-warm").unwrap();
+        let mid = cw.srgb(0.5);
+        assert!(mid.iter().all(|c| (c - 0.865).abs() < 0.01), "{mid:?}");
+        for name in COLORMAP_NAMES {
+            Colormap::preset(name).unwrap();
+        }
+        let err = Colormap::preset("jet").unwrap_err().to_string();
+        assert!(err.contains("jet") && err.contains("viridis"), "{err}");
+    }
+
+    #[test]
+    fn max_opacity_bounds_every_lookup() {
+        let op = OpacityMap::from_points(&[(0.0, 0.0), (0.3, 0.0), (0.31, 0.8), (0.6, 0.1), (1.0, 0.5)]).unwrap();
+        let tf = TransferFunction::new(Colormap::preset("gray").unwrap(), op);
+        let mut seed = 1u32;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(1664525).wrapping_add(1013904223);
+            (seed >> 8) as f32 / (1 << 24) as f32
+        };
+        for _ in 0..2000 {
+            let (a, b) = (rnd(), rnd());
+            let (lo, hi) = (a.min(b), a.max(b));
+            let m = tf.max_opacity(lo, hi);
+            for k in 0..=50 {
+                let x = lo + (hi - lo) * k as f32 / 50.0;
+                assert!(tf.opacity(x) <= m + 1e-7, "x {x} in [{lo}, {hi}]: {} > {m}", tf.opacity(x));
+            }
+        }
+        // The zero-opacity region is recognised as invisible (away from the kink).
+        assert_eq!(tf.max_opacity(0.0, 0.29), 0.0);
+    }
+
+    #[test]
+    fn control_points_interpolate_and_validate() {
+        let cp = ControlPoints::new("radius map", &[(0.0, 1.0), (1.0, 0.5)]).unwrap();
+        assert_eq!(cp.eval(0.5), 0.75);
+        assert_eq!(cp.eval(-1.0), 1.0);
+        assert_eq!(cp.eval(2.0), 0.5);
+        assert!(ControlPoints::new("radius map", &[(0.5, 1.0), (0.1, 0.5)]).is_err());
+        assert!(ControlPoints::new("radius map", &[(f32::NAN, 1.0)]).is_err());
+        assert!(OpacityMap::from_points(&[(0.0, 2.0)]).is_err());
+    }
+}
