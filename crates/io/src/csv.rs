@@ -30,7 +30,10 @@ impl CsvTable {
     /// after trimming whitespace; `None` if there is no such column.
     pub fn column(&self, name: &str) -> Option<&[f64]> {
         let wanted = name.trim().to_lowercase();
-        let index = self.columns.iter().position(|c| c.to_lowercase() == wanted)?;
+        let index = self
+            .columns
+            .iter()
+            .position(|c| c.to_lowercase() == wanted)?;
         self.data.get(index).map(Vec::as_slice)
     }
 
@@ -74,7 +77,8 @@ fn fields(line: &str, sep: Separator) -> impl Iterator<Item = &str> + Clone {
 pub fn read_csv(path: &Path) -> Result<CsvTable, IoError> {
     let file = File::open(path).map_err(|e| IoError::io(path, e))?;
     let mut reader = BufReader::new(file);
-    let fmt = |line: usize, message: String| IoError::format(path, format!("line {line}: {message}"));
+    let fmt =
+        |line: usize, message: String| IoError::format(path, format!("line {line}: {message}"));
 
     let mut table = CsvTable::default();
     let mut separator = None;
@@ -93,7 +97,10 @@ pub fn read_csv(path: &Path) -> Result<CsvTable, IoError> {
         let text = std::str::from_utf8(&buf).map_err(|e| {
             fmt(
                 line_no,
-                format!("not valid UTF-8 text (bad byte at column {})", e.valid_up_to() + 1),
+                format!(
+                    "not valid UTF-8 text (bad byte at column {})",
+                    e.valid_up_to() + 1
+                ),
             )
         })?;
         let text = if line_no == 1 {
@@ -170,10 +177,7 @@ fn parse_row(text: &str, sep: Separator, table: &mut CsvTable) -> Result<(), Str
             table.columns[expected - 1]
         ));
     }
-    for ((field, name), column) in fields(text, sep)
-        .zip(&table.columns)
-        .zip(&mut table.data)
-    {
+    for ((field, name), column) in fields(text, sep).zip(&table.columns).zip(&mut table.data) {
         let value = field.parse::<f64>().map_err(|_| {
             if field.is_empty() {
                 format!("column '{name}' is empty")
@@ -202,10 +206,21 @@ mod tests {
 
     #[test]
     fn header_checks() {
-        assert!(parse_header("x,y,X", Separator::Comma).unwrap_err().contains("'X'"));
-        assert!(parse_header("x,,z", Separator::Comma).unwrap_err().contains("column 2"));
+        assert!(
+            parse_header("x,y,X", Separator::Comma)
+                .unwrap_err()
+                .contains("'X'")
+        );
+        assert!(
+            parse_header("x,,z", Separator::Comma)
+                .unwrap_err()
+                .contains("column 2")
+        );
         assert!(parse_header("1.0 2.0", Separator::Whitespace).is_err());
-        assert_eq!(parse_header("x 1", Separator::Whitespace).unwrap(), ["x", "1"]);
+        assert_eq!(
+            parse_header("x 1", Separator::Whitespace).unwrap(),
+            ["x", "1"]
+        );
     }
 
     #[test]

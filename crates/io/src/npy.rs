@@ -139,11 +139,10 @@ pub fn read_npy(path: &Path) -> Result<NpyArray, IoError> {
         return Err(fmt(message));
     }
 
-    let mut data = read_values(&mut reader, &dtype, count)
-        .map_err(|e| match e.kind() {
-            ErrorKind::UnexpectedEof => fmt("file ends inside the array data".to_string()),
-            _ => IoError::io(path, e),
-        })?;
+    let mut data = read_values(&mut reader, &dtype, count).map_err(|e| match e.kind() {
+        ErrorKind::UnexpectedEof => fmt("file ends inside the array data".to_string()),
+        _ => IoError::io(path, e),
+    })?;
     if header.fortran_order && header.shape.len() > 1 {
         data = fortran_to_c(&data, &header.shape);
     }
@@ -267,9 +266,7 @@ impl Dtype {
     /// Parses a simple descr such as `<f4`, `>i8`, `|u1`, `|b1` or `=f8`.
     fn parse(descr: &str) -> Result<Dtype, String> {
         let unsupported = || {
-            format!(
-                "unsupported dtype '{descr}' (expected float32, float64 or an integer type)"
-            )
+            format!("unsupported dtype '{descr}' (expected float32, float64 or an integer type)")
         };
         let native_big = cfg!(target_endian = "big");
         let (big_endian, rest) = match descr.as_bytes().first() {
@@ -339,7 +336,11 @@ fn read_values(reader: &mut impl Read, dtype: &Dtype, count: usize) -> std::io::
 }
 
 /// Converts each `N`-byte item of `bytes` with `convert` and appends it.
-fn decode_items<const N: usize>(bytes: &[u8], out: &mut Vec<f64>, convert: impl Fn([u8; N]) -> f64) {
+fn decode_items<const N: usize>(
+    bytes: &[u8],
+    out: &mut Vec<f64>,
+    convert: impl Fn([u8; N]) -> f64,
+) {
     for item in bytes.chunks_exact(N) {
         let mut raw = [0u8; N];
         raw.copy_from_slice(item);
@@ -495,9 +496,13 @@ fn parse_header(text: &str) -> Result<Header, String> {
             .iter()
             .map(|item| match item {
                 Literal::Int(digits) => digits.parse::<usize>().map_err(|_| {
-                    format!("invalid header: shape {raw} has an invalid or too large dimension {digits}")
+                    format!(
+                        "invalid header: shape {raw} has an invalid or too large dimension {digits}"
+                    )
                 }),
-                _ => Err(format!("invalid header: shape {raw} must hold only integers")),
+                _ => Err(format!(
+                    "invalid header: shape {raw} must hold only integers"
+                )),
             })
             .collect::<Result<Vec<usize>, String>>()?,
         (_, raw) => return Err(format!("invalid header: shape {raw} is not a tuple")),
@@ -592,7 +597,10 @@ impl Parser<'_> {
             Some(b'-' | b'+' | b'0'..=b'9') => Ok(self.integer()),
             Some(c) if c.is_ascii_alphabetic() => {
                 let start = self.pos;
-                while self.peek().is_some_and(|c| c.is_ascii_alphanumeric() || c == b'_') {
+                while self
+                    .peek()
+                    .is_some_and(|c| c.is_ascii_alphanumeric() || c == b'_')
+                {
                     self.pos += 1;
                 }
                 match &self.text[start..self.pos] {
@@ -687,13 +695,15 @@ mod tests {
 
     #[test]
     fn parses_header_variants() {
-        let h = parse_header("{\"shape\": (4,3,), 'fortran_order':True,'descr':'>f8',}  \n").unwrap();
+        let h =
+            parse_header("{\"shape\": (4,3,), 'fortran_order':True,'descr':'>f8',}  \n").unwrap();
         assert_eq!(h.shape, vec![4, 3]);
         assert!(h.fortran_order);
         assert_eq!(h.descr, ">f8");
         let h = parse_header("{'descr': '<i4', 'fortran_order': False, 'shape': (), }").unwrap();
         assert!(h.shape.is_empty());
-        let h = parse_header("{'descr': '<i8', 'fortran_order': False, 'shape': (5L, 2L)}").unwrap();
+        let h =
+            parse_header("{'descr': '<i8', 'fortran_order': False, 'shape': (5L, 2L)}").unwrap();
         assert_eq!(h.shape, vec![5, 2]);
     }
 
@@ -727,11 +737,17 @@ mod tests {
     fn dtype_parsing() {
         assert_eq!(
             Dtype::parse(">f8").unwrap(),
-            Dtype { kind: Kind::Float, size: 8, big_endian: true }
+            Dtype {
+                kind: Kind::Float,
+                size: 8,
+                big_endian: true
+            }
         );
         assert_eq!(Dtype::parse("|b1").unwrap().kind, Kind::Bool);
         assert_eq!(Dtype::parse("<u2").unwrap().name(), "uint16");
-        for bad in ["<c8", "|O", "<U10", "|S3", "<f16", "<i3", "", "<", "|V8", "<M8[ns]"] {
+        for bad in [
+            "<c8", "|O", "<U10", "|S3", "<f16", "<i3", "", "<", "|V8", "<M8[ns]",
+        ] {
             let err = Dtype::parse(bad).unwrap_err();
             assert!(err.contains(&format!("'{bad}'")), "{err}");
         }

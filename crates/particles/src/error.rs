@@ -1,0 +1,35 @@
+/// Why a particle set or its settings cannot be used. Indices are positions
+/// in the input arrays (before any reordering), so users can find the row.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParticleError {
+    #[error("no particles")]
+    Empty,
+    #[error("particle {index} has a non-finite coordinate ({x}, {y}, {z})")]
+    NonFinitePosition { index: usize, x: f32, y: f32, z: f32 },
+    #[error("{what} has {got} values but there are {expected} particles")]
+    LengthMismatch {
+        what: &'static str,
+        expected: usize,
+        got: usize,
+    },
+    #[error("particle {index} has radius {value}; radii must be finite and > 0")]
+    BadRadius { index: usize, value: f32 },
+    #[error("global radius {value} must be finite and > 0")]
+    BadGlobalRadius { value: f32 },
+    #[error("particle {index} has {what} {value}; it must be finite")]
+    NonFiniteValue {
+        index: usize,
+        what: &'static str,
+        value: f32,
+    },
+    #[error("particle {index} has weight {value}; weights must be finite and >= 0")]
+    BadWeight { index: usize, value: f32 },
+    #[error("cluster size {value} is outside 1..=16")]
+    BadClusterSize { value: usize },
+    #[error("kernel parameter {name} = {value} must be finite and > 0")]
+    BadKernelParameter { name: &'static str, value: f32 },
+    #[error("{what} given, but the particles have no attribute")]
+    NeedsAttribute { what: &'static str },
+    #[error("too many particles ({count}); at most {max} per volume")]
+    TooMany { count: usize, max: usize },
+}

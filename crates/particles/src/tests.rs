@@ -1,0 +1,319 @@
+//! Known-answer tests: every field the BVH path computes is compared with a
+//! brute-force sum over all particles written from the kernel definitions.
+
+use super::*;
+use voxless_core::{Aabb, Range1, Ray, Vec3, Volume};
+use voxless_transfer::{Colormap, ControlPoints, OpacityMap, TransferFunction};
+
+struct Lcg(u64);
+impl Lcg {
+    fn f(&mut self) -> f32 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+    fn v(&mut self) -> Vec3 {
+        Vec3::new(self.f(), self.f(), self.f())
+    }
+}
+
+fn random_data(n: usize, seed: u64) -> ParticleData {
+    let mut rng = Lcg(seed);
+    ParticleData {
+        positions: (0..n).map(|_| rng.v()).collect(),
+        radii: Some((0..n).map(|_| 0.04 + 0.06 * rng.f()).collect()),
+        attribute: Some((0..n).map(|_| 10.0 * rng.f() - 3.0).collect()),
+        weights: Some((0..n).map(|_| 0.5 + rng.f()).collect()),
+    }
+}
+
+const KERNELS: [Kernel; 3] = [
+    Kernel::Gaussian3,
+    Kernel::Gaussian {
+        kappa: 1.5,
+        sigma: 2.0,
+    },
+    Kernel::CubicSpline,
+];
+
+/// φ and dφ/dd per the formulas in the kernel docs, in f64.
+fn reference_kernel(k: Kernel, d: f64, r: f64, w: f64) -> (f64, f64) {
+    match k {
+        Kernel::Gaussian3 if d <= r => {
+            let v = w * (-0.5 * (3.0 * d / r).powi(2)).exp();
+            (v, -9.0 * d / (r * r) * v)
+        }
+        Kernel::Gaussian { kappa, sigma } if d <= sigma as f64 * r => {
+            let v = kappa as f64 * w * (-d * d / (2.0 * r * r)).exp();
+            (v, -d / (r * r) * v)
+        }
+        Kernel::CubicSpline if d <= 2.0 * r => {
+            let q = d / r;
+            let norm = w / (std::f64::consts::PI * r.powi(3));
+            if q < 1.0 {
+                (norm * (1.0 - 1.5 * q * q + 0.75 * q.powi(3)), norm * (-3.0 * q + 2.25 * q * q) / r)
+            } else {
+                (norm * 0.25 * (2.0 - q).powi(3), norm * -0.75 * (2.0 - q).powi(2) / r)
+            }
+        }
+        _ => (0.0, 0.0),
+    }
+}
+
+/// (Φ, Θ, ∇Φ, Σ|∇φᵢ|) by summing over every particle.
+fn brute_force(data: &ParticleData, k: Kernel, p: Vec3) -> (f64, f64, [f64; 3], f64) {
+    let (mut phi, mut num, mut g, mut gabs) = (0.0, 0.0, [0.0; 3], 0.0);
+    for i in 0..data.positions.len() {
+        let c = data.positions[i];
+        let dv = [(p.x - c.x) as f64, (p.y - c.y) as f64, (p.z - c.z) as f64];
+        let d = (dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2]).sqrt();
+        let r = data.radii.as_ref().unwrap()[i] as f64;
+        let w = data.weights.as_ref().unwrap()[i] as f64;
+        let (v, dd) = reference_kernel(k, d, r, w);
+        phi += v;
+        num += v * data.attribute.as_ref().unwrap()[i] as f64;
+        if d > 0.0 {
+            for a in 0..3 {
+                g[a] += dd * dv[a] / d;
+            }
+            gabs += dd.abs();
+        }
+    }
+    (phi, if phi > 0.0 { num / phi } else { f64::NAN }, g, gabs)
+}
+
+#[test]
+fn fields_equal_brute_force_for_every_kernel_and_cluster_size() {
+    let data = random_data(2000, 42);
+    for kernel in KERNELS {
+        for cluster_size in [1, 4, 16] {
+            let settings = ParticleSettings {
+                kernel,
+                cluster_size,
+                ..Default::default()
+            };
+            let vol = ParticleVolume::new(data.clone(), settings).unwrap();
+            vol.validate().unwrap();
+            let max_phi = vol.value_range().hi as f64;
+            let mut rng = Lcg(7 + cluster_size as u64);
+            let bounds = vol.bounds();
+            let mut checked = 0;
+            for _ in 0..10_000 {
+                let p = bounds.min + rng.v().mul_elem(bounds.extent());
+                let (phi, theta, g, gabs) = brute_force(&data, kernel, p);
+                let f = vol.field(p, true);
+                if phi < 1e-6 * max_phi {
+                    continue;
+                }
+                checked += 1;
+                let rel = |a: f64, b: f64, scale: f64| (a - b).abs() / scale;
+                assert!(rel(f.density as f64, phi, phi) <= 1e-5, "{kernel:?} N={cluster_size} Φ {} vs {phi}", f.density);
+                // Θ is an average of values in [-3, 7]: relative to that scale.
+                assert!(rel(f.attribute as f64, theta, 10.0) <= 1e-5, "Θ {} vs {theta}", f.attribute);
+                // Gradient components can cancel, so compare against Σ|∇φᵢ|.
+                for a in 0..3 {
+                    assert!(rel(f.gradient[a] as f64, g[a], gabs) <= 1e-5, "{kernel:?} ∇Φ[{a}] {} vs {}", f.gradient[a], g[a]);
+                }
+            }
+            assert!(checked > 5000, "only {checked} points had Φ above the threshold");
+        }
+    }
+}
+
+#[test]
+fn point_query_returns_exactly_the_overlapping_particles() {
+    let data = random_data(3000, 5);
+    for cluster_size in [1, 3, 16] {
+        let vol = ParticleVolume::new(
+            data.clone(),
+            ParticleSettings {
+                cluster_size,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let mut rng = Lcg(9);
+        for _ in 0..2000 {
+            let p = rng.v();
+            let mut got: Vec<u32> = vol.overlapping(p).iter().map(|&i| vol.original_index()[i]).collect();
+            got.sort_unstable();
+            let want: Vec<u32> = (0..data.positions.len())
+                .filter(|&i| {
+                    let r = data.radii.as_ref().unwrap()[i];
+                    (p - data.positions[i]).length_squared() <= r * r
+                })
+                .map(|i| i as u32)
+                .collect();
+            assert_eq!(got, want);
+        }
+    }
+}
+
+#[test]
+fn radius_map_refits_and_stays_exact() {
+    let mut data = random_data(4000, 8);
+    data.radii = None;
+    let settings = ParticleSettings {
+        radius: 0.05,
+        cluster_size: 8,
+        ..Default::default()
+    };
+    let mut vol = ParticleVolume::new(data.clone(), settings).unwrap();
+    let nodes_before = vol.bvh().nodes().len();
+    // Small attributes shrink to nothing (hidden), large ones double.
+    let map = ControlPoints::new("radius map", &[(0.0, 0.0), (0.3, 0.0), (1.0, 2.0)]).unwrap();
+    vol.set_radius(0.05, Some(map.clone())).unwrap();
+    vol.validate().unwrap();
+    assert_eq!(vol.bvh().nodes().len(), nodes_before, "refit keeps the topology");
+    let attr = data.attribute.as_ref().unwrap();
+    let range = vol.attribute_range().unwrap();
+    let radius_of = |i: usize| 0.05 * map.eval(range.normalize(attr[i])).max(0.0);
+    let mut rng = Lcg(1);
+    for _ in 0..3000 {
+        let p = rng.v();
+        let mut got: Vec<u32> = vol.overlapping(p).iter().map(|&i| vol.original_index()[i]).collect();
+        got.sort_unstable();
+        let want: Vec<u32> = (0..data.positions.len())
+            .filter(|&i| radius_of(i) > 0.0 && (p - data.positions[i]).length_squared() <= radius_of(i) * radius_of(i))
+            .map(|i| i as u32)
+            .collect();
+        assert_eq!(got, want);
+    }
+    // A global radius change refits too.
+    vol.set_radius(0.08, None).unwrap();
+    vol.validate().unwrap();
+    assert!(vol.radii().iter().all(|&r| r == 0.08));
+}
+
+#[test]
+fn line_integral_matches_quadrature_of_samples() {
+    let data = random_data(500, 3);
+    for kernel in KERNELS {
+        let vol = ParticleVolume::new(
+            data.clone(),
+            ParticleSettings {
+                kernel,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let mut rng = Lcg(4);
+        for _ in 0..12 {
+            let o = Vec3::new(rng.f(), rng.f(), -1.0);
+            let ray = Ray::new(o, (Vec3::new(rng.f(), rng.f(), 1.0) - o + Vec3::new(0.0, 0.0, 1.0)).normalized());
+            // Partial chords too: stop inside the cube.
+            for t in [Range1::new(0.0, 10.0), Range1::new(0.0, 1.0 + rng.f())] {
+                let exact = vol.line_integral(&ray, t);
+                let f = |s: f64| vol.density(ray.at(s as f32)) as f64;
+                // Every support lies within t < 4; the truncated Gaussians jump
+                // at their support edge, so the quadrature needs a fine step.
+                let quad = voxless_core::simpson(f, t.lo as f64, t.hi.min(4.0) as f64, 400_000);
+                assert!((exact - quad).abs() <= 1e-4 * quad.max(1e-3), "{kernel:?}: exact {exact} vs quadrature {quad}");
+            }
+        }
+    }
+}
+
+#[test]
+fn kernel_integrals_match_radial_quadrature() {
+    for kernel in KERNELS {
+        let r = 0.7;
+        let support = kernel.support_factor() as f64 * r;
+        let f = |d: f64| 4.0 * std::f64::consts::PI * d * d * reference_kernel(kernel, d, r, 1.0).0;
+        let quad = voxless_core::simpson(f, 0.0, support * (1.0 - 1e-12), 200_000);
+        let exact = kernel.integral(r);
+        assert!((quad - exact).abs() < 1e-6 * exact, "{kernel:?}: {quad} vs {exact}");
+    }
+}
+
+#[test]
+fn pre_classification_averages_colours() {
+    // Two overlapping particles with attributes at the ends of the range.
+    let data = ParticleData {
+        positions: vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.5, 0.0, 0.0)],
+        radii: None,
+        attribute: Some(vec![0.0, 1.0]),
+        weights: None,
+    };
+    let mut vol = ParticleVolume::new(
+        data,
+        ParticleSettings {
+            radius: 1.0,
+            classification: Classification::Pre,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let tf = TransferFunction::new(Colormap::preset("cool-warm").unwrap(), OpacityMap::preset("linear").unwrap());
+    vol.classify(&tf);
+    let p = Vec3::new(0.1, 0.0, 0.0);
+    let w0 = (-4.5f32 * 0.01).exp();
+    let w1 = (-4.5f32 * 0.16).exp();
+    let want = (tf.color(0.0) * w0 + tf.color(1.0) * w1) / (w0 + w1);
+    let got = vol.field(p, false).color.unwrap();
+    assert!((got - want).length() < 1e-5, "{got:?} vs {want:?}");
+    // Post-classification would colour-map Θ instead: a different colour.
+    let theta = vol.field(p, false).attribute;
+    assert!((theta - w1 / (w0 + w1)).abs() < 1e-5);
+}
+
+#[test]
+fn bad_input_is_a_clear_error() {
+    let ok = random_data(10, 1);
+    let s = ParticleSettings::default();
+    let mut d = ok.clone();
+    d.positions[3].y = f32::NAN;
+    let e = ParticleVolume::new(d, s.clone()).err().unwrap();
+    assert_eq!(e.to_string(), "particle 3 has a non-finite coordinate (".to_string() + &format!("{}, NaN, {})", ok.positions[3].x, ok.positions[3].z));
+    let mut d = ok.clone();
+    d.radii.as_mut().unwrap()[4] = 0.0;
+    assert!(ParticleVolume::new(d, s.clone()).err().unwrap().to_string().contains("particle 4 has radius 0"));
+    let mut d = ok.clone();
+    d.radii.as_mut().unwrap()[2] = -1.0;
+    assert!(matches!(ParticleVolume::new(d, s.clone()), Err(ParticleError::BadRadius { index: 2, .. })));
+    let mut d = ok.clone();
+    d.attribute.as_mut().unwrap().pop();
+    assert!(ParticleVolume::new(d, s.clone()).err().unwrap().to_string().contains("attribute has 9 values but there are 10 particles"));
+    assert!(matches!(ParticleVolume::new(ParticleData::default(), s.clone()), Err(ParticleError::Empty)));
+    let mut d = ok.clone();
+    d.weights.as_mut().unwrap()[0] = f32::INFINITY;
+    assert!(ParticleVolume::new(d, s.clone()).is_err());
+    for radius in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        let mut d = ok.clone();
+        d.radii = None;
+        assert!(ParticleVolume::new(d, ParticleSettings { radius, ..s.clone() }).is_err());
+    }
+    assert!(ParticleVolume::new(ok.clone(), ParticleSettings { cluster_size: 0, ..s.clone() }).is_err());
+    assert!(ParticleVolume::new(ok.clone(), ParticleSettings { cluster_size: 17, ..s.clone() }).is_err());
+    let mut d = ok.clone();
+    d.attribute = None;
+    let map = ControlPoints::new("weight map", &[(0.0, 1.0)]).unwrap();
+    assert!(ParticleVolume::new(d, ParticleSettings { weight_map: Some(map), ..s }).is_err());
+}
+
+#[test]
+fn intervals_cover_every_nonzero_sample_with_its_range() {
+    let data = random_data(1500, 12);
+    let vol = ParticleVolume::new(data, ParticleSettings::default()).unwrap();
+    let mut rng = Lcg(77);
+    let mut out = Vec::new();
+    for _ in 0..200 {
+        let o = Vec3::new(rng.f(), rng.f(), -0.5);
+        let ray = Ray::new(o, (rng.v() - o + Vec3::new(0.0, 0.0, 0.5)).normalized());
+        let t = Range1::new(0.0, 5.0);
+        out.clear();
+        vol.intervals(&ray, t, &voxless_core::IntervalQuery::all(), &mut out);
+        for w in out.windows(2) {
+            assert!(w[0].t.hi <= w[1].t.lo, "intervals overlap or are unsorted");
+        }
+        for k in 0..2000 {
+            let s = 5.0 * k as f32 / 2000.0;
+            let phi = vol.density(ray.at(s));
+            let inside = out.iter().find(|iv| iv.t.contains(s));
+            match inside {
+                Some(iv) => assert!(iv.value_range.contains(phi), "Φ {phi} outside {:?}", iv.value_range),
+                None => assert!(phi == 0.0 || out.iter().any(|iv| (iv.t.lo - s).abs() < 1e-4 || (iv.t.hi - s).abs() < 1e-4), "Φ {phi} in a gap at t = {s}"),
+            }
+        }
+    }
+    let _ = Aabb::EMPTY;
+}
