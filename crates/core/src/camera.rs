@@ -116,3 +116,51 @@ impl Camera {
         }
     }
 }
+
+impl Camera {
+    /// An orthographic camera looking down `-axis` (0 = x, 1 = y, 2 = z)
+    /// whose image exactly covers `bounds` in the other two axes `(u, v)`:
+    /// `(y, z)` for x, `(x, z)` for y, `(x, y)` for z. Pixel (row, col) of a
+    /// W×H image is centred at `(min_u + (col + 0.5)·du, max_v − (row + 0.5)·dv)`.
+    pub fn axis_projection(bounds: &Aabb, axis: usize) -> Result<Camera, CameraError> {
+        let (u, v) = match axis {
+            0 => (1, 2),
+            1 => (0, 2),
+            2 => (0, 1),
+            _ => return Err(CameraError(format!("axis {axis} is not 0, 1 or 2"))),
+        };
+        let e = bounds.extent();
+        if bounds.is_empty() || !(e[u] > 0.0 && e[v] > 0.0) || !e.is_finite() {
+            return Err(CameraError(format!(
+                "projection bounds {:?}..{:?} have no area across the view axis",
+                bounds.min.to_array(),
+                bounds.max.to_array()
+            )));
+        }
+        let unit = |a: usize| {
+            let mut d = [0.0; 3];
+            d[a] = 1.0;
+            Vec3::from_array(d)
+        };
+        let c = bounds.center();
+        let mut eye = c;
+        // Outside the bounds on the +axis side; projections integrate the
+        // whole line anyway, so the distance only matters for clarity.
+        let eye_axis = bounds.max[axis] + e[axis].max(1.0);
+        match axis {
+            0 => eye.x = eye_axis,
+            1 => eye.y = eye_axis,
+            _ => eye.z = eye_axis,
+        }
+        Ok(Camera {
+            eye,
+            right: unit(u),
+            up: unit(v),
+            forward: -unit(axis),
+            projection: Projection::Orthographic {
+                half_width: 0.5 * e[u],
+                half_height: 0.5 * e[v],
+            },
+        })
+    }
+}

@@ -1,1 +1,454 @@
-//! placeholder
+//! Scenes: a serde description ([`SceneDesc`], read from TOML or built from
+//! command-line flags) resolved into loaded data, camera, transfer function
+//! and render settings ([`LoadedScene`]).
+//!
+//! Resolution is where user input meets the libraries, so every failure here
+//! is a [`SceneError`] naming the file (and field) at fault. Paths in a scene
+//! are relative to the scene file. Defaults come from the data: the camera
+//! frames the bounds, the value range is the data's, and a missing particle
+//! radius is estimated from the mean particle spacing (and reported in
+//! [`LoadedScene::notes`]).
+//!
+//! [`AnyVolume`] is the enum at the top: dispatch on the data kind happens
+//! once per call, and the integrators below it are generic.
+
+pub mod demo;
+pub mod desc;
+mod load;
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+use voxless_core::{Aabb, Camera, Image, Projection, Range1, Vec3, Volume};
+use voxless_io::IoError;
+use voxless_particles::{
+    Classification, Kernel, ParticleData, ParticleError, ParticleSettings, ParticleVolume,
+};
+use voxless_render::{Light, RenderSettings};
+use voxless_transfer::{Colormap, ControlPoints, OpacityMap, TransferError, TransferFunction};
+
+pub use desc::*;
+
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error(transparent)]
+    Io(#[from] IoError),
+    #[error("{path}: {message}")]
+    Toml { path: PathBuf, message: String },
+    #[error("{path}: {message}")]
+    Data { path: PathBuf, message: String },
+    #[error("{path}: {source}")]
+    Particles {
+        path: PathBuf,
+        #[source]
+        source: ParticleError,
+    },
+    #[error("{field}: {message}")]
+    Setting { field: String, message: String },
+    #[error("transfer function: {0}")]
+    Transfer(#[from] TransferError),
+}
+
+impl SceneError {
+    pub fn data(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
+        SceneError::Data {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+    pub fn setting(field: &str, message: impl Into<String>) -> Self {
+        SceneError::Setting {
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+}
+
+/// Reads a TOML scene file (unknown keys are errors, so typos surface).
+pub fn read_scene(path: &Path) -> Result<SceneDesc, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|source| IoError::Io {
+        path: path.into(),
+        source,
+    })?;
+    toml::from_str(&text).map_err(|e| SceneError::Toml {
+        path: path.into(),
+        message: e.to_string(),
+    })
+}
+
+/// Every data kind voxless renders; one variant per kind.
+pub enum AnyVolume {
+    Particles(Box<ParticleVolume>),
+}
+
+/// Runs `$body` with `$v` bound to the concrete volume (monomorphised per kind).
+macro_rules! with_volume {
+    ($any:expr, $v:ident => $body:expr) => {
+        match $any {
+            AnyVolume::Particles($v) => {
+                let $v = &**$v;
+                $body
+            }
+        }
+    };
+}
+
+impl AnyVolume {
+    pub fn bounds(&self) -> Aabb {
+        with_volume!(self, v => v.bounds())
+    }
+    pub fn value_range(&self) -> Range1 {
+        with_volume!(self, v => v.value_range())
+    }
+    pub fn kind(&self) -> &'static str {
+        match self {
+            AnyVolume::Particles(_) => "particles",
+        }
+    }
+
+    /// Renders with the emission–absorption integrator.
+    pub fn render(
+        &self,
+        camera: &Camera,
+        tf: &TransferFunction,
+        settings: &RenderSettings,
+        progress: &(dyn Fn(u64, u64) + Sync),
+    ) -> Image {
+        with_volume!(self, v => voxless_render::render(v, camera, tf, settings, progress))
+    }
+
+    /// Column density `∫ value dt` per pixel, row-major.
+    pub fn project(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        progress: &(dyn Fn(u64, u64) + Sync),
+    ) -> Vec<f32> {
+        with_volume!(self, v => voxless_render::project(v, camera, width, height, progress))
+    }
+
+    /// The integral of the field over all space, when the data kind knows it
+    /// exactly (what a projection over the full bounds must conserve).
+    pub fn total_mass(&self) -> Option<f64> {
+        match self {
+            AnyVolume::Particles(v) => Some(v.total_mass()),
+        }
+    }
+
+    /// Names of the columns [`AnyVolume::sample_points`] writes.
+    pub fn sample_columns(&self, gradient: bool) -> Vec<&'static str> {
+        let mut c = vec!["density"];
+        match self {
+            AnyVolume::Particles(v) if v.has_attribute() => c.push("attribute"),
+            _ => {}
+        }
+        if gradient {
+            c.extend(["d/dx", "d/dy", "d/dz"]);
+        }
+        c
+    }
+
+    /// The fields at every point, row-major `points.len() × columns`.
+    pub fn sample_points(&self, points: &[Vec3], gradient: bool) -> Vec<f32> {
+        match self {
+            AnyVolume::Particles(v) => points
+                .par_iter()
+                .flat_map_iter(|&p| {
+                    let f = v.field(p, gradient);
+                    let mut row = vec![f.density];
+                    if v.has_attribute() {
+                        row.push(f.attribute);
+                    }
+                    if gradient {
+                        row.extend(f.gradient.to_array());
+                    }
+                    row
+                })
+                .collect(),
+        }
+    }
+}
+
+/// Everything a render, sample or projection needs.
+pub struct LoadedScene {
+    pub volume: AnyVolume,
+    pub camera: Camera,
+    pub tf: TransferFunction,
+    pub settings: RenderSettings,
+    /// Linear RGB behind the volume.
+    pub background: [f32; 3],
+    /// Defaults chosen from the data, worth telling the user.
+    pub notes: Vec<String>,
+}
+
+/// Loads the data named by `desc` (paths relative to `base`) and fills every
+/// default.
+pub fn resolve(desc: &SceneDesc, base: &Path) -> Result<LoadedScene, SceneError> {
+    let mut notes = Vec::new();
+    let pdesc = desc.particles.as_ref().ok_or_else(|| {
+        SceneError::setting(
+            "scene",
+            "no data source: add a [particles] table to the scene or pass --particles FILE (or use `voxless demo`)",
+        )
+    })?;
+    let mut volume = load_particles(pdesc, base, &mut notes)?;
+
+    let tf = transfer_function(&desc.transfer)?;
+    volume.classify(&tf);
+    let volume = AnyVolume::Particles(Box::new(volume));
+
+    let width = desc.image.width.unwrap_or(800);
+    let height = desc.image.height.unwrap_or(600);
+    if width == 0 || height == 0 || width > 32768 || height > 32768 {
+        return Err(SceneError::setting(
+            "image size",
+            format!("{width}×{height} is outside 1..=32768 per side"),
+        ));
+    }
+    let spp = desc.image.spp.unwrap_or(1);
+    if spp == 0 {
+        return Err(SceneError::setting("image.spp", "samples per pixel must be ≥ 1"));
+    }
+    let camera = camera(&desc.camera, &volume.bounds(), width as f32 / height as f32)?;
+
+    let mut settings = with_volume!(&volume, v => RenderSettings::for_volume(v, width, height));
+    settings.spp = spp;
+    let r = &desc.render;
+    if let Some(step) = r.step {
+        positive("render.step", step)?;
+        settings.step = Some(step);
+    }
+    if let Some(rate) = r.sampling_rate {
+        positive("render.sampling_rate", rate)?;
+        settings.sampling_rate = rate;
+    }
+    if let Some(et) = r.early_termination {
+        if !(et > 0.0 && et <= 1.0) {
+            return Err(SceneError::setting("render.early_termination", format!("{et} is outside (0, 1]")));
+        }
+        settings.early_termination = et;
+    }
+    if let Some(s) = r.opacity_scale {
+        positive("render.opacity_scale", s)?;
+        settings.opacity_scale = s;
+    }
+    if let Some([lo, hi]) = desc.transfer.value_range {
+        settings.value_range = range("transfer.value_range", lo, hi)?;
+    }
+    settings.seed = r.seed.unwrap_or(0);
+    if let Some(l) = &desc.light {
+        let dir = match l.direction {
+            Some(d) => Vec3::from_array(d).normalized(),
+            None => (camera.up * 0.6 - camera.right * 0.4 - camera.forward * 0.7).normalized(),
+        };
+        if !(dir.is_finite() && dir.length_squared() > 0.5) {
+            return Err(SceneError::setting("light.direction", "must be a finite, non-zero vector"));
+        }
+        let ambient = l.ambient.unwrap_or(0.3);
+        if !(0.0..=1.0).contains(&ambient) {
+            return Err(SceneError::setting("light.ambient", format!("{ambient} is outside [0, 1]")));
+        }
+        settings.light = Some(Light { direction: dir, ambient });
+    }
+    let background = r.background.unwrap_or([0.0; 3]);
+    Ok(LoadedScene {
+        volume,
+        camera,
+        tf,
+        settings,
+        background,
+        notes,
+    })
+}
+
+fn positive(field: &str, v: f32) -> Result<(), SceneError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::setting(field, format!("{v} must be finite and > 0")))
+    }
+}
+
+fn range(field: &str, lo: f32, hi: f32) -> Result<Range1, SceneError> {
+    if lo.is_finite() && hi.is_finite() && lo <= hi {
+        Ok(Range1::new(lo, hi))
+    } else {
+        Err(SceneError::setting(field, format!("[{lo}, {hi}] is not a finite, increasing range")))
+    }
+}
+
+fn parse_kernel(p: &ParticlesDesc) -> Result<Kernel, SceneError> {
+    let name = p.kernel.as_deref().unwrap_or("gaussian3");
+    match name.to_ascii_lowercase().as_str() {
+        "gaussian3" => Ok(Kernel::Gaussian3),
+        "gaussian" => Ok(Kernel::Gaussian {
+            kappa: p.kappa.unwrap_or(1.0),
+            sigma: p.sigma.unwrap_or(2.0),
+        }),
+        "cubic-spline" | "cubic" | "m4" => Ok(Kernel::CubicSpline),
+        _ => Err(SceneError::setting(
+            "particles.kernel",
+            format!("unknown kernel '{name}' (available: {})", voxless_particles::KERNEL_NAMES.join(", ")),
+        )),
+    }
+}
+
+fn control_points(field: &str, pts: &Option<Vec<[f32; 2]>>) -> Result<Option<ControlPoints>, SceneError> {
+    pts.as_ref()
+        .map(|p| {
+            let v: Vec<(f32, f32)> = p.iter().map(|q| (q[0], q[1])).collect();
+            ControlPoints::new(field, &v).map_err(SceneError::from)
+        })
+        .transpose()
+}
+
+fn load_particles(p: &ParticlesDesc, base: &Path, notes: &mut Vec<String>) -> Result<ParticleVolume, SceneError> {
+    let kernel = parse_kernel(p)?;
+    let mut files: Vec<(&'static str, PathBuf)> = Vec::new();
+    let (data, main_file) = match (&p.file, p.demo.unwrap_or(false)) {
+        (Some(f), _) => {
+            let path = base.join(f);
+            let (positions, source) = load::read_positions(&path)?;
+            let n = positions.len();
+            let mut data = ParticleData {
+                positions,
+                ..Default::default()
+            };
+            let mut per = |spec: &Option<String>, what: &'static str| -> Result<Option<Vec<f32>>, SceneError> {
+                spec.as_ref()
+                    .map(|s| {
+                        let (v, path) = load::read_per_particle(s, base, &source, n, what)?;
+                        files.push((what, path));
+                        Ok(v)
+                    })
+                    .transpose()
+            };
+            data.attribute = per(&p.attribute, "attribute")?;
+            data.radii = per(&p.radii, "radii")?;
+            data.weights = per(&p.weights, "weights")?;
+            (data, path)
+        }
+        (None, true) => (demo::galaxy(120_000), PathBuf::from("<demo>")),
+        (None, false) => {
+            return Err(SceneError::setting("particles.file", "no particle file given (or set demo = true)"));
+        }
+    };
+    let radius = match (p.radius, &data.radii) {
+        (Some(r), _) => r,
+        (None, Some(_)) => 1.0,
+        (None, None) => {
+            let r = default_radius(&data.positions, kernel);
+            notes.push(format!(
+                "no radius given: using {r:.4} ({} kernel, support = 2.5 × mean particle spacing)",
+                kernel.name()
+            ));
+            r
+        }
+    };
+    let classification = match p.classification.as_deref().unwrap_or("post") {
+        "post" => Classification::Post,
+        "pre" => Classification::Pre,
+        other => {
+            return Err(SceneError::setting(
+                "particles.classification",
+                format!("'{other}' is not 'post' or 'pre'"),
+            ));
+        }
+    };
+    let attribute_range = p.attribute_range.map(|[a, b]| range("particles.attribute_range", a, b)).transpose()?;
+    let settings = ParticleSettings {
+        kernel,
+        radius,
+        radius_map: control_points("radius map", &p.radius_map)?,
+        weight_map: control_points("weight map", &p.weight_map)?,
+        cluster_size: p.cluster.unwrap_or(8),
+        attribute_range,
+        classification,
+    };
+    ParticleVolume::new(data, settings).map_err(|source| {
+        // Blame the file that holds the bad values.
+        let blamed = |what: &str| files.iter().find(|f| f.0 == what).map(|f| f.1.clone());
+        let path = match &source {
+            ParticleError::BadRadius { .. } => blamed("radii"),
+            ParticleError::BadWeight { .. } => blamed("weights"),
+            ParticleError::NonFiniteValue { what, .. } | ParticleError::LengthMismatch { what, .. } => blamed(what),
+            _ => None,
+        }
+        .unwrap_or(main_file);
+        SceneError::Particles { path, source }
+    })
+}
+
+/// Support radius 2.5× the mean particle spacing, converted to the kernel's
+/// radius parameter. The spacing is `(occupied volume / N)^(1/3)`, with the
+/// occupied volume counted on a coarse grid (about four particles per cell if
+/// the data were uniform), so clustered data — a thin disc in a big box — get
+/// the spacing where the particles actually are.
+fn default_radius(positions: &[Vec3], kernel: Kernel) -> f32 {
+    let mut b = Aabb::EMPTY;
+    for p in positions {
+        b.grow(*p);
+    }
+    let n = positions.len();
+    let longest = b.extent().max_elem().max(1e-12);
+    let res = ((n as f32 / 4.0).cbrt().round() as usize).clamp(1, 128);
+    let cell = longest / res as f32;
+    let dims = b.extent().mul_elem(Vec3::splat(1.0 / cell));
+    let dim = |a: f32| (a.ceil() as usize).clamp(1, res);
+    let (nx, ny, nz) = (dim(dims.x), dim(dims.y), dim(dims.z));
+    let mut occupied = vec![false; nx * ny * nz];
+    for p in positions {
+        let q = (*p - b.min) * (1.0 / cell);
+        let (i, j, k) = ((q.x as usize).min(nx - 1), (q.y as usize).min(ny - 1), (q.z as usize).min(nz - 1));
+        occupied[(k * ny + j) * nx + i] = true;
+    }
+    let count = occupied.iter().filter(|&&o| o).count().max(1);
+    let spacing = (count as f32 * cell * cell * cell / n as f32).cbrt();
+    2.5 * spacing / kernel.support_factor()
+}
+
+pub fn transfer_function(t: &TransferDesc) -> Result<TransferFunction, SceneError> {
+    let colormap = match &t.colormap_points {
+        Some(pts) => {
+            let v: Vec<(f32, [f32; 3])> = pts.iter().map(|p| (p[0], [p[1], p[2], p[3]])).collect();
+            Colormap::from_points(&v)?
+        }
+        None => Colormap::preset(t.colormap.as_deref().unwrap_or("viridis"))?,
+    };
+    let opacity = match &t.opacity_points {
+        Some(pts) => OpacityMap::from_points(&pts.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>())?,
+        None => OpacityMap::preset(t.opacity.as_deref().unwrap_or("linear"))?,
+    };
+    Ok(TransferFunction::new(colormap, opacity))
+}
+
+fn camera(c: &CameraDesc, bounds: &Aabb, aspect: f32) -> Result<Camera, SceneError> {
+    let framing = Camera::framing(bounds, aspect);
+    let eye = c.eye.map(Vec3::from_array).unwrap_or(framing.eye);
+    let look_at = c.look_at.map(Vec3::from_array).unwrap_or(bounds.center());
+    let up = c.up.map(Vec3::from_array).unwrap_or(Vec3::new(0.0, 1.0, 0.0));
+    let projection = match c.projection.as_deref().unwrap_or("perspective") {
+        "perspective" => Projection::Perspective {
+            fov_y_deg: c.fov.unwrap_or(30.0),
+        },
+        "orthographic" | "ortho" => {
+            let h = c.ortho_height.unwrap_or(bounds.diagonal());
+            positive("camera.ortho_height", h)?;
+            Projection::Orthographic {
+                half_width: 0.5 * h * aspect,
+                half_height: 0.5 * h,
+            }
+        }
+        other => {
+            return Err(SceneError::setting(
+                "camera.projection",
+                format!("'{other}' is not 'perspective' or 'orthographic'"),
+            ));
+        }
+    };
+    Camera::look_at(eye, look_at, up, projection).map_err(|e| SceneError::setting("camera", e.to_string()))
+}
+
+#[cfg(test)]
+mod tests;

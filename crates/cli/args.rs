@@ -1,0 +1,208 @@
+//! Command-line flags that mirror the scene file, and how they override it.
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use voxless_scene::{LightDesc, ParticlesDesc, SceneDesc};
+
+/// Every scene setting a one-off run needs, as flags (they override the scene file).
+#[derive(Args, Debug, Default, Clone)]
+pub struct SceneArgs {
+    /// Scene file (TOML); optional when --particles is given.
+    pub scene: Option<PathBuf>,
+
+    // ---- data ----
+    /// Particle positions: .npy N×3 (float32/float64) or CSV with x, y, z columns.
+    #[arg(long, help_heading = "Particles")]
+    pub particles: Option<PathBuf>,
+    /// Per-particle attribute: .npy with N values, or a CSV column name.
+    #[arg(long, help_heading = "Particles")]
+    pub attribute: Option<String>,
+    /// Global radius parameter (support for gaussian3, std-dev for gaussian, h for cubic-spline).
+    #[arg(long, help_heading = "Particles")]
+    pub radius: Option<f32>,
+    /// Per-particle radii: .npy with N values, or a CSV column name.
+    #[arg(long, help_heading = "Particles")]
+    pub radii: Option<String>,
+    /// Per-particle weights (masses for cubic-spline): .npy or CSV column.
+    #[arg(long, help_heading = "Particles")]
+    pub weights: Option<String>,
+    /// RBF kernel: gaussian3 (default), gaussian, cubic-spline.
+    #[arg(long, help_heading = "Particles")]
+    pub kernel: Option<String>,
+    /// Global density scale κ of the gaussian kernel (default 1).
+    #[arg(long, help_heading = "Particles")]
+    pub kappa: Option<f32>,
+    /// Truncation σ of the gaussian kernel, in radii (default 2).
+    #[arg(long, help_heading = "Particles")]
+    pub sigma: Option<f32>,
+    /// Particles per BVH leaf cluster, 1..=16 (default 8).
+    #[arg(long, help_heading = "Particles")]
+    pub cluster: Option<usize>,
+    /// Attribute classification: post (average, then colour-map) or pre.
+    #[arg(long, help_heading = "Particles")]
+    pub classification: Option<String>,
+    /// Attribute range mapped to the colormap / maps.
+    #[arg(long, num_args = 2, value_names = ["LO", "HI"], help_heading = "Particles", allow_negative_numbers = true)]
+    pub attribute_range: Option<Vec<f32>>,
+
+    // ---- image ----
+    /// Image size in pixels.
+    #[arg(long, num_args = 2, value_names = ["W", "H"], help_heading = "Image")]
+    pub size: Option<Vec<u32>>,
+    /// Samples per pixel (progressively accumulated).
+    #[arg(long, help_heading = "Image")]
+    pub spp: Option<u32>,
+
+    // ---- transfer function ----
+    /// Colormap preset (see `voxless colormaps`).
+    #[arg(long, help_heading = "Transfer function")]
+    pub colormap: Option<String>,
+    /// Opacity preset: linear, constant, ramp-high, ramp-low.
+    #[arg(long, help_heading = "Transfer function")]
+    pub opacity: Option<String>,
+    /// Value range mapped to [0, 1] (default: from the data).
+    #[arg(long, num_args = 2, value_names = ["LO", "HI"], help_heading = "Transfer function", allow_negative_numbers = true)]
+    pub value_range: Option<Vec<f32>>,
+
+    // ---- camera ----
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true)]
+    pub eye: Option<Vec<f32>>,
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true)]
+    pub look_at: Option<Vec<f32>>,
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true)]
+    pub up: Option<Vec<f32>>,
+    /// Vertical field of view in degrees.
+    #[arg(long, help_heading = "Camera")]
+    pub fov: Option<f32>,
+    /// Orthographic projection with this view height (world units).
+    #[arg(long, value_name = "HEIGHT", help_heading = "Camera")]
+    pub orthographic: Option<f32>,
+
+    // ---- render ----
+    /// Ray-marching step in world units (default: 1/8 of the median support radius).
+    #[arg(long, help_heading = "Render")]
+    pub step: Option<f32>,
+    /// Stop marching at this opacity (default 0.99).
+    #[arg(long, help_heading = "Render")]
+    pub early_termination: Option<f32>,
+    /// Extinction per unit length at opacity 1 (default 8 / bounds diagonal).
+    #[arg(long, help_heading = "Render")]
+    pub opacity_scale: Option<f32>,
+    /// Background colour, linear RGB.
+    #[arg(long, num_args = 3, value_names = ["R", "G", "B"], help_heading = "Render")]
+    pub background: Option<Vec<f32>>,
+    /// Gradient shading with a directional light.
+    #[arg(long, help_heading = "Render")]
+    pub shade: bool,
+    /// Direction towards the light (implies --shade).
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Render", allow_negative_numbers = true)]
+    pub light_dir: Option<Vec<f32>>,
+    /// Random seed for jitter.
+    #[arg(long, help_heading = "Render")]
+    pub seed: Option<u64>,
+}
+
+fn arr3(v: &Option<Vec<f32>>) -> Option<[f32; 3]> {
+    v.as_ref().map(|v| [v[0], v[1], v[2]])
+}
+fn arr2(v: &Option<Vec<f32>>) -> Option<[f32; 2]> {
+    v.as_ref().map(|v| [v[0], v[1]])
+}
+
+/// Paths from the command line are relative to the working directory; make
+/// them absolute so resolving against the scene's directory leaves them be.
+fn cwd_path(s: &str) -> String {
+    let p = Path::new(s);
+    if p.is_absolute() || p.extension().is_none() {
+        // No extension: possibly a CSV column name; leave it alone.
+        return s.to_string();
+    }
+    std::env::current_dir().map(|d| d.join(p).to_string_lossy().into_owned()).unwrap_or_else(|_| s.to_string())
+}
+
+impl SceneArgs {
+    /// Loads the scene file (if any) and applies the flags on top. Returns the
+    /// description and the directory its relative paths are relative to.
+    pub fn scene(&self) -> anyhow::Result<(SceneDesc, PathBuf)> {
+        let (mut d, base) = match &self.scene {
+            Some(path) => {
+                let d = voxless_scene::read_scene(path)?;
+                let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+                (d, base)
+            }
+            None => (SceneDesc::default(), PathBuf::from(".")),
+        };
+        self.apply(&mut d);
+        Ok((d, base))
+    }
+
+    fn apply(&self, d: &mut SceneDesc) {
+        let has_particle_flags = self.particles.is_some()
+            || self.attribute.is_some()
+            || self.radius.is_some()
+            || self.radii.is_some()
+            || self.weights.is_some()
+            || self.kernel.is_some()
+            || self.kappa.is_some()
+            || self.sigma.is_some()
+            || self.cluster.is_some()
+            || self.classification.is_some()
+            || self.attribute_range.is_some();
+        if has_particle_flags {
+            let p = d.particles.get_or_insert_with(ParticlesDesc::default);
+            if let Some(f) = &self.particles {
+                let f = f.to_string_lossy();
+                p.file = Some(cwd_path(&f));
+                p.demo = None;
+            }
+            set(&mut p.attribute, self.attribute.as_deref().map(cwd_path));
+            set(&mut p.radius, self.radius);
+            set(&mut p.radii, self.radii.as_deref().map(cwd_path));
+            set(&mut p.weights, self.weights.as_deref().map(cwd_path));
+            set(&mut p.kernel, self.kernel.clone());
+            set(&mut p.kappa, self.kappa);
+            set(&mut p.sigma, self.sigma);
+            set(&mut p.cluster, self.cluster);
+            set(&mut p.classification, self.classification.clone());
+            set(&mut p.attribute_range, arr2(&self.attribute_range));
+        }
+        if let Some(s) = &self.size {
+            d.image.width = Some(s[0]);
+            d.image.height = Some(s[1]);
+        }
+        set(&mut d.image.spp, self.spp);
+        if self.colormap.is_some() {
+            d.transfer.colormap_points = None;
+        }
+        set(&mut d.transfer.colormap, self.colormap.clone());
+        if self.opacity.is_some() {
+            d.transfer.opacity_points = None;
+        }
+        set(&mut d.transfer.opacity, self.opacity.clone());
+        set(&mut d.transfer.value_range, arr2(&self.value_range));
+        set(&mut d.camera.eye, arr3(&self.eye));
+        set(&mut d.camera.look_at, arr3(&self.look_at));
+        set(&mut d.camera.up, arr3(&self.up));
+        set(&mut d.camera.fov, self.fov);
+        if let Some(h) = self.orthographic {
+            d.camera.projection = Some("orthographic".into());
+            d.camera.ortho_height = Some(h);
+        }
+        set(&mut d.render.step, self.step);
+        set(&mut d.render.early_termination, self.early_termination);
+        set(&mut d.render.opacity_scale, self.opacity_scale);
+        set(&mut d.render.background, arr3(&self.background));
+        set(&mut d.render.seed, self.seed);
+        if self.shade || self.light_dir.is_some() {
+            let l = d.light.get_or_insert_with(LightDesc::default);
+            set(&mut l.direction, arr3(&self.light_dir));
+        }
+    }
+}
+
+fn set<T>(slot: &mut Option<T>, v: Option<T>) {
+    if v.is_some() {
+        *slot = v;
+    }
+}

@@ -1,0 +1,255 @@
+//! `voxless`: render particles in their native form from the terminal.
+//! Thin front-end: parse flags, resolve the scene, call the libraries, write files.
+
+mod args;
+mod bench;
+mod progress;
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand};
+use voxless_core::{Aabb, Camera, Vec3};
+use voxless_scene::{LoadedScene, ParticlesDesc};
+
+use args::SceneArgs;
+use progress::Progress;
+
+#[derive(Parser)]
+#[command(name = "voxless", version, about = "Render particles, AMR cells and phase-space tessellations without resampling them onto a grid")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render the built-in demo particles (a spiral galaxy) to a PNG.
+    Demo {
+        /// Output image (.png, or .exr for linear float RGBA).
+        #[arg(short, long, default_value = "demo.png")]
+        output: PathBuf,
+        #[command(flatten)]
+        scene: SceneArgs,
+    },
+    /// Render a scene (TOML file and/or flags) to an image.
+    Render {
+        /// Output image (.png, or .exr for linear float RGBA).
+        #[arg(short, long, default_value = "out.png")]
+        output: PathBuf,
+        #[command(flatten)]
+        scene: SceneArgs,
+    },
+    /// Evaluate the reconstructed fields at points: writes float32 N×k .npy,
+    /// columns Φ, then Θ (with an attribute), then ∂Φ/∂x, ∂Φ/∂y, ∂Φ/∂z (with --gradient).
+    Sample {
+        /// Points: .npy N×3, float32 or float64.
+        #[arg(long)]
+        points: PathBuf,
+        /// Output .npy.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Also write the analytic gradient of Φ.
+        #[arg(long)]
+        gradient: bool,
+        #[command(flatten)]
+        scene: SceneArgs,
+    },
+    /// Column density ∫Φ dt per pixel, orthographic down an axis, covering the
+    /// data bounds: float32 H×W .npy (or .exr), row 0 at the top.
+    Project {
+        /// View axis: x, y or z (looking down −axis).
+        #[arg(long, default_value = "z")]
+        axis: String,
+        /// Override the bounds covered: x0 y0 z0 x1 y1 z1.
+        #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], allow_negative_numbers = true)]
+        bounds: Option<Vec<f32>>,
+        /// Output .npy (float32 H×W) or .exr (one channel "Y").
+        #[arg(short, long)]
+        output: PathBuf,
+        #[command(flatten)]
+        scene: SceneArgs,
+    },
+    /// List the built-in colormaps.
+    Colormaps,
+    /// Run the benchmarks and print a markdown table (see docs/benchmarks.md).
+    Bench(bench::BenchArgs),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    if let Err(e) = run(cli) {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Demo { output, scene } => {
+            let (mut desc, base) = scene.scene()?;
+            if desc.particles.is_none() {
+                desc.particles = Some(ParticlesDesc {
+                    demo: Some(true),
+                    attribute_range: Some([0.0, 1.0]),
+                    ..Default::default()
+                });
+            }
+            // The demo's look: a galaxy seen from above at an angle, shaded.
+            desc.image.width.get_or_insert(800);
+            desc.image.height.get_or_insert(450);
+            desc.render.sampling_rate.get_or_insert(0.5);
+            desc.transfer.colormap.get_or_insert_with(|| "inferno".into());
+            desc.camera.eye.get_or_insert([0.0, 1.3, 1.85]);
+            desc.render.opacity_scale.get_or_insert(10.0);
+            desc.camera.look_at.get_or_insert([0.0, -0.1, 0.0]);
+            desc.light.get_or_insert_with(Default::default);
+            render_to(&resolve(&desc, &base)?, &output)
+        }
+        Command::Render { output, scene } => {
+            let (desc, base) = scene.scene()?;
+            render_to(&resolve(&desc, &base)?, &output)
+        }
+        Command::Sample {
+            points,
+            output,
+            gradient,
+            scene,
+        } => {
+            let (desc, base) = scene.scene()?;
+            let s = resolve(&desc, &base)?;
+            let pts = read_points(&points)?;
+            let cols = s.volume.sample_columns(gradient);
+            let t = Instant::now();
+            let values = s.volume.sample_points(&pts, gradient);
+            voxless_io::write_npy_f32(&output, &[pts.len(), cols.len()], &values)?;
+            eprintln!(
+                "sampled {} points in {:.2}s → {} (columns: {})",
+                pts.len(),
+                t.elapsed().as_secs_f64(),
+                output.display(),
+                cols.join(", ")
+            );
+            Ok(())
+        }
+        Command::Project {
+            axis,
+            bounds,
+            output,
+            scene,
+        } => {
+            let (desc, base) = scene.scene()?;
+            let s = resolve(&desc, &base)?;
+            let axis_index = match axis.as_str() {
+                "x" | "X" => 0,
+                "y" | "Y" => 1,
+                "z" | "Z" => 2,
+                other => bail!("--axis must be x, y or z, not '{other}'"),
+            };
+            let b = match bounds {
+                Some(v) => Aabb::new(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5])),
+                None => s.volume.bounds(),
+            };
+            let camera = Camera::axis_projection(&b, axis_index).context("--bounds")?;
+            let (w, h) = (s.settings.width, s.settings.height);
+            let progress = Progress::new("projecting", h as u64);
+            let t = Instant::now();
+            let column = s.volume.project(&camera, w, h, &|d, _| progress.set(d));
+            progress.finish();
+            write_gray(&output, w, h, &column)?;
+            let (u, v) = match axis_index {
+                0 => (1, 2),
+                1 => (0, 2),
+                _ => (0, 1),
+            };
+            let pixel_area = (b.extent()[u] / w as f32) as f64 * (b.extent()[v] / h as f32) as f64;
+            let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * pixel_area;
+            let mass = s.volume.total_mass().map(|m| format!(", total kernel mass {m:.6e}")).unwrap_or_default();
+            eprintln!(
+                "projected {w}×{h} in {:.2}s → {} (Σ column × pixel area = {integral:.6e}{mass})",
+                t.elapsed().as_secs_f64(),
+                output.display()
+            );
+            Ok(())
+        }
+        Command::Colormaps => {
+            for name in voxless_transfer::COLORMAP_NAMES {
+                println!("{name}");
+            }
+            Ok(())
+        }
+        Command::Bench(args) => bench::run(args),
+    }
+}
+
+fn resolve(desc: &voxless_scene::SceneDesc, base: &Path) -> Result<LoadedScene> {
+    let t = Instant::now();
+    let s = voxless_scene::resolve(desc, base)?;
+    for n in &s.notes {
+        eprintln!("note: {n}");
+    }
+    let b = s.volume.bounds();
+    eprintln!(
+        "loaded {} in {:.2}s: bounds [{:.3}, {:.3}, {:.3}]..[{:.3}, {:.3}, {:.3}], value range [{:.4e}, {:.4e}]",
+        s.volume.kind(),
+        t.elapsed().as_secs_f64(),
+        b.min.x,
+        b.min.y,
+        b.min.z,
+        b.max.x,
+        b.max.y,
+        b.max.z,
+        s.settings.value_range.lo,
+        s.settings.value_range.hi,
+    );
+    Ok(s)
+}
+
+fn is_exr(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+}
+
+fn render_to(s: &LoadedScene, output: &Path) -> Result<()> {
+    let st = &s.settings;
+    let tiles = st.width.div_ceil(voxless_render::TILE) as u64 * st.height.div_ceil(voxless_render::TILE) as u64;
+    let progress = Progress::new("rendering", tiles * st.spp as u64);
+    let t = Instant::now();
+    let image = s.volume.render(&s.camera, &s.tf, st, &|d, _| progress.set(d));
+    progress.finish();
+    let secs = t.elapsed().as_secs_f64();
+    if is_exr(output) {
+        voxless_io::write_exr_rgba(output, image.width as usize, image.height as usize, &image.to_rgba_f32())?;
+    } else {
+        voxless_io::write_png_rgb8(output, image.width, image.height, &image.to_srgb8(s.background))?;
+    }
+    eprintln!(
+        "rendered {}×{} at {} spp in {secs:.2}s → {}",
+        st.width,
+        st.height,
+        st.spp,
+        output.display()
+    );
+    Ok(())
+}
+
+fn write_gray(path: &Path, w: u32, h: u32, values: &[f32]) -> Result<()> {
+    if is_exr(path) {
+        voxless_io::write_exr_gray(path, w as usize, h as usize, values)?;
+    } else {
+        voxless_io::write_npy_f32(path, &[h as usize, w as usize], values)?;
+    }
+    Ok(())
+}
+
+fn read_points(path: &Path) -> Result<Vec<Vec3>> {
+    let a = voxless_io::read_npy(path)?;
+    if a.shape.len() != 2 || a.shape[1] != 3 {
+        bail!("{}: expected an N×3 array of points, found shape {:?}", path.display(), a.shape);
+    }
+    let pts: Vec<Vec3> = a.data.chunks_exact(3).map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect();
+    if let Some(i) = pts.iter().position(|p| !p.is_finite()) {
+        bail!("{}: point {i} has a non-finite coordinate", path.display());
+    }
+    Ok(pts)
+}

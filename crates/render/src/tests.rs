@@ -1,0 +1,115 @@
+use super::*;
+use voxless_core::{Aabb, Projection, Sample};
+use voxless_transfer::{Colormap, OpacityMap};
+
+/// A procedural homogeneous slab `z ∈ [0, thickness]` of value 1 with exact
+/// intervals — an analytic oracle for the integrator.
+struct Slab {
+    thickness: f32,
+}
+
+impl Volume for Slab {
+    fn bounds(&self) -> Aabb {
+        Aabb::new(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, self.thickness))
+    }
+    fn value_range(&self) -> Range1 {
+        Range1::new(0.0, 1.0)
+    }
+    fn sample(&self, p: Vec3) -> Option<Sample> {
+        self.bounds().contains(p).then(|| Sample::scalar(1.0))
+    }
+    fn intervals(&self, ray: &Ray, t: Range1, _: &IntervalQuery, out: &mut Vec<Interval>) {
+        let c = self.bounds().clip_ray(ray, t);
+        if !c.is_empty() {
+            out.push(Interval {
+                t: c,
+                value_range: Range1::new(1.0, 1.0),
+                nominal_dt: 0.1,
+            });
+        }
+    }
+}
+
+fn white_constant() -> TransferFunction {
+    TransferFunction::new(
+        Colormap::preset("gray").unwrap(),
+        OpacityMap::preset("constant").unwrap(),
+    )
+}
+
+#[test]
+fn homogeneous_slab_transmittance_is_exact_at_any_step() {
+    let thickness = 0.37;
+    let slab = Slab { thickness };
+    let sigma = 3.0;
+    let tf = white_constant();
+    let camera = Camera::look_at(
+        Vec3::new(0.0, 0.0, 5.0),
+        Vec3::ZERO,
+        Vec3::new(0.0, 1.0, 0.0),
+        Projection::Orthographic {
+            half_width: 0.5,
+            half_height: 0.5,
+        },
+    )
+    .unwrap();
+    let want = (-sigma * thickness).exp();
+    for step in [0.001, 0.01, 0.033, 0.1, 0.2, 0.3, 0.5, 2.0] {
+        let settings = RenderSettings {
+            step: Some(step),
+            opacity_scale: sigma,
+            early_termination: 1.0,
+            ..RenderSettings::for_volume(&slab, 8, 8)
+        };
+        let img = render(&slab, &camera, &tf, &settings, &|_, _| {});
+        for p in &img.pixels {
+            let transmittance = 1.0 - p[3];
+            assert!((transmittance - want).abs() < 1e-3, "step {step}: T = {transmittance}, want {want}");
+        }
+    }
+    // A tilted ray crosses thickness / cos θ.
+    let cos = 0.8f32;
+    let ray = Ray::new(Vec3::new(-1.0, 0.0, 2.0), Vec3::new(0.6, 0.0, -cos));
+    let settings = RenderSettings {
+        step: Some(0.07),
+        opacity_scale: sigma,
+        early_termination: 1.0,
+        ..RenderSettings::for_volume(&slab, 1, 1)
+    };
+    let a = march(&slab, &ray, &tf, &settings, &PixelRng::new(0, 0, 0), &mut Vec::new())[3];
+    assert!(((1.0 - a) - (-sigma * thickness / cos).exp()).abs() < 1e-3);
+}
+
+#[test]
+fn early_termination_stops_at_the_threshold() {
+    let slab = Slab { thickness: 0.5 };
+    let tf = white_constant();
+    let ray = Ray::new(Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 0.0, -1.0));
+    let settings = RenderSettings {
+        step: Some(0.001),
+        opacity_scale: 100.0,
+        early_termination: 0.9,
+        ..RenderSettings::for_volume(&slab, 1, 1)
+    };
+    let a = march(&slab, &ray, &tf, &settings, &PixelRng::new(0, 0, 0), &mut Vec::new())[3];
+    assert!((0.9..0.92).contains(&a), "alpha {a}");
+}
+
+#[test]
+fn project_of_the_slab_is_its_thickness() {
+    let slab = Slab { thickness: 0.25 };
+    let camera = Camera::look_at(
+        Vec3::new(0.0, 0.0, 5.0),
+        Vec3::ZERO,
+        Vec3::new(0.0, 1.0, 0.0),
+        Projection::Orthographic {
+            half_width: 0.9,
+            half_height: 0.9,
+        },
+    )
+    .unwrap();
+    // The default line integral (Simpson over intervals) of a constant 1.
+    for v in project(&slab, &camera, 4, 4, &|_, _| {}) {
+        assert!((v - 0.25).abs() < 1e-5, "{v}");
+    }
+}

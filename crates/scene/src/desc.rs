@@ -1,0 +1,113 @@
+//! The serde description of a scene: what a TOML file (or the command line)
+//! says, before any file is read. Every field is optional; [`crate::resolve`]
+//! fills defaults from the data.
+
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDesc {
+    pub particles: Option<ParticlesDesc>,
+    #[serde(default)]
+    pub camera: CameraDesc,
+    #[serde(default)]
+    pub image: ImageDesc,
+    #[serde(default)]
+    pub transfer: TransferDesc,
+    #[serde(default)]
+    pub render: RenderDesc,
+    pub light: Option<LightDesc>,
+}
+
+/// A particle data source. Paths are relative to the scene file.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ParticlesDesc {
+    /// `.npy` N×3 (float32/float64) or CSV with a header naming x, y, z.
+    pub file: Option<String>,
+    /// The built-in demo particles instead of a file.
+    pub demo: Option<bool>,
+    /// `.npy` with N values, or the name of a CSV column.
+    pub attribute: Option<String>,
+    /// Global radius parameter (support radius for gaussian3, standard
+    /// deviation for gaussian, smoothing length h for cubic-spline).
+    pub radius: Option<f32>,
+    /// Per-particle radii: `.npy` with N values or a CSV column.
+    pub radii: Option<String>,
+    /// Per-particle weights (masses for cubic-spline): `.npy` or a CSV column.
+    pub weights: Option<String>,
+    /// gaussian3 (default), gaussian, cubic-spline.
+    pub kernel: Option<String>,
+    pub kappa: Option<f32>,
+    pub sigma: Option<f32>,
+    /// Particles per BVH leaf, 1..=16 (default 8).
+    pub cluster: Option<usize>,
+    /// post (default) or pre.
+    pub classification: Option<String>,
+    /// `[[attribute, fraction], ...]` over the normalised attribute.
+    pub radius_map: Option<Vec<[f32; 2]>>,
+    /// `[[attribute, weight], ...]` over the normalised attribute.
+    pub weight_map: Option<Vec<[f32; 2]>>,
+    pub attribute_range: Option<[f32; 2]>,
+}
+
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    pub eye: Option<[f32; 3]>,
+    pub look_at: Option<[f32; 3]>,
+    pub up: Option<[f32; 3]>,
+    /// Vertical field of view in degrees (perspective).
+    pub fov: Option<f32>,
+    /// perspective (default) or orthographic.
+    pub projection: Option<String>,
+    /// World-space height of the view (orthographic).
+    pub ortho_height: Option<f32>,
+}
+
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ImageDesc {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub spp: Option<u32>,
+}
+
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TransferDesc {
+    /// A preset name (see `voxless colormaps`).
+    pub colormap: Option<String>,
+    /// `[[x, r, g, b], ...]` sRGB control points; overrides `colormap`.
+    pub colormap_points: Option<Vec<[f32; 4]>>,
+    /// An opacity preset: linear (default), constant, ramp-high, ramp-low.
+    pub opacity: Option<String>,
+    /// `[[x, opacity], ...]`; overrides `opacity`.
+    pub opacity_points: Option<Vec<[f32; 2]>>,
+    /// Value range mapped to [0, 1]; from the data by default.
+    pub value_range: Option<[f32; 2]>,
+}
+
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RenderDesc {
+    /// World-space step; default: the data's nominal step / sampling_rate.
+    pub step: Option<f32>,
+    pub sampling_rate: Option<f32>,
+    pub early_termination: Option<f32>,
+    /// Extinction per unit length at opacity 1; default 8 / bounds diagonal.
+    pub opacity_scale: Option<f32>,
+    /// Linear RGB background.
+    pub background: Option<[f32; 3]>,
+    pub seed: Option<u64>,
+}
+
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LightDesc {
+    /// Direction towards the light, world space; default: over the camera's
+    /// left shoulder.
+    pub direction: Option<[f32; 3]>,
+    /// Fraction of colour kept in full shade (default 0.3).
+    pub ambient: Option<f32>,
+}

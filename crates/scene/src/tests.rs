@@ -1,0 +1,24 @@
+use super::*;
+
+#[test]
+fn example_scene_parses() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/galaxy.toml");
+    let desc = read_scene(&path).unwrap();
+    assert!(desc.particles.is_some());
+}
+
+#[test]
+fn unknown_keys_are_errors_naming_the_file() {
+    let dir = std::env::temp_dir().join(format!("voxless-scene-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("typo.toml");
+    std::fs::write(&path, "[particles]\nfiel = \"x.npy\"\n").unwrap();
+    let e = read_scene(&path).unwrap_err().to_string();
+    assert!(e.contains("typo.toml") && e.contains("fiel"), "{e}");
+}
+
+#[test]
+fn missing_data_source_is_explained() {
+    let e = resolve(&SceneDesc::default(), Path::new(".")).err().unwrap().to_string();
+    assert!(e.contains("--particles"), "{e}");
+}
