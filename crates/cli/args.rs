@@ -19,7 +19,7 @@ pub struct SceneArgs {
     #[arg(long, help_heading = "Particles")]
     pub attribute: Option<String>,
     /// Global radius parameter (support for gaussian3, std-dev for gaussian, h for cubic-spline).
-    #[arg(long, help_heading = "Particles")]
+    #[arg(long, help_heading = "Particles", allow_negative_numbers = true)]
     pub radius: Option<f32>,
     /// Per-particle radii: .npy with N values, or a CSV column name.
     #[arg(long, help_heading = "Particles")]
@@ -31,10 +31,10 @@ pub struct SceneArgs {
     #[arg(long, help_heading = "Particles")]
     pub kernel: Option<String>,
     /// Global density scale κ of the gaussian kernel (default 1).
-    #[arg(long, help_heading = "Particles")]
+    #[arg(long, help_heading = "Particles", allow_negative_numbers = true)]
     pub kappa: Option<f32>,
     /// Truncation σ of the gaussian kernel, in radii (default 2).
-    #[arg(long, help_heading = "Particles")]
+    #[arg(long, help_heading = "Particles", allow_negative_numbers = true)]
     pub sigma: Option<f32>,
     /// Particles per BVH leaf cluster, 1..=16 (default 8).
     #[arg(long, help_heading = "Particles")]
@@ -73,21 +73,21 @@ pub struct SceneArgs {
     #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true)]
     pub up: Option<Vec<f32>>,
     /// Vertical field of view in degrees.
-    #[arg(long, help_heading = "Camera")]
+    #[arg(long, help_heading = "Camera", allow_negative_numbers = true)]
     pub fov: Option<f32>,
     /// Orthographic projection with this view height (world units).
-    #[arg(long, value_name = "HEIGHT", help_heading = "Camera")]
+    #[arg(long, value_name = "HEIGHT", help_heading = "Camera", allow_negative_numbers = true)]
     pub orthographic: Option<f32>,
 
     // ---- render ----
     /// Ray-marching step in world units (default: 1/8 of the median support radius).
-    #[arg(long, help_heading = "Render")]
+    #[arg(long, help_heading = "Render", allow_negative_numbers = true)]
     pub step: Option<f32>,
     /// Stop marching at this opacity (default 0.99).
-    #[arg(long, help_heading = "Render")]
+    #[arg(long, help_heading = "Render", allow_negative_numbers = true)]
     pub early_termination: Option<f32>,
     /// Extinction per unit length at opacity 1 (default 8 / bounds diagonal).
-    #[arg(long, help_heading = "Render")]
+    #[arg(long, help_heading = "Render", allow_negative_numbers = true)]
     pub opacity_scale: Option<f32>,
     /// Background colour, linear RGB.
     #[arg(long, num_args = 3, value_names = ["R", "G", "B"], help_heading = "Render")]

@@ -1,0 +1,86 @@
+//! Helpers shared by the end-to-end tests: a scratch directory, running the
+//! binary, and deterministic particle sets.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+pub struct Scratch(pub PathBuf);
+
+impl Scratch {
+    pub fn new(name: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("voxless-test-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+    pub fn path(&self, file: &str) -> PathBuf {
+        self.0.join(file)
+    }
+    pub fn str(&self, file: &str) -> String {
+        self.path(file).to_string_lossy().into_owned()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Runs `voxless` with `args`; returns (success, stderr, output).
+pub fn voxless(args: &[&str]) -> (bool, String, Output) {
+    let out = Command::new(env!("CARGO_BIN_EXE_voxless")).args(args).output().unwrap();
+    (out.status.success(), String::from_utf8_lossy(&out.stderr).into_owned(), out)
+}
+
+pub fn ok(args: &[&str]) -> String {
+    let (success, stderr, _) = voxless(args);
+    assert!(success, "voxless {args:?} failed:\n{stderr}");
+    stderr
+}
+
+pub fn fails(args: &[&str]) -> String {
+    let (success, stderr, _) = voxless(args);
+    assert!(!success, "voxless {args:?} should have failed:\n{stderr}");
+    assert!(!stderr.contains("panicked"), "voxless {args:?} panicked:\n{stderr}");
+    stderr
+}
+
+pub struct Lcg(pub u64);
+impl Lcg {
+    pub fn f(&mut self) -> f32 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+}
+
+/// `n` random positions in the unit cube, written as N×3 float32 .npy.
+pub fn write_positions(path: &Path, n: usize, seed: u64) -> Vec<[f32; 3]> {
+    let mut rng = Lcg(seed);
+    let p: Vec<[f32; 3]> = (0..n).map(|_| [rng.f(), rng.f(), rng.f()]).collect();
+    let flat: Vec<f32> = p.iter().flatten().copied().collect();
+    voxless_io::write_npy_f32(path, &[n, 3], &flat).unwrap();
+    p
+}
+
+pub fn write_values(path: &Path, v: &[f32]) {
+    voxless_io::write_npy_f32(path, &[v.len()], v).unwrap();
+}
+
+/// Reads a float .npy into (shape, values).
+pub fn read(path: &Path) -> (Vec<usize>, Vec<f64>) {
+    let a = voxless_io::read_npy(path).unwrap();
+    (a.shape, a.data)
+}
+
+/// Where the project's shared real data lives next to the repository, if present.
+pub fn shared_data(sub: &str) -> Option<PathBuf> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(sub);
+    if p.exists() {
+        Some(p)
+    } else {
+        eprintln!("notice: {} not found; skipping the real-data part of this test", p.display());
+        None
+    }
+}
