@@ -76,7 +76,12 @@ pub struct SceneArgs {
     #[arg(long, help_heading = "Camera", allow_negative_numbers = true)]
     pub fov: Option<f32>,
     /// Orthographic projection with this view height (world units).
-    #[arg(long, value_name = "HEIGHT", help_heading = "Camera", allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "HEIGHT",
+        help_heading = "Camera",
+        allow_negative_numbers = true
+    )]
     pub orthographic: Option<f32>,
 
     // ---- render ----
@@ -118,7 +123,9 @@ fn cwd_path(s: &str) -> String {
         // No extension: possibly a CSV column name; leave it alone.
         return s.to_string();
     }
-    std::env::current_dir().map(|d| d.join(p).to_string_lossy().into_owned()).unwrap_or_else(|_| s.to_string())
+    std::env::current_dir()
+        .map(|d| d.join(p).to_string_lossy().into_owned())
+        .unwrap_or_else(|_| s.to_string())
 }
 
 impl SceneArgs {

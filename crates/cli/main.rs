@@ -17,7 +17,11 @@ use args::SceneArgs;
 use progress::Progress;
 
 #[derive(Parser)]
-#[command(name = "voxless", version, about = "Render particles, AMR cells and phase-space tessellations without resampling them onto a grid")]
+#[command(
+    name = "voxless",
+    version,
+    about = "Render particles, AMR cells and phase-space tessellations without resampling them onto a grid"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -100,7 +104,9 @@ fn run(cli: Cli) -> Result<()> {
             desc.image.width.get_or_insert(800);
             desc.image.height.get_or_insert(450);
             desc.render.sampling_rate.get_or_insert(0.5);
-            desc.transfer.colormap.get_or_insert_with(|| "inferno".into());
+            desc.transfer
+                .colormap
+                .get_or_insert_with(|| "inferno".into());
             desc.camera.eye.get_or_insert([0.0, 1.3, 1.85]);
             desc.render.opacity_scale.get_or_insert(10.0);
             desc.camera.look_at.get_or_insert([0.0, -0.1, 0.0]);
@@ -165,7 +171,11 @@ fn run(cli: Cli) -> Result<()> {
             };
             let pixel_area = (b.extent()[u] / w as f32) as f64 * (b.extent()[v] / h as f32) as f64;
             let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * pixel_area;
-            let mass = s.volume.total_mass().map(|m| format!(", total kernel mass {m:.6e}")).unwrap_or_default();
+            let mass = s
+                .volume
+                .total_mass()
+                .map(|m| format!(", total kernel mass {m:.6e}"))
+                .unwrap_or_default();
             eprintln!(
                 "projected {w}×{h} in {:.2}s → {} (Σ column × pixel area = {integral:.6e}{mass})",
                 t.elapsed().as_secs_f64(),
@@ -207,21 +217,35 @@ fn resolve(desc: &voxless_scene::SceneDesc, base: &Path) -> Result<LoadedScene> 
 }
 
 fn is_exr(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
 }
 
 fn render_to(s: &LoadedScene, output: &Path) -> Result<()> {
     let st = &s.settings;
-    let tiles = st.width.div_ceil(voxless_render::TILE) as u64 * st.height.div_ceil(voxless_render::TILE) as u64;
+    let tiles = st.width.div_ceil(voxless_render::TILE) as u64
+        * st.height.div_ceil(voxless_render::TILE) as u64;
     let progress = Progress::new("rendering", tiles * st.spp as u64);
     let t = Instant::now();
-    let image = s.volume.render(&s.camera, &s.tf, st, &|d, _| progress.set(d));
+    let image = s
+        .volume
+        .render(&s.camera, &s.tf, st, &|d, _| progress.set(d));
     progress.finish();
     let secs = t.elapsed().as_secs_f64();
     if is_exr(output) {
-        voxless_io::write_exr_rgba(output, image.width as usize, image.height as usize, &image.to_rgba_f32())?;
+        voxless_io::write_exr_rgba(
+            output,
+            image.width as usize,
+            image.height as usize,
+            &image.to_rgba_f32(),
+        )?;
     } else {
-        voxless_io::write_png_rgb8(output, image.width, image.height, &image.to_srgb8(s.background))?;
+        voxless_io::write_png_rgb8(
+            output,
+            image.width,
+            image.height,
+            &image.to_srgb8(s.background),
+        )?;
     }
     eprintln!(
         "rendered {}×{} at {} spp in {secs:.2}s → {}",
@@ -245,9 +269,17 @@ fn write_gray(path: &Path, w: u32, h: u32, values: &[f32]) -> Result<()> {
 fn read_points(path: &Path) -> Result<Vec<Vec3>> {
     let a = voxless_io::read_npy(path)?;
     if a.shape.len() != 2 || a.shape[1] != 3 {
-        bail!("{}: expected an N×3 array of points, found shape {:?}", path.display(), a.shape);
+        bail!(
+            "{}: expected an N×3 array of points, found shape {:?}",
+            path.display(),
+            a.shape
+        );
     }
-    let pts: Vec<Vec3> = a.data.chunks_exact(3).map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect();
+    let pts: Vec<Vec3> = a
+        .data
+        .chunks_exact(3)
+        .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
+        .collect();
     if let Some(i) = pts.iter().position(|p| !p.is_finite()) {
         bail!("{}: point {i} has a non-finite coordinate", path.display());
     }

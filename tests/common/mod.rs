@@ -30,8 +30,15 @@ impl Drop for Scratch {
 
 /// Runs `voxless` with `args`; returns (success, stderr, output).
 pub fn voxless(args: &[&str]) -> (bool, String, Output) {
-    let out = Command::new(env!("CARGO_BIN_EXE_voxless")).args(args).output().unwrap();
-    (out.status.success(), String::from_utf8_lossy(&out.stderr).into_owned(), out)
+    let out = Command::new(env!("CARGO_BIN_EXE_voxless"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+        out,
+    )
 }
 
 pub fn ok(args: &[&str]) -> String {
@@ -43,14 +50,20 @@ pub fn ok(args: &[&str]) -> String {
 pub fn fails(args: &[&str]) -> String {
     let (success, stderr, _) = voxless(args);
     assert!(!success, "voxless {args:?} should have failed:\n{stderr}");
-    assert!(!stderr.contains("panicked"), "voxless {args:?} panicked:\n{stderr}");
+    assert!(
+        !stderr.contains("panicked"),
+        "voxless {args:?} panicked:\n{stderr}"
+    );
     stderr
 }
 
 pub struct Lcg(pub u64);
 impl Lcg {
     pub fn f(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((self.0 >> 40) as f32) / (1u64 << 24) as f32
     }
 }
@@ -76,11 +89,16 @@ pub fn read(path: &Path) -> (Vec<usize>, Vec<f64>) {
 
 /// Where the project's shared real data lives next to the repository, if present.
 pub fn shared_data(sub: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(sub);
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data")
+        .join(sub);
     if p.exists() {
         Some(p)
     } else {
-        eprintln!("notice: {} not found; skipping the real-data part of this test", p.display());
+        eprintln!(
+            "notice: {} not found; skipping the real-data part of this test",
+            p.display()
+        );
         None
     }
 }

@@ -124,7 +124,12 @@ impl Bvh {
         prims
             .par_iter()
             .enumerate()
-            .map(|(i, b)| (order::morton(order::quantize(b.center(), &centroid_bounds)), i as u32))
+            .map(|(i, b)| {
+                (
+                    order::morton(order::quantize(b.center(), &centroid_bounds)),
+                    i as u32,
+                )
+            })
             .collect_into_vec(&mut self.keys);
         self.keys.par_sort_unstable();
         self.nodes.resize(2 * n - 1, Node::EMPTY);
@@ -157,7 +162,11 @@ impl Bvh {
     }
 
     pub fn primitive_count(&self) -> usize {
-        if self.nodes.is_empty() { 0 } else { self.nodes.len().div_ceil(2) }
+        if self.nodes.is_empty() {
+            0
+        } else {
+            self.nodes.len().div_ceil(2)
+        }
     }
 
     /// Bytes held by the tree (nodes only; the build scratch is excluded).
@@ -237,7 +246,10 @@ impl Bvh {
             };
         }
         if self.nodes.len() != 2 * n - 1 {
-            return Err(InvalidBvh(format!("{} nodes for {n} primitives", self.nodes.len())));
+            return Err(InvalidBvh(format!(
+                "{} nodes for {n} primitives",
+                self.nodes.len()
+            )));
         }
         let mut seen = vec![false; n];
         // (node, end of its subtree) — depth-first ranges must tile exactly.
@@ -253,12 +265,16 @@ impl Bvh {
                     return Err(InvalidBvh(format!("primitive {p} missing or repeated")));
                 }
                 if node.bounds() != prims[p] && !(node.bounds().is_empty() && prims[p].is_empty()) {
-                    return Err(InvalidBvh(format!("leaf {i} box differs from primitive {p}")));
+                    return Err(InvalidBvh(format!(
+                        "leaf {i} box differs from primitive {p}"
+                    )));
                 }
             } else {
                 let r = i + node.index as usize;
                 if r <= i + 1 || r >= end {
-                    return Err(InvalidBvh(format!("node {i} has right child {r} outside ({i}, {end})")));
+                    return Err(InvalidBvh(format!(
+                        "node {i} has right child {r} outside ({i}, {end})"
+                    )));
                 }
                 for c in [i + 1, r] {
                     if !node.bounds().encloses(&self.nodes[c].bounds()) {

@@ -4,7 +4,10 @@ use super::*;
 struct Lcg(u64);
 impl Lcg {
     fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((self.0 >> 40) as f32) / (1u64 << 24) as f32
     }
     fn vec(&mut self) -> Vec3 {
@@ -31,7 +34,9 @@ fn point_query_equals_brute_force() {
             let mut got = Vec::new();
             bvh.point_query(p, |i| got.push(i));
             got.sort_unstable();
-            let want: Vec<u32> = (0..n as u32).filter(|&i| prims[i as usize].contains(p)).collect();
+            let want: Vec<u32> = (0..n as u32)
+                .filter(|&i| prims[i as usize].contains(p))
+                .collect();
             assert_eq!(got, want, "n = {n}, p = {p:?}");
         }
     }
@@ -73,7 +78,9 @@ fn refit_after_growth_stays_valid_and_exact() {
         let mut got = Vec::new();
         bvh.point_query(p, |i| got.push(i));
         got.sort_unstable();
-        let want: Vec<u32> = (0..prims.len() as u32).filter(|&i| prims[i as usize].contains(p)).collect();
+        let want: Vec<u32> = (0..prims.len() as u32)
+            .filter(|&i| prims[i as usize].contains(p))
+            .collect();
         assert_eq!(got, want);
     }
 }

@@ -34,7 +34,13 @@ mod tests {
         g.ranges[i3] = Range1::new(0.0, 2.0);
         let ray = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::new(1.0, 0.0, 0.0));
         let mut out = Vec::new();
-        g.intervals(&ray, Range1::new(0.0, 100.0), 0.1, &IntervalQuery::all(), &mut out);
+        g.intervals(
+            &ray,
+            Range1::new(0.0, 100.0),
+            0.1,
+            &IntervalQuery::all(),
+            &mut out,
+        );
         assert_eq!(out.len(), 2);
         assert!((out[0].t.lo - 2.0).abs() < 1e-5 && (out[0].t.hi - 3.0).abs() < 1e-5);
         assert!((out[1].t.lo - 4.0).abs() < 1e-5 && (out[1].t.hi - 5.0).abs() < 1e-5);
@@ -42,13 +48,25 @@ mod tests {
         let i2 = g.index(2, 0, 0);
         g.ranges[i2] = Range1::new(0.5, 0.7);
         out.clear();
-        g.intervals(&ray, Range1::new(0.0, 100.0), 0.1, &IntervalQuery::all(), &mut out);
+        g.intervals(
+            &ray,
+            Range1::new(0.0, 100.0),
+            0.1,
+            &IntervalQuery::all(),
+            &mut out,
+        );
         assert_eq!(out.len(), 1);
         assert_eq!(out[0].value_range, Range1::new(0.0, 2.0));
         // An invisible range is a gap.
         let hide = |r: Range1| r.hi > 1.5;
         out.clear();
-        g.intervals(&ray, Range1::new(0.0, 100.0), 0.1, &IntervalQuery { is_visible: &hide }, &mut out);
+        g.intervals(
+            &ray,
+            Range1::new(0.0, 100.0),
+            0.1,
+            &IntervalQuery { is_visible: &hide },
+            &mut out,
+        );
         assert_eq!(out.len(), 1);
         assert!((out[0].t.lo - 4.0).abs() < 1e-5);
     }
@@ -60,9 +78,18 @@ mod tests {
         for r in g.ranges.iter_mut() {
             *r = Range1::new(0.0, 1.0);
         }
-        let ray = Ray::new(Vec3::new(-1.0, -0.7, -0.3), Vec3::new(1.0, 0.9, 0.8).normalized());
+        let ray = Ray::new(
+            Vec3::new(-1.0, -0.7, -0.3),
+            Vec3::new(1.0, 0.9, 0.8).normalized(),
+        );
         let mut out = Vec::new();
-        g.intervals(&ray, Range1::new(0.0, 1e9), 0.1, &IntervalQuery::all(), &mut out);
+        g.intervals(
+            &ray,
+            Range1::new(0.0, 1e9),
+            0.1,
+            &IntervalQuery::all(),
+            &mut out,
+        );
         let clip = b.clip_ray(&ray, Range1::new(0.0, 1e9));
         assert_eq!(out.len(), 1);
         assert!((out[0].t.lo - clip.lo).abs() < 1e-4 && (out[0].t.hi - clip.hi).abs() < 1e-4);
@@ -72,8 +99,24 @@ mod tests {
     fn camera_rejects_degenerate_vectors() {
         let p = Projection::Perspective { fov_y_deg: 40.0 };
         assert!(Camera::look_at(Vec3::ZERO, Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0), p).is_err());
-        assert!(Camera::look_at(Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.0), p).is_err());
-        assert!(Camera::look_at(Vec3::splat(f32::NAN), Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0), p).is_err());
+        assert!(
+            Camera::look_at(
+                Vec3::ZERO,
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+                p
+            )
+            .is_err()
+        );
+        assert!(
+            Camera::look_at(
+                Vec3::splat(f32::NAN),
+                Vec3::ZERO,
+                Vec3::new(0.0, 1.0, 0.0),
+                p
+            )
+            .is_err()
+        );
     }
 
     #[test]

@@ -110,7 +110,10 @@ pub trait Volume: Send + Sync {
     fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
         let mut intervals = Vec::new();
         self.intervals(ray, t, &IntervalQuery::all(), &mut intervals);
-        let f = |t: f64| self.sample(ray.at(t as f32)).map_or(0.0, |s| s.value as f64);
+        let f = |t: f64| {
+            self.sample(ray.at(t as f32))
+                .map_or(0.0, |s| s.value as f64)
+        };
         intervals
             .iter()
             .map(|iv| {

@@ -5,7 +5,12 @@ pub enum ParticleError {
     #[error("no particles")]
     Empty,
     #[error("particle {index} has a non-finite coordinate ({x}, {y}, {z})")]
-    NonFinitePosition { index: usize, x: f32, y: f32, z: f32 },
+    NonFinitePosition {
+        index: usize,
+        x: f32,
+        y: f32,
+        z: f32,
+    },
     #[error("{what} has {got} values but there are {expected} particles")]
     LengthMismatch {
         what: &'static str,
@@ -30,6 +35,10 @@ pub enum ParticleError {
     BadKernelParameter { name: &'static str, value: f32 },
     #[error("{what} given, but the particles have no attribute")]
     NeedsAttribute { what: &'static str },
+    #[error(
+        "radius too large: the median support radius {support} exceeds the extent of the data ({extent}), so every sample would sum nearly every one of the {count} particles; use a smaller radius"
+    )]
+    HugeRadius { support: f32, extent: f32, count: usize },
     #[error("too many particles ({count}); at most {max} per volume")]
     TooMany { count: usize, max: usize },
 }

@@ -25,18 +25,14 @@
 use voxless_core::Vec3;
 
 /// The kernel family and its global parameters.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Kernel {
+    #[default]
     Gaussian3,
     Gaussian { kappa: f32, sigma: f32 },
     CubicSpline,
 }
 
-impl Default for Kernel {
-    fn default() -> Self {
-        Kernel::Gaussian3
-    }
-}
 
 /// Names accepted on the command line and in scenes.
 pub const KERNEL_NAMES: &[&str] = &["gaussian3", "gaussian", "cubic-spline"];
@@ -245,7 +241,11 @@ fn projected_m4(qb: f32) -> f32 {
                 let f = |v: f64| m4((qb * qb + v * v).sqrt() as f32) as f64;
                 let vmax = (4.0 - qb * qb).max(0.0).sqrt();
                 let vkink = (1.0 - qb * qb).max(0.0).sqrt();
-                let inner = if vkink > 0.0 { voxless_core::simpson(f, 0.0, vkink, 400) } else { 0.0 };
+                let inner = if vkink > 0.0 {
+                    voxless_core::simpson(f, 0.0, vkink, 400)
+                } else {
+                    0.0
+                };
                 (2.0 * (inner + voxless_core::simpson(f, vkink, vmax, 400))) as f32
             })
             .collect()

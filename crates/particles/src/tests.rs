@@ -8,7 +8,10 @@ use voxless_transfer::{Colormap, ControlPoints, OpacityMap, TransferFunction};
 struct Lcg(u64);
 impl Lcg {
     fn f(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((self.0 >> 40) as f32) / (1u64 << 24) as f32
     }
     fn v(&mut self) -> Vec3 {
@@ -50,9 +53,15 @@ fn reference_kernel(k: Kernel, d: f64, r: f64, w: f64) -> (f64, f64) {
             let q = d / r;
             let norm = w / (std::f64::consts::PI * r.powi(3));
             if q < 1.0 {
-                (norm * (1.0 - 1.5 * q * q + 0.75 * q.powi(3)), norm * (-3.0 * q + 2.25 * q * q) / r)
+                (
+                    norm * (1.0 - 1.5 * q * q + 0.75 * q.powi(3)),
+                    norm * (-3.0 * q + 2.25 * q * q) / r,
+                )
             } else {
-                (norm * 0.25 * (2.0 - q).powi(3), norm * -0.75 * (2.0 - q).powi(2) / r)
+                (
+                    norm * 0.25 * (2.0 - q).powi(3),
+                    norm * -0.75 * (2.0 - q).powi(2) / r,
+                )
             }
         }
         _ => (0.0, 0.0),
@@ -106,15 +115,31 @@ fn fields_equal_brute_force_for_every_kernel_and_cluster_size() {
                 }
                 checked += 1;
                 let rel = |a: f64, b: f64, scale: f64| (a - b).abs() / scale;
-                assert!(rel(f.density as f64, phi, phi) <= 1e-5, "{kernel:?} N={cluster_size} Φ {} vs {phi}", f.density);
+                assert!(
+                    rel(f.density as f64, phi, phi) <= 1e-5,
+                    "{kernel:?} N={cluster_size} Φ {} vs {phi}",
+                    f.density
+                );
                 // Θ is an average of values in [-3, 7]: relative to that scale.
-                assert!(rel(f.attribute as f64, theta, 10.0) <= 1e-5, "Θ {} vs {theta}", f.attribute);
+                assert!(
+                    rel(f.attribute as f64, theta, 10.0) <= 1e-5,
+                    "Θ {} vs {theta}",
+                    f.attribute
+                );
                 // Gradient components can cancel, so compare against Σ|∇φᵢ|.
                 for a in 0..3 {
-                    assert!(rel(f.gradient[a] as f64, g[a], gabs) <= 1e-5, "{kernel:?} ∇Φ[{a}] {} vs {}", f.gradient[a], g[a]);
+                    assert!(
+                        rel(f.gradient[a] as f64, g[a], gabs) <= 1e-5,
+                        "{kernel:?} ∇Φ[{a}] {} vs {}",
+                        f.gradient[a],
+                        g[a]
+                    );
                 }
             }
-            assert!(checked > 5000, "only {checked} points had Φ above the threshold");
+            assert!(
+                checked > 5000,
+                "only {checked} points had Φ above the threshold"
+            );
         }
     }
 }
@@ -134,7 +159,11 @@ fn point_query_returns_exactly_the_overlapping_particles() {
         let mut rng = Lcg(9);
         for _ in 0..2000 {
             let p = rng.v();
-            let mut got: Vec<u32> = vol.overlapping(p).iter().map(|&i| vol.original_index()[i]).collect();
+            let mut got: Vec<u32> = vol
+                .overlapping(p)
+                .iter()
+                .map(|&i| vol.original_index()[i])
+                .collect();
             got.sort_unstable();
             let want: Vec<u32> = (0..data.positions.len())
                 .filter(|&i| {
@@ -163,17 +192,28 @@ fn radius_map_refits_and_stays_exact() {
     let map = ControlPoints::new("radius map", &[(0.0, 0.0), (0.3, 0.0), (1.0, 2.0)]).unwrap();
     vol.set_radius(0.05, Some(map.clone())).unwrap();
     vol.validate().unwrap();
-    assert_eq!(vol.bvh().nodes().len(), nodes_before, "refit keeps the topology");
+    assert_eq!(
+        vol.bvh().nodes().len(),
+        nodes_before,
+        "refit keeps the topology"
+    );
     let attr = data.attribute.as_ref().unwrap();
     let range = vol.attribute_range().unwrap();
     let radius_of = |i: usize| 0.05 * map.eval(range.normalize(attr[i])).max(0.0);
     let mut rng = Lcg(1);
     for _ in 0..3000 {
         let p = rng.v();
-        let mut got: Vec<u32> = vol.overlapping(p).iter().map(|&i| vol.original_index()[i]).collect();
+        let mut got: Vec<u32> = vol
+            .overlapping(p)
+            .iter()
+            .map(|&i| vol.original_index()[i])
+            .collect();
         got.sort_unstable();
         let want: Vec<u32> = (0..data.positions.len())
-            .filter(|&i| radius_of(i) > 0.0 && (p - data.positions[i]).length_squared() <= radius_of(i) * radius_of(i))
+            .filter(|&i| {
+                radius_of(i) > 0.0
+                    && (p - data.positions[i]).length_squared() <= radius_of(i) * radius_of(i)
+            })
             .map(|i| i as u32)
             .collect();
         assert_eq!(got, want);
@@ -199,7 +239,10 @@ fn line_integral_matches_quadrature_of_samples() {
         let mut rng = Lcg(4);
         for _ in 0..12 {
             let o = Vec3::new(rng.f(), rng.f(), -1.0);
-            let ray = Ray::new(o, (Vec3::new(rng.f(), rng.f(), 1.0) - o + Vec3::new(0.0, 0.0, 1.0)).normalized());
+            let ray = Ray::new(
+                o,
+                (Vec3::new(rng.f(), rng.f(), 1.0) - o + Vec3::new(0.0, 0.0, 1.0)).normalized(),
+            );
             // Partial chords too: stop inside the cube.
             for t in [Range1::new(0.0, 10.0), Range1::new(0.0, 1.0 + rng.f())] {
                 let exact = vol.line_integral(&ray, t);
@@ -207,7 +250,10 @@ fn line_integral_matches_quadrature_of_samples() {
                 // Every support lies within t < 4; the truncated Gaussians jump
                 // at their support edge, so the quadrature needs a fine step.
                 let quad = voxless_core::simpson(f, t.lo as f64, t.hi.min(4.0) as f64, 400_000);
-                assert!((exact - quad).abs() <= 1e-4 * quad.max(1e-3), "{kernel:?}: exact {exact} vs quadrature {quad}");
+                assert!(
+                    (exact - quad).abs() <= 1e-4 * quad.max(1e-3),
+                    "{kernel:?}: exact {exact} vs quadrature {quad}"
+                );
             }
         }
     }
@@ -221,7 +267,10 @@ fn kernel_integrals_match_radial_quadrature() {
         let f = |d: f64| 4.0 * std::f64::consts::PI * d * d * reference_kernel(kernel, d, r, 1.0).0;
         let quad = voxless_core::simpson(f, 0.0, support * (1.0 - 1e-12), 200_000);
         let exact = kernel.integral(r);
-        assert!((quad - exact).abs() < 1e-6 * exact, "{kernel:?}: {quad} vs {exact}");
+        assert!(
+            (quad - exact).abs() < 1e-6 * exact,
+            "{kernel:?}: {quad} vs {exact}"
+        );
     }
 }
 
@@ -243,7 +292,10 @@ fn pre_classification_averages_colours() {
         },
     )
     .unwrap();
-    let tf = TransferFunction::new(Colormap::preset("cool-warm").unwrap(), OpacityMap::preset("linear").unwrap());
+    let tf = TransferFunction::new(
+        Colormap::preset("cool-warm").unwrap(),
+        OpacityMap::preset("linear").unwrap(),
+    );
     vol.classify(&tf);
     let p = Vec3::new(0.1, 0.0, 0.0);
     let w0 = (-4.5f32 * 0.01).exp();
@@ -263,31 +315,105 @@ fn bad_input_is_a_clear_error() {
     let mut d = ok.clone();
     d.positions[3].y = f32::NAN;
     let e = ParticleVolume::new(d, s.clone()).err().unwrap();
-    assert_eq!(e.to_string(), "particle 3 has a non-finite coordinate (".to_string() + &format!("{}, NaN, {})", ok.positions[3].x, ok.positions[3].z));
+    assert_eq!(
+        e.to_string(),
+        "particle 3 has a non-finite coordinate (".to_string()
+            + &format!("{}, NaN, {})", ok.positions[3].x, ok.positions[3].z)
+    );
     let mut d = ok.clone();
     d.radii.as_mut().unwrap()[4] = 0.0;
-    assert!(ParticleVolume::new(d, s.clone()).err().unwrap().to_string().contains("particle 4 has radius 0"));
+    assert!(
+        ParticleVolume::new(d, s.clone())
+            .err()
+            .unwrap()
+            .to_string()
+            .contains("particle 4 has radius 0")
+    );
     let mut d = ok.clone();
     d.radii.as_mut().unwrap()[2] = -1.0;
-    assert!(matches!(ParticleVolume::new(d, s.clone()), Err(ParticleError::BadRadius { index: 2, .. })));
+    assert!(matches!(
+        ParticleVolume::new(d, s.clone()),
+        Err(ParticleError::BadRadius { index: 2, .. })
+    ));
     let mut d = ok.clone();
     d.attribute.as_mut().unwrap().pop();
-    assert!(ParticleVolume::new(d, s.clone()).err().unwrap().to_string().contains("attribute has 9 values but there are 10 particles"));
-    assert!(matches!(ParticleVolume::new(ParticleData::default(), s.clone()), Err(ParticleError::Empty)));
+    assert!(
+        ParticleVolume::new(d, s.clone())
+            .err()
+            .unwrap()
+            .to_string()
+            .contains("attribute has 9 values but there are 10 particles")
+    );
+    assert!(matches!(
+        ParticleVolume::new(ParticleData::default(), s.clone()),
+        Err(ParticleError::Empty)
+    ));
     let mut d = ok.clone();
     d.weights.as_mut().unwrap()[0] = f32::INFINITY;
     assert!(ParticleVolume::new(d, s.clone()).is_err());
     for radius in [0.0, -1.0, f32::NAN, f32::INFINITY] {
         let mut d = ok.clone();
         d.radii = None;
-        assert!(ParticleVolume::new(d, ParticleSettings { radius, ..s.clone() }).is_err());
+        assert!(
+            ParticleVolume::new(
+                d,
+                ParticleSettings {
+                    radius,
+                    ..s.clone()
+                }
+            )
+            .is_err()
+        );
     }
-    assert!(ParticleVolume::new(ok.clone(), ParticleSettings { cluster_size: 0, ..s.clone() }).is_err());
-    assert!(ParticleVolume::new(ok.clone(), ParticleSettings { cluster_size: 17, ..s.clone() }).is_err());
+    assert!(
+        ParticleVolume::new(
+            ok.clone(),
+            ParticleSettings {
+                cluster_size: 0,
+                ..s.clone()
+            }
+        )
+        .is_err()
+    );
+    assert!(
+        ParticleVolume::new(
+            ok.clone(),
+            ParticleSettings {
+                cluster_size: 17,
+                ..s.clone()
+            }
+        )
+        .is_err()
+    );
     let mut d = ok.clone();
     d.attribute = None;
     let map = ControlPoints::new("weight map", &[(0.0, 1.0)]).unwrap();
-    assert!(ParticleVolume::new(d, ParticleSettings { weight_map: Some(map), ..s }).is_err());
+    assert!(
+        ParticleVolume::new(
+            d,
+            ParticleSettings {
+                weight_map: Some(map),
+                ..s
+            }
+        )
+        .is_err()
+    );
+}
+
+#[test]
+fn huge_radii_are_refused_not_rendered_forever() {
+    // A support far larger than the data would make every sample visit every
+    // particle: refused up front, and a refit to such a radius is refused too.
+    let mut big = random_data(5000, 2);
+    big.radii = None;
+    let s = ParticleSettings::default();
+    let e = ParticleVolume::new(big.clone(), ParticleSettings { radius: 1e6, ..s.clone() }).err().unwrap();
+    assert!(matches!(e, ParticleError::HugeRadius { .. }), "{e}");
+    assert!(e.to_string().contains("radius too large"), "{e}");
+    let mut vol = ParticleVolume::new(big, ParticleSettings { radius: 0.05, ..s }).unwrap();
+    assert!(vol.set_radius(1e6, None).is_err());
+    assert!(vol.radii().iter().all(|&r| r == 0.05), "a refused change leaves the volume as it was");
+    vol.validate().unwrap();
 }
 
 #[test]
@@ -310,10 +436,48 @@ fn intervals_cover_every_nonzero_sample_with_its_range() {
             let phi = vol.density(ray.at(s));
             let inside = out.iter().find(|iv| iv.t.contains(s));
             match inside {
-                Some(iv) => assert!(iv.value_range.contains(phi), "Φ {phi} outside {:?}", iv.value_range),
-                None => assert!(phi == 0.0 || out.iter().any(|iv| (iv.t.lo - s).abs() < 1e-4 || (iv.t.hi - s).abs() < 1e-4), "Φ {phi} in a gap at t = {s}"),
+                Some(iv) => assert!(
+                    iv.value_range.contains(phi),
+                    "Φ {phi} outside {:?}",
+                    iv.value_range
+                ),
+                None => assert!(
+                    phi == 0.0
+                        || out
+                            .iter()
+                            .any(|iv| (iv.t.lo - s).abs() < 1e-4 || (iv.t.hi - s).abs() < 1e-4),
+                    "Φ {phi} in a gap at t = {s}"
+                ),
             }
         }
     }
     let _ = Aabb::EMPTY;
+}
+
+#[test]
+fn weight_map_scales_each_kernel() {
+    let data = random_data(800, 21);
+    let map = ControlPoints::new("weight map", &[(0.0, 0.0), (1.0, 2.0)]).unwrap();
+    let vol = ParticleVolume::new(
+        data.clone(),
+        ParticleSettings {
+            weight_map: Some(map.clone()),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let range = vol.attribute_range().unwrap();
+    // Fold the map into the weights and compare with the brute-force sum.
+    let mut mapped = data.clone();
+    let attr = data.attribute.as_ref().unwrap();
+    for (i, w) in mapped.weights.as_mut().unwrap().iter_mut().enumerate() {
+        *w *= map.eval(range.normalize(attr[i]));
+    }
+    let mut rng = Lcg(5);
+    for _ in 0..2000 {
+        let p = rng.v();
+        let (phi, ..) = brute_force(&mapped, Kernel::Gaussian3, p);
+        let got = vol.density(p) as f64;
+        assert!((got - phi).abs() <= 1e-5 * phi.max(1e-3), "{got} vs {phi}");
+    }
 }

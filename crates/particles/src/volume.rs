@@ -177,7 +177,10 @@ impl ParticleVolume {
         if let Some(r) = &data.radii
             && let Some(i) = r.iter().position(|r| !(r.is_finite() && *r > 0.0))
         {
-            return Err(ParticleError::BadRadius { index: i, value: r[i] });
+            return Err(ParticleError::BadRadius {
+                index: i,
+                value: r[i],
+            });
         }
         if let Some(a) = &data.attribute
             && let Some(i) = a.iter().position(|a| !a.is_finite())
@@ -191,7 +194,10 @@ impl ParticleVolume {
         if let Some(w) = &data.weights
             && let Some(i) = w.iter().position(|w| !(w.is_finite() && *w >= 0.0))
         {
-            return Err(ParticleError::BadWeight { index: i, value: w[i] });
+            return Err(ParticleError::BadWeight {
+                index: i,
+                value: w[i],
+            });
         }
         if data.attribute.is_none() {
             for (what, present) in [
@@ -217,8 +223,12 @@ impl ParticleVolume {
             .collect();
         keys.par_sort_unstable();
         let original_index: Vec<u32> = keys.iter().map(|k| k.1).collect();
-        let gather = |v: &[f32]| -> Vec<f32> { original_index.iter().map(|&i| v[i as usize]).collect() };
-        let positions: Vec<Vec3> = original_index.iter().map(|&i| data.positions[i as usize]).collect();
+        let gather =
+            |v: &[f32]| -> Vec<f32> { original_index.iter().map(|&i| v[i as usize]).collect() };
+        let positions: Vec<Vec3> = original_index
+            .iter()
+            .map(|&i| data.positions[i as usize])
+            .collect();
         let base_radius = match &data.radii {
             Some(r) => gather(r),
             None => vec![settings.radius; n],
@@ -256,6 +266,7 @@ impl ParticleVolume {
             nominal_dt: 1.0,
         };
         vol.derive_radii_and_weights();
+        vol.check_support()?;
         vol.bvh = Bvh::build(&vol.cluster_bounds());
         vol.derive_acceleration();
         Ok(vol)
@@ -273,14 +284,23 @@ impl ParticleVolume {
         s.radius = radius;
         s.radius_map = radius_map;
         check_settings(&s)?;
-        if !self.input_radii {
-            self.base_radius.fill(radius);
-        }
         if s.radius_map.is_some() && self.attribute.is_none() {
             return Err(ParticleError::NeedsAttribute { what: "radius map" });
         }
-        self.settings = s;
+        let old = std::mem::replace(&mut self.settings, s);
+        if !self.input_radii {
+            self.base_radius.fill(radius);
+        }
         self.derive_radii_and_weights();
+        if let Err(e) = self.check_support() {
+            // Leave the volume exactly as it was.
+            if !self.input_radii {
+                self.base_radius.fill(old.radius);
+            }
+            self.settings = old;
+            self.derive_radii_and_weights();
+            return Err(e);
+        }
         self.bvh.refit(&self.cluster_bounds());
         self.derive_acceleration();
         Ok(())
@@ -306,8 +326,12 @@ impl ParticleVolume {
             _ => 1.0,
         };
         let n = self.positions.len();
-        self.radius = (0..n).map(|i| self.base_radius[i] * map(&s.radius_map, i)).collect();
-        self.weight = (0..n).map(|i| self.base_weight[i] * map(&s.weight_map, i)).collect();
+        self.radius = (0..n)
+            .map(|i| self.base_radius[i] * map(&s.radius_map, i))
+            .collect();
+        self.weight = (0..n)
+            .map(|i| self.base_weight[i] * map(&s.weight_map, i))
+            .collect();
         let factor = s.kernel.support_factor();
         self.packed = (0..n)
             .map(|i| {
@@ -327,6 +351,34 @@ impl ParticleVolume {
                 }
             })
             .collect();
+    }
+
+    /// Refuses supports that would make every query visit (nearly) every
+    /// particle — a render that would effectively hang. Small sets are exempt:
+    /// there the cost stays bounded whatever the radius.
+    fn check_support(&self) -> Result<(), ParticleError> {
+        const EXEMPT: usize = 1000;
+        if self.len() <= EXEMPT {
+            return Ok(());
+        }
+        let mut b = Aabb::EMPTY;
+        for p in &self.positions {
+            b.grow(*p);
+        }
+        let factor = self.settings.kernel.support_factor();
+        let stride = (self.len() / RANGE_PROBES).max(1);
+        let mut supports: Vec<f32> = self.radius.iter().step_by(stride).map(|r| r * factor).collect();
+        let mid = supports.len() / 2;
+        let support = *supports.select_nth_unstable_by(mid, f32::total_cmp).1;
+        let extent = b.diagonal();
+        if support > extent {
+            return Err(ParticleError::HugeRadius {
+                support,
+                extent,
+                count: self.len(),
+            });
+        }
+        Ok(())
     }
 
     /// Box of each cluster: the union of its visible members' support boxes.
@@ -399,7 +451,11 @@ impl ParticleVolume {
             );
         for (r, s) in grid.ranges.iter_mut().zip(sums) {
             // Rounding in the f32 sum could undercut the true bound; pad it.
-            *r = if s >= 0.0 { Range1::new(0.0, s * 1.0001) } else { Range1::EMPTY };
+            *r = if s >= 0.0 {
+                Range1::new(0.0, s * 1.0001)
+            } else {
+                Range1::EMPTY
+            };
         }
         self.grid = grid;
 

@@ -216,14 +216,23 @@ pub fn march<V: Volume>(
     rng: &PixelRng,
     scratch: &mut Vec<Interval>,
 ) -> [f32; 4] {
-    let t = volume.bounds().clip_ray(ray, Range1::new(0.0, f32::INFINITY));
+    let t = volume
+        .bounds()
+        .clip_ray(ray, Range1::new(0.0, f32::INFINITY));
     if t.is_empty() {
         return [0.0; 4];
     }
     let vr = settings.value_range;
     let visible = |r: Range1| tf.max_opacity(vr.normalize(r.lo), vr.normalize(r.hi)) > 0.0;
     scratch.clear();
-    volume.intervals(ray, t, &IntervalQuery { is_visible: &visible }, scratch);
+    volume.intervals(
+        ray,
+        t,
+        &IntervalQuery {
+            is_visible: &visible,
+        },
+        scratch,
+    );
     let mut color = Vec3::ZERO;
     let mut alpha = 0.0f32;
     let attr_range = settings.attribute_range.unwrap_or(Range1::new(0.0, 1.0));

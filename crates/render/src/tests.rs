@@ -10,7 +10,10 @@ struct Slab {
 
 impl Volume for Slab {
     fn bounds(&self) -> Aabb {
-        Aabb::new(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, self.thickness))
+        Aabb::new(
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, self.thickness),
+        )
     }
     fn value_range(&self) -> Range1 {
         Range1::new(0.0, 1.0)
@@ -64,7 +67,10 @@ fn homogeneous_slab_transmittance_is_exact_at_any_step() {
         let img = render(&slab, &camera, &tf, &settings, &|_, _| {});
         for p in &img.pixels {
             let transmittance = 1.0 - p[3];
-            assert!((transmittance - want).abs() < 1e-3, "step {step}: T = {transmittance}, want {want}");
+            assert!(
+                (transmittance - want).abs() < 1e-3,
+                "step {step}: T = {transmittance}, want {want}"
+            );
         }
     }
     // A tilted ray crosses thickness / cos θ.
@@ -76,7 +82,14 @@ fn homogeneous_slab_transmittance_is_exact_at_any_step() {
         early_termination: 1.0,
         ..RenderSettings::for_volume(&slab, 1, 1)
     };
-    let a = march(&slab, &ray, &tf, &settings, &PixelRng::new(0, 0, 0), &mut Vec::new())[3];
+    let a = march(
+        &slab,
+        &ray,
+        &tf,
+        &settings,
+        &PixelRng::new(0, 0, 0),
+        &mut Vec::new(),
+    )[3];
     assert!(((1.0 - a) - (-sigma * thickness / cos).exp()).abs() < 1e-3);
 }
 
@@ -91,7 +104,14 @@ fn early_termination_stops_at_the_threshold() {
         early_termination: 0.9,
         ..RenderSettings::for_volume(&slab, 1, 1)
     };
-    let a = march(&slab, &ray, &tf, &settings, &PixelRng::new(0, 0, 0), &mut Vec::new())[3];
+    let a = march(
+        &slab,
+        &ray,
+        &tf,
+        &settings,
+        &PixelRng::new(0, 0, 0),
+        &mut Vec::new(),
+    )[3];
     assert!((0.9..0.92).contains(&a), "alpha {a}");
 }
 

@@ -208,7 +208,10 @@ pub fn resolve(desc: &SceneDesc, base: &Path) -> Result<LoadedScene, SceneError>
     }
     let spp = desc.image.spp.unwrap_or(1);
     if spp == 0 {
-        return Err(SceneError::setting("image.spp", "samples per pixel must be ≥ 1"));
+        return Err(SceneError::setting(
+            "image.spp",
+            "samples per pixel must be ≥ 1",
+        ));
     }
     let camera = camera(&desc.camera, &volume.bounds(), width as f32 / height as f32)?;
 
@@ -225,7 +228,10 @@ pub fn resolve(desc: &SceneDesc, base: &Path) -> Result<LoadedScene, SceneError>
     }
     if let Some(et) = r.early_termination {
         if !(et > 0.0 && et <= 1.0) {
-            return Err(SceneError::setting("render.early_termination", format!("{et} is outside (0, 1]")));
+            return Err(SceneError::setting(
+                "render.early_termination",
+                format!("{et} is outside (0, 1]"),
+            ));
         }
         settings.early_termination = et;
     }
@@ -243,13 +249,22 @@ pub fn resolve(desc: &SceneDesc, base: &Path) -> Result<LoadedScene, SceneError>
             None => (camera.up * 0.6 - camera.right * 0.4 - camera.forward * 0.7).normalized(),
         };
         if !(dir.is_finite() && dir.length_squared() > 0.5) {
-            return Err(SceneError::setting("light.direction", "must be a finite, non-zero vector"));
+            return Err(SceneError::setting(
+                "light.direction",
+                "must be a finite, non-zero vector",
+            ));
         }
         let ambient = l.ambient.unwrap_or(0.3);
         if !(0.0..=1.0).contains(&ambient) {
-            return Err(SceneError::setting("light.ambient", format!("{ambient} is outside [0, 1]")));
+            return Err(SceneError::setting(
+                "light.ambient",
+                format!("{ambient} is outside [0, 1]"),
+            ));
         }
-        settings.light = Some(Light { direction: dir, ambient });
+        settings.light = Some(Light {
+            direction: dir,
+            ambient,
+        });
     }
     let background = r.background.unwrap_or([0.0; 3]);
     Ok(LoadedScene {
@@ -266,7 +281,10 @@ fn positive(field: &str, v: f32) -> Result<(), SceneError> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(SceneError::setting(field, format!("{v} must be finite and > 0")))
+        Err(SceneError::setting(
+            field,
+            format!("{v} must be finite and > 0"),
+        ))
     }
 }
 
@@ -274,7 +292,10 @@ fn range(field: &str, lo: f32, hi: f32) -> Result<Range1, SceneError> {
     if lo.is_finite() && hi.is_finite() && lo <= hi {
         Ok(Range1::new(lo, hi))
     } else {
-        Err(SceneError::setting(field, format!("[{lo}, {hi}] is not a finite, increasing range")))
+        Err(SceneError::setting(
+            field,
+            format!("[{lo}, {hi}] is not a finite, increasing range"),
+        ))
     }
 }
 
@@ -289,12 +310,18 @@ fn parse_kernel(p: &ParticlesDesc) -> Result<Kernel, SceneError> {
         "cubic-spline" | "cubic" | "m4" => Ok(Kernel::CubicSpline),
         _ => Err(SceneError::setting(
             "particles.kernel",
-            format!("unknown kernel '{name}' (available: {})", voxless_particles::KERNEL_NAMES.join(", ")),
+            format!(
+                "unknown kernel '{name}' (available: {})",
+                voxless_particles::KERNEL_NAMES.join(", ")
+            ),
         )),
     }
 }
 
-fn control_points(field: &str, pts: &Option<Vec<[f32; 2]>>) -> Result<Option<ControlPoints>, SceneError> {
+fn control_points(
+    field: &str,
+    pts: &Option<Vec<[f32; 2]>>,
+) -> Result<Option<ControlPoints>, SceneError> {
     pts.as_ref()
         .map(|p| {
             let v: Vec<(f32, f32)> = p.iter().map(|q| (q[0], q[1])).collect();
@@ -303,7 +330,11 @@ fn control_points(field: &str, pts: &Option<Vec<[f32; 2]>>) -> Result<Option<Con
         .transpose()
 }
 
-fn load_particles(p: &ParticlesDesc, base: &Path, notes: &mut Vec<String>) -> Result<ParticleVolume, SceneError> {
+fn load_particles(
+    p: &ParticlesDesc,
+    base: &Path,
+    notes: &mut Vec<String>,
+) -> Result<ParticleVolume, SceneError> {
     let kernel = parse_kernel(p)?;
     let mut files: Vec<(&'static str, PathBuf)> = Vec::new();
     let (data, main_file) = match (&p.file, p.demo.unwrap_or(false)) {
@@ -315,7 +346,9 @@ fn load_particles(p: &ParticlesDesc, base: &Path, notes: &mut Vec<String>) -> Re
                 positions,
                 ..Default::default()
             };
-            let mut per = |spec: &Option<String>, what: &'static str| -> Result<Option<Vec<f32>>, SceneError> {
+            let mut per = |spec: &Option<String>,
+                           what: &'static str|
+             -> Result<Option<Vec<f32>>, SceneError> {
                 spec.as_ref()
                     .map(|s| {
                         let (v, path) = load::read_per_particle(s, base, &source, n, what)?;
@@ -331,7 +364,10 @@ fn load_particles(p: &ParticlesDesc, base: &Path, notes: &mut Vec<String>) -> Re
         }
         (None, true) => (demo::galaxy(120_000), PathBuf::from("<demo>")),
         (None, false) => {
-            return Err(SceneError::setting("particles.file", "no particle file given (or set demo = true)"));
+            return Err(SceneError::setting(
+                "particles.file",
+                "no particle file given (or set demo = true)",
+            ));
         }
     };
     let radius = match (p.radius, &data.radii) {
@@ -356,7 +392,10 @@ fn load_particles(p: &ParticlesDesc, base: &Path, notes: &mut Vec<String>) -> Re
             ));
         }
     };
-    let attribute_range = p.attribute_range.map(|[a, b]| range("particles.attribute_range", a, b)).transpose()?;
+    let attribute_range = p
+        .attribute_range
+        .map(|[a, b]| range("particles.attribute_range", a, b))
+        .transpose()?;
     let settings = ParticleSettings {
         kernel,
         radius,
@@ -372,7 +411,8 @@ fn load_particles(p: &ParticlesDesc, base: &Path, notes: &mut Vec<String>) -> Re
         let path = match &source {
             ParticleError::BadRadius { .. } => blamed("radii"),
             ParticleError::BadWeight { .. } => blamed("weights"),
-            ParticleError::NonFiniteValue { what, .. } | ParticleError::LengthMismatch { what, .. } => blamed(what),
+            ParticleError::NonFiniteValue { what, .. }
+            | ParticleError::LengthMismatch { what, .. } => blamed(what),
             _ => None,
         }
         .unwrap_or(main_file);
@@ -400,7 +440,11 @@ fn default_radius(positions: &[Vec3], kernel: Kernel) -> f32 {
     let mut occupied = vec![false; nx * ny * nz];
     for p in positions {
         let q = (*p - b.min) * (1.0 / cell);
-        let (i, j, k) = ((q.x as usize).min(nx - 1), (q.y as usize).min(ny - 1), (q.z as usize).min(nz - 1));
+        let (i, j, k) = (
+            (q.x as usize).min(nx - 1),
+            (q.y as usize).min(ny - 1),
+            (q.z as usize).min(nz - 1),
+        );
         occupied[(k * ny + j) * nx + i] = true;
     }
     let count = occupied.iter().filter(|&&o| o).count().max(1);
@@ -417,7 +461,9 @@ pub fn transfer_function(t: &TransferDesc) -> Result<TransferFunction, SceneErro
         None => Colormap::preset(t.colormap.as_deref().unwrap_or("viridis"))?,
     };
     let opacity = match &t.opacity_points {
-        Some(pts) => OpacityMap::from_points(&pts.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>())?,
+        Some(pts) => {
+            OpacityMap::from_points(&pts.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>())?
+        }
         None => OpacityMap::preset(t.opacity.as_deref().unwrap_or("linear"))?,
     };
     Ok(TransferFunction::new(colormap, opacity))
@@ -427,7 +473,9 @@ fn camera(c: &CameraDesc, bounds: &Aabb, aspect: f32) -> Result<Camera, SceneErr
     let framing = Camera::framing(bounds, aspect);
     let eye = c.eye.map(Vec3::from_array).unwrap_or(framing.eye);
     let look_at = c.look_at.map(Vec3::from_array).unwrap_or(bounds.center());
-    let up = c.up.map(Vec3::from_array).unwrap_or(Vec3::new(0.0, 1.0, 0.0));
+    let up =
+        c.up.map(Vec3::from_array)
+            .unwrap_or(Vec3::new(0.0, 1.0, 0.0));
     let projection = match c.projection.as_deref().unwrap_or("perspective") {
         "perspective" => Projection::Perspective {
             fov_y_deg: c.fov.unwrap_or(30.0),
@@ -447,7 +495,8 @@ fn camera(c: &CameraDesc, bounds: &Aabb, aspect: f32) -> Result<Camera, SceneErr
             ));
         }
     };
-    Camera::look_at(eye, look_at, up, projection).map_err(|e| SceneError::setting("camera", e.to_string()))
+    Camera::look_at(eye, look_at, up, projection)
+        .map_err(|e| SceneError::setting("camera", e.to_string()))
 }
 
 #[cfg(test)]

@@ -23,7 +23,8 @@ impl Source {
 }
 
 fn is_npy(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy"))
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npy"))
 }
 
 /// Reads positions from an N×3 `.npy` or a CSV with x, y, z columns.
@@ -35,12 +36,19 @@ pub fn read_positions(path: &Path) -> Result<(Vec<Vec3>, Source), SceneError> {
                 path,
                 format!(
                     "expected an N×3 array of positions, found shape ({})",
-                    a.shape.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(", ")
+                    a.shape
+                        .iter()
+                        .map(|s| s.to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
             ));
         }
         if a.shape[0] == 0 {
-            return Err(SceneError::data(path, "no particles (the array has 0 rows)"));
+            return Err(SceneError::data(
+                path,
+                "no particles (the array has 0 rows)",
+            ));
         }
         let p = a
             .data
@@ -60,7 +68,10 @@ pub fn read_positions(path: &Path) -> Result<(Vec<Vec3>, Source), SceneError> {
         };
         let (x, y, z) = (col("x")?, col("y")?, col("z")?);
         if t.rows() == 0 {
-            return Err(SceneError::data(path, "no particles (the table has no rows)"));
+            return Err(SceneError::data(
+                path,
+                "no particles (the table has no rows)",
+            ));
         }
         let p = (0..t.rows())
             .map(|i| Vec3::new(x[i] as f32, y[i] as f32, z[i] as f32))
@@ -86,7 +97,10 @@ pub fn read_per_particle(
     let path = base.join(spec);
     if !is_npy(&path) {
         let hint = match source {
-            Source::Csv(_, t) => format!(" or a column of the particle table ({})", t.columns.join(", ")),
+            Source::Csv(_, t) => format!(
+                " or a column of the particle table ({})",
+                t.columns.join(", ")
+            ),
             Source::Npy(_) => String::new(),
         };
         return Err(SceneError::data(
@@ -99,7 +113,10 @@ pub fn read_per_particle(
     if !ok_shape {
         return Err(SceneError::data(
             &path,
-            format!("{what}: expected {n} values (shape (N,)), found shape {:?}", a.shape),
+            format!(
+                "{what}: expected {n} values (shape (N,)), found shape {:?}",
+                a.shape
+            ),
         ));
     }
     if a.data.len() != n {

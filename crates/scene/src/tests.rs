@@ -19,6 +19,9 @@ fn unknown_keys_are_errors_naming_the_file() {
 
 #[test]
 fn missing_data_source_is_explained() {
-    let e = resolve(&SceneDesc::default(), Path::new(".")).err().unwrap().to_string();
+    let e = resolve(&SceneDesc::default(), Path::new("."))
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("--particles"), "{e}");
 }

@@ -32,7 +32,13 @@ pub enum TransferError {
 
 /// Names accepted by [`Colormap::preset`].
 pub const COLORMAP_NAMES: &[&str] = &[
-    "viridis", "inferno", "magma", "plasma", "cividis", "gray", "cool-warm",
+    "viridis",
+    "inferno",
+    "magma",
+    "plasma",
+    "cividis",
+    "gray",
+    "cool-warm",
 ];
 /// Names accepted by [`OpacityMap::preset`].
 pub const OPACITY_NAMES: &[&str] = &["linear", "constant", "ramp-high", "ramp-low"];
@@ -92,7 +98,10 @@ impl ControlPoints {
 
     /// Largest `y` over all points (the map's maximum, since it is piecewise linear).
     pub fn max_value(&self) -> f32 {
-        self.points.iter().map(|p| p.1).fold(f32::NEG_INFINITY, f32::max)
+        self.points
+            .iter()
+            .map(|p| p.1)
+            .fold(f32::NEG_INFINITY, f32::max)
     }
 }
 
@@ -137,7 +146,10 @@ impl Colormap {
             let ch: Vec<(f32, f32)> = points.iter().map(|p| (p.0, p.1[c])).collect();
             ControlPoints::new("colormap", &ch)?;
         }
-        if let Some(p) = points.iter().find(|p| p.1.iter().any(|v| !(0.0..=1.0).contains(v))) {
+        if let Some(p) = points
+            .iter()
+            .find(|p| p.1.iter().any(|v| !(0.0..=1.0).contains(v)))
+        {
             return Err(TransferError::BadControlPoints {
                 what: "colormap".into(),
                 message: format!("colour {:?} at x = {} is outside [0, 1]", p.1, p.0),
@@ -172,7 +184,11 @@ impl Colormap {
     /// Linear-RGB colour at `x`.
     pub fn linear(&self, x: f32) -> Vec3 {
         let c = self.srgb(x);
-        Vec3::new(srgb_to_linear(c[0]), srgb_to_linear(c[1]), srgb_to_linear(c[2]))
+        Vec3::new(
+            srgb_to_linear(c[0]),
+            srgb_to_linear(c[1]),
+            srgb_to_linear(c[2]),
+        )
     }
 }
 
@@ -237,7 +253,10 @@ impl TransferFunction {
             .map(|b| {
                 let lo = ((b as f32 / BINS as f32) * (LUT - 1) as f32).floor() as usize;
                 let hi = (((b + 1) as f32 / BINS as f32) * (LUT - 1) as f32).ceil() as usize;
-                opacity_lut[lo..=hi.min(LUT - 1)].iter().copied().fold(0.0, f32::max)
+                opacity_lut[lo..=hi.min(LUT - 1)]
+                    .iter()
+                    .copied()
+                    .fold(0.0, f32::max)
             })
             .collect();
         let mut max_table = vec![bins];
@@ -332,7 +351,9 @@ mod tests {
 
     #[test]
     fn max_opacity_bounds_every_lookup() {
-        let op = OpacityMap::from_points(&[(0.0, 0.0), (0.3, 0.0), (0.31, 0.8), (0.6, 0.1), (1.0, 0.5)]).unwrap();
+        let op =
+            OpacityMap::from_points(&[(0.0, 0.0), (0.3, 0.0), (0.31, 0.8), (0.6, 0.1), (1.0, 0.5)])
+                .unwrap();
         let tf = TransferFunction::new(Colormap::preset("gray").unwrap(), op);
         let mut seed = 1u32;
         let mut rnd = || {
@@ -345,7 +366,11 @@ mod tests {
             let m = tf.max_opacity(lo, hi);
             for k in 0..=50 {
                 let x = lo + (hi - lo) * k as f32 / 50.0;
-                assert!(tf.opacity(x) <= m + 1e-7, "x {x} in [{lo}, {hi}]: {} > {m}", tf.opacity(x));
+                assert!(
+                    tf.opacity(x) <= m + 1e-7,
+                    "x {x} in [{lo}, {hi}]: {} > {m}",
+                    tf.opacity(x)
+                );
             }
         }
         // The zero-opacity region is recognised as invisible (away from the kink).
