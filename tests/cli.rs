@@ -434,37 +434,19 @@ fn bad_input_gives_clear_errors() {
     let e = fails(&["render", "--particles", &s.str("trunc.npy"), "-o", &out]);
     assert!(e.contains("trunc.npy"), "{e}");
 
-    // Bad settings.
-    let e = fails(&[
-        "render",
-        "--particles",
-        &good,
-        "--kernel",
-        "wendland",
-        "-o",
-        &out,
-    ]);
-    assert!(e.contains("wendland") && e.contains("cubic-spline"), "{e}");
-    let e = fails(&[
-        "render",
-        "--particles",
-        &good,
-        "--colormap",
-        "jet",
-        "-o",
-        &out,
-    ]);
-    assert!(e.contains("jet") && e.contains("viridis"), "{e}");
-    let e = fails(&[
-        "render",
-        "--particles",
-        &good,
-        "--cluster",
-        "32",
-        "-o",
-        &out,
-    ]);
-    assert!(e.contains("cluster"), "{e}");
+    // Bad settings: (flag, value, what the message must mention).
+    for (flag, value, mentions) in [
+        ("--kernel", "wendland", ["wendland", "cubic-spline"]),
+        ("--colormap", "jet", ["jet", "viridis"]),
+        ("--cluster", "32", ["cluster", "1..=16"]),
+        ("--opacity", "cloudy", ["cloudy", "linear"]),
+    ] {
+        let e = fails(&["render", "--particles", &good, flag, value, "-o", &out]);
+        assert!(
+            mentions.iter().all(|m| e.contains(m)),
+            "{flag} {value}: {e}"
+        );
+    }
     let e = fails(&["render", "-o", &out]);
     assert!(e.contains("--particles"), "{e}");
 }

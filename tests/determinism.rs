@@ -34,6 +34,9 @@ fn image_is_identical_across_thread_counts() {
     };
     let one = with_threads(1);
     let three = with_threads(3);
-    assert!(one.pixels.iter().any(|p| p[3] > 0.1), "the galaxy is visible");
+    assert!(
+        one.pixels.iter().any(|p| p[3] > 0.1),
+        "the galaxy is visible"
+    );
     assert_eq!(one, three);
 }

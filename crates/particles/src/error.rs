@@ -38,7 +38,11 @@ pub enum ParticleError {
     #[error(
         "radius too large: the median support radius {support} exceeds the extent of the data ({extent}), so every sample would sum nearly every one of the {count} particles; use a smaller radius"
     )]
-    HugeRadius { support: f32, extent: f32, count: usize },
+    HugeRadius {
+        support: f32,
+        extent: f32,
+        count: usize,
+    },
     #[error("too many particles ({count}); at most {max} per volume")]
     TooMany { count: usize, max: usize },
 }

@@ -29,10 +29,12 @@ use voxless_core::Vec3;
 pub enum Kernel {
     #[default]
     Gaussian3,
-    Gaussian { kappa: f32, sigma: f32 },
+    Gaussian {
+        kappa: f32,
+        sigma: f32,
+    },
     CubicSpline,
 }
-
 
 /// Names accepted on the command line and in scenes.
 pub const KERNEL_NAMES: &[&str] = &["gaussian3", "gaussian", "cubic-spline"];
@@ -121,13 +123,13 @@ impl Family for CubicFamily {
     #[inline(always)]
     fn value(d: Vec3, _: f32, inv_h: f32, amp: f32) -> f32 {
         let (_, q) = cubic_q(d, inv_h);
-        (amp as f64 * m4_f64(q)) as f32
+        (amp as f64 * m4(q)) as f32
     }
     #[inline(always)]
     fn value_and_gradient_factor(d: Vec3, _: f32, inv_h: f32, amp: f32) -> (f32, f32) {
         let (dist, q) = cubic_q(d, inv_h);
         let (amp, inv_h) = (amp as f64, inv_h as f64);
-        let v = amp * m4_f64(q);
+        let v = amp * m4(q);
         // dφ/dd = amp·M4'(q)/h; ∇φ = dφ/dd·d/|d|. At d = 0, M4'(q)/q → −3.
         let g = if q > 0.0 {
             amp * m4_derivative(q) * inv_h / dist
@@ -138,21 +140,9 @@ impl Family for CubicFamily {
     }
 }
 
-#[inline(always)]
-fn m4_f64(q: f64) -> f64 {
-    if q < 1.0 {
-        1.0 - 1.5 * q * q + 0.75 * q * q * q
-    } else if q < 2.0 {
-        let t = 2.0 - q;
-        0.25 * t * t * t
-    } else {
-        0.0
-    }
-}
-
 /// The M4 cubic spline shape (without the 1/(πh³) normalisation).
 #[inline(always)]
-pub fn m4(q: f32) -> f32 {
+pub fn m4(q: f64) -> f64 {
     if q < 1.0 {
         1.0 - 1.5 * q * q + 0.75 * q * q * q
     } else if q < 2.0 {
@@ -209,7 +199,7 @@ impl Kernel {
                     // Full chord: the projected kernel F(b/h)·h (u in units of h).
                     norm * r * projected_m4((b2.sqrt() / r) as f32) as f64
                 } else {
-                    let f = |u: f64| m4(((b2 + u * u).sqrt() / r) as f32) as f64;
+                    let f = |u: f64| m4((b2 + u * u).sqrt() / r);
                     norm * voxless_core::simpson(f, a, b, 256)
                 }
             }
@@ -238,7 +228,7 @@ fn projected_m4(qb: f32) -> f32 {
         (0..PROJ_TABLE)
             .map(|i| {
                 let qb = 2.0 * i as f64 / (PROJ_TABLE - 1) as f64;
-                let f = |v: f64| m4((qb * qb + v * v).sqrt() as f32) as f64;
+                let f = |v: f64| m4((qb * qb + v * v).sqrt());
                 let vmax = (4.0 - qb * qb).max(0.0).sqrt();
                 let vkink = (1.0 - qb * qb).max(0.0).sqrt();
                 let inner = if vkink > 0.0 {

@@ -156,24 +156,37 @@ fn point_query_returns_exactly_the_overlapping_particles() {
             },
         )
         .unwrap();
-        let mut rng = Lcg(9);
-        for _ in 0..2000 {
-            let p = rng.v();
-            let mut got: Vec<u32> = vol
-                .overlapping(p)
-                .iter()
-                .map(|&i| vol.original_index()[i])
-                .collect();
-            got.sort_unstable();
-            let want: Vec<u32> = (0..data.positions.len())
-                .filter(|&i| {
-                    let r = data.radii.as_ref().unwrap()[i];
-                    (p - data.positions[i]).length_squared() <= r * r
-                })
-                .map(|i| i as u32)
-                .collect();
-            assert_eq!(got, want);
-        }
+        let radii = data.radii.as_ref().unwrap();
+        assert_overlaps_match(&vol, &data.positions, |i| radii[i], 9, 2000);
+    }
+}
+
+/// The BVH point query returns exactly the particles (input indices) whose
+/// support `radius_of(i)` contains each of `count` random points.
+fn assert_overlaps_match(
+    vol: &ParticleVolume,
+    positions: &[Vec3],
+    radius_of: impl Fn(usize) -> f32,
+    seed: u64,
+    count: usize,
+) {
+    let mut rng = Lcg(seed);
+    for _ in 0..count {
+        let p = rng.v();
+        let mut got: Vec<u32> = vol
+            .overlapping(p)
+            .iter()
+            .map(|&i| vol.original_index()[i])
+            .collect();
+        got.sort_unstable();
+        let want: Vec<u32> = (0..positions.len())
+            .filter(|&i| {
+                let r = radius_of(i);
+                r > 0.0 && (p - positions[i]).length_squared() <= r * r
+            })
+            .map(|i| i as u32)
+            .collect();
+        assert_eq!(got, want, "at {p:?}");
     }
 }
 
@@ -200,24 +213,7 @@ fn radius_map_refits_and_stays_exact() {
     let attr = data.attribute.as_ref().unwrap();
     let range = vol.attribute_range().unwrap();
     let radius_of = |i: usize| 0.05 * map.eval(range.normalize(attr[i])).max(0.0);
-    let mut rng = Lcg(1);
-    for _ in 0..3000 {
-        let p = rng.v();
-        let mut got: Vec<u32> = vol
-            .overlapping(p)
-            .iter()
-            .map(|&i| vol.original_index()[i])
-            .collect();
-        got.sort_unstable();
-        let want: Vec<u32> = (0..data.positions.len())
-            .filter(|&i| {
-                radius_of(i) > 0.0
-                    && (p - data.positions[i]).length_squared() <= radius_of(i) * radius_of(i)
-            })
-            .map(|i| i as u32)
-            .collect();
-        assert_eq!(got, want);
-    }
+    assert_overlaps_match(&vol, &data.positions, radius_of, 1, 3000);
     // A global radius change refits too.
     vol.set_radius(0.08, None).unwrap();
     vol.validate().unwrap();
@@ -407,12 +403,23 @@ fn huge_radii_are_refused_not_rendered_forever() {
     let mut big = random_data(5000, 2);
     big.radii = None;
     let s = ParticleSettings::default();
-    let e = ParticleVolume::new(big.clone(), ParticleSettings { radius: 1e6, ..s.clone() }).err().unwrap();
+    let e = ParticleVolume::new(
+        big.clone(),
+        ParticleSettings {
+            radius: 1e6,
+            ..s.clone()
+        },
+    )
+    .err()
+    .unwrap();
     assert!(matches!(e, ParticleError::HugeRadius { .. }), "{e}");
     assert!(e.to_string().contains("radius too large"), "{e}");
     let mut vol = ParticleVolume::new(big, ParticleSettings { radius: 0.05, ..s }).unwrap();
     assert!(vol.set_radius(1e6, None).is_err());
-    assert!(vol.radii().iter().all(|&r| r == 0.05), "a refused change leaves the volume as it was");
+    assert!(
+        vol.radii().iter().all(|&r| r == 0.05),
+        "a refused change leaves the volume as it was"
+    );
     vol.validate().unwrap();
 }
 

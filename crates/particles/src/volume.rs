@@ -367,7 +367,12 @@ impl ParticleVolume {
         }
         let factor = self.settings.kernel.support_factor();
         let stride = (self.len() / RANGE_PROBES).max(1);
-        let mut supports: Vec<f32> = self.radius.iter().step_by(stride).map(|r| r * factor).collect();
+        let mut supports: Vec<f32> = self
+            .radius
+            .iter()
+            .step_by(stride)
+            .map(|r| r * factor)
+            .collect();
         let mid = supports.len() / 2;
         let support = *supports.select_nth_unstable_by(mid, f32::total_cmp).1;
         let extent = b.diagonal();

@@ -40,6 +40,31 @@ fn white_constant() -> TransferFunction {
     )
 }
 
+/// Opacity of one ray through `slab` with a white, constant-opacity transfer function.
+fn alpha_along(
+    slab: &Slab,
+    ray: &Ray,
+    step: f32,
+    opacity_scale: f32,
+    early_termination: f32,
+) -> f32 {
+    let settings = RenderSettings {
+        step: Some(step),
+        opacity_scale,
+        early_termination,
+        ..RenderSettings::for_volume(slab, 1, 1)
+    };
+    let rng = PixelRng::new(0, 0, 0);
+    march(
+        slab,
+        ray,
+        &white_constant(),
+        &settings,
+        &rng,
+        &mut Vec::new(),
+    )[3]
+}
+
 #[test]
 fn homogeneous_slab_transmittance_is_exact_at_any_step() {
     let thickness = 0.37;
@@ -76,42 +101,15 @@ fn homogeneous_slab_transmittance_is_exact_at_any_step() {
     // A tilted ray crosses thickness / cos θ.
     let cos = 0.8f32;
     let ray = Ray::new(Vec3::new(-1.0, 0.0, 2.0), Vec3::new(0.6, 0.0, -cos));
-    let settings = RenderSettings {
-        step: Some(0.07),
-        opacity_scale: sigma,
-        early_termination: 1.0,
-        ..RenderSettings::for_volume(&slab, 1, 1)
-    };
-    let a = march(
-        &slab,
-        &ray,
-        &tf,
-        &settings,
-        &PixelRng::new(0, 0, 0),
-        &mut Vec::new(),
-    )[3];
+    let a = alpha_along(&slab, &ray, 0.07, sigma, 1.0);
     assert!(((1.0 - a) - (-sigma * thickness / cos).exp()).abs() < 1e-3);
 }
 
 #[test]
 fn early_termination_stops_at_the_threshold() {
     let slab = Slab { thickness: 0.5 };
-    let tf = white_constant();
     let ray = Ray::new(Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 0.0, -1.0));
-    let settings = RenderSettings {
-        step: Some(0.001),
-        opacity_scale: 100.0,
-        early_termination: 0.9,
-        ..RenderSettings::for_volume(&slab, 1, 1)
-    };
-    let a = march(
-        &slab,
-        &ray,
-        &tf,
-        &settings,
-        &PixelRng::new(0, 0, 0),
-        &mut Vec::new(),
-    )[3];
+    let a = alpha_along(&slab, &ray, 0.001, 100.0, 0.9);
     assert!((0.9..0.92).contains(&a), "alpha {a}");
 }
 
