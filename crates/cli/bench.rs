@@ -59,8 +59,8 @@ enum Which {
         /// Number of synthetic particles.
         #[arg(long, default_value_t = 1_000_000)]
         n: usize,
-        /// Particle distribution: galaxy (demo spiral, clustered), uniform (unit cube) or both.
-        #[arg(long, default_value = "both")]
+        /// Particle distribution: the demo spiral galaxy (clustered), a uniform unit cube, or both.
+        #[arg(long, default_value = "both", value_parser = ["galaxy", "uniform", "both"])]
         scene: String,
         /// Timed runs per measurement (the median is reported).
         #[arg(long, default_value_t = 5)]
@@ -68,102 +68,83 @@ enum Which {
     },
     /// Frame time with clustered (8) vs unclustered (1) BVH leaves, and the
     /// max difference between the two images.
-    Frame {
-        /// Image width and height in pixels.
-        #[arg(long, default_value_t = 1024)]
-        size: u32,
-        /// Number of particles of the synthetic galaxy.
-        #[arg(long, default_value_t = 1_000_000)]
-        n: usize,
-        /// Samples per pixel.
-        #[arg(long, default_value_t = 1)]
-        spp: u32,
-        /// Samples per nominal step (RenderSettings::sampling_rate; library default 1).
-        #[arg(long, default_value_t = 1.0)]
-        sampling_rate: f32,
-        /// Timed renders per cluster size (the median is reported).
-        #[arg(long, default_value_t = 1)]
-        repeats: usize,
-        /// Also bench the SPH dam-break snapshot in DIR (positions.npy, h.npy,
-        /// mass.npy, speed.npy), e.g. ../shared/data/sph-dam-break/npy_01000.
-        #[arg(long, value_name = "DIR")]
-        dam_break: Option<PathBuf>,
-        /// Write the rendered frames as PNGs into this directory.
-        #[arg(long, value_name = "DIR")]
-        save: Option<PathBuf>,
-    },
+    Frame(FrameArgs),
+}
+
+#[derive(clap::Args)]
+struct FrameArgs {
+    /// Image width and height in pixels.
+    #[arg(long, default_value_t = 1024)]
+    size: u32,
+    /// Number of particles of the synthetic galaxy.
+    #[arg(long, default_value_t = 1_000_000)]
+    n: usize,
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 1)]
+    spp: u32,
+    /// Samples per nominal step (RenderSettings::sampling_rate; library default 1).
+    #[arg(long, default_value_t = 1.0)]
+    sampling_rate: f32,
+    /// Timed renders per cluster size (the median is reported).
+    #[arg(long, default_value_t = 1)]
+    repeats: usize,
+    /// Also bench the SPH dam-break snapshot in DIR (positions.npy, h.npy,
+    /// mass.npy, speed.npy), e.g. ../shared/data/sph-dam-break/npy_01000.
+    #[arg(long, value_name = "DIR")]
+    dam_break: Option<PathBuf>,
+    /// Write the rendered frames as PNGs into this directory.
+    #[arg(long, value_name = "DIR")]
+    save: Option<PathBuf>,
 }
 
 pub fn run(args: BenchArgs) -> Result<()> {
     match args.which {
         Which::Bvh { n, scene, repeats } => {
-            let scenes: &[&str] = match scene.as_str() {
-                "both" => &["galaxy", "uniform"],
-                "galaxy" => &["galaxy"],
-                "uniform" => &["uniform"],
-                other => bail!("--scene must be galaxy, uniform or both, not '{other}'"),
-            };
             if n == 0 || repeats == 0 {
                 bail!("--n and --repeats must be ≥ 1");
             }
             print_header();
-            for s in scenes {
+            for s in ["galaxy", "uniform"]
+                .into_iter()
+                .filter(|s| scene == "both" || scene == *s)
+            {
                 bench_bvh(s, n, repeats)?;
             }
-            Ok(())
         }
-        Which::Frame {
-            size,
-            n,
-            spp,
-            sampling_rate,
-            repeats,
-            dam_break,
-            save,
-        } => {
-            if size == 0 || n == 0 || spp == 0 || repeats == 0 || !(sampling_rate > 0.0) {
+        Which::Frame(o) => {
+            if o.size == 0 || o.n == 0 || o.spp == 0 || o.repeats == 0 || !(o.sampling_rate > 0.0) {
                 bail!("--size, --n, --spp, --repeats and --sampling-rate must be > 0");
             }
-            if let Some(dir) = &save {
+            if let Some(dir) = &o.save {
                 std::fs::create_dir_all(dir)
                     .with_context(|| format!("creating {}", dir.display()))?;
             }
-            let opts = FrameOpts {
-                size,
-                spp,
-                sampling_rate,
-                repeats,
-                save,
-            };
+            // Read the snapshot first so a bad path fails before the long galaxy runs.
+            let dam_break = o.dam_break.as_deref().map(read_dam_break).transpose()?;
             print_header();
-            let mut rows = Vec::new();
-            let (data, radius) = synthetic("galaxy", n);
-            rows.push(bench_frame(
-                &format!("galaxy {}", count(n)),
-                data,
-                Kernel::Gaussian3,
-                radius,
-                &opts,
-            )?);
-            if let Some(dir) = &dam_break {
-                let data = read_dam_break(dir)?;
+            let (data, radius) = synthetic("galaxy", o.n);
+            let label = format!("galaxy {}", count(o.n));
+            let mut rows = vec![bench_frame(&label, data, Kernel::Gaussian3, radius, &o)?];
+            if let Some(data) = dam_break {
                 let label = format!("dam break {}", count(data.positions.len()));
-                rows.push(bench_frame(&label, data, Kernel::CubicSpline, 1.0, &opts)?);
+                rows.push(bench_frame(&label, data, Kernel::CubicSpline, 1.0, &o)?);
             }
+            let (size, spp, rate, repeats) = (o.size, o.spp, o.sampling_rate, o.repeats);
             println!(
-                "### Frame: {size}×{size}, {spp} spp, sampling rate {sampling_rate}, median of {repeats}\n"
+                "### Frame: {size}×{size}, {spp} spp, sampling rate {rate}, median of {repeats}\n"
             );
             println!(
-                "| scene | kernel | build N=8 s | build N=1 s | frame N=8 s | frame N=1 s | speedup (N=1 / N=8) | max abs diff | mean abs diff |"
+                "| scene | kernel | volume N=8 s | volume N=1 s | frame N=8 s | frame N=1 s \
+                 | speedup (N=1 / N=8) | max abs diff | mean abs diff |"
             );
             println!("|---|---|---:|---:|---:|---:|---:|---:|---:|");
             for r in rows {
                 println!("{r}");
             }
             println!();
-            Ok(())
         }
     }
+    Ok(())
 }
 
 // ---------------------------------------------------------------- bvh
@@ -179,15 +160,12 @@ fn bench_bvh(scene: &str, n: usize, repeats: usize) -> Result<()> {
         ..Default::default()
     };
     // ParticleVolume::new at N=1 gives the Hilbert order used below.
-    let mut vol = None;
-    let t_new1 = median_of(repeats, || {
-        let t = Instant::now();
-        let v = ParticleVolume::new(data.clone(), settings(1));
-        let s = t.elapsed().as_secs_f64();
-        vol = Some(v);
-        s
-    });
-    let vol = vol.unwrap()?;
+    let (t_new1, vol) = bench(
+        repeats,
+        || data.clone(),
+        |d| ParticleVolume::new(d, settings(1)),
+    );
+    let vol = vol?;
     let positions = vol.positions();
     let factor = kernel.support_factor();
     let support: Vec<f32> = vol.radii().iter().map(|r| r * factor).collect();
@@ -206,35 +184,28 @@ fn bench_bvh(scene: &str, n: usize, repeats: usize) -> Result<()> {
         "| N/leaf | clusters | boxes ms | build ms | rebuild ms | refit ms (r × 1.5) | refit / build | build / build(N=1) | tree MB | tree / particles |"
     );
     println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
-    let mut build1 = None;
+    let mut builds = Vec::new();
+    let mut mem16 = 0.0;
     for cs in [1usize, 2, 4, 8, 16] {
         eprintln!("bvh/{scene}: cluster size {cs}");
-        let mut boxes = Vec::new();
-        let t_boxes = median_of(repeats, || {
-            timed(|| boxes = cluster_boxes(positions, &support, cs))
-        });
+        let (t_boxes, boxes) = bench(repeats, || (), |_| cluster_boxes(positions, &support, cs));
         let big = cluster_boxes(positions, &grown, cs);
-        let t_build = median_of(repeats, || {
-            let t = Instant::now();
-            let b = Bvh::build(&boxes);
-            let s = t.elapsed().as_secs_f64();
-            drop(b);
-            s
-        });
-        let mut bvh = Bvh::build(&boxes);
-        let t_rebuild = median_of(repeats, || timed(|| bvh.rebuild(&boxes)));
+        let (t_build, mut bvh) = bench(repeats, || (), |_| Bvh::build(&boxes));
+        let (t_rebuild, _) = bench(repeats, || (), |_| bvh.rebuild(&boxes));
         // Alternate the grown and original radii so every refit changes the boxes.
         let mut k = 0;
-        let t_refit = median_of(repeats, || {
+        let mut pick = || {
             k += 1;
-            let prims = if k % 2 == 1 { &big } else { &boxes };
-            timed(|| bvh.refit(prims))
-        });
+            if k % 2 == 1 { &big } else { &boxes }
+        };
+        let (t_refit, _) = bench(repeats, &mut pick, |prims| bvh.refit(prims));
         bvh.refit(&big);
         bvh.validate(&big)
             .map_err(|e| anyhow::anyhow!("after refit: {e}"))?;
-        let b1 = *build1.get_or_insert(t_build);
+        builds.push(t_build);
+        let b1 = builds[0];
         let mem = bvh.memory_bytes() as f64;
+        mem16 = mem / particle_bytes;
         println!(
             "| {cs} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} | {:.1} | {:.2} |",
             boxes.len(),
@@ -248,20 +219,28 @@ fn bench_bvh(scene: &str, n: usize, repeats: usize) -> Result<()> {
             mem / particle_bytes
         );
     }
-    println!();
+    let verdict = |ok: bool| if ok { "met" } else { "not met" };
+    let per_1m = |t: f64| ms(t) * 1e6 / n as f64;
+    println!(
+        "\nTargets (1M particles, 2 cores; times scaled linearly to 1M): build ≤ 100 ms: \
+         1/leaf {:.1} ms ({}), 8/leaf {:.1} ms ({}); tree ≤ 0.5× particle data at 16/leaf: \
+         {mem16:.2}× ({}).\n",
+        per_1m(builds[0]),
+        verdict(per_1m(builds[0]) <= 100.0),
+        per_1m(builds[3]),
+        verdict(per_1m(builds[3]) <= 100.0),
+        verdict(mem16 <= 0.5)
+    );
     drop(vol);
 
     // The user-facing path at the default cluster size.
     eprintln!("bvh/{scene}: set_radius vs new at cluster size 8");
-    let mut vol8 = None;
-    let t_new8 = median_of(repeats, || {
-        let t = Instant::now();
-        let v = ParticleVolume::new(data.clone(), settings(8));
-        let s = t.elapsed().as_secs_f64();
-        vol8 = Some(v);
-        s
-    });
-    let mut vol8 = vol8.unwrap()?;
+    let (t_new8, vol8) = bench(
+        repeats,
+        || data.clone(),
+        |d| ParticleVolume::new(d, settings(8)),
+    );
+    let mut vol8 = vol8?;
     // Up to 1.5 r and back: "back" ends in the state `new` built, so its ratio
     // to `new` compares equal work; "up" touches more macrocells.
     let (mut up, mut down) = (Vec::new(), Vec::new());
@@ -274,19 +253,15 @@ fn bench_bvh(scene: &str, n: usize, repeats: usize) -> Result<()> {
         down.push(t.elapsed().as_secs_f64());
     }
     let (up, down) = (median(up), median(down));
-    println!("| cluster size 8 | ms | ratio to `new` |");
+    println!("| 8/leaf | ms | ratio to `new` |");
     println!("|---|---:|---:|");
-    println!("| `ParticleVolume::new` (r) | {:.1} | 1.00 |", ms(t_new8));
-    println!(
-        "| `set_radius` r → 1.5 r | {:.1} | {:.2} |",
-        ms(up),
-        up / t_new8
-    );
-    println!(
-        "| `set_radius` 1.5 r → r | {:.1} | {:.2} |",
-        ms(down),
-        down / t_new8
-    );
+    for (what, t) in [
+        ("`ParticleVolume::new` (r)", t_new8),
+        ("`set_radius` r → 1.5 r", up),
+        ("`set_radius` 1.5 r → r", down),
+    ] {
+        println!("| {what} | {:.1} | {:.2} |", ms(t), t / t_new8);
+    }
     println!();
     Ok(())
 }
@@ -307,20 +282,12 @@ fn cluster_boxes(positions: &[Vec3], support: &[f32], cs: usize) -> Vec<Aabb> {
 
 // ---------------------------------------------------------------- frame
 
-struct FrameOpts {
-    size: u32,
-    spp: u32,
-    sampling_rate: f32,
-    repeats: usize,
-    save: Option<PathBuf>,
-}
-
 fn bench_frame(
     label: &str,
     data: ParticleData,
     kernel: Kernel,
     radius: f32,
-    o: &FrameOpts,
+    o: &FrameArgs,
 ) -> Result<String> {
     let settings = |cluster_size| ParticleSettings {
         kernel,
@@ -330,25 +297,20 @@ fn bench_frame(
     };
     let tf = TransferFunction::default_for_density();
     eprintln!("frame/{label}: building volumes");
-    let (t_b8, v8) = timed_val(|| ParticleVolume::new(data.clone(), settings(8)));
-    let (t_b1, v1) = timed_val(|| ParticleVolume::new(data, settings(1)));
+    let (t_b8, v8) = bench(1, || data.clone(), |d| ParticleVolume::new(d, settings(8)));
+    let (t_b1, v1) = bench(1, || data.clone(), |d| ParticleVolume::new(d, settings(1)));
     let (v8, v1) = (v8?, v1?);
     let camera = Camera::framing(&v8.bounds(), 1.0);
     let mut rs = RenderSettings::for_volume(&v8, o.size, o.size);
     rs.spp = o.spp;
     rs.sampling_rate = o.sampling_rate;
     let render = |v: &ParticleVolume, what: &str| {
-        let mut img = None;
-        let t = median_of(o.repeats, || {
-            eprintln!("frame/{label}: rendering {what}");
-            let t = Instant::now();
-            let i = voxless_render::render(v, &camera, &tf, &rs, &|_, _| {});
-            let s = t.elapsed().as_secs_f64();
-            eprintln!("frame/{label}: {what} took {s:.2} s");
-            img = Some(i);
-            s
+        let setup = || eprintln!("frame/{label}: rendering {what}");
+        let (t, img) = bench(o.repeats, setup, |_| {
+            voxless_render::render(v, &camera, &tf, &rs, &|_, _| {})
         });
-        (t, img.unwrap())
+        eprintln!("frame/{label}: {what}: median {t:.2} s");
+        (t, img)
     };
     let (t8, img8) = render(&v8, "cluster size 8");
     let (t1, img1) = render(&v1, "cluster size 1");
@@ -399,12 +361,9 @@ fn read_dam_break(dir: &Path) -> Result<ParticleData> {
     let n = pos.shape[0];
     let column = |name: &str| -> Result<Vec<f32>> {
         let a = read(name)?;
-        if a.data.len() != n {
-            bail!(
-                "{}: expected {n} values, found {}",
-                dir.join(name).display(),
-                a.data.len()
-            );
+        let (path, got) = (dir.join(name), a.data.len());
+        if got != n {
+            bail!("{}: expected {n} values, found {got}", path.display());
         }
         Ok(a.data.iter().map(|&v| v as f32).collect())
     };
@@ -440,85 +399,48 @@ fn synthetic(scene: &str, n: usize) -> (ParticleData, f32) {
             ..Default::default()
         }
     };
-    let radius = 2.5 * mean_spacing(&data.positions);
+    let radius = voxless_scene::default_radius(&data.positions, Kernel::Gaussian3);
     (data, radius)
-}
-
-/// `(occupied volume / N)^(1/3)`, the occupied volume counted on a coarse grid
-/// of about four particles per cell (the estimate `voxless render` uses when no
-/// radius is given; that function is private to voxless-scene).
-fn mean_spacing(positions: &[Vec3]) -> f32 {
-    let b = positions.iter().fold(Aabb::EMPTY, |mut b, p| {
-        b.grow(*p);
-        b
-    });
-    let n = positions.len();
-    let res = ((n as f32 / 4.0).cbrt().round() as usize).clamp(1, 128);
-    let cell = b.extent().max_elem().max(1e-12) / res as f32;
-    let dims = b.extent() * (1.0 / cell);
-    let dim = |a: f32| (a.ceil() as usize).clamp(1, res);
-    let (nx, ny, nz) = (dim(dims.x), dim(dims.y), dim(dims.z));
-    let mut occupied = vec![false; nx * ny * nz];
-    for p in positions {
-        let q = (*p - b.min) * (1.0 / cell);
-        let (i, j, k) = (
-            (q.x as usize).min(nx - 1),
-            (q.y as usize).min(ny - 1),
-            (q.z as usize).min(nz - 1),
-        );
-        occupied[(k * ny + j) * nx + i] = true;
-    }
-    let cells = occupied.iter().filter(|&&o| o).count().max(1);
-    (cells as f32 * cell * cell * cell / n as f32).cbrt()
 }
 
 // ---------------------------------------------------------------- helpers
 
-fn timed(f: impl FnOnce()) -> f64 {
-    let t = Instant::now();
-    f();
-    t.elapsed().as_secs_f64()
+/// Median time in seconds of `repeats` calls of `f(setup())` (`setup` is not
+/// timed), and the last call's result (earlier results are dropped untimed).
+fn bench<S, T>(
+    repeats: usize,
+    mut setup: impl FnMut() -> S,
+    mut f: impl FnMut(S) -> T,
+) -> (f64, T) {
+    let mut times = Vec::new();
+    let mut last = None;
+    for _ in 0..repeats.max(1) {
+        let input = setup();
+        let t = Instant::now();
+        let out = f(input);
+        times.push(t.elapsed().as_secs_f64());
+        last = Some(out);
+    }
+    (median(times), last.expect("at least one run"))
 }
 
-fn timed_val<T>(f: impl FnOnce() -> T) -> (f64, T) {
-    let t = Instant::now();
-    let v = f();
-    (t.elapsed().as_secs_f64(), v)
-}
-
-/// Median of `repeats` calls of `f`, each returning its own time in seconds.
-fn median_of(repeats: usize, mut f: impl FnMut() -> f64) -> f64 {
-    median((0..repeats).map(|_| f()).collect())
-}
-
+/// The median (the upper one for an even count).
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    }
+    v[v.len() / 2]
 }
 
 fn ms(s: f64) -> f64 {
     s * 1e3
 }
 
-/// 1000000 → "1M", 23760 → "23,760".
+/// 1000000 → "1M", else the plain number.
 fn count(n: usize) -> String {
-    if n >= 1_000_000 && n % 1_000_000 == 0 {
-        return format!("{}M", n / 1_000_000);
+    if n.is_multiple_of(1_000_000) {
+        format!("{}M", n / 1_000_000)
+    } else {
+        n.to_string()
     }
-    let s = n.to_string();
-    let mut out = String::new();
-    for (i, ch) in s.chars().enumerate() {
-        if i > 0 && (s.len() - i) % 3 == 0 {
-            out.push(',');
-        }
-        out.push(ch);
-    }
-    out
 }
 
 fn print_header() {

@@ -1,3 +1,4 @@
+#![allow(clippy::needless_range_loop)] // component loops over x, y, z read clearest
 //! Known-answer tests: every field the BVH path computes is compared with a
 //! brute-force sum over all particles written from the kernel definitions.
 

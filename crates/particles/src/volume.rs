@@ -92,8 +92,10 @@ pub struct FieldSample {
 
 /// At most this many particles per volume (indices are `u32`).
 const MAX_PARTICLES: usize = (u32::MAX / 2) as usize;
-/// Particle centres sampled to estimate max Φ.
-const RANGE_PROBES: usize = 65_536;
+/// Particle centres sampled to estimate max Φ (and the median support).
+/// The estimate only normalises the transfer function, and it dominated the
+/// cost of a radius change at 65,536 probes (docs/benchmarks.md).
+const RANGE_PROBES: usize = 16_384;
 
 pub struct ParticleVolume {
     settings: ParticleSettings,

@@ -425,7 +425,7 @@ fn load_particles(
 /// occupied volume counted on a coarse grid (about four particles per cell if
 /// the data were uniform), so clustered data — a thin disc in a big box — get
 /// the spacing where the particles actually are.
-fn default_radius(positions: &[Vec3], kernel: Kernel) -> f32 {
+pub fn default_radius(positions: &[Vec3], kernel: Kernel) -> f32 {
     let mut b = Aabb::EMPTY;
     for p in positions {
         b.grow(*p);
