@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use voxless_scene::{LightDesc, ParticlesDesc, SceneDesc};
+use voxless_scene::{AmrDesc, LightDesc, ParticlesDesc, SceneDesc};
 
 /// Every scene setting a one-off run needs, as flags (they override the scene file).
 #[derive(Args, Debug, Default, Clone)]
@@ -45,6 +45,32 @@ pub struct SceneArgs {
     /// Attribute range mapped to the colormap / maps.
     #[arg(long, num_args = 2, value_names = ["LO", "HI"], help_heading = "Particles", allow_negative_numbers = true)]
     pub attribute_range: Option<Vec<f32>>,
+
+    // ---- AMR ----
+    /// ExaBricks cells: .cells (int32 x, y, z, level per cell).
+    #[arg(long, help_heading = "AMR")]
+    pub cells: Option<PathBuf>,
+    /// ExaBricks .scalars file, one per field (repeat the flag).
+    #[arg(long, help_heading = "AMR")]
+    pub scalars: Vec<PathBuf>,
+    /// AMRClaw ASCII output fort.qNNNN (fields q0, q1, …).
+    #[arg(long, help_heading = "AMR")]
+    pub amrclaw: Option<PathBuf>,
+    /// World position of cell coordinate 0 (default: .meta.json beside the cells, else 0).
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "AMR", allow_negative_numbers = true)]
+    pub origin: Option<Vec<f32>>,
+    /// World width of a finest cell (default: .meta.json, else 1).
+    #[arg(long, help_heading = "AMR")]
+    pub cell_size: Option<f32>,
+    /// Field driving opacity (default: the first).
+    #[arg(long, help_heading = "AMR")]
+    pub field: Option<String>,
+    /// Field driving colour (multi-field rendering).
+    #[arg(long, help_heading = "AMR")]
+    pub color_field: Option<String>,
+    /// Reconstruction: basis (default, smooth across levels) or nearest.
+    #[arg(long, help_heading = "AMR")]
+    pub reconstruction: Option<String>,
 
     // ---- image ----
     /// Image size in pixels.
@@ -106,6 +132,18 @@ pub struct SceneArgs {
     /// Random seed for jitter.
     #[arg(long, help_heading = "Render")]
     pub seed: Option<u64>,
+    /// Implicit iso-surface at this value of the opacity field (repeat for more).
+    #[arg(long, help_heading = "Render", allow_negative_numbers = true)]
+    pub iso: Vec<f32>,
+    /// Opacity of the iso-surfaces (default 1).
+    #[arg(long, help_heading = "Render")]
+    pub iso_opacity: Option<f32>,
+    /// Render only the iso-surfaces, not the volume.
+    #[arg(long, help_heading = "Render")]
+    pub iso_only: bool,
+    /// Render only what lies inside this box.
+    #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], help_heading = "Render", allow_negative_numbers = true)]
+    pub clip: Option<Vec<f32>>,
 }
 
 fn arr3(v: &Option<Vec<f32>>) -> Option<[f32; 3]> {
@@ -174,6 +212,34 @@ impl SceneArgs {
             set(&mut p.classification, self.classification.clone());
             set(&mut p.attribute_range, arr2(&self.attribute_range));
         }
+        let has_amr_flags = self.cells.is_some()
+            || !self.scalars.is_empty()
+            || self.amrclaw.is_some()
+            || self.origin.is_some()
+            || self.cell_size.is_some()
+            || self.field.is_some()
+            || self.color_field.is_some()
+            || self.reconstruction.is_some();
+        if has_amr_flags {
+            let a = d.amr.get_or_insert_with(AmrDesc::default);
+            let abs = |p: &PathBuf| cwd_path(&p.to_string_lossy());
+            if let Some(c) = &self.cells {
+                a.cells = Some(abs(c));
+                a.amrclaw = None;
+            }
+            if !self.scalars.is_empty() {
+                a.scalars = Some(self.scalars.iter().map(abs).collect());
+            }
+            if let Some(q) = &self.amrclaw {
+                a.amrclaw = Some(abs(q));
+                a.cells = None;
+            }
+            set(&mut a.origin, arr3(&self.origin));
+            set(&mut a.cell_size, self.cell_size);
+            set(&mut a.field, self.field.clone());
+            set(&mut a.color_field, self.color_field.clone());
+            set(&mut a.reconstruction, self.reconstruction.clone());
+        }
         if let Some(s) = &self.size {
             d.image.width = Some(s[0]);
             d.image.height = Some(s[1]);
@@ -201,6 +267,16 @@ impl SceneArgs {
         set(&mut d.render.opacity_scale, self.opacity_scale);
         set(&mut d.render.background, arr3(&self.background));
         set(&mut d.render.seed, self.seed);
+        if !self.iso.is_empty() {
+            d.render.iso = Some(self.iso.clone());
+        }
+        set(&mut d.render.iso_opacity, self.iso_opacity);
+        if self.iso_only {
+            d.render.volume = Some(false);
+        }
+        if let Some(c) = &self.clip {
+            d.render.clip = Some([c[0], c[1], c[2], c[3], c[4], c[5]]);
+        }
         if self.shade || self.light_dir.is_some() {
             let l = d.light.get_or_insert_with(LightDesc::default);
             set(&mut l.direction, arr3(&self.light_dir));

@@ -16,7 +16,9 @@ pub use camera::{Camera, CameraError, Projection};
 pub use image::{Image, linear_to_srgb, srgb_to_linear};
 pub use macrogrid::MacroGrid;
 pub use math::{Aabb, Range1, Ray, Vec3};
-pub use volume::{Attribute, Interval, IntervalQuery, Sample, Volume, simpson};
+pub use volume::{
+    Attribute, Interval, IntervalQuery, Sample, Volume, quadrature_line_integral, simpson,
+};
 
 #[cfg(test)]
 mod tests {

@@ -128,6 +128,7 @@ impl MacroGrid {
                             t: Range1::new(t_cur, t_exit),
                             value_range: r,
                             nominal_dt,
+                            hint: Interval::NO_HINT,
                         }),
                     }
                     open = true;

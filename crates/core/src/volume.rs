@@ -19,6 +19,14 @@ pub struct Interval {
     /// The data's own length scale here (particles: a fraction of the support
     /// radius; AMR: the finest cell width). Integrators step a multiple of it.
     pub nominal_dt: f32,
+    /// Opaque to integrators: the volume's own note on where this interval
+    /// came from (AMR: the active brick region), handed back through
+    /// [`Volume::sample_in`]. [`Interval::NO_HINT`] when unused.
+    pub hint: u32,
+}
+
+impl Interval {
+    pub const NO_HINT: u32 = u32::MAX;
 }
 
 /// What an integrator tells the volume about the intervals it wants.
@@ -100,6 +108,20 @@ pub trait Volume: Send + Sync {
         self.sample(p).map(|s| (s, self.gradient(p)))
     }
 
+    /// [`Volume::sample`] at a point `p` inside `interval` (one this volume
+    /// handed out). Volumes that can use the interval's hint to skip a lookup
+    /// override it; the default ignores the interval.
+    fn sample_in(&self, p: Vec3, interval: &Interval) -> Option<Sample> {
+        let _ = interval;
+        self.sample(p)
+    }
+
+    /// [`Volume::sample_with_gradient`] at a point inside `interval`.
+    fn sample_with_gradient_in(&self, p: Vec3, interval: &Interval) -> Option<(Sample, Vec3)> {
+        let _ = interval;
+        self.sample_with_gradient(p)
+    }
+
     /// Append the intervals of `ray` within `t` to `out` (which the caller
     /// clears), in increasing `t`, non-overlapping.
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>);
@@ -108,21 +130,29 @@ pub trait Volume: Send + Sync {
     /// quadrature over the intervals with 16 panels per `nominal_dt` — the slow
     /// path; data kinds with a closed form override it.
     fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
-        let mut intervals = Vec::new();
-        self.intervals(ray, t, &IntervalQuery::all(), &mut intervals);
-        let f = |t: f64| {
-            self.sample(ray.at(t as f32))
-                .map_or(0.0, |s| s.value as f64)
-        };
-        intervals
-            .iter()
-            .map(|iv| {
-                let (a, b) = (iv.t.lo as f64, iv.t.hi as f64);
-                let panels = (((b - a) / iv.nominal_dt as f64) * 16.0).ceil().max(2.0) as usize;
-                simpson(f, a, b, panels + panels % 2)
-            })
-            .sum()
+        quadrature_line_integral(self, ray, t)
     }
+}
+
+/// The default [`Volume::line_integral`]: composite Simpson quadrature over
+/// the volume's intervals with 16 panels per `nominal_dt`. Public so that
+/// volumes whose exact integral covers only some modes can fall back to it.
+pub fn quadrature_line_integral<V: Volume + ?Sized>(volume: &V, ray: &Ray, t: Range1) -> f64 {
+    let mut intervals = Vec::new();
+    volume.intervals(ray, t, &IntervalQuery::all(), &mut intervals);
+    intervals
+        .iter()
+        .map(|iv| {
+            let f = |t: f64| {
+                volume
+                    .sample_in(ray.at(t as f32), iv)
+                    .map_or(0.0, |s| s.value as f64)
+            };
+            let (a, b) = (iv.t.lo as f64, iv.t.hi as f64);
+            let panels = (((b - a) / iv.nominal_dt as f64) * 16.0).ceil().max(2.0) as usize;
+            simpson(f, a, b, panels + panels % 2)
+        })
+        .sum()
 }
 
 /// Composite Simpson rule with `n` (even) panels.

@@ -8,6 +8,10 @@
 //!   commas, tabs or spaces, with `#` comments.
 //! - [`image`]: 8-bit sRGB PNG and linear `f32` OpenEXR images, plus small
 //!   readers used for round-trip tests.
+//! - [`amr`]: block-structured AMR output as leaf cells ([`AmrCellData`]):
+//!   ExaBricks `.cells`/`.scalars` files ([`read_exabricks`]) and AMRClaw's
+//!   ASCII `fort.q`/`fort.t` output ([`read_amrclaw`]), whose coarse cells
+//!   under finer grids are dropped.
 //!
 //! Every function reports failures as an [`IoError`] that names the file and
 //! says what is wrong with it. Bad input never panics, and readers check the
@@ -17,10 +21,12 @@
 
 use std::path::{Path, PathBuf};
 
+pub mod amr;
 pub mod csv;
 pub mod image;
 pub mod npy;
 
+pub use amr::{AmrCellData, read_amrclaw, read_exabricks};
 pub use csv::{CsvTable, read_csv};
 pub use image::{read_exr_gray, read_png_rgb8, write_exr_gray, write_exr_rgba, write_png_rgb8};
 pub use npy::{NpyArray, read_npy, write_npy_f32};

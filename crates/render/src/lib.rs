@@ -21,7 +21,9 @@
 pub mod sampling;
 
 use rayon::prelude::*;
-use voxless_core::{Attribute, Camera, Image, Interval, IntervalQuery, Range1, Ray, Vec3, Volume};
+use voxless_core::{
+    Aabb, Attribute, Camera, Image, Interval, IntervalQuery, Range1, Ray, Vec3, Volume,
+};
 use voxless_transfer::TransferFunction;
 
 use sampling::PixelRng;
@@ -53,6 +55,15 @@ pub struct RenderSettings {
     pub attribute_range: Option<Range1>,
     pub light: Option<Light>,
     pub seed: u64,
+    /// Only the part of the volume inside this box is rendered.
+    pub clip: Option<Aabb>,
+    /// Values of implicit iso-surfaces (shaded with the gradient; coloured by
+    /// the attribute when there is one, else by the colormap at the iso-value).
+    pub iso: Vec<f32>,
+    /// Opacity of the iso-surfaces (1 = opaque).
+    pub iso_opacity: f32,
+    /// Whether the volume itself is rendered (false: iso-surfaces only).
+    pub volume: bool,
 }
 
 impl RenderSettings {
@@ -72,6 +83,10 @@ impl RenderSettings {
             attribute_range: volume.attribute_range(),
             light: None,
             seed: 0,
+            clip: None,
+            iso: Vec::new(),
+            iso_opacity: 1.0,
+            volume: true,
         }
     }
 }
@@ -216,14 +231,19 @@ pub fn march<V: Volume>(
     rng: &PixelRng,
     scratch: &mut Vec<Interval>,
 ) -> [f32; 4] {
-    let t = volume
-        .bounds()
-        .clip_ray(ray, Range1::new(0.0, f32::INFINITY));
+    let mut region = volume.bounds();
+    if let Some(clip) = settings.clip {
+        region = Aabb::new(region.min.max(clip.min), region.max.min(clip.max));
+    }
+    let t = region.clip_ray(ray, Range1::new(0.0, f32::INFINITY));
     if t.is_empty() {
         return [0.0; 4];
     }
     let vr = settings.value_range;
-    let visible = |r: Range1| tf.max_opacity(vr.normalize(r.lo), vr.normalize(r.hi)) > 0.0;
+    let visible = |r: Range1| {
+        (settings.volume && tf.max_opacity(vr.normalize(r.lo), vr.normalize(r.hi)) > 0.0)
+            || settings.iso.iter().any(|&v| r.contains(v))
+    };
     scratch.clear();
     volume.intervals(
         ray,
@@ -233,10 +253,22 @@ pub fn march<V: Volume>(
         },
         scratch,
     );
-    let mut color = Vec3::ZERO;
-    let mut alpha = 0.0f32;
+    let mut acc = Accumulator::default();
     let attr_range = settings.attribute_range.unwrap_or(Range1::new(0.0, 1.0));
+    let colour_of = |s: &voxless_core::Sample, x: f32| match s.attribute {
+        Attribute::Scalar(v) => tf.color(attr_range.normalize(v)),
+        Attribute::Rgb(c) => c,
+        Attribute::None => tf.color(x),
+    };
+    let needs_gradient = settings.light.is_some();
+    // The previous sample (t, value), for iso-surface crossings; reset at gaps.
+    let mut prev: Option<(f32, f32)> = None;
+    let mut prev_end = f32::NAN;
     for (k, iv) in scratch.iter().enumerate() {
+        if iv.t.lo != prev_end {
+            prev = None;
+        }
+        prev_end = iv.t.hi;
         let dt = settings
             .step
             .unwrap_or(iv.nominal_dt / settings.sampling_rate)
@@ -249,41 +281,85 @@ pub fn march<V: Volume>(
         while seg_start < iv.t.hi {
             let end = seg_end.min(iv.t.hi);
             let len = end - seg_start;
-            if len > 0.0 {
-                let p = ray.at(0.5 * (seg_start + end));
-                let (sample, gradient) = match settings.light {
-                    Some(_) => match volume.sample_with_gradient(p) {
-                        Some((s, g)) => (Some(s), g),
-                        None => (None, Vec3::ZERO),
-                    },
-                    None => (volume.sample(p), Vec3::ZERO),
-                };
-                if let Some(s) = sample {
-                    let x = vr.normalize(s.value);
-                    let opacity = tf.opacity(x);
-                    if opacity > 0.0 {
-                        let a = 1.0 - (-opacity * settings.opacity_scale * len).exp();
-                        let mut c = match s.attribute {
-                            Attribute::Scalar(v) => tf.color(attr_range.normalize(v)),
-                            Attribute::Rgb(c) => c,
-                            Attribute::None => tf.color(x),
-                        };
-                        if let Some(light) = settings.light {
-                            c = c * shade(gradient, light);
-                        }
-                        color += c * ((1.0 - alpha) * a);
-                        alpha += (1.0 - alpha) * a;
-                        if alpha >= settings.early_termination {
-                            return [color.x, color.y, color.z, alpha];
+            seg_start = end;
+            seg_end = end + dt;
+            if len <= 0.0 {
+                continue;
+            }
+            let tm = end - 0.5 * len;
+            let p = ray.at(tm);
+            let (sample, gradient) = match needs_gradient && settings.volume {
+                true => match volume.sample_with_gradient_in(p, iv) {
+                    Some((s, g)) => (Some(s), g),
+                    None => (None, Vec3::ZERO),
+                },
+                false => (volume.sample_in(p, iv), Vec3::ZERO),
+            };
+            let Some(s) = sample else {
+                prev = None;
+                continue;
+            };
+            // Implicit iso-surfaces: a sign change of value − iso between the
+            // previous sample and this one is a hit, placed by linear interpolation.
+            if let Some((t0, v0)) = prev {
+                for &iso in &settings.iso {
+                    if (v0 - iso) * (s.value - iso) < 0.0 || (s.value == iso && v0 != iso) {
+                        let th = t0 + (iso - v0) / (s.value - v0) * (tm - t0);
+                        let ph = ray.at(th);
+                        let (hs, g) = volume
+                            .sample_with_gradient_in(ph, iv)
+                            .unwrap_or((s, gradient));
+                        let light = settings.light.unwrap_or(Light {
+                            direction: -ray.dir,
+                            ambient: 0.2,
+                        });
+                        let c = colour_of(&hs, vr.normalize(iso)) * shade(g, light);
+                        if acc.add(c, settings.iso_opacity, settings.early_termination) {
+                            return acc.rgba();
                         }
                     }
                 }
             }
-            seg_start = end;
-            seg_end = end + dt;
+            prev = Some((tm, s.value));
+            if !settings.volume {
+                continue;
+            }
+            let x = vr.normalize(s.value);
+            let opacity = tf.opacity(x);
+            if opacity > 0.0 {
+                let a = 1.0 - (-opacity * settings.opacity_scale * len).exp();
+                let mut c = colour_of(&s, x);
+                if let Some(light) = settings.light {
+                    c = c * shade(gradient, light);
+                }
+                if acc.add(c, a, settings.early_termination) {
+                    return acc.rgba();
+                }
+            }
         }
     }
-    [color.x, color.y, color.z, alpha]
+    acc.rgba()
+}
+
+/// Front-to-back compositing of premultiplied colour.
+#[derive(Default)]
+struct Accumulator {
+    color: Vec3,
+    alpha: f32,
+}
+
+impl Accumulator {
+    /// Adds colour `c` with opacity `a` behind what is there; returns true
+    /// once the pixel is opaque enough to stop.
+    #[inline]
+    fn add(&mut self, c: Vec3, a: f32, early_termination: f32) -> bool {
+        self.color += c * ((1.0 - self.alpha) * a);
+        self.alpha += (1.0 - self.alpha) * a;
+        self.alpha >= early_termination
+    }
+    fn rgba(&self) -> [f32; 4] {
+        [self.color.x, self.color.y, self.color.z, self.alpha]
+    }
 }
 
 /// Two-sided diffuse term: the gradient's sign depends on which side of a

@@ -28,6 +28,7 @@ impl Volume for Slab {
                 t: c,
                 value_range: Range1::new(1.0, 1.0),
                 nominal_dt: 0.1,
+                hint: Interval::NO_HINT,
             });
         }
     }
@@ -130,4 +131,83 @@ fn project_of_the_slab_is_its_thickness() {
     for v in project(&slab, &camera, 4, 4, &|_, _| {}) {
         assert!((v - 0.25).abs() < 1e-5, "{v}");
     }
+}
+
+/// An analytic field `value = |p|` inside the cube [-1, 1]³, one interval.
+struct Radial;
+
+impl Volume for Radial {
+    fn bounds(&self) -> Aabb {
+        Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0))
+    }
+    fn value_range(&self) -> Range1 {
+        Range1::new(0.0, 3f32.sqrt())
+    }
+    fn sample(&self, p: Vec3) -> Option<Sample> {
+        self.bounds()
+            .contains(p)
+            .then(|| Sample::scalar(p.length()))
+    }
+    fn intervals(&self, ray: &Ray, t: Range1, _: &IntervalQuery, out: &mut Vec<Interval>) {
+        let c = self.bounds().clip_ray(ray, t);
+        if !c.is_empty() {
+            out.push(Interval {
+                t: c,
+                value_range: self.value_range(),
+                nominal_dt: 0.05,
+                hint: Interval::NO_HINT,
+            });
+        }
+    }
+}
+
+#[test]
+fn iso_surface_is_hit_exactly_where_the_field_crosses() {
+    let settings = RenderSettings {
+        iso: vec![0.5],
+        volume: false,
+        ..RenderSettings::for_volume(&Radial, 1, 1)
+    };
+    let tf = white_constant();
+    let alpha_at = |b: f32| {
+        let ray = Ray::new(Vec3::new(b, 0.0, 3.0), Vec3::new(0.0, 0.0, -1.0));
+        march(
+            &Radial,
+            &ray,
+            &tf,
+            &settings,
+            &PixelRng::new(0, 0, 0),
+            &mut Vec::new(),
+        )[3]
+    };
+    // Inside the sphere |p| = 0.5 the ray crosses the surface; outside it never does.
+    for b in [0.0, 0.2, 0.45, 0.49] {
+        assert_eq!(alpha_at(b), 1.0, "impact {b}");
+    }
+    for b in [0.51, 0.6, 0.9] {
+        assert_eq!(alpha_at(b), 0.0, "impact {b}");
+    }
+}
+
+#[test]
+fn clip_box_limits_what_is_integrated() {
+    let slab = Slab { thickness: 1.0 };
+    let sigma = 2.0;
+    let ray = Ray::new(Vec3::new(0.1, 0.1, 3.0), Vec3::new(0.0, 0.0, -1.0));
+    let settings = RenderSettings {
+        step: Some(0.05),
+        opacity_scale: sigma,
+        early_termination: 1.0,
+        clip: Some(Aabb::new(Vec3::splat(-5.0), Vec3::new(5.0, 5.0, 0.3))),
+        ..RenderSettings::for_volume(&slab, 1, 1)
+    };
+    let a = march(
+        &slab,
+        &ray,
+        &white_constant(),
+        &settings,
+        &PixelRng::new(0, 0, 0),
+        &mut Vec::new(),
+    )[3];
+    assert!(((1.0 - a) - (-sigma * 0.3f32).exp()).abs() < 1e-3, "{a}");
 }

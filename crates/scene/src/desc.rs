@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields)]
 pub struct SceneDesc {
     pub particles: Option<ParticlesDesc>,
+    pub amr: Option<AmrDesc>,
     #[serde(default)]
     pub camera: CameraDesc,
     #[serde(default)]
@@ -49,6 +50,29 @@ pub struct ParticlesDesc {
     /// `[[attribute, weight], ...]` over the normalised attribute.
     pub weight_map: Option<Vec<[f32; 2]>>,
     pub attribute_range: Option<[f32; 2]>,
+}
+
+/// An AMR data source: ExaBricks cells + scalars, or AMRClaw output.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AmrDesc {
+    /// ExaBricks `.cells` (int32 x, y, z, level per cell).
+    pub cells: Option<String>,
+    /// ExaBricks `.scalars` files, one per field (float32 per cell).
+    pub scalars: Option<Vec<String>>,
+    /// AMRClaw `fort.qNNNN` (with `fort.tNNNN` beside it); fields q0, q1, …
+    pub amrclaw: Option<String>,
+    /// World position of cell coordinate 0 (default: from a `.meta.json`
+    /// beside the cells, else 0).
+    pub origin: Option<[f32; 3]>,
+    /// World width of a finest cell (default: from `.meta.json`, else 1).
+    pub cell_size: Option<f32>,
+    /// Field driving opacity (default: the first).
+    pub field: Option<String>,
+    /// Field driving colour (multi-field rendering; default: `field`).
+    pub color_field: Option<String>,
+    /// basis (default) or nearest.
+    pub reconstruction: Option<String>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
@@ -100,6 +124,14 @@ pub struct RenderDesc {
     /// Linear RGB background.
     pub background: Option<[f32; 3]>,
     pub seed: Option<u64>,
+    /// Implicit iso-surfaces at these values of the opacity field.
+    pub iso: Option<Vec<f32>>,
+    /// Opacity of the iso-surfaces (default 1).
+    pub iso_opacity: Option<f32>,
+    /// Render the volume itself (default true; false = iso-surfaces only).
+    pub volume: Option<bool>,
+    /// Clip box `[x0, y0, z0, x1, y1, z1]`: only what is inside is rendered.
+    pub clip: Option<[f32; 6]>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]

@@ -19,6 +19,7 @@ mod load;
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
+use voxless_amr::{AmrCells, AmrError, AmrSettings, AmrVolume, Reconstruction};
 use voxless_core::{Aabb, Camera, Image, Projection, Range1, Vec3, Volume};
 use voxless_io::IoError;
 use voxless_particles::{
@@ -42,6 +43,12 @@ pub enum SceneError {
         path: PathBuf,
         #[source]
         source: ParticleError,
+    },
+    #[error("{path}: {source}")]
+    Amr {
+        path: PathBuf,
+        #[source]
+        source: AmrError,
     },
     #[error("{field}: {message}")]
     Setting { field: String, message: String },
@@ -79,6 +86,7 @@ pub fn read_scene(path: &Path) -> Result<SceneDesc, SceneError> {
 /// Every data kind voxless renders; one variant per kind.
 pub enum AnyVolume {
     Particles(Box<ParticleVolume>),
+    Amr(Box<AmrVolume>),
 }
 
 /// Runs `$body` with `$v` bound to the concrete volume (monomorphised per kind).
@@ -86,6 +94,10 @@ macro_rules! with_volume {
     ($any:expr, $v:ident => $body:expr) => {
         match $any {
             AnyVolume::Particles($v) => {
+                let $v = &**$v;
+                $body
+            }
+            AnyVolume::Amr($v) => {
                 let $v = &**$v;
                 $body
             }
@@ -103,6 +115,7 @@ impl AnyVolume {
     pub fn kind(&self) -> &'static str {
         match self {
             AnyVolume::Particles(_) => "particles",
+            AnyVolume::Amr(_) => "AMR cells",
         }
     }
 
@@ -133,20 +146,34 @@ impl AnyVolume {
     pub fn total_mass(&self) -> Option<f64> {
         match self {
             AnyVolume::Particles(v) => Some(v.total_mass()),
+            AnyVolume::Amr(v) => v.exact_integral(),
         }
     }
 
     /// Names of the columns [`AnyVolume::sample_points`] writes.
-    pub fn sample_columns(&self, gradient: bool) -> Vec<&'static str> {
-        let mut c = vec!["density"];
+    pub fn sample_columns(&self, gradient: bool) -> Vec<String> {
+        let grad = |name: &str| ["x", "y", "z"].map(|a| format!("d{name}/d{a}"));
         match self {
-            AnyVolume::Particles(v) if v.has_attribute() => c.push("attribute"),
-            _ => {}
+            AnyVolume::Particles(v) => {
+                let mut c = vec!["density".to_string()];
+                if v.has_attribute() {
+                    c.push("attribute".into());
+                }
+                if gradient {
+                    c.extend(grad("density"));
+                }
+                c
+            }
+            AnyVolume::Amr(v) => {
+                let mut c: Vec<String> = v.field_names().to_vec();
+                if gradient {
+                    for n in v.field_names() {
+                        c.extend(grad(n));
+                    }
+                }
+                c
+            }
         }
-        if gradient {
-            c.extend(["d/dx", "d/dy", "d/dz"]);
-        }
-        c
     }
 
     /// The fields at every point, row-major `points.len() × columns`.
@@ -166,6 +193,24 @@ impl AnyVolume {
                     row
                 })
                 .collect(),
+            AnyVolume::Amr(v) => {
+                let nf = v.field_names().len();
+                let width = if gradient { 4 * nf } else { nf };
+                points
+                    .par_iter()
+                    .flat_map_iter(|&p| match v.fields_at(p, gradient) {
+                        // Values of every field, then every field's gradient.
+                        Some(f) => {
+                            let mut row: Vec<f32> = f.iter().map(|x| x.0).collect();
+                            if gradient {
+                                row.extend(f.iter().flat_map(|x| x.1.to_array()));
+                            }
+                            row
+                        }
+                        None => vec![f32::NAN; width],
+                    })
+                    .collect()
+            }
         }
     }
 }
@@ -186,17 +231,27 @@ pub struct LoadedScene {
 /// default.
 pub fn resolve(desc: &SceneDesc, base: &Path) -> Result<LoadedScene, SceneError> {
     let mut notes = Vec::new();
-    let pdesc = desc.particles.as_ref().ok_or_else(|| {
-        SceneError::setting(
-            "scene",
-            "no data source: add a [particles] table to the scene or pass --particles FILE (or use `voxless demo`)",
-        )
-    })?;
-    let mut volume = load_particles(pdesc, base, &mut notes)?;
-
     let tf = transfer_function(&desc.transfer)?;
-    volume.classify(&tf);
-    let volume = AnyVolume::Particles(Box::new(volume));
+    let volume = match (&desc.particles, &desc.amr) {
+        (Some(p), None) => {
+            let mut volume = load_particles(p, base, &mut notes)?;
+            volume.classify(&tf);
+            AnyVolume::Particles(Box::new(volume))
+        }
+        (None, Some(a)) => AnyVolume::Amr(Box::new(load_amr(a, base)?)),
+        (Some(_), Some(_)) => {
+            return Err(SceneError::setting(
+                "scene",
+                "both [particles] and [amr] are given; pick one data source",
+            ));
+        }
+        (None, None) => {
+            return Err(SceneError::setting(
+                "scene",
+                "no data source: add a [particles] or [amr] table to the scene, or pass --particles FILE, --cells FILE --scalars FILE, or --amrclaw FILE (or use `voxless demo`)",
+            ));
+        }
+    };
 
     let width = desc.image.width.unwrap_or(800);
     let height = desc.image.height.unwrap_or(600);
@@ -243,6 +298,54 @@ pub fn resolve(desc: &SceneDesc, base: &Path) -> Result<LoadedScene, SceneError>
         settings.value_range = range("transfer.value_range", lo, hi)?;
     }
     settings.seed = r.seed.unwrap_or(0);
+    if let Some(iso) = &r.iso {
+        if let Some(v) = iso.iter().find(|v| !v.is_finite()) {
+            return Err(SceneError::setting(
+                "render.iso",
+                format!("iso-value {v} is not finite"),
+            ));
+        }
+        settings.iso = iso.clone();
+    }
+    if let Some(o) = r.iso_opacity {
+        if !(0.0..=1.0).contains(&o) {
+            return Err(SceneError::setting(
+                "render.iso_opacity",
+                format!("{o} is outside [0, 1]"),
+            ));
+        }
+        settings.iso_opacity = o;
+    }
+    settings.volume = r.volume.unwrap_or(true);
+    if let Some(c) = r.clip {
+        let b = Aabb::new(Vec3::new(c[0], c[1], c[2]), Vec3::new(c[3], c[4], c[5]));
+        if !(b.min.is_finite() && b.max.is_finite()) || b.is_empty() {
+            return Err(SceneError::setting(
+                "render.clip",
+                format!("{c:?} is not a finite box with min ≤ max"),
+            ));
+        }
+        settings.clip = Some(b);
+    }
+    // TF space skipping for AMR: leave invisible regions out of the BVH.
+    let mut volume = volume;
+    if let AnyVolume::Amr(v) = &mut volume {
+        let vr = settings.value_range;
+        let (tf_ref, iso, dvr) = (&tf, settings.iso.clone(), settings.volume);
+        let visible = move |r: Range1| {
+            (dvr && tf_ref.max_opacity(vr.normalize(r.lo), vr.normalize(r.hi)) > 0.0)
+                || iso.iter().any(|&x| r.contains(x))
+        };
+        let took = v.set_visibility(&visible);
+        notes.push(format!(
+            "{} cells in {} bricks and {} regions; {} regions visible under the transfer function (selected in {:.1} ms)",
+            v.stats().cells,
+            v.stats().bricks,
+            v.stats().regions,
+            v.visible_region_count(),
+            took.as_secs_f64() * 1e3
+        ));
+    }
     if let Some(l) = &desc.light {
         let dir = match l.direction {
             Some(d) => Vec3::from_array(d).normalized(),
@@ -275,6 +378,87 @@ pub fn resolve(desc: &SceneDesc, base: &Path) -> Result<LoadedScene, SceneError>
         background,
         notes,
     })
+}
+
+fn load_amr(a: &AmrDesc, base: &Path) -> Result<AmrVolume, SceneError> {
+    let (data, path) = match (&a.cells, &a.amrclaw) {
+        (Some(cells), None) => {
+            let scalars: Vec<PathBuf> = a.scalars.iter().flatten().map(|s| base.join(s)).collect();
+            if scalars.is_empty() {
+                return Err(SceneError::setting(
+                    "amr.scalars",
+                    "ExaBricks cells need at least one .scalars file (--scalars FILE)",
+                ));
+            }
+            let path = base.join(cells);
+            (voxless_io::read_exabricks(&path, &scalars)?, path)
+        }
+        (None, Some(q)) => {
+            let path = base.join(q);
+            (voxless_io::read_amrclaw(&path)?, path)
+        }
+        (Some(_), Some(_)) => {
+            return Err(SceneError::setting(
+                "amr",
+                "give either cells (ExaBricks) or amrclaw, not both",
+            ));
+        }
+        (None, None) => {
+            return Err(SceneError::setting(
+                "amr",
+                "no cells: give cells + scalars (ExaBricks) or amrclaw (fort.qNNNN)",
+            ));
+        }
+    };
+    let names: Vec<&str> = data.fields.iter().map(|f| f.0.as_str()).collect();
+    let index = |what: &str, name: &str| {
+        names.iter().position(|n| *n == name).ok_or_else(|| {
+            SceneError::data(
+                &path,
+                format!(
+                    "no field '{name}' for {what} (fields: {})",
+                    names.join(", ")
+                ),
+            )
+        })
+    };
+    let field = a
+        .field
+        .as_deref()
+        .map(|n| index("the opacity field", n))
+        .transpose()?
+        .unwrap_or(0);
+    let color_field = a
+        .color_field
+        .as_deref()
+        .map(|n| index("the colour field", n))
+        .transpose()?;
+    let reconstruction = match a.reconstruction.as_deref().unwrap_or("basis") {
+        "basis" => Reconstruction::Basis,
+        "nearest" => Reconstruction::Nearest,
+        other => {
+            return Err(SceneError::setting(
+                "amr.reconstruction",
+                format!("'{other}' is not 'basis' or 'nearest'"),
+            ));
+        }
+    };
+    let origin = a.origin.unwrap_or(data.origin.map(|v| v as f32));
+    let cells = AmrCells {
+        cells: data.cells,
+        fields: data.fields,
+        origin: Vec3::from_array(origin),
+        cell_size: a.cell_size.unwrap_or(data.finest_cell_size as f32),
+    };
+    AmrVolume::new(
+        cells,
+        AmrSettings {
+            field,
+            color_field,
+            reconstruction,
+        },
+    )
+    .map_err(|source| SceneError::Amr { path, source })
 }
 
 fn positive(field: &str, v: f32) -> Result<(), SceneError> {

@@ -1,0 +1,798 @@
+//! Readers for block-structured AMR output, converted to leaf cells.
+//!
+//! Every reader returns an [`AmrCellData`]: a flat list of cells in the
+//! ExaBricks convention plus one `f32` value per cell and field. A cell is
+//! `(x, y, z, level)`: its lower corner in integer units of the finest cell
+//! width, and its level, where level 0 is the finest and a level-`l` cell is
+//! `2^l` units wide. World coordinates are `origin + finest_cell_size · (x, y,
+//! z)`. The readers do not check that cells are aligned or disjoint; the AMR
+//! crate validates that when it builds its bricks.
+//!
+//! - [`read_exabricks`] reads an ExaBricks `.cells` file (little-endian
+//!   `int32` x, y, z, level per cell, 16 bytes, no header) and any number of
+//!   `.scalars` files (little-endian `float32`, one per cell in the same
+//!   order). Origin and finest cell size come from an optional sibling
+//!   `<stem>.meta.json`.
+//! - [`read_amrclaw`] reads AMRClaw's native ASCII output (`fort.qNNNN` plus
+//!   `fort.tNNNN`). AMRClaw writes every grid in full, including coarse cells
+//!   that finer grids cover; the reader drops those, so the result holds only
+//!   leaf cells. Its fields are named `q0`, `q1`, … in the order of AMRClaw's
+//!   `meqn` solution components.
+//!
+//! Both readers check sizes against the file's length before allocating, and
+//! report truncated or malformed files as [`IoError::Format`] naming the file
+//! (and, for text, the line).
+
+use std::ffi::OsString;
+use std::fs::File;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+
+use crate::{IoError, checked_product};
+
+/// AMR leaf cells in ExaBricks convention.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AmrCellData {
+    /// (x, y, z, level) per cell: lower corner in finest-cell integer units,
+    /// level 0 = finest, cell width 2^level units.
+    pub cells: Vec<[i32; 4]>,
+    /// Field name and one value per cell, in cell order.
+    pub fields: Vec<(String, Vec<f32>)>,
+    /// World position of integer coordinate (0,0,0).
+    pub origin: [f64; 3],
+    /// World width of one finest cell (one integer unit).
+    pub finest_cell_size: f64,
+    /// Simulation time, when the format records it.
+    pub time: Option<f64>,
+}
+
+impl AmrCellData {
+    /// The values of the field called `name`, if there is one.
+    pub fn field(&self, name: &str) -> Option<&[f32]> {
+        self.fields
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_slice())
+    }
+}
+
+/// The largest cell level accepted (cells `2^30` finest units wide).
+pub const MAX_LEVEL: i32 = 30;
+
+fn read_all(path: &Path) -> Result<Vec<u8>, IoError> {
+    std::fs::read(path).map_err(|e| IoError::io(path, e))
+}
+
+/// Reads an ExaBricks `.cells` file and its `.scalars` fields.
+///
+/// Each scalars file becomes one field. Its name is the part of the file name
+/// between the cells file's stem and `.scalars` (`frame3.density.scalars`
+/// next to `frame3.cells` gives `density`); a file not named that way is
+/// named by its stem (`rho.scalars` gives `rho`).
+///
+/// If `<stem>.meta.json` exists next to the cells file (`frame3.meta.json`
+/// for `frame3.cells`), its `origin` (three numbers) and `finest_cell_size`
+/// (a positive number) are used, and its optional `time`; otherwise the
+/// origin is (0, 0, 0), the finest cell size 1 and the time unknown.
+///
+/// Fails if the cells file's size is not a multiple of 16 bytes, a level is
+/// outside `0..=30` (the message gives the cell index), a scalars file's size
+/// is not a multiple of 4 bytes or its value count differs from the cell
+/// count, two fields get the same name, or the meta file is malformed.
+pub fn read_exabricks(cells: &Path, scalars: &[PathBuf]) -> Result<AmrCellData, IoError> {
+    let bytes = read_all(cells)?;
+    if !bytes.len().is_multiple_of(16) {
+        return Err(IoError::format(
+            cells,
+            format!(
+                "size {} bytes is not a multiple of 16 (one cell is four int32: x, y, z, \
+                 level); the file is truncated or not an ExaBricks .cells file",
+                bytes.len()
+            ),
+        ));
+    }
+    let mut cell_list = Vec::with_capacity(bytes.len() / 16);
+    for (index, chunk) in bytes.chunks_exact(16).enumerate() {
+        let word = |k: usize| {
+            i32::from_le_bytes([
+                chunk[4 * k],
+                chunk[4 * k + 1],
+                chunk[4 * k + 2],
+                chunk[4 * k + 3],
+            ])
+        };
+        let cell = [word(0), word(1), word(2), word(3)];
+        if !(0..=MAX_LEVEL).contains(&cell[3]) {
+            return Err(IoError::format(
+                cells,
+                format!(
+                    "cell {index} has level {}; levels must be 0 (finest) to {MAX_LEVEL}",
+                    cell[3]
+                ),
+            ));
+        }
+        cell_list.push(cell);
+    }
+    drop(bytes);
+
+    let stem = cells.file_stem().map(|s| s.to_string_lossy().into_owned());
+    let mut fields: Vec<(String, Vec<f32>)> = Vec::with_capacity(scalars.len());
+    for path in scalars {
+        let values = read_scalars(path, cells, cell_list.len())?;
+        let name = field_name(stem.as_deref(), path);
+        if fields.iter().any(|(n, _)| *n == name) {
+            return Err(IoError::format(
+                path,
+                format!("field name `{name}` is used by an earlier scalars file too"),
+            ));
+        }
+        fields.push((name, values));
+    }
+
+    let mut data = AmrCellData {
+        cells: cell_list,
+        fields,
+        origin: [0.0; 3],
+        finest_cell_size: 1.0,
+        time: None,
+    };
+    if let Some(stem) = cells.file_stem() {
+        let mut name = OsString::from(stem);
+        name.push(".meta.json");
+        let meta = cells.with_file_name(name);
+        if meta.is_file() {
+            read_meta(&meta, &mut data)?;
+        }
+    }
+    Ok(data)
+}
+
+/// One `.scalars` file, which must hold exactly `count` float32 values.
+fn read_scalars(path: &Path, cells: &Path, count: usize) -> Result<Vec<f32>, IoError> {
+    let mismatch = |len: u64| {
+        let message = if !len.is_multiple_of(4) {
+            format!("size {len} bytes is not a multiple of 4 (one float32 per cell)")
+        } else {
+            format!(
+                "holds {} values, but {} holds {count} cells",
+                len / 4,
+                cells.display()
+            )
+        };
+        IoError::format(path, message)
+    };
+    // Check the size before reading so a wrong, huge file is not loaded.
+    let len = std::fs::metadata(path)
+        .map_err(|e| IoError::io(path, e))?
+        .len();
+    if !len.is_multiple_of(4) || len / 4 != count as u64 {
+        return Err(mismatch(len));
+    }
+    let bytes = read_all(path)?;
+    if bytes.len() as u64 != len {
+        return Err(mismatch(bytes.len() as u64));
+    }
+    Ok(bytes
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect())
+}
+
+/// The field name of a scalars file (see [`read_exabricks`]).
+fn field_name(cells_stem: Option<&str>, scalars: &Path) -> String {
+    let file_name = scalars
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    if let Some(stem) = cells_stem
+        && let Some(rest) = file_name.strip_prefix(stem)
+        && let Some(rest) = rest.strip_prefix('.')
+        && let Some(middle) = rest.strip_suffix(".scalars")
+        && !middle.is_empty()
+    {
+        return middle.to_string();
+    }
+    scalars
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or(file_name)
+}
+
+/// Applies `origin`, `finest_cell_size` and optional `time` from a meta file.
+fn read_meta(path: &Path, data: &mut AmrCellData) -> Result<(), IoError> {
+    let bytes = read_all(path)?;
+    let value: serde_json::Value = serde_json::from_slice(&bytes)
+        .map_err(|e| IoError::format(path, format!("not valid JSON: {e}")))?;
+    let origin = value
+        .get("origin")
+        .and_then(|o| o.as_array())
+        .filter(|a| a.len() == 3)
+        .and_then(|a| {
+            let c: Vec<f64> = a.iter().filter_map(|v| v.as_f64()).collect();
+            (c.len() == 3 && c.iter().all(|v| v.is_finite())).then(|| [c[0], c[1], c[2]])
+        })
+        .ok_or_else(|| {
+            IoError::format(path, "`origin` must be an array of three finite numbers")
+        })?;
+    let size = value
+        .get("finest_cell_size")
+        .and_then(|s| s.as_f64())
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .ok_or_else(|| IoError::format(path, "`finest_cell_size` must be a positive number"))?;
+    let time = match value.get("time") {
+        None | Some(serde_json::Value::Null) => None,
+        Some(t) => Some(
+            t.as_f64()
+                .filter(|t| t.is_finite())
+                .ok_or_else(|| IoError::format(path, "`time` must be a finite number"))?,
+        ),
+    };
+    data.origin = origin;
+    data.finest_cell_size = size;
+    data.time = time;
+    Ok(())
+}
+
+/// A text file read line by line, counting lines (from 1).
+struct Lines {
+    reader: BufReader<File>,
+    path: PathBuf,
+    buf: Vec<u8>,
+    /// Number of the line in `buf`.
+    line: usize,
+    /// `next_nonblank` returns `buf` again instead of reading.
+    replay: bool,
+}
+
+impl Lines {
+    fn open(path: &Path) -> Result<Lines, IoError> {
+        let file = File::open(path).map_err(|e| IoError::io(path, e))?;
+        Ok(Lines {
+            reader: BufReader::with_capacity(1 << 16, file),
+            path: path.to_path_buf(),
+            buf: Vec::with_capacity(256),
+            line: 0,
+            replay: false,
+        })
+    }
+
+    /// The next line that is not blank, trimmed; `None` at the end.
+    fn next_nonblank(&mut self) -> Result<Option<&str>, IoError> {
+        if !std::mem::take(&mut self.replay) {
+            loop {
+                self.buf.clear();
+                let n = self
+                    .reader
+                    .read_until(b'\n', &mut self.buf)
+                    .map_err(|e| IoError::io(&self.path, e))?;
+                if n == 0 {
+                    return Ok(None);
+                }
+                self.line += 1;
+                if !self.buf.trim_ascii().is_empty() {
+                    break;
+                }
+            }
+        }
+        match std::str::from_utf8(self.buf.trim_ascii()) {
+            Ok(s) => Ok(Some(s)),
+            Err(_) => Err(IoError::format(
+                &self.path,
+                format!("line {} is not text (invalid UTF-8)", self.line),
+            )),
+        }
+    }
+
+    /// Makes the next `next_nonblank` return the current line again.
+    fn unread(&mut self) {
+        self.replay = true;
+    }
+
+    fn error(&self, message: impl std::fmt::Display) -> IoError {
+        IoError::format(&self.path, format!("line {}: {message}", self.line))
+    }
+
+    /// A `value name` line whose name (if present) must be `name`; returns
+    /// the value token. `context` says what is being read, for errors.
+    fn named_value(&mut self, name: &str, context: &str) -> Result<String, IoError> {
+        let Some(line) = self.next_nonblank()? else {
+            let line = self.line;
+            return Err(IoError::format(
+                &self.path,
+                format!("file ends at line {line} in {context}, before `{name}`"),
+            ));
+        };
+        let mut tokens = line.split_ascii_whitespace();
+        let value = tokens.next().unwrap_or_default().to_string();
+        if let Some(found) = tokens.next()
+            && !found.eq_ignore_ascii_case(name)
+        {
+            let found = found.to_string();
+            return Err(self.error(format!("expected `{name}` in {context}, found `{found}`")));
+        }
+        Ok(value)
+    }
+
+    /// A `value name` line parsed with `parse`; `what` describes a valid
+    /// value, for errors.
+    fn named<T>(
+        &mut self,
+        name: &str,
+        context: &str,
+        what: &str,
+        parse: impl Fn(&str) -> Option<T>,
+    ) -> Result<T, IoError> {
+        let token = self.named_value(name, context)?;
+        parse(&token)
+            .ok_or_else(|| self.error(format!("{name} `{token}` is not {what} ({context})")))
+    }
+}
+
+/// Parses a number as Fortran writes it: also accepts `D`/`Q` exponent
+/// letters (`0.1D+01`) and the exponent letter left out for three-digit
+/// exponents (`0.1234-100`).
+pub(crate) fn parse_fortran(token: &str) -> Option<f64> {
+    if let Ok(v) = token.parse::<f64>() {
+        return Some(v);
+    }
+    let bytes = token.as_bytes();
+    let mut fixed = String::with_capacity(token.len() + 1);
+    for (i, c) in token.char_indices() {
+        match c {
+            'd' | 'D' | 'q' | 'Q' => fixed.push('e'),
+            '+' | '-'
+                if i > 0 && !matches!(bytes[i - 1], b'e' | b'E' | b'd' | b'D' | b'q' | b'Q') =>
+            {
+                fixed.push('e');
+                fixed.push(c);
+            }
+            _ => fixed.push(c),
+        }
+    }
+    fixed.parse().ok()
+}
+
+fn int(token: &str) -> Option<i64> {
+    token.parse().ok()
+}
+
+fn finite(token: &str) -> Option<f64> {
+    parse_fortran(token).filter(|v| v.is_finite())
+}
+
+/// What `fort.tNNNN` says about a frame.
+struct FrameHeader {
+    time: f64,
+    meqn: usize,
+    ngrids: usize,
+}
+
+/// The `fort.tNNNN` file that belongs to `fort.qNNNN`, if the name fits.
+fn fort_t_path(fort_q: &Path) -> Option<PathBuf> {
+    let name = fort_q.file_name()?.to_str()?;
+    let number = name.strip_prefix("fort.q")?;
+    Some(fort_q.with_file_name(format!("fort.t{number}")))
+}
+
+/// Reads `fort.tNNNN`: lines `value name` giving time, meqn, ngrids, naux
+/// and ndim (in that order when the names are missing).
+fn read_fort_t(path: &Path) -> Result<FrameHeader, IoError> {
+    let len = std::fs::metadata(path)
+        .map_err(|e| IoError::io(path, e))?
+        .len();
+    if len > 1 << 16 {
+        return Err(IoError::format(
+            path,
+            format!("{len} bytes is far too long for an AMRClaw fort.t header"),
+        ));
+    }
+    let text = String::from_utf8(read_all(path)?)
+        .map_err(|_| IoError::format(path, "not text (invalid UTF-8)"))?;
+    let entries: Vec<(usize, &str, Option<&str>)> = text
+        .lines()
+        .enumerate()
+        .filter_map(|(i, l)| {
+            let mut t = l.split_ascii_whitespace();
+            t.next().map(|v| (i + 1, v, t.next()))
+        })
+        .collect();
+    let named = entries.iter().any(|e| e.2.is_some());
+    let get = |name: &str, position: usize| {
+        let entry = if named {
+            entries
+                .iter()
+                .find(|e| e.2.is_some_and(|n| n.eq_ignore_ascii_case(name)))
+        } else {
+            entries.get(position)
+        };
+        entry.ok_or_else(|| IoError::format(path, format!("no `{name}` line")))
+    };
+    let number = |name: &str, position: usize, min: f64| -> Result<f64, IoError> {
+        let (line, token, _) = get(name, position)?;
+        parse_fortran(token)
+            .filter(|v| v.is_finite() && *v >= min && (min == f64::MIN || v.fract() == 0.0))
+            .ok_or_else(|| {
+                let what = if min == f64::MIN {
+                    "a number"
+                } else {
+                    "a count"
+                };
+                IoError::format(path, format!("line {line}: {name} `{token}` is not {what}"))
+            })
+    };
+    let time = number("time", 0, f64::MIN)?;
+    let meqn = number("meqn", 1, 1.0)?;
+    let ngrids = number("ngrids", 2, 0.0)?;
+    let ndim = number("ndim", 4, 0.0)?;
+    if ndim != 3.0 {
+        return Err(IoError::format(
+            path,
+            format!("ndim is {ndim}; only 3D AMRClaw output is supported"),
+        ));
+    }
+    Ok(FrameHeader {
+        time,
+        // Saturating casts; the grid reader checks sizes against the file.
+        meqn: meqn as usize,
+        ngrids: ngrids as usize,
+    })
+}
+
+/// One grid (patch) of a `fort.q` file.
+struct Grid {
+    number: i64,
+    amr_level: i64,
+    /// Line of the `grid_number` header line.
+    line: usize,
+    size: [usize; 3],
+    low: [f64; 3],
+    d: [f64; 3],
+    /// `meqn` values per cell, cells x fastest, then y, then z.
+    values: Vec<f32>,
+}
+
+/// Reads AMRClaw's native ASCII output and converts it to leaf cells.
+///
+/// `fort_q` is a `fort.qNNNN` file: per grid eleven `value name` lines
+/// (`grid_number`, `AMR_level` (1 = coarsest), `mx`, `my`, `mz`, `xlow`,
+/// `ylow`, `zlow`, `dx`, `dy`, `dz`), then `mx·my·mz` rows of `meqn` values,
+/// x fastest, then y, then z. Blank lines anywhere are skipped, and numbers
+/// may use Fortran's `D` exponents. The header `fort.tNNNN` in the same
+/// directory gives the time, `meqn`, the number of grids and `ndim` (which
+/// must be 3). If there is no such file, `meqn` is taken from the number of
+/// values on the first data row, the grids are read to the end of the file,
+/// and `time` is `None`.
+///
+/// Conversion: the finest cell size is the smallest `dx` of any grid; every
+/// grid must have `dx == dy == dz`, equal to the finest size times a power of
+/// two `2^level`, and the same for all grids of an AMR level (finer AMR
+/// levels having smaller cells). The origin is the smallest `xlow`, `ylow`,
+/// `zlow` of the coarsest AMR level's grids, and a grid's lower corner is
+/// `round((xlow - origin) / dx_finest)` (it must lie on that lattice). A
+/// cell is dropped when one grid of a finer AMR level contains its whole box,
+/// which is how AMRClaw stores the coarse values under refined regions.
+/// Cells come grid by grid in file order, x fastest within a grid. Fields are
+/// named `q0`, `q1`, …; the `f64` text values are rounded to `f32`.
+///
+/// Fails with the grid number and line number if a grid holds fewer values
+/// than its header declares, and on any malformed header or number.
+pub fn read_amrclaw(fort_q: &Path) -> Result<AmrCellData, IoError> {
+    let header = match fort_t_path(fort_q) {
+        Some(t) if t.is_file() => Some(read_fort_t(&t)?),
+        _ => None,
+    };
+    let file_len = std::fs::metadata(fort_q)
+        .map_err(|e| IoError::io(fort_q, e))?
+        .len();
+    let mut lines = Lines::open(fort_q)?;
+    let mut meqn = header.as_ref().map(|h| h.meqn);
+    let mut grids: Vec<Grid> = Vec::new();
+    loop {
+        if let Some(h) = &header
+            && grids.len() == h.ngrids
+        {
+            if let Some(extra) = lines.next_nonblank()? {
+                let extra: String = extra.chars().take(40).collect();
+                return Err(lines.error(format!(
+                    "unexpected `{extra}` after the last of the {} grids fort.t declares",
+                    h.ngrids
+                )));
+            }
+            break;
+        }
+        if lines.next_nonblank()?.is_none() {
+            if let Some(h) = &header {
+                return Err(IoError::format(
+                    fort_q,
+                    format!(
+                        "file ends at line {} after {} grids, but fort.t declares {}",
+                        lines.line,
+                        grids.len(),
+                        h.ngrids
+                    ),
+                ));
+            }
+            break;
+        }
+        lines.unread();
+        grids.push(read_grid(&mut lines, &mut meqn, file_len)?);
+    }
+    let meqn = meqn.unwrap_or(0);
+    if grids.is_empty() {
+        return Err(IoError::format(fort_q, "no grids in the file"));
+    }
+    let mut data = grids_to_cells(fort_q, grids, meqn)?;
+    data.time = header.map(|h| h.time);
+    Ok(data)
+}
+
+/// Reads one grid's header and values.
+fn read_grid(lines: &mut Lines, meqn: &mut Option<usize>, file_len: u64) -> Result<Grid, IoError> {
+    let number: i64 = lines.named("grid_number", "a grid header", "an integer", int)?;
+    let line = lines.line;
+    let context = format!("the header of grid {number} (line {line})");
+    let amr_level: i64 = lines.named("AMR_level", &context, "an integer", int)?;
+    let mut size = [0usize; 3];
+    for (s, name) in size.iter_mut().zip(["mx", "my", "mz"]) {
+        *s = lines.named(name, &context, "a positive integer", |t| {
+            t.parse().ok().filter(|&n: &usize| n > 0)
+        })?;
+    }
+    let mut low = [0.0; 3];
+    for (v, name) in low.iter_mut().zip(["xlow", "ylow", "zlow"]) {
+        *v = lines.named(name, &context, "a finite number", finite)?;
+    }
+    let mut d = [0.0; 3];
+    for (v, name) in d.iter_mut().zip(["dx", "dy", "dz"]) {
+        *v = lines.named(name, &context, "a positive number", |t| {
+            parse_fortran(t).filter(|v| v.is_finite() && *v > 0.0)
+        })?;
+    }
+    let grid_error = |lines: &Lines, message: String| {
+        IoError::format(
+            &lines.path,
+            format!("grid {number} (header at line {line}): {message}"),
+        )
+    };
+
+    if meqn.is_none() {
+        // No fort.t: the first data row has one value per equation.
+        let Some(first) = lines.next_nonblank()? else {
+            return Err(grid_error(
+                lines,
+                format!("file ends at line {} before its data", lines.line),
+            ));
+        };
+        *meqn = Some(first.split_ascii_whitespace().count());
+        lines.unread();
+    }
+    let meqn = meqn.unwrap_or(1);
+    let count = checked_product(&[size[0], size[1], size[2], meqn])
+        .filter(|&c| (c as u64).saturating_mul(2) <= file_len)
+        .ok_or_else(|| {
+            grid_error(
+                lines,
+                format!(
+                    "{}×{}×{} cells × {meqn} values is more than the file's {file_len} bytes can hold",
+                    size[0], size[1], size[2]
+                ),
+            )
+        })?;
+    let mut values = Vec::with_capacity(count);
+    while values.len() < count {
+        let Some(row) = lines.next_nonblank()? else {
+            return Err(grid_error(
+                lines,
+                format!(
+                    "file ends at line {} after {} of its {count} values (mx·my·mz·meqn); \
+                     the file is truncated",
+                    lines.line,
+                    values.len()
+                ),
+            ));
+        };
+        for token in row.split_ascii_whitespace() {
+            let problem = match parse_fortran(token) {
+                Some(value) if values.len() < count => {
+                    values.push(value as f32);
+                    continue;
+                }
+                Some(_) => "a row runs past the grid's last value".to_string(),
+                None => {
+                    let token: String = token.chars().take(40).collect();
+                    format!("`{token}` is not a number")
+                }
+            };
+            return Err(grid_error(
+                lines,
+                format!(
+                    "line {}: {problem}, after {} of {count} values (mx·my·mz·meqn); \
+                     the grid is truncated, or its header or meqn is wrong",
+                    lines.line,
+                    values.len()
+                ),
+            ));
+        }
+    }
+    Ok(Grid {
+        number,
+        amr_level,
+        line,
+        size,
+        low,
+        d,
+        values,
+    })
+}
+
+/// Drops covered cells and converts grids to ExaBricks cells.
+fn grids_to_cells(path: &Path, grids: Vec<Grid>, meqn: usize) -> Result<AmrCellData, IoError> {
+    let grid_error = |g: &Grid, message: String| {
+        IoError::format(
+            path,
+            format!("grid {} (header at line {}): {message}", g.number, g.line),
+        )
+    };
+    for g in &grids {
+        let [dx, dy, dz] = g.d;
+        let tol = 1e-9 * dx;
+        if (dy - dx).abs() > tol || (dz - dx).abs() > tol {
+            return Err(grid_error(
+                g,
+                format!("dx = {dx}, dy = {dy}, dz = {dz} differ; only cubic cells are supported"),
+            ));
+        }
+    }
+    let finest = grids.iter().map(|g| g.d[0]).fold(f64::INFINITY, f64::min);
+
+    // Level (log2 of the cell width in finest units) per grid.
+    let mut levels = Vec::with_capacity(grids.len());
+    for g in &grids {
+        let ratio = g.d[0] / finest;
+        let level = ratio.log2().round();
+        if !(level <= f64::from(MAX_LEVEL)) || (ratio - level.exp2()).abs() > 1e-6 * level.exp2() {
+            return Err(grid_error(
+                g,
+                format!(
+                    "dx = {} is {ratio} times the finest dx {finest}; the refinement ratio \
+                     must be a power of two",
+                    g.d[0]
+                ),
+            ));
+        }
+        levels.push(level as u32);
+    }
+    // Each AMR level must have one cell size, and finer AMR levels smaller cells.
+    for (a, ga) in grids.iter().enumerate() {
+        for (b, gb) in grids.iter().enumerate().skip(a + 1) {
+            let consistent = match ga.amr_level.cmp(&gb.amr_level) {
+                std::cmp::Ordering::Equal => levels[a] == levels[b],
+                std::cmp::Ordering::Less => levels[a] > levels[b],
+                std::cmp::Ordering::Greater => levels[a] < levels[b],
+            };
+            if !consistent {
+                return Err(grid_error(
+                    gb,
+                    format!(
+                        "AMR level {} with dx = {} is inconsistent with grid {} (AMR level {}, \
+                         dx = {})",
+                        gb.amr_level, gb.d[0], ga.number, ga.amr_level, ga.d[0]
+                    ),
+                ));
+            }
+        }
+    }
+
+    let coarsest = grids.iter().map(|g| g.amr_level).min().unwrap_or(1);
+    let mut origin = [f64::INFINITY; 3];
+    for g in grids.iter().filter(|g| g.amr_level == coarsest) {
+        for (o, &low) in origin.iter_mut().zip(&g.low) {
+            *o = o.min(low);
+        }
+    }
+
+    // Grid boxes in finest units: lower corner and exclusive upper corner.
+    let mut boxes = Vec::with_capacity(grids.len());
+    for (g, &level) in grids.iter().zip(&levels) {
+        let width = 1i64 << level;
+        let mut lo = [0i64; 3];
+        let mut hi = [0i64; 3];
+        for a in 0..3 {
+            let exact = (g.low[a] - origin[a]) / finest;
+            let rounded = exact.round();
+            if (exact - rounded).abs() > 1e-3 || rounded.abs() > f64::from(i32::MAX) {
+                return Err(grid_error(
+                    g,
+                    format!(
+                        "{}low = {} is not on the finest-cell lattice from origin {} with \
+                         spacing {finest}",
+                        ["x", "y", "z"][a],
+                        g.low[a],
+                        origin[a]
+                    ),
+                ));
+            }
+            lo[a] = rounded as i64;
+            hi[a] = lo[a] + g.size[a] as i64 * width;
+            if hi[a] > i64::from(i32::MAX) {
+                return Err(grid_error(
+                    g,
+                    "extends past the int32 coordinate range".into(),
+                ));
+            }
+        }
+        boxes.push((lo, hi));
+    }
+
+    // Mark cells that a grid of a finer AMR level contains.
+    let mut covered: Vec<Vec<bool>> = vec![Vec::new(); grids.len()];
+    for (a, ga) in grids.iter().enumerate() {
+        let (lo, hi) = boxes[a];
+        let width = 1i64 << levels[a];
+        for (b, gb) in grids.iter().enumerate() {
+            let (flo, fhi) = boxes[b];
+            if gb.amr_level <= ga.amr_level || (0..3).any(|k| fhi[k] <= lo[k] || flo[k] >= hi[k]) {
+                continue;
+            }
+            // Cells i with [lo + i·w, lo + (i+1)·w) inside [flo, fhi).
+            let mut range = [(0usize, 0usize); 3];
+            for k in 0..3 {
+                let first = (flo[k] - lo[k] + width - 1).div_euclid(width).max(0);
+                let end = (fhi[k] - lo[k]).div_euclid(width).min(ga.size[k] as i64);
+                range[k] = (first as usize, end.max(first) as usize);
+            }
+            let mask = &mut covered[a];
+            if mask.is_empty() {
+                mask.resize(ga.size[0] * ga.size[1] * ga.size[2], false);
+            }
+            let [nx, ny, _] = ga.size;
+            for z in range[2].0..range[2].1 {
+                for y in range[1].0..range[1].1 {
+                    let row = (z * ny + y) * nx;
+                    mask[row + range[0].0..row + range[0].1].fill(true);
+                }
+            }
+        }
+    }
+
+    let kept: usize = grids
+        .iter()
+        .zip(&covered)
+        .map(|(g, mask)| {
+            let total = g.size[0] * g.size[1] * g.size[2];
+            total - mask.iter().filter(|&&c| c).count()
+        })
+        .sum();
+    let mut cells = Vec::with_capacity(kept);
+    let mut fields: Vec<(String, Vec<f32>)> = (0..meqn)
+        .map(|q| (format!("q{q}"), Vec::with_capacity(kept)))
+        .collect();
+    for (((g, mask), (lo, _)), &level) in grids.iter().zip(&covered).zip(&boxes).zip(&levels) {
+        let width = 1i64 << level;
+        let [nx, ny, nz] = g.size;
+        let mut index = 0;
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    if mask.is_empty() || !mask[index] {
+                        // In range: hi was checked against i32::MAX above.
+                        let corner = |k: usize, i: usize| (lo[k] + i as i64 * width) as i32;
+                        cells.push([corner(0, x), corner(1, y), corner(2, z), level as i32]);
+                        let row = &g.values[index * meqn..(index + 1) * meqn];
+                        for ((_, field), &v) in fields.iter_mut().zip(row) {
+                            field.push(v);
+                        }
+                    }
+                    index += 1;
+                }
+            }
+        }
+    }
+    Ok(AmrCellData {
+        cells,
+        fields,
+        origin,
+        finest_cell_size: finest,
+        time: None,
+    })
+}
