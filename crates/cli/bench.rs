@@ -32,6 +32,7 @@
 //!   reported as a correctness check. With `--dam-break DIR` the same is done
 //!   for an SPH dam-break snapshot (`positions.npy`, `h.npy`, `mass.npy`,
 //!   `speed.npy`; cubic-spline kernel with radius h, weights = mass).
+//! - `bench amr`: AMR cells (see `bench_amr.rs`).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -69,6 +70,10 @@ enum Which {
     /// Frame time with clustered (8) vs unclustered (1) BVH leaves, and the
     /// max difference between the two images.
     Frame(FrameArgs),
+    /// AMR: build statistics and times (ExaBricks Table 1), reconstruction via
+    /// cell location vs via regions (Table 3), and frame time with adaptive
+    /// sampling and TF space skipping on and off.
+    Amr(crate::bench_amr::AmrArgs),
 }
 
 #[derive(clap::Args)]
@@ -143,6 +148,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             }
             println!();
         }
+        Which::Amr(o) => crate::bench_amr::run(o)?,
     }
     Ok(())
 }
@@ -328,7 +334,7 @@ fn bench_frame(
 }
 
 /// Max and mean absolute difference over all pixels and RGBA channels.
-fn image_diff(a: &Image, b: &Image) -> (f32, f64) {
+pub(crate) fn image_diff(a: &Image, b: &Image) -> (f32, f64) {
     let mut max = 0.0f32;
     let mut sum = 0.0f64;
     for (p, q) in a.pixels.iter().zip(&b.pixels) {
@@ -341,7 +347,7 @@ fn image_diff(a: &Image, b: &Image) -> (f32, f64) {
     (max, sum / (4.0 * a.pixels.len().max(1) as f64))
 }
 
-fn save_png(path: &Path, img: &Image) -> Result<()> {
+pub(crate) fn save_png(path: &Path, img: &Image) -> Result<()> {
     voxless_io::write_png_rgb8(path, img.width, img.height, &img.to_srgb8([0.0; 3]))?;
     eprintln!("wrote {}", path.display());
     Ok(())
@@ -407,7 +413,7 @@ fn synthetic(scene: &str, n: usize) -> (ParticleData, f32) {
 
 /// Median time in seconds of `repeats` calls of `f(setup())` (`setup` is not
 /// timed), and the last call's result (earlier results are dropped untimed).
-fn bench<S, T>(
+pub(crate) fn bench<S, T>(
     repeats: usize,
     mut setup: impl FnMut() -> S,
     mut f: impl FnMut(S) -> T,
@@ -425,17 +431,17 @@ fn bench<S, T>(
 }
 
 /// The median (the upper one for an even count).
-fn median(mut v: Vec<f64>) -> f64 {
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }
 
-fn ms(s: f64) -> f64 {
+pub(crate) fn ms(s: f64) -> f64 {
     s * 1e3
 }
 
 /// 1000000 → "1M", else the plain number.
-fn count(n: usize) -> String {
+pub(crate) fn count(n: usize) -> String {
     if n.is_multiple_of(1_000_000) {
         format!("{}M", n / 1_000_000)
     } else {
@@ -443,7 +449,7 @@ fn count(n: usize) -> String {
     }
 }
 
-fn print_header() {
+pub(crate) fn print_header() {
     let model = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|s| {

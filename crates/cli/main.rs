@@ -3,6 +3,7 @@
 
 mod args;
 mod bench;
+mod bench_amr;
 mod progress;
 
 use std::path::{Path, PathBuf};
@@ -190,7 +191,7 @@ fn run(cli: Cli) -> Result<()> {
             let mass = s
                 .volume
                 .total_mass()
-                .map(|m| format!(", total kernel mass {m:.6e}"))
+                .map(|m| format!(", exact ∫ field dV = {m:.6e}"))
                 .unwrap_or_default();
             eprintln!(
                 "projected {w}×{h} in {:.2}s → {} (Σ column × pixel area = {integral:.6e}{mass})",

@@ -459,3 +459,51 @@ fn bricks_are_filled_same_level_and_at_most_32_wide() {
     assert!(vol.bricks().len() >= 8);
     assert!(vol.bricks().iter().all(|b| b.size.iter().all(|&s| s <= 32)));
 }
+
+/// The real AMRClaw frame (ExaBricks conversion): regions equal the
+/// brute-force sum over all 216k cells at a few hundred points and cell
+/// location at 10⁴; skipped with a notice when the shared data is absent.
+#[test]
+fn real_frame_matches_brute_force() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/amr-euler3d/exabricks");
+    if !dir.exists() {
+        eprintln!(
+            "notice: {} not found; skipping the real-frame test",
+            dir.display()
+        );
+        return;
+    }
+    let scalars: Vec<_> = ["density", "energy"]
+        .iter()
+        .map(|f| dir.join(format!("frame3.{f}.scalars")))
+        .collect();
+    let data = voxless_io::read_exabricks(&dir.join("frame3.cells"), &scalars).unwrap();
+    let input = AmrCells {
+        cells: data.cells,
+        fields: data.fields,
+        origin: Vec3::from_array(data.origin.map(|v| v as f32)),
+        cell_size: data.finest_cell_size as f32,
+    };
+    let vol = AmrVolume::new(input.clone(), AmrSettings::default()).unwrap();
+    assert_eq!(vol.stats().cells, 216_089);
+    let locator = CellLocator::new(&input, 0);
+    let mut rng = Lcg(21);
+    for k in 0..10_000 {
+        let p = random_point(&mut rng, &vol.bounds());
+        let got = vol.sample(p).map(|s| s.value as f64);
+        let want = if k < 300 {
+            brute_force(&input, 0, p)
+        } else {
+            locator.sample(p).map(|v| v as f64)
+        };
+        match (got, want) {
+            (Some(g), Some(w)) => assert!(
+                (g - w).abs() <= 1e-5 * w.abs().max(1e-3),
+                "at {p:?}: {g} vs {w}"
+            ),
+            (None, None) => {}
+            (g, w) => panic!("coverage differs at {p:?}: regions {g:?}, reference {w:?}"),
+        }
+    }
+}

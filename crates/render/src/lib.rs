@@ -306,9 +306,14 @@ pub fn march<V: Volume>(
                     if (v0 - iso) * (s.value - iso) < 0.0 || (s.value == iso && v0 != iso) {
                         let th = t0 + (iso - v0) / (s.value - v0) * (tm - t0);
                         let ph = ray.at(th);
-                        let (hs, g) = volume
-                            .sample_with_gradient_in(ph, iv)
-                            .unwrap_or((s, gradient));
+                        // The hit may lie in the previous interval: only use
+                        // this interval's hint when it contains the hit.
+                        let hit = if iv.t.contains(th) {
+                            volume.sample_with_gradient_in(ph, iv)
+                        } else {
+                            volume.sample_with_gradient(ph)
+                        };
+                        let (hs, g) = hit.unwrap_or((s, gradient));
                         let light = settings.light.unwrap_or(Light {
                             direction: -ray.dir,
                             ambient: 0.2,

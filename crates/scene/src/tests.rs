@@ -1,10 +1,17 @@
 use super::*;
 
 #[test]
-fn example_scene_parses() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/galaxy.toml");
-    let desc = read_scene(&path).unwrap();
-    assert!(desc.particles.is_some());
+fn example_scenes_parse() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    assert!(
+        read_scene(&dir.join("galaxy.toml"))
+            .unwrap()
+            .particles
+            .is_some()
+    );
+    let amr = read_scene(&dir.join("amr-euler3d.toml")).unwrap();
+    assert_eq!(amr.render.iso, Some(vec![1.1, 2.0]));
+    assert!(amr.amr.unwrap().amrclaw.is_some());
 }
 
 #[test]
