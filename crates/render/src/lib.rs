@@ -64,6 +64,9 @@ pub struct RenderSettings {
     pub iso_opacity: f32,
     /// Whether the volume itself is rendered (false: iso-surfaces only).
     pub volume: bool,
+    /// Map `log10(value)` rather than `value` through the transfer function
+    /// (`value_range` is then in log10 units; values ≤ 0 map to 0).
+    pub log_scale: bool,
 }
 
 impl RenderSettings {
@@ -87,6 +90,29 @@ impl RenderSettings {
             iso: Vec::new(),
             iso_opacity: 1.0,
             volume: true,
+            log_scale: false,
+        }
+    }
+
+    /// Whether values in `r` can show up in the image: the transfer function
+    /// gives them opacity, or an iso-value lies in `r`. Space skipping drops
+    /// what this rejects.
+    pub fn is_visible(&self, tf: &TransferFunction, r: Range1) -> bool {
+        (self.volume && tf.max_opacity(self.normalize(r.lo), self.normalize(r.hi)) > 0.0)
+            || self.iso.iter().any(|&v| r.contains(v))
+    }
+
+    /// A field value → the transfer function's `[0, 1]` coordinate.
+    #[inline]
+    pub fn normalize(&self, value: f32) -> f32 {
+        if self.log_scale {
+            if value > 0.0 {
+                self.value_range.normalize(value.log10())
+            } else {
+                0.0
+            }
+        } else {
+            self.value_range.normalize(value)
         }
     }
 }
@@ -239,11 +265,7 @@ pub fn march<V: Volume>(
     if t.is_empty() {
         return [0.0; 4];
     }
-    let vr = settings.value_range;
-    let visible = |r: Range1| {
-        (settings.volume && tf.max_opacity(vr.normalize(r.lo), vr.normalize(r.hi)) > 0.0)
-            || settings.iso.iter().any(|&v| r.contains(v))
-    };
+    let visible = |r: Range1| settings.is_visible(tf, r);
     scratch.clear();
     volume.intervals(
         ray,
@@ -318,7 +340,7 @@ pub fn march<V: Volume>(
                             direction: -ray.dir,
                             ambient: 0.2,
                         });
-                        let c = colour_of(&hs, vr.normalize(iso)) * shade(g, light);
+                        let c = colour_of(&hs, settings.normalize(iso)) * shade(g, light);
                         if acc.add(c, settings.iso_opacity, settings.early_termination) {
                             return acc.rgba();
                         }
@@ -329,7 +351,7 @@ pub fn march<V: Volume>(
             if !settings.volume {
                 continue;
             }
-            let x = vr.normalize(s.value);
+            let x = settings.normalize(s.value);
             let opacity = tf.opacity(x);
             if opacity > 0.0 {
                 let a = 1.0 - (-opacity * settings.opacity_scale * len).exp();

@@ -330,13 +330,7 @@ pub fn resolve(desc: &SceneDesc, base: &Path) -> Result<LoadedScene, SceneError>
     // TF space skipping for AMR: leave invisible regions out of the BVH.
     let mut volume = volume;
     if let AnyVolume::Amr(v) = &mut volume {
-        let vr = settings.value_range;
-        let (tf_ref, iso, dvr) = (&tf, settings.iso.clone(), settings.volume);
-        let visible = move |r: Range1| {
-            (dvr && tf_ref.max_opacity(vr.normalize(r.lo), vr.normalize(r.hi)) > 0.0)
-                || iso.iter().any(|&x| r.contains(x))
-        };
-        let took = v.set_visibility(&visible);
+        let took = v.set_visibility(&|r: Range1| settings.is_visible(&tf, r));
         notes.push(format!(
             "{} cells in {} bricks and {} regions; {} regions visible under the transfer function (selected in {:.1} ms)",
             v.stats().cells,

@@ -1,0 +1,49 @@
+//! Phase-space tessellations of N-body dark matter (Kähler, Hahn & Abel).
+//!
+//! **Model.** N³ tracer particles start on a Lagrangian grid; their current
+//! positions (periodic box `[0, L)³`) keep the grid's connectivity. Each
+//! Lagrangian cell is split into 6 tetrahedra sharing its main diagonal (the
+//! Kuhn decomposition, consistent between neighbours), every tet carries mass
+//! `m_particle / 6`, and its density is `ρ = m/|V|`. Where sheets fold
+//! (shell crossing), tets overlap: the density at a point is the sum over the
+//! tets covering it (eq. 1 of the paper), and the number of those tets is the
+//! stream count.
+//!
+//! **Periodicity.** Every tet is unwrapped to the periodic image nearest its
+//! anchor vertex (no tet spans the box), and a tet that crosses a face of the
+//! box is repeated at the images that bring its parts back in, so a view of
+//! exactly the box shows every tet whole and conserves mass.
+//!
+//! **Degenerate tets.** At caustics `|V| → 0`. Tets with `|V|` below
+//! `degenerate_fraction` (default 1e-6) of the mean tet volume are kept as
+//! point masses at their centroid: projections add them to the pixel that
+//! contains them, so total mass stays exact; renders and point samples, which
+//! see volumes, ignore them (they cover no volume).
+//!
+//! **Rendering** ([`render`]): exact per-pixel event sorting by default, or
+//! the paper's bounded-memory k-buffer + log-depth layers; blocks of 8³ cells
+//! with precomputed bounds are culled per screen tile.
+
+pub mod mesh;
+pub mod raster;
+pub mod render;
+mod volume;
+
+pub use mesh::{BLOCK, Block, LagrangianGrid, Tet, TetMesh, TetSettings};
+pub use render::TetMode;
+pub use volume::TetVolume;
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TetError {
+    #[error("{count} particles is not N³ for an integer N ≥ 2")]
+    NotCubic { count: usize },
+    #[error("box size {box_size} must be finite and > 0")]
+    BadBox { box_size: f32 },
+    #[error("particle {index} has a non-finite coordinate")]
+    NonFinite { index: usize },
+    #[error("particle mass {mass} must be finite and > 0")]
+    BadMass { mass: f64 },
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,234 @@
+//! Tile rasterisation of tets: which pixels a tet covers and where each
+//! pixel's ray enters and leaves it.
+//!
+//! Per frame every block is projected to the screen and binned into the
+//! tiles its box overlaps (block culling, paper §"Tiled rendering"). Per tile
+//! and tet, the four face planes are built once; each covered pixel then
+//! clips its ray against them (entering faces raise `t_in`, leaving faces
+//! lower `t_out`).
+
+use voxless_core::{Aabb, Camera, Projection, Ray, Vec3};
+
+use crate::mesh::{Tet, TetMesh};
+
+/// Side of a tile in pixels.
+pub const TILE: u32 = 32;
+
+/// Maps world points to continuous pixel coordinates.
+#[derive(Clone, Copy)]
+pub struct Screen {
+    camera: Camera,
+    width: u32,
+    height: u32,
+    /// Perspective: tan(fov/2) (vertical) and aspect.
+    tan_half: f32,
+    aspect: f32,
+}
+
+impl Screen {
+    pub fn new(camera: &Camera, width: u32, height: u32) -> Screen {
+        let tan_half = match camera.projection {
+            Projection::Perspective { fov_y_deg } => (fov_y_deg.to_radians() * 0.5).tan(),
+            Projection::Orthographic { .. } => 0.0,
+        };
+        Screen {
+            camera: *camera,
+            width,
+            height,
+            tan_half,
+            aspect: width as f32 / height as f32,
+        }
+    }
+
+    /// Pixel coordinates of `p`, or `None` when it is at or behind the eye
+    /// plane of a perspective camera (callers then assume full coverage).
+    pub fn project(&self, p: Vec3) -> Option<(f32, f32)> {
+        let c = &self.camera;
+        let v = p - c.eye;
+        let (sx, sy) = match c.projection {
+            Projection::Perspective { .. } => {
+                let z = v.dot(c.forward);
+                if z <= 1e-6 {
+                    return None;
+                }
+                (
+                    v.dot(c.right) / (z * self.tan_half * self.aspect),
+                    v.dot(c.up) / (z * self.tan_half),
+                )
+            }
+            Projection::Orthographic {
+                half_width,
+                half_height,
+            } => (v.dot(c.right) / half_width, v.dot(c.up) / half_height),
+        };
+        Some((
+            (sx + 1.0) * 0.5 * self.width as f32,
+            (1.0 - sy) * 0.5 * self.height as f32,
+        ))
+    }
+
+    /// Inclusive pixel ranges `(x0, x1, y0, y1)` whose centres may lie in the
+    /// projection of `points`, clipped to the image; `None` if empty.
+    pub fn pixel_rect(&self, points: &[Vec3]) -> Option<(u32, u32, u32, u32)> {
+        let (mut x0, mut x1, mut y0, mut y1) = (
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        );
+        for &p in points {
+            match self.project(p) {
+                Some((x, y)) => {
+                    x0 = x0.min(x);
+                    x1 = x1.max(x);
+                    y0 = y0.min(y);
+                    y1 = y1.max(y);
+                }
+                None => return Some((0, self.width - 1, 0, self.height - 1)),
+            }
+        }
+        // Pixel c's centre is c + 0.5.
+        let lo = |v: f32| (v - 0.5).ceil().max(0.0);
+        let hi = |v: f32, n: u32| (v - 0.5).floor().min(n as f32 - 1.0);
+        let (ax, bx, ay, by) = (lo(x0), hi(x1, self.width), lo(y0), hi(y1, self.height));
+        if !(ax <= bx && ay <= by) {
+            return None;
+        }
+        Some((ax as u32, bx as u32, ay as u32, by as u32))
+    }
+
+    pub fn ray(&self, x: u32, y: u32) -> Ray {
+        self.camera
+            .ray(x as f32 + 0.5, y as f32 + 0.5, self.width, self.height)
+    }
+}
+
+fn corners(b: &Aabb) -> [Vec3; 8] {
+    let mut out = [b.min; 8];
+    for (i, c) in out.iter_mut().enumerate() {
+        *c = Vec3::new(
+            if i & 1 == 0 { b.min.x } else { b.max.x },
+            if i & 2 == 0 { b.min.y } else { b.max.y },
+            if i & 4 == 0 { b.min.z } else { b.max.z },
+        );
+    }
+    out
+}
+
+/// Per tile (row-major over tiles), the blocks whose screen box overlaps it.
+/// Per ray, the parametric range inside the periodic box and in front of the
+/// eye: the images of box-crossing tets fill the box exactly, so only that
+/// range may be integrated.
+pub fn box_spans(mesh: &TetMesh, rays: &[Ray]) -> Vec<(f32, f32)> {
+    let b = Aabb::new(Vec3::ZERO, Vec3::splat(mesh.box_size));
+    rays.iter()
+        .map(|r| {
+            let t = b.clip_ray(r, voxless_core::Range1::new(0.0, f32::INFINITY));
+            if t.is_empty() {
+                (1.0, 0.0)
+            } else {
+                (t.lo, t.hi)
+            }
+        })
+        .collect()
+}
+
+pub fn bin_blocks(mesh: &TetMesh, screen: &Screen) -> (u32, u32, Vec<Vec<u32>>) {
+    let tx = screen.width.div_ceil(TILE);
+    let ty = screen.height.div_ceil(TILE);
+    let mut bins = vec![Vec::new(); (tx * ty) as usize];
+    for (i, b) in mesh.blocks.iter().enumerate() {
+        if let Some((x0, x1, y0, y1)) = screen.pixel_rect(&corners(&b.bounds)) {
+            for y in y0 / TILE..=y1 / TILE {
+                for x in x0 / TILE..=x1 / TILE {
+                    bins[(y * tx + x) as usize].push(i as u32);
+                }
+            }
+        }
+    }
+    (tx, ty, bins)
+}
+
+/// The four face planes of a tet, `n·x ≤ c` inside.
+#[derive(Clone, Copy, Debug)]
+pub struct Planes {
+    n: [Vec3; 4],
+    c: [f32; 4],
+}
+
+impl Planes {
+    pub fn new(t: &Tet) -> Planes {
+        let v = &t.v;
+        let mut n = [Vec3::ZERO; 4];
+        let mut c = [0.0; 4];
+        for f in 0..4 {
+            // Face opposite vertex f.
+            let (a, b, d) = (v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]);
+            let mut normal = (b - a).cross(d - a);
+            if normal.dot(v[f] - a) > 0.0 {
+                normal = -normal;
+            }
+            n[f] = normal;
+            c[f] = normal.dot(a);
+        }
+        Planes { n, c }
+    }
+
+    /// The parametric range of `ray` inside the tet, possibly empty.
+    #[inline]
+    pub fn clip(&self, ray: &Ray) -> (f32, f32) {
+        let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
+        for f in 0..4 {
+            let nd = self.n[f].dot(ray.dir);
+            let dist = self.c[f] - self.n[f].dot(ray.origin);
+            if nd > 0.0 {
+                t1 = t1.min(dist / nd);
+            } else if nd < 0.0 {
+                t0 = t0.max(dist / nd);
+            } else if dist < 0.0 {
+                return (1.0, 0.0);
+            }
+        }
+        (t0, t1)
+    }
+}
+
+/// Calls `visit(local_pixel_index, t_in, t_out, density)` for every pixel of
+/// the tile at (`x0`, `y0`, `w`, `h`) whose ray crosses a tet of the listed
+/// blocks, with `[t_in, t_out]` clipped to the pixel's `spans` entry (the
+/// part of its ray inside the periodic box, in front of the eye).
+pub fn for_each_crossing(
+    mesh: &TetMesh,
+    screen: &Screen,
+    blocks: &[u32],
+    tile: (u32, u32, u32, u32),
+    rays: &[Ray],
+    spans: &[(f32, f32)],
+    mut visit: impl FnMut(usize, f32, f32, f32),
+) {
+    let (tx0, ty0, w, h) = tile;
+    for &b in blocks {
+        let block = &mesh.blocks[b as usize];
+        for tet in &mesh.tets[block.tets.start as usize..block.tets.end as usize] {
+            let Some((x0, x1, y0, y1)) = screen.pixel_rect(&tet.v) else {
+                continue;
+            };
+            let (x0, x1) = (x0.max(tx0), x1.min(tx0 + w - 1));
+            let (y0, y1) = (y0.max(ty0), y1.min(ty0 + h - 1));
+            if x0 > x1 || y0 > y1 {
+                continue;
+            }
+            let planes = Planes::new(tet);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let local = ((y - ty0) * w + (x - tx0)) as usize;
+                    let (t0, t1) = planes.clip(&rays[local]);
+                    let (t0, t1) = (t0.max(spans[local].0), t1.min(spans[local].1));
+                    if t1 > t0 {
+                        visit(local, t0, t1, tet.density);
+                    }
+                }
+            }
+        }
+    }
+}

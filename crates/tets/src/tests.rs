@@ -1,0 +1,483 @@
+//! Known answers: uniform grids (mean density, one stream), the analytic
+//! Zel'dovich plane wave, mass conservation, periodic shifts, and a
+//! brute-force renderer that tests every tet against every ray.
+
+use super::*;
+use voxless_core::{Aabb, Camera, Range1, Ray, Vec3, Volume};
+use voxless_render::RenderSettings;
+use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
+
+struct Lcg(u64);
+impl Lcg {
+    fn f(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+}
+
+/// A grid with positions `q + displacement(q)`, wrapped into the box.
+fn grid(n: usize, l: f32, disp: impl Fn([f32; 3]) -> [f32; 3]) -> LagrangianGrid {
+    let dq = l / n as f32;
+    let mut positions = Vec::with_capacity(n * n * n);
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..n {
+                let q = [i as f32 * dq, j as f32 * dq, k as f32 * dq];
+                let d = disp(q);
+                let w = |x: f32| x.rem_euclid(l);
+                positions.push(Vec3::new(w(q[0] + d[0]), w(q[1] + d[1]), w(q[2] + d[2])));
+            }
+        }
+    }
+    LagrangianGrid {
+        n,
+        box_size: l,
+        positions,
+    }
+}
+
+fn jitter(seed: u64, amp: f32) -> impl Fn([f32; 3]) -> [f32; 3] {
+    move |q| {
+        // Deterministic per point: hash the position.
+        let mut r = Lcg(seed
+            ^ ((q[0] * 1e4) as u64)
+            ^ (((q[1] * 1e4) as u64) << 20)
+            ^ (((q[2] * 1e4) as u64) << 40));
+        [0, 1, 2].map(|_| (r.f() - 0.5) * 2.0 * amp)
+    }
+}
+
+#[test]
+fn bad_input_is_a_clear_error() {
+    let mut g = grid(4, 1.0, |_| [0.0; 3]);
+    let s = TetSettings::default();
+    let mut short = g.clone();
+    short.positions.pop();
+    assert!(matches!(
+        TetMesh::new(&short, &s),
+        Err(TetError::NotCubic { count: 63 })
+    ));
+    for l in [0.0, -1.0, f32::NAN] {
+        let bad = LagrangianGrid {
+            box_size: l,
+            ..g.clone()
+        };
+        assert!(matches!(
+            TetMesh::new(&bad, &s),
+            Err(TetError::BadBox { .. })
+        ));
+    }
+    g.positions[5].y = f32::NAN;
+    assert!(matches!(
+        TetMesh::new(&g, &s),
+        Err(TetError::NonFinite { index: 5 })
+    ));
+}
+
+#[test]
+fn uniform_grid_has_mean_density_and_one_stream() {
+    let g = grid(6, 2.0, |_| [0.0; 3]);
+    let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+    let mean = 1.0 / 8.0;
+    let mut rng = Lcg(1);
+    for _ in 0..2000 {
+        let p = Vec3::new(rng.f(), rng.f(), rng.f()) * 2.0;
+        let (rho, streams) = v.density_and_streams(p);
+        assert_eq!(streams, 1, "at {p:?}");
+        assert!((rho - mean).abs() < 1e-5 * mean, "{rho}");
+    }
+}
+
+fn axis_camera(l: f32) -> Camera {
+    Camera::axis_projection(&Aabb::new(Vec3::ZERO, Vec3::splat(l)), 2).unwrap()
+}
+
+#[test]
+fn projection_of_the_box_conserves_mass() {
+    let g = grid(8, 1.0, jitter(3, 0.04));
+    let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+    for (axis, res) in [(0, 256u32), (1, 200), (2, 320)] {
+        let cam = Camera::axis_projection(&Aabb::new(Vec3::ZERO, Vec3::ONE), axis).unwrap();
+        let col = render::project(&v.mesh, &cam, res, res, &|_, _| {});
+        let mass: f64 = col.iter().map(|&c| c as f64).sum::<f64>() / (res as f64 * res as f64);
+        assert!((mass - 1.0).abs() <= 1e-3, "axis {axis}: {mass}");
+    }
+}
+
+#[test]
+fn sampled_density_integrates_to_the_total_mass() {
+    let g = grid(6, 1.0, jitter(5, 0.05));
+    let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+    let mut errors = Vec::new();
+    for m in [16usize, 48] {
+        let h = 1.0 / m as f32;
+        let mut sum = 0.0f64;
+        for i in 0..m {
+            for j in 0..m {
+                for k in 0..m {
+                    let p = Vec3::new(i as f32 + 0.5, j as f32 + 0.5, k as f32 + 0.5) * h;
+                    sum += v.density_and_streams(p).0;
+                }
+            }
+        }
+        errors.push((sum * (h as f64).powi(3) - 1.0).abs());
+    }
+    assert!(errors[1] < errors[0] && errors[1] < 5e-3, "{errors:?}");
+}
+
+/// The Zel'dovich sheet x = q + A sin(kq) after shell crossing (A·k = 1.5).
+fn zeldovich(n: usize) -> (LagrangianGrid, impl Fn(f32) -> f32) {
+    let l = 1.0f32;
+    let k = std::f32::consts::TAU / l;
+    let a = 1.5 / k;
+    let x_of = move |q: f32| q + a * (k * q).sin();
+    (grid(n, l, move |q| [x_of(q[0]) - q[0], 0.0, 0.0]), x_of)
+}
+
+#[test]
+fn zeldovich_density_matches_the_cell_sum_and_streams() {
+    let n = 32;
+    let (g, x_of) = zeldovich(n);
+    let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+    let dq = 1.0 / n as f32;
+    let rho_bar = 1.0f64;
+    let mut rng = Lcg(9);
+    let mut checked = 0;
+    for _ in 0..3000 {
+        let x = rng.f();
+        // Expected: Σ over Lagrangian cells whose x-extent covers x (periodic).
+        let mut want = 0.0f64;
+        let mut covering = 0;
+        let mut near_edge = false;
+        for i in 0..n {
+            let (a, b) = (x_of(i as f32 * dq), x_of((i + 1) as f32 * dq));
+            let (lo, hi) = (a.min(b), a.max(b));
+            for shift in [-1.0f32, 0.0, 1.0] {
+                let xs = x + shift;
+                if (xs - lo).abs() < 1e-4 || (xs - hi).abs() < 1e-4 {
+                    near_edge = true;
+                }
+                if xs > lo && xs < hi {
+                    want += rho_bar * dq as f64 / (hi - lo) as f64;
+                    covering += 1;
+                }
+            }
+        }
+        if near_edge {
+            continue;
+        }
+        // y, z away from cell faces.
+        let p = Vec3::new(
+            x,
+            (rng.f() * 0.8 + 0.1) * dq + 0.3,
+            (rng.f() * 0.8 + 0.1) * dq + 0.6,
+        );
+        let (rho, streams) = v.density_and_streams(p);
+        assert_eq!(streams as usize, covering, "streams at x = {x}");
+        assert!(covering == 1 || covering == 3, "{covering}");
+        assert!(
+            (rho - want).abs() <= 1e-4 * want,
+            "x = {x}: {rho} vs {want}"
+        );
+        checked += 1;
+    }
+    assert!(checked > 2500);
+}
+
+#[test]
+fn zeldovich_error_against_the_analytic_density_halves_with_resolution() {
+    let k = std::f64::consts::TAU;
+    let a = 1.5 / k;
+    // Analytic: Σ over streams q_s with x(q_s) = x of ρ̄ / |1 + A k cos(k q_s)|,
+    // streams found by bisection on a fine q grid.
+    let analytic = |x: f64| -> Option<f64> {
+        let f = |q: f64| q + a * (k * q).sin() - x;
+        let m = 20_000;
+        let mut sum = 0.0;
+        for i in 0..m {
+            let (q0, q1) = (i as f64 / m as f64 - 0.5, (i + 1) as f64 / m as f64 - 0.5);
+            // Search q over [-0.5, 1.5) so periodic images of x are found.
+            for off in [0.0, 1.0] {
+                let (a0, a1) = (q0 + off, q1 + off);
+                if f(a0) * f(a1) <= 0.0 && f(a0) != f(a1) {
+                    let (mut lo, mut hi) = (a0, a1);
+                    for _ in 0..60 {
+                        let mid = 0.5 * (lo + hi);
+                        if f(lo) * f(mid) <= 0.0 {
+                            hi = mid
+                        } else {
+                            lo = mid
+                        }
+                    }
+                    let dxdq = (1.0 + a * k * (k * lo).cos()).abs();
+                    if dxdq < 0.2 {
+                        return None; // too close to a caustic
+                    }
+                    sum += 1.0 / dxdq;
+                }
+            }
+        }
+        Some(sum)
+    };
+    let mut errs = Vec::new();
+    for n in [32usize, 128] {
+        let (g, _) = zeldovich(n);
+        // Only the x-extent matters: a thin slab of cells suffices, but the
+        // tessellation needs the full N³ grid; keep N³ and sample few points.
+        let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+        let mut total = 0.0;
+        let mut count = 0;
+        for i in 0..400 {
+            let x = (i as f64 + 0.37) / 400.0;
+            let Some(want) = analytic(x) else { continue };
+            let (rho, _) = v.density_and_streams(Vec3::new(x as f32, 0.013, 0.021));
+            total += (rho - want).abs() / want;
+            count += 1;
+        }
+        errs.push(total / count as f64);
+    }
+    assert!(
+        errs[1] <= 0.5 * errs[0],
+        "mean relative error {errs:?} should at least halve"
+    );
+}
+
+fn log_tf() -> TransferFunction {
+    TransferFunction::new(
+        Colormap::preset("inferno").unwrap(),
+        OpacityMap::preset("linear").unwrap(),
+    )
+}
+
+fn settings_for(v: &TetVolume, w: u32, h: u32) -> RenderSettings {
+    let mut s = RenderSettings::for_volume(v, w, h);
+    s.log_scale = true;
+    s.value_range = Range1::new(v.value_range().lo.log10(), v.value_range().hi.log10());
+    s.early_termination = 1.0;
+    s
+}
+
+/// Every tet against every ray, events sorted, integrated exactly.
+fn brute_force(
+    v: &TetVolume,
+    cam: &Camera,
+    tf: &TransferFunction,
+    s: &RenderSettings,
+) -> Vec<[f32; 4]> {
+    let mut out = Vec::new();
+    for y in 0..s.height {
+        for x in 0..s.width {
+            let ray = cam.ray(x as f32 + 0.5, y as f32 + 0.5, s.width, s.height);
+            let mut ev: Vec<(f32, f64)> = Vec::new();
+            // Only the ray's part inside the periodic box (in front of the eye).
+            let span = Aabb::new(Vec3::ZERO, Vec3::splat(v.mesh.box_size))
+                .clip_ray(&ray, Range1::new(0.0, f32::INFINITY));
+            for t in &v.mesh.tets {
+                let (a, b) = raster::Planes::new(t).clip(&ray);
+                let (a, b) = (a.max(span.lo), b.min(span.hi));
+                if b > a {
+                    ev.push((a, t.density as f64));
+                    ev.push((b, -(t.density as f64)));
+                }
+            }
+            ev.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (mut rho, mut c, mut alpha) = (0.0f64, Vec3::ZERO, 0.0f32);
+            for w in ev.windows(2) {
+                rho += w[0].1;
+                let len = w[1].0 - w[0].0;
+                if rho > 1e-9 && len > 0.0 {
+                    let xx = s.normalize(rho as f32);
+                    let a = 1.0 - (-tf.opacity(xx) * s.opacity_scale * len).exp();
+                    c += tf.color(xx) * ((1.0 - alpha) * a);
+                    alpha += (1.0 - alpha) * a;
+                }
+            }
+            out.push([c.x, c.y, c.z, alpha]);
+        }
+    }
+    out
+}
+
+#[test]
+fn exact_mode_equals_brute_force_and_kbuffer_converges() {
+    let (g, _) = zeldovich(6);
+    let g = LagrangianGrid {
+        positions: g
+            .positions
+            .iter()
+            .zip(grid(6, 1.0, jitter(11, 0.03)).positions)
+            .map(|(a, b)| {
+                // Shell-crossed sheet plus jitter: overlapping, tilted tets.
+                let d = b - Vec3::new(
+                    (b.x * 6.0).round() / 6.0,
+                    (b.y * 6.0).round() / 6.0,
+                    (b.z * 6.0).round() / 6.0,
+                );
+                Vec3::new(
+                    (a.x + d.x).rem_euclid(1.0),
+                    (a.y + d.y).rem_euclid(1.0),
+                    (a.z + d.z).rem_euclid(1.0),
+                )
+            })
+            .collect(),
+        ..g
+    };
+    let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+    let tf = log_tf();
+    let cam = Camera::look_at(
+        Vec3::new(1.9, 1.4, 2.3),
+        Vec3::splat(0.5),
+        Vec3::new(0.0, 1.0, 0.0),
+        voxless_core::Projection::Perspective { fov_y_deg: 40.0 },
+    )
+    .unwrap();
+    let s = settings_for(&v, 24, 20);
+    let want = brute_force(&v, &cam, &tf, &s);
+    let exact = render::render(&v.mesh, &cam, &tf, &s, TetMode::Exact, &|_, _| {});
+    let err = |img: &voxless_core::Image| {
+        img.pixels
+            .iter()
+            .zip(&want)
+            .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max))
+            .fold(0.0f32, f32::max)
+    };
+    assert!(err(&exact) <= 1e-5, "exact vs brute force: {}", err(&exact));
+    assert!(want.iter().any(|p| p[3] > 0.05), "the mesh is visible");
+    // The k-buffer's error falls as k grows, and vanishes once k holds everything.
+    let mut last = f32::INFINITY;
+    for k in [2usize, 4, 8, 16, 32, 64, 4096] {
+        let img = render::render(
+            &v.mesh,
+            &cam,
+            &tf,
+            &s,
+            TetMode::KBuffer { k, layers: 32 },
+            &|_, _| {},
+        );
+        let e = img
+            .pixels
+            .iter()
+            .zip(&want)
+            .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).sum::<f32>())
+            .sum::<f32>();
+        assert!(
+            e <= last * 1.0001 + 1e-6,
+            "k = {k}: error {e} rose from {last}"
+        );
+        last = e;
+    }
+    assert!(last <= 1e-3, "k = 4096 should be exact: {last}");
+}
+
+#[test]
+fn exact_mode_agrees_with_the_generic_sampled_path() {
+    let g = grid(5, 1.0, jitter(13, 0.05));
+    let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+    let tf = log_tf();
+    let cam = Camera::look_at(
+        Vec3::new(2.0, 1.5, 2.5),
+        Vec3::splat(0.5),
+        Vec3::new(0.0, 1.0, 0.0),
+        voxless_core::Projection::Perspective { fov_y_deg: 35.0 },
+    )
+    .unwrap();
+    let mut s = settings_for(&v, 16, 16);
+    let exact = render::render(&v.mesh, &cam, &tf, &s, TetMode::Exact, &|_, _| {});
+    s.step = Some(0.0005);
+    let sampled = voxless_render::render(&v, &cam, &tf, &s, &|_, _| {});
+    let max = exact
+        .pixels
+        .iter()
+        .zip(&sampled.pixels)
+        .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max))
+        .fold(0.0f32, f32::max);
+    assert!(max <= 5e-3, "exact vs sampled (step 5e-4): {max}");
+}
+
+#[test]
+fn half_box_shift_renders_identically() {
+    let n = 8;
+    let base = grid(n, 1.0, jitter(17, 0.04));
+    let shifted = LagrangianGrid {
+        positions: base
+            .positions
+            .iter()
+            .map(|p| {
+                Vec3::new(
+                    (p.x + 0.5).rem_euclid(1.0),
+                    p.y,
+                    (p.z + 0.5).rem_euclid(1.0),
+                )
+            })
+            .collect(),
+        ..base.clone()
+    };
+    // The same particles, relabelled so the Lagrangian grid is shifted too.
+    let relabel = |g: &LagrangianGrid| {
+        let mut out = g.positions.clone();
+        for i in 0..n {
+            for j in 0..n {
+                for k in 0..n {
+                    out[(((i + n / 2) % n) * n + j) * n + (k + n / 2) % n] =
+                        g.positions[(i * n + j) * n + k];
+                }
+            }
+        }
+        LagrangianGrid {
+            positions: out,
+            ..g.clone()
+        }
+    };
+    let shifted = relabel(&shifted);
+    let a = TetVolume::new(&base, &TetSettings::default()).unwrap();
+    let b = TetVolume::new(&shifted, &TetSettings::default()).unwrap();
+    // Looking down y with the image covering exactly the box: a shift by half
+    // a box in x and z is a periodic relabelling, so the column density is the
+    // same map rolled by half the image.
+    let cam = Camera::axis_projection(&Aabb::new(Vec3::ZERO, Vec3::ONE), 1).unwrap();
+    let res = 64u32;
+    let ca = render::project(&a.mesh, &cam, res, res, &|_, _| {});
+    let cb = render::project(&b.mesh, &cam, res, res, &|_, _| {});
+    let mut max = 0.0f32;
+    for row in 0..res {
+        for col in 0..res {
+            let rolled = (((row + res / 2) % res) * res + (col + res / 2) % res) as usize;
+            max = max.max((ca[(row * res + col) as usize] - cb[rolled]).abs());
+        }
+    }
+    let scale = ca.iter().copied().fold(0.0f32, f32::max);
+    assert!(max <= 1e-4 * scale, "max difference {max} of {scale}");
+    // And the unshifted grid's total mass is intact in both.
+    let sum = |c: &[f32]| c.iter().map(|&v| v as f64).sum::<f64>() / (res * res) as f64;
+    assert!((sum(&ca) - 1.0).abs() < 1e-3 && (sum(&cb) - 1.0).abs() < 1e-3);
+}
+
+#[test]
+fn ray_tet_clip_matches_point_sampling() {
+    let g = grid(4, 1.0, jitter(19, 0.08));
+    let mesh = TetMesh::new(&g, &TetSettings::default()).unwrap();
+    let mut rng = Lcg(23);
+    for t in mesh.tets.iter().take(200) {
+        let c = (t.v[0] + t.v[1] + t.v[2] + t.v[3]) * 0.25;
+        let o = c + Vec3::new(rng.f() - 0.5, rng.f() - 0.5, 2.0);
+        let ray = Ray::new(
+            o,
+            (c + Vec3::new(rng.f() - 0.5, rng.f() - 0.5, 0.0) * 0.05 - o).normalized(),
+        );
+        let (a, b) = raster::Planes::new(t).clip(&ray);
+        let chord = (b - a).max(0.0);
+        let steps = 20_000;
+        let inside = (0..steps)
+            .filter(|&i| t.contains(ray.at(4.0 * (i as f32 + 0.5) / steps as f32)))
+            .count();
+        let est = inside as f32 * 4.0 / steps as f32;
+        assert!(
+            (chord - est).abs() <= 2.0 * 4.0 / steps as f32 + 1e-5,
+            "{chord} vs {est}"
+        );
+    }
+    let _ = axis_camera(1.0);
+}
