@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use voxless_scene::{AmrDesc, LightDesc, ParticlesDesc, SceneDesc};
+use voxless_scene::{AmrDesc, LightDesc, ParticlesDesc, SceneDesc, TetsDesc};
 
 /// Every scene setting a one-off run needs, as flags (they override the scene file).
 #[derive(Args, Debug, Default, Clone)]
@@ -45,6 +45,32 @@ pub struct SceneArgs {
     /// Attribute range mapped to the colormap / maps.
     #[arg(long, num_args = 2, value_names = ["LO", "HI"], help_heading = "Particles", allow_negative_numbers = true)]
     pub attribute_range: Option<Vec<f32>>,
+
+    // ---- phase-space tessellation ----
+    /// Treat --particles as N³ N-body particles on a Lagrangian grid (Lagrangian
+    /// order, k fastest) and render their phase-space tessellation.
+    #[arg(long, value_name = "N", help_heading = "Phase-space tessellation")]
+    pub lagrangian: Option<usize>,
+    /// Periodic box size L (positions in [0, L)³).
+    #[arg(
+        long = "box",
+        value_name = "L",
+        help_heading = "Phase-space tessellation",
+        allow_negative_numbers = true
+    )]
+    pub box_size: Option<f32>,
+    /// Mass per particle (default: total mass 1).
+    #[arg(long, help_heading = "Phase-space tessellation")]
+    pub particle_mass: Option<f64>,
+    /// exact (default: every tet event sorted per pixel) or kbuffer (bounded memory).
+    #[arg(long, help_heading = "Phase-space tessellation")]
+    pub tet_mode: Option<String>,
+    /// k-buffer depth for --tet-mode kbuffer (default 16).
+    #[arg(long, help_heading = "Phase-space tessellation")]
+    pub k: Option<usize>,
+    /// Log-spaced depth layers behind the k-buffer (default 64).
+    #[arg(long, help_heading = "Phase-space tessellation")]
+    pub layers: Option<usize>,
 
     // ---- AMR ----
     /// ExaBricks cells: .cells (int32 x, y, z, level per cell).
@@ -141,6 +167,12 @@ pub struct SceneArgs {
     /// Render only the iso-surfaces, not the volume.
     #[arg(long, help_heading = "Render")]
     pub iso_only: bool,
+    /// Map log10(value) through the transfer function (default for tessellations).
+    #[arg(long, help_heading = "Transfer function", conflicts_with = "linear")]
+    pub log: bool,
+    /// Map the value linearly (default except for tessellations).
+    #[arg(long, help_heading = "Transfer function")]
+    pub linear: bool,
     /// Render only what lies inside this box.
     #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], help_heading = "Render", allow_negative_numbers = true)]
     pub clip: Option<Vec<f32>>,
@@ -194,7 +226,25 @@ impl SceneArgs {
             || self.cluster.is_some()
             || self.classification.is_some()
             || self.attribute_range.is_some();
-        if has_particle_flags {
+        let has_tet_flags = self.lagrangian.is_some()
+            || self.box_size.is_some()
+            || self.particle_mass.is_some()
+            || self.tet_mode.is_some()
+            || self.k.is_some()
+            || self.layers.is_some();
+        if has_tet_flags || d.tets.is_some() {
+            // Positions on a Lagrangian grid: a tessellation, not RBF particles.
+            let t = d.tets.get_or_insert_with(TetsDesc::default);
+            if let Some(f) = &self.particles {
+                t.file = Some(cwd_path(&f.to_string_lossy()));
+            }
+            set(&mut t.lagrangian, self.lagrangian);
+            set(&mut t.box_size, self.box_size);
+            set(&mut t.particle_mass, self.particle_mass);
+            set(&mut t.mode, self.tet_mode.clone());
+            set(&mut t.k, self.k);
+            set(&mut t.layers, self.layers);
+        } else if has_particle_flags {
             let p = d.particles.get_or_insert_with(ParticlesDesc::default);
             if let Some(f) = &self.particles {
                 let f = f.to_string_lossy();
@@ -273,6 +323,12 @@ impl SceneArgs {
         set(&mut d.render.iso_opacity, self.iso_opacity);
         if self.iso_only {
             d.render.volume = Some(false);
+        }
+        if self.log {
+            d.render.log_scale = Some(true);
+        }
+        if self.linear {
+            d.render.log_scale = Some(false);
         }
         if let Some(c) = &self.clip {
             d.render.clip = Some([c[0], c[1], c[2], c[3], c[4], c[5]]);

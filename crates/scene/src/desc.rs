@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 pub struct SceneDesc {
     pub particles: Option<ParticlesDesc>,
     pub amr: Option<AmrDesc>,
+    pub tets: Option<TetsDesc>,
     #[serde(default)]
     pub camera: CameraDesc,
     #[serde(default)]
@@ -75,6 +76,27 @@ pub struct AmrDesc {
     pub reconstruction: Option<String>,
 }
 
+/// N-body particles on a Lagrangian grid, rendered as a phase-space
+/// tessellation (6 tets per Lagrangian cell).
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TetsDesc {
+    /// `.npy` N³×3 positions in Lagrangian order `(i·N + j)·N + k`, k fastest.
+    pub file: Option<String>,
+    /// N (particles per axis of the Lagrangian grid).
+    pub lagrangian: Option<usize>,
+    /// Periodic box size L (positions in `[0, L)³`).
+    pub box_size: Option<f32>,
+    /// Mass per particle (default: total mass 1).
+    pub particle_mass: Option<f64>,
+    /// exact (default) or kbuffer.
+    pub mode: Option<String>,
+    /// k-buffer depth (kbuffer mode; default 16).
+    pub k: Option<usize>,
+    /// Log-spaced depth layers behind the k-buffer (default 64).
+    pub layers: Option<usize>,
+}
+
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
@@ -132,6 +154,10 @@ pub struct RenderDesc {
     pub volume: Option<bool>,
     /// Clip box `[x0, y0, z0, x1, y1, z1]`: only what is inside is rendered.
     pub clip: Option<[f32; 6]>,
+    /// Map log10(value) through the transfer function (default: on for
+    /// tessellations, whose densities span decades; off otherwise). The value
+    /// range is then given in log10 units.
+    pub log_scale: Option<bool>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]

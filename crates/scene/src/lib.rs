@@ -26,6 +26,7 @@ use voxless_particles::{
     Classification, Kernel, ParticleData, ParticleError, ParticleSettings, ParticleVolume,
 };
 use voxless_render::{Light, RenderSettings};
+use voxless_tets::{LagrangianGrid, TetError, TetMode, TetSettings, TetVolume};
 use voxless_transfer::{Colormap, ControlPoints, OpacityMap, TransferError, TransferFunction};
 
 pub use desc::*;
@@ -49,6 +50,12 @@ pub enum SceneError {
         path: PathBuf,
         #[source]
         source: AmrError,
+    },
+    #[error("{path}: {source}")]
+    Tets {
+        path: PathBuf,
+        #[source]
+        source: TetError,
     },
     #[error("{field}: {message}")]
     Setting { field: String, message: String },
@@ -87,6 +94,8 @@ pub fn read_scene(path: &Path) -> Result<SceneDesc, SceneError> {
 pub enum AnyVolume {
     Particles(Box<ParticleVolume>),
     Amr(Box<AmrVolume>),
+    /// A phase-space tessellation and how to render it.
+    Tets(Box<TetVolume>, TetMode),
 }
 
 /// Runs `$body` with `$v` bound to the concrete volume (monomorphised per kind).
@@ -98,6 +107,10 @@ macro_rules! with_volume {
                 $body
             }
             AnyVolume::Amr($v) => {
+                let $v = &**$v;
+                $body
+            }
+            AnyVolume::Tets($v, _) => {
                 let $v = &**$v;
                 $body
             }
@@ -116,6 +129,7 @@ impl AnyVolume {
         match self {
             AnyVolume::Particles(_) => "particles",
             AnyVolume::Amr(_) => "AMR cells",
+            AnyVolume::Tets(..) => "phase-space tessellation",
         }
     }
 
@@ -127,7 +141,13 @@ impl AnyVolume {
         settings: &RenderSettings,
         progress: &(dyn Fn(u64, u64) + Sync),
     ) -> Image {
-        with_volume!(self, v => voxless_render::render(v, camera, tf, settings, progress))
+        match self {
+            // The exact (or k-buffer) tile renderer replaces sampling.
+            AnyVolume::Tets(v, mode) => {
+                voxless_tets::render::render(&v.mesh, camera, tf, settings, *mode, progress)
+            }
+            _ => with_volume!(self, v => voxless_render::render(v, camera, tf, settings, progress)),
+        }
     }
 
     /// Column density `∫ value dt` per pixel, row-major.
@@ -138,7 +158,14 @@ impl AnyVolume {
         height: u32,
         progress: &(dyn Fn(u64, u64) + Sync),
     ) -> Vec<f32> {
-        with_volume!(self, v => voxless_render::project(v, camera, width, height, progress))
+        match self {
+            AnyVolume::Tets(v, _) => {
+                voxless_tets::render::project(&v.mesh, camera, width, height, progress)
+            }
+            _ => {
+                with_volume!(self, v => voxless_render::project(v, camera, width, height, progress))
+            }
+        }
     }
 
     /// The integral of the field over all space, when the data kind knows it
@@ -147,6 +174,7 @@ impl AnyVolume {
         match self {
             AnyVolume::Particles(v) => Some(v.total_mass()),
             AnyVolume::Amr(v) => v.exact_integral(),
+            AnyVolume::Tets(v, _) => Some(v.mesh.total_mass()),
         }
     }
 
@@ -164,6 +192,7 @@ impl AnyVolume {
                 }
                 c
             }
+            AnyVolume::Tets(..) => vec!["density".into(), "streams".into()],
             AnyVolume::Amr(v) => {
                 let mut c: Vec<String> = v.field_names().to_vec();
                 if gradient {
@@ -191,6 +220,13 @@ impl AnyVolume {
                         row.extend(f.gradient.to_array());
                     }
                     row
+                })
+                .collect(),
+            AnyVolume::Tets(v, _) => points
+                .par_iter()
+                .flat_map_iter(|&p| {
+                    let (rho, streams) = v.density_and_streams(p);
+                    [rho as f32, streams as f32]
                 })
                 .collect(),
             AnyVolume::Amr(v) => {
@@ -232,23 +268,29 @@ pub struct LoadedScene {
 pub fn resolve(desc: &SceneDesc, base: &Path) -> Result<LoadedScene, SceneError> {
     let mut notes = Vec::new();
     let tf = transfer_function(&desc.transfer)?;
-    let volume = match (&desc.particles, &desc.amr) {
-        (Some(p), None) => {
+    let sources = [
+        desc.particles.is_some(),
+        desc.amr.is_some(),
+        desc.tets.is_some(),
+    ];
+    if sources.iter().filter(|&&s| s).count() > 1 {
+        return Err(SceneError::setting(
+            "scene",
+            "more than one data source ([particles], [amr], [tets]) is given; pick one",
+        ));
+    }
+    let volume = match (&desc.particles, &desc.amr, &desc.tets) {
+        (Some(p), _, _) => {
             let mut volume = load_particles(p, base, &mut notes)?;
             volume.classify(&tf);
             AnyVolume::Particles(Box::new(volume))
         }
-        (None, Some(a)) => AnyVolume::Amr(Box::new(load_amr(a, base)?)),
-        (Some(_), Some(_)) => {
+        (_, Some(a), _) => AnyVolume::Amr(Box::new(load_amr(a, base)?)),
+        (_, _, Some(t)) => load_tets(t, base)?,
+        (None, None, None) => {
             return Err(SceneError::setting(
                 "scene",
-                "both [particles] and [amr] are given; pick one data source",
-            ));
-        }
-        (None, None) => {
-            return Err(SceneError::setting(
-                "scene",
-                "no data source: add a [particles] or [amr] table to the scene, or pass --particles FILE, --cells FILE --scalars FILE, or --amrclaw FILE (or use `voxless demo`)",
+                "no data source: add a [particles], [amr] or [tets] table to the scene, or pass --particles FILE (with --lagrangian N --box L for a phase-space tessellation), --cells FILE --scalars FILE, or --amrclaw FILE (or use `voxless demo`)",
             ));
         }
     };
@@ -290,9 +332,23 @@ pub fn resolve(desc: &SceneDesc, base: &Path) -> Result<LoadedScene, SceneError>
         }
         settings.early_termination = et;
     }
+    if let AnyVolume::Tets(..) = volume {
+        // Dark-matter sheets are thin: filaments a fraction of a Lagrangian
+        // spacing across need a denser medium to show.
+        settings.opacity_scale = 100.0 / volume.bounds().diagonal().max(1e-12);
+    }
     if let Some(s) = r.opacity_scale {
         positive("render.opacity_scale", s)?;
         settings.opacity_scale = s;
+    }
+    settings.log_scale = r.log_scale.unwrap_or(matches!(volume, AnyVolume::Tets(..)));
+    if settings.log_scale {
+        // Log-scale transfer functions take their range in log10 units; the
+        // data range's non-positive floor becomes 3 decades below its top.
+        let vr = settings.value_range;
+        let hi = vr.hi.max(f32::MIN_POSITIVE).log10();
+        let lo = if vr.lo > 0.0 { vr.lo.log10() } else { hi - 3.0 };
+        settings.value_range = Range1::new(lo, hi);
     }
     if let Some([lo, hi]) = desc.transfer.value_range {
         settings.value_range = range("transfer.value_range", lo, hi)?;
@@ -453,6 +509,53 @@ fn load_amr(a: &AmrDesc, base: &Path) -> Result<AmrVolume, SceneError> {
         },
     )
     .map_err(|source| SceneError::Amr { path, source })
+}
+
+fn load_tets(t: &TetsDesc, base: &Path) -> Result<AnyVolume, SceneError> {
+    let file = t.file.as_ref().ok_or_else(|| {
+        SceneError::setting(
+            "tets.file",
+            "no positions file given (--particles FILE.npy with --lagrangian N --box L)",
+        )
+    })?;
+    let path = base.join(file);
+    let (positions, _) = load::read_positions(&path)?;
+    let n = match t.lagrangian {
+        Some(n) => n,
+        None => {
+            return Err(SceneError::setting(
+                "tets.lagrangian",
+                "the Lagrangian grid size N is needed (--lagrangian N)",
+            ));
+        }
+    };
+    let box_size = t.box_size.ok_or_else(|| {
+        SceneError::setting("tets.box_size", "the periodic box size is needed (--box L)")
+    })?;
+    let grid = LagrangianGrid {
+        n,
+        box_size,
+        positions,
+    };
+    let settings = TetSettings {
+        particle_mass: t.particle_mass,
+        ..Default::default()
+    };
+    let mode = match t.mode.as_deref().unwrap_or("exact") {
+        "exact" => TetMode::Exact,
+        "kbuffer" | "k-buffer" => TetMode::KBuffer {
+            k: t.k.unwrap_or(16).max(1),
+            layers: t.layers.unwrap_or(64).max(1),
+        },
+        other => {
+            return Err(SceneError::setting(
+                "tets.mode",
+                format!("'{other}' is not 'exact' or 'kbuffer'"),
+            ));
+        }
+    };
+    let v = TetVolume::new(&grid, &settings).map_err(|source| SceneError::Tets { path, source })?;
+    Ok(AnyVolume::Tets(Box::new(v), mode))
 }
 
 fn positive(field: &str, v: f32) -> Result<(), SceneError> {

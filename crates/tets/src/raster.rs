@@ -97,6 +97,13 @@ impl Screen {
         Some((ax as u32, bx as u32, ay as u32, by as u32))
     }
 
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
     pub fn ray(&self, x: u32, y: u32) -> Ray {
         self.camera
             .ray(x as f32 + 0.5, y as f32 + 0.5, self.width, self.height)
@@ -115,7 +122,76 @@ fn corners(b: &Aabb) -> [Vec3; 8] {
     out
 }
 
-/// Per tile (row-major over tiles), the blocks whose screen box overlaps it.
+/// Everything per frame that does not depend on the tile: each tet's pixel
+/// rectangle (computed once, not once per tile it touches) and, per tile, the
+/// blocks whose screen box overlaps it (block culling).
+pub struct Frame {
+    pub screen: Screen,
+    pub tiles_x: u32,
+    pub tiles_y: u32,
+    /// Per tile (row-major), the overlapping blocks.
+    pub bins: Vec<Vec<u32>>,
+    /// Per tet, inclusive pixel rect `[x0, x1, y0, y1]`; `x0 > x1` when off screen.
+    rects: Vec<[u16; 4]>,
+}
+
+impl Frame {
+    pub fn new(mesh: &TetMesh, camera: &Camera, width: u32, height: u32) -> Frame {
+        use rayon::prelude::*;
+        let screen = Screen::new(camera, width, height);
+        let rects = mesh
+            .tets
+            .par_iter()
+            .map(|t| match screen.pixel_rect(&t.v) {
+                Some((x0, x1, y0, y1)) => [x0 as u16, x1 as u16, y0 as u16, y1 as u16],
+                None => [1, 0, 1, 0],
+            })
+            .collect();
+        let tiles_x = width.div_ceil(TILE);
+        let tiles_y = height.div_ceil(TILE);
+        let mut bins = vec![Vec::new(); (tiles_x * tiles_y) as usize];
+        for (i, b) in mesh.blocks.iter().enumerate() {
+            if let Some((x0, x1, y0, y1)) = screen.pixel_rect(&corners(&b.bounds)) {
+                for y in y0 / TILE..=y1 / TILE {
+                    for x in x0 / TILE..=x1 / TILE {
+                        bins[(y * tiles_x + x) as usize].push(i as u32);
+                    }
+                }
+            }
+        }
+        Frame {
+            screen,
+            tiles_x,
+            tiles_y,
+            bins,
+            rects,
+        }
+    }
+
+    /// Tile `i`'s pixel rectangle `(x0, y0, w, h)`.
+    pub fn tile(&self, i: u32) -> (u32, u32, u32, u32) {
+        let (x0, y0) = ((i % self.tiles_x) * TILE, (i / self.tiles_x) * TILE);
+        (
+            x0,
+            y0,
+            TILE.min(self.screen.width - x0),
+            TILE.min(self.screen.height - y0),
+        )
+    }
+
+    /// The rays through the centres of tile `i`'s pixels, row-major.
+    pub fn rays(&self, i: u32) -> Vec<Ray> {
+        let (x0, y0, w, h) = self.tile(i);
+        let mut rays = Vec::with_capacity((w * h) as usize);
+        for y in y0..y0 + h {
+            for x in x0..x0 + w {
+                rays.push(self.screen.ray(x, y));
+            }
+        }
+        rays
+    }
+}
+
 /// Per ray, the parametric range inside the periodic box and in front of the
 /// eye: the images of box-crossing tets fill the box exactly, so only that
 /// range may be integrated.
@@ -131,22 +207,6 @@ pub fn box_spans(mesh: &TetMesh, rays: &[Ray]) -> Vec<(f32, f32)> {
             }
         })
         .collect()
-}
-
-pub fn bin_blocks(mesh: &TetMesh, screen: &Screen) -> (u32, u32, Vec<Vec<u32>>) {
-    let tx = screen.width.div_ceil(TILE);
-    let ty = screen.height.div_ceil(TILE);
-    let mut bins = vec![Vec::new(); (tx * ty) as usize];
-    for (i, b) in mesh.blocks.iter().enumerate() {
-        if let Some((x0, x1, y0, y1)) = screen.pixel_rect(&corners(&b.bounds)) {
-            for y in y0 / TILE..=y1 / TILE {
-                for x in x0 / TILE..=x1 / TILE {
-                    bins[(y * tx + x) as usize].push(i as u32);
-                }
-            }
-        }
-    }
-    (tx, ty, bins)
 }
 
 /// The four face planes of a tet, `n·x ≤ c` inside.
@@ -174,6 +234,53 @@ impl Planes {
         Planes { n, c }
     }
 
+    /// [`Planes::clip`] for many rays sharing `origin` (a perspective camera):
+    /// the origin's distances to the planes are computed once.
+    #[inline]
+    pub fn with_origin(&self, origin: Vec3) -> [f32; 4] {
+        [0, 1, 2, 3].map(|f| self.c[f] - self.n[f].dot(origin))
+    }
+
+    /// Clip of a ray from the origin given to [`Planes::with_origin`].
+    #[inline]
+    pub fn clip_from(&self, dist: &[f32; 4], dir: Vec3) -> (f32, f32) {
+        let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
+        for f in 0..4 {
+            let nd = self.n[f].dot(dir);
+            if nd > 0.0 {
+                t1 = t1.min(dist[f] / nd);
+            } else if nd < 0.0 {
+                t0 = t0.max(dist[f] / nd);
+            } else if dist[f] < 0.0 {
+                return (1.0, 0.0);
+            }
+        }
+        (t0, t1)
+    }
+
+    /// For many rays sharing `dir` (an orthographic camera): n·dir once.
+    #[inline]
+    pub fn with_dir(&self, dir: Vec3) -> [f32; 4] {
+        [0, 1, 2, 3].map(|f| self.n[f].dot(dir))
+    }
+
+    /// Clip of a ray from `origin` along the direction given to [`Planes::with_dir`].
+    #[inline]
+    pub fn clip_at(&self, nd: &[f32; 4], origin: Vec3) -> (f32, f32) {
+        let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
+        for f in 0..4 {
+            let dist = self.c[f] - self.n[f].dot(origin);
+            if nd[f] > 0.0 {
+                t1 = t1.min(dist / nd[f]);
+            } else if nd[f] < 0.0 {
+                t0 = t0.max(dist / nd[f]);
+            } else if dist < 0.0 {
+                return (1.0, 0.0);
+            }
+        }
+        (t0, t1)
+    }
+
     /// The parametric range of `ray` inside the tet, possibly empty.
     #[inline]
     pub fn clip(&self, ray: &Ray) -> (f32, f32) {
@@ -194,35 +301,47 @@ impl Planes {
 }
 
 /// Calls `visit(local_pixel_index, t_in, t_out, density)` for every pixel of
-/// the tile at (`x0`, `y0`, `w`, `h`) whose ray crosses a tet of the listed
-/// blocks, with `[t_in, t_out]` clipped to the pixel's `spans` entry (the
-/// part of its ray inside the periodic box, in front of the eye).
+/// tile `tile` whose ray crosses a tet of the tile's blocks, with
+/// `[t_in, t_out]` clipped to the pixel's `spans` entry (the part of its ray
+/// inside the periodic box, in front of the eye).
 pub fn for_each_crossing(
     mesh: &TetMesh,
-    screen: &Screen,
-    blocks: &[u32],
-    tile: (u32, u32, u32, u32),
+    frame: &Frame,
+    tile: u32,
     rays: &[Ray],
     spans: &[(f32, f32)],
     mut visit: impl FnMut(usize, f32, f32, f32),
 ) {
-    let (tx0, ty0, w, h) = tile;
-    for &b in blocks {
+    let (tx0, ty0, w, h) = frame.tile(tile);
+    let shared_origin = match frame.screen.camera.projection {
+        Projection::Perspective { .. } => Some(frame.screen.camera.eye),
+        Projection::Orthographic { .. } => None,
+    };
+    for &b in &frame.bins[tile as usize] {
         let block = &mesh.blocks[b as usize];
-        for tet in &mesh.tets[block.tets.start as usize..block.tets.end as usize] {
-            let Some((x0, x1, y0, y1)) = screen.pixel_rect(&tet.v) else {
-                continue;
-            };
-            let (x0, x1) = (x0.max(tx0), x1.min(tx0 + w - 1));
-            let (y0, y1) = (y0.max(ty0), y1.min(ty0 + h - 1));
+        let range = block.tets.start as usize..block.tets.end as usize;
+        for (tet, r) in mesh.tets[range.clone()].iter().zip(&frame.rects[range]) {
+            let (x0, x1) = ((r[0] as u32).max(tx0), (r[1] as u32).min(tx0 + w - 1));
+            let (y0, y1) = ((r[2] as u32).max(ty0), (r[3] as u32).min(ty0 + h - 1));
             if x0 > x1 || y0 > y1 {
                 continue;
             }
             let planes = Planes::new(tet);
+            // Perspective rays share their origin, orthographic ones their
+            // direction: that half of each plane test is done once per tet.
+            let shared = match shared_origin {
+                Some(o) => (planes.with_origin(o), true),
+                None => (planes.with_dir(rays[0].dir), false),
+            };
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     let local = ((y - ty0) * w + (x - tx0)) as usize;
-                    let (t0, t1) = planes.clip(&rays[local]);
+                    let ray = &rays[local];
+                    let (t0, t1) = if shared.1 {
+                        planes.clip_from(&shared.0, ray.dir)
+                    } else {
+                        planes.clip_at(&shared.0, ray.origin)
+                    };
                     let (t0, t1) = (t0.max(spans[local].0), t1.min(spans[local].1));
                     if t1 > t0 {
                         visit(local, t0, t1, tet.density);

@@ -18,7 +18,7 @@ use voxless_render::RenderSettings;
 use voxless_transfer::TransferFunction;
 
 use crate::mesh::TetMesh;
-use crate::raster::{Screen, TILE, bin_blocks, box_spans, for_each_crossing};
+use crate::raster::{Frame, box_spans, for_each_crossing};
 
 /// How a pixel's events become colour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,16 +29,6 @@ pub enum TetMode {
     KBuffer { k: usize, layers: usize },
 }
 
-fn tile_rays(screen: &Screen, tx: u32, ty: u32, w: u32, h: u32) -> Vec<Ray> {
-    let mut rays = Vec::with_capacity((w * h) as usize);
-    for y in ty..ty + h {
-        for x in tx..tx + w {
-            rays.push(screen.ray(x, y));
-        }
-    }
-    rays
-}
-
 /// Front-to-back compositing of constant-density segments.
 struct Compositor<'a> {
     tf: &'a TransferFunction,
@@ -47,7 +37,16 @@ struct Compositor<'a> {
     alpha: f32,
 }
 
-impl Compositor<'_> {
+impl<'a> Compositor<'a> {
+    fn new(tf: &'a TransferFunction, settings: &'a RenderSettings) -> Self {
+        Compositor {
+            tf,
+            settings,
+            color: Vec3::ZERO,
+            alpha: 0.0,
+        }
+    }
+
     /// Adds a segment of length `len` and density `rho`; true once opaque.
     fn segment(&mut self, rho: f64, len: f32) -> bool {
         if rho <= 0.0 || len <= 0.0 {
@@ -94,6 +93,35 @@ fn sweep(events: &[(f32, f32)], comp: &mut Compositor, scale: f64) -> (f32, f64)
     (t_prev, rho)
 }
 
+/// Runs `per_tile(tile, rays)` over every tile in parallel (each returns its
+/// pixels row-major) and assembles the full image, row-major.
+fn over_tiles<T: Copy + Default + Send>(
+    frame: &Frame,
+    progress: &(dyn Fn(u64, u64) + Sync),
+    per_tile: impl Fn(u32, &[Ray]) -> Vec<T> + Sync,
+) -> Vec<T> {
+    let total = (frame.tiles_x * frame.tiles_y) as u64;
+    let done = std::sync::atomic::AtomicU64::new(0);
+    let tiles: Vec<(u32, Vec<T>)> = (0..frame.tiles_x * frame.tiles_y)
+        .into_par_iter()
+        .map(|i| {
+            let out = per_tile(i, &frame.rays(i));
+            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress(d, total);
+            (i, out)
+        })
+        .collect();
+    let width = frame.screen.width();
+    let mut image = vec![T::default(); (width * frame.screen.height()) as usize];
+    for (i, pixels) in tiles {
+        let (x0, y0, w, _) = frame.tile(i);
+        for (k, p) in pixels.into_iter().enumerate() {
+            image[((y0 + k as u32 / w) * width + x0 + k as u32 % w) as usize] = p;
+        }
+    }
+    image
+}
+
 /// Renders `mesh` with `mode`. `progress(done, total)` counts tiles.
 pub fn render(
     mesh: &TetMesh,
@@ -104,80 +132,41 @@ pub fn render(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Image {
     let (w, h) = (settings.width, settings.height);
-    let screen = Screen::new(camera, w, h);
-    let (tx, ty, bins) = bin_blocks(mesh, &screen);
-    let total = (tx * ty) as u64;
-    let done = std::sync::atomic::AtomicU64::new(0);
+    let frame = Frame::new(mesh, camera, w, h);
     let scale = mesh
         .tets
         .iter()
         .map(|t| t.density as f64)
         .fold(0.0, f64::max);
-    let tiles: Vec<(u32, u32, Vec<[f32; 4]>)> = (0..tx * ty)
-        .into_par_iter()
-        .map(|i| {
-            let (x0, y0) = ((i % tx) * TILE, (i / tx) * TILE);
-            let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
-            let rays = tile_rays(&screen, x0, y0, tw, th);
-            let n = rays.len();
-            let out = match mode {
-                TetMode::Exact => {
-                    let mut events: Vec<Vec<(f32, f32)>> = vec![Vec::new(); n];
-                    let spans = box_spans(mesh, &rays);
-                    for_each_crossing(
-                        mesh,
-                        &screen,
-                        &bins[i as usize],
-                        (x0, y0, tw, th),
-                        &rays,
-                        &spans,
-                        |p, t0, t1, rho| {
-                            events[p].push((t0, rho));
-                            events[p].push((t1, -rho));
-                        },
-                    );
-                    events
-                        .iter_mut()
-                        .map(|ev| {
-                            ev.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-                            let mut comp = Compositor {
-                                tf,
-                                settings,
-                                color: Vec3::ZERO,
-                                alpha: 0.0,
-                            };
-                            sweep(ev, &mut comp, scale);
-                            comp.rgba()
-                        })
-                        .collect()
-                }
-                TetMode::KBuffer { k, layers } => kbuffer_tile(
-                    mesh,
-                    &screen,
-                    &bins[i as usize],
-                    (x0, y0, tw, th),
-                    &rays,
-                    k,
-                    layers,
-                    tf,
-                    settings,
-                    scale,
-                ),
-            };
-            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress(d, total);
-            (x0, y0, out)
-        })
-        .collect();
-    let mut image = Image::new(w, h);
-    for (x0, y0, pixels) in tiles {
-        let tw = TILE.min(w - x0);
-        for (k, p) in pixels.into_iter().enumerate() {
-            let (x, y) = (x0 + k as u32 % tw, y0 + k as u32 / tw);
-            image.pixels[(y * w + x) as usize] = p;
+    let pixels = over_tiles(&frame, progress, |i, rays| {
+        let spans = box_spans(mesh, rays);
+        match mode {
+            TetMode::Exact => {
+                let mut events: Vec<Vec<(f32, f32)>> = vec![Vec::new(); rays.len()];
+                for_each_crossing(mesh, &frame, i, rays, &spans, |p, t0, t1, rho| {
+                    events[p].push((t0, rho));
+                    events[p].push((t1, -rho));
+                });
+                events
+                    .iter_mut()
+                    .map(|ev| {
+                        ev.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+                        let mut comp = Compositor::new(tf, settings);
+                        sweep(ev, &mut comp, scale);
+                        comp.rgba()
+                    })
+                    .collect()
+            }
+            TetMode::KBuffer { k, layers } => kbuffer_tile(
+                mesh, &frame, i, rays, &spans, k, layers, tf, settings, scale,
+            ),
         }
+    });
+    Image {
+        width: w,
+        height: h,
+        pixels,
     }
-    image
 }
 
 /// Depth-layer edges: `layers` log-spaced layers over `[a, b]`, finer near
@@ -205,10 +194,10 @@ impl Layers {
 #[allow(clippy::too_many_arguments)]
 fn kbuffer_tile(
     mesh: &TetMesh,
-    screen: &Screen,
-    blocks: &[u32],
-    tile: (u32, u32, u32, u32),
+    frame: &Frame,
+    tile: u32,
     rays: &[Ray],
+    clip: &[(f32, f32)],
     k: usize,
     layers: usize,
     tf: &TransferFunction,
@@ -218,7 +207,6 @@ fn kbuffer_tile(
     let n = rays.len();
     let k = k.max(1);
     let layers = layers.max(1);
-    let clip = box_spans(mesh, rays);
     let spans: Vec<Layers> = clip
         .iter()
         .map(|&(a, b)| {
@@ -243,7 +231,7 @@ fn kbuffer_tile(
         }
         buf.insert(at, e);
     };
-    for_each_crossing(mesh, screen, blocks, tile, rays, &clip, |p, t0, t1, rho| {
+    for_each_crossing(mesh, frame, tile, rays, clip, |p, t0, t1, rho| {
         insert(&mut kbuf[p], (t0, rho));
         insert(&mut kbuf[p], (t1, -rho));
         // Deposit ρ × (overlap with each layer).
@@ -259,12 +247,7 @@ fn kbuffer_tile(
     });
     (0..n)
         .map(|p| {
-            let mut comp = Compositor {
-                tf,
-                settings,
-                color: Vec3::ZERO,
-                alpha: 0.0,
-            };
+            let mut comp = Compositor::new(tf, settings);
             let buf = &kbuf[p];
             let (t_k, _) = sweep(buf, &mut comp, scale);
             if buf.len() < k || comp.alpha >= settings.early_termination {
@@ -298,41 +281,16 @@ pub fn project(
     height: u32,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Vec<f32> {
-    let screen = Screen::new(camera, width, height);
-    let (tx, ty, bins) = bin_blocks(mesh, &screen);
-    let total = (tx * ty) as u64;
-    let done = std::sync::atomic::AtomicU64::new(0);
-    let tiles: Vec<(u32, u32, Vec<f64>)> = (0..tx * ty)
-        .into_par_iter()
-        .map(|i| {
-            let (x0, y0) = ((i % tx) * TILE, (i / tx) * TILE);
-            let (tw, th) = (TILE.min(width - x0), TILE.min(height - y0));
-            let rays = tile_rays(&screen, x0, y0, tw, th);
-            let mut sum = vec![0.0f64; rays.len()];
-            let spans = box_spans(mesh, &rays);
-            for_each_crossing(
-                mesh,
-                &screen,
-                &bins[i as usize],
-                (x0, y0, tw, th),
-                &rays,
-                &spans,
-                |p, t0, t1, rho| {
-                    sum[p] += rho as f64 * (t1 - t0) as f64;
-                },
-            );
-            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress(d, total);
-            (x0, y0, sum)
-        })
-        .collect();
-    let mut out = vec![0.0f64; (width * height) as usize];
-    for (x0, y0, sum) in tiles {
-        let tw = TILE.min(width - x0);
-        for (k, v) in sum.into_iter().enumerate() {
-            out[((y0 + k as u32 / tw) * width + x0 + k as u32 % tw) as usize] = v;
-        }
-    }
+    let frame = Frame::new(mesh, camera, width, height);
+    let mut out: Vec<f64> = over_tiles(&frame, progress, |i, rays| {
+        let mut sum = vec![0.0f64; rays.len()];
+        let spans = box_spans(mesh, rays);
+        for_each_crossing(mesh, &frame, i, rays, &spans, |p, t0, t1, rho| {
+            sum[p] += rho as f64 * (t1 - t0) as f64;
+        });
+        sum
+    });
+    let screen = &frame.screen;
     // Point masses: the pixel whose footprint contains the point gets m / area.
     if let voxless_core::Projection::Orthographic {
         half_width,

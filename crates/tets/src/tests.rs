@@ -83,8 +83,18 @@ fn uniform_grid_has_mean_density_and_one_stream() {
     let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
     let mean = 1.0 / 8.0;
     let mut rng = Lcg(1);
-    for _ in 0..2000 {
-        let p = Vec3::new(rng.f(), rng.f(), rng.f()) * 2.0;
+    let mut points: Vec<Vec3> = (0..2000)
+        .map(|_| Vec3::new(rng.f(), rng.f(), rng.f()) * 2.0)
+        .collect();
+    // Grid-aligned points lie on shared faces, edges and vertices: cell
+    // centres sit on the diagonal all six tets of a cell share.
+    let dq = 2.0 / 6.0;
+    for i in 0..6 {
+        points.push(Vec3::splat((i as f32 + 0.5) * dq));
+        points.push(Vec3::new(i as f32 * dq, 0.5 * dq, (i as f32 + 0.5) * dq));
+        points.push(Vec3::splat(i as f32 * dq));
+    }
+    for p in points {
         let (rho, streams) = v.density_and_streams(p);
         assert_eq!(streams, 1, "at {p:?}");
         assert!((rho - mean).abs() < 1e-5 * mean, "{rho}");
