@@ -243,6 +243,7 @@ impl Planes {
 
     /// Clip of a ray from the origin given to [`Planes::with_origin`].
     #[inline]
+    #[allow(clippy::needless_range_loop)] // four faces over parallel arrays
     pub fn clip_from(&self, dist: &[f32; 4], dir: Vec3) -> (f32, f32) {
         let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
         for f in 0..4 {
@@ -266,6 +267,7 @@ impl Planes {
 
     /// Clip of a ray from `origin` along the direction given to [`Planes::with_dir`].
     #[inline]
+    #[allow(clippy::needless_range_loop)] // four faces over parallel arrays
     pub fn clip_at(&self, nd: &[f32; 4], origin: Vec3) -> (f32, f32) {
         let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
         for f in 0..4 {
