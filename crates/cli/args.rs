@@ -71,6 +71,10 @@ pub struct SceneArgs {
     /// Log-spaced depth layers behind the k-buffer (default 64).
     #[arg(long, help_heading = "Phase-space tessellation")]
     pub layers: Option<usize>,
+    /// Level of detail: blocks smaller than this many pixels on screen use a
+    /// 2^r-subsampled Lagrangian grid (off by default).
+    #[arg(long, value_name = "PIXELS", help_heading = "Phase-space tessellation")]
+    pub lod: Option<f32>,
 
     // ---- AMR ----
     /// ExaBricks cells: .cells (int32 x, y, z, level per cell).
@@ -231,7 +235,8 @@ impl SceneArgs {
             || self.particle_mass.is_some()
             || self.tet_mode.is_some()
             || self.k.is_some()
-            || self.layers.is_some();
+            || self.layers.is_some()
+            || self.lod.is_some();
         if has_tet_flags || d.tets.is_some() {
             // Positions on a Lagrangian grid: a tessellation, not RBF particles.
             let t = d.tets.get_or_insert_with(TetsDesc::default);
@@ -244,6 +249,7 @@ impl SceneArgs {
             set(&mut t.mode, self.tet_mode.clone());
             set(&mut t.k, self.k);
             set(&mut t.layers, self.layers);
+            set(&mut t.lod_pixels, self.lod);
         } else if has_particle_flags {
             let p = d.particles.get_or_insert_with(ParticlesDesc::default);
             if let Some(f) = &self.particles {

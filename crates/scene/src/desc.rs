@@ -95,6 +95,10 @@ pub struct TetsDesc {
     pub k: Option<usize>,
     /// Log-spaced depth layers behind the k-buffer (default 64).
     pub layers: Option<usize>,
+    /// Level of detail: blocks (8³ Lagrangian cells) whose screen box is
+    /// smaller than this many pixels are drawn from a 2^r-subsampled grid.
+    /// Off by default.
+    pub lod_pixels: Option<f32>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]

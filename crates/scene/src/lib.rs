@@ -26,7 +26,7 @@ use voxless_particles::{
     Classification, Kernel, ParticleData, ParticleError, ParticleSettings, ParticleVolume,
 };
 use voxless_render::{Light, RenderSettings};
-use voxless_tets::{LagrangianGrid, TetError, TetMode, TetSettings, TetVolume};
+use voxless_tets::{LagrangianGrid, TetError, TetMode, TetOptions, TetSettings, TetVolume};
 use voxless_transfer::{Colormap, ControlPoints, OpacityMap, TransferError, TransferFunction};
 
 pub use desc::*;
@@ -95,7 +95,7 @@ pub enum AnyVolume {
     Particles(Box<ParticleVolume>),
     Amr(Box<AmrVolume>),
     /// A phase-space tessellation and how to render it.
-    Tets(Box<TetVolume>, TetMode),
+    Tets(Box<TetVolume>, TetMode, TetOptions),
 }
 
 /// Runs `$body` with `$v` bound to the concrete volume (monomorphised per kind).
@@ -110,7 +110,7 @@ macro_rules! with_volume {
                 let $v = &**$v;
                 $body
             }
-            AnyVolume::Tets($v, _) => {
+            AnyVolume::Tets($v, ..) => {
                 let $v = &**$v;
                 $body
             }
@@ -143,8 +143,8 @@ impl AnyVolume {
     ) -> Image {
         match self {
             // The exact (or k-buffer) tile renderer replaces sampling.
-            AnyVolume::Tets(v, mode) => {
-                voxless_tets::render::render(&v.mesh, camera, tf, settings, *mode, progress)
+            AnyVolume::Tets(v, mode, opts) => {
+                voxless_tets::render::render(&v.mesh, camera, tf, settings, *mode, *opts, progress)
             }
             _ => with_volume!(self, v => voxless_render::render(v, camera, tf, settings, progress)),
         }
@@ -159,8 +159,8 @@ impl AnyVolume {
         progress: &(dyn Fn(u64, u64) + Sync),
     ) -> Vec<f32> {
         match self {
-            AnyVolume::Tets(v, _) => {
-                voxless_tets::render::project(&v.mesh, camera, width, height, progress)
+            AnyVolume::Tets(v, _, opts) => {
+                voxless_tets::render::project(&v.mesh, camera, width, height, *opts, progress)
             }
             _ => {
                 with_volume!(self, v => voxless_render::project(v, camera, width, height, progress))
@@ -174,7 +174,7 @@ impl AnyVolume {
         match self {
             AnyVolume::Particles(v) => Some(v.total_mass()),
             AnyVolume::Amr(v) => v.exact_integral(),
-            AnyVolume::Tets(v, _) => Some(v.mesh.total_mass()),
+            AnyVolume::Tets(v, ..) => Some(v.mesh.total_mass()),
         }
     }
 
@@ -222,7 +222,7 @@ impl AnyVolume {
                     row
                 })
                 .collect(),
-            AnyVolume::Tets(v, _) => points
+            AnyVolume::Tets(v, ..) => points
                 .par_iter()
                 .flat_map_iter(|&p| {
                     let (rho, streams) = v.density_and_streams(p);
@@ -554,8 +554,16 @@ fn load_tets(t: &TetsDesc, base: &Path) -> Result<AnyVolume, SceneError> {
             ));
         }
     };
-    let v = TetVolume::new(&grid, &settings).map_err(|source| SceneError::Tets { path, source })?;
-    Ok(AnyVolume::Tets(Box::new(v), mode))
+    if let Some(p) = t.lod_pixels {
+        positive("tets.lod_pixels", p)?;
+    }
+    let levels = if t.lod_pixels.is_some() { 3 } else { 0 };
+    let v = TetVolume::new(&grid, &settings, levels)
+        .map_err(|source| SceneError::Tets { path, source })?;
+    let options = TetOptions {
+        lod_pixels: t.lod_pixels,
+    };
+    Ok(AnyVolume::Tets(Box::new(v), mode, options))
 }
 
 fn positive(field: &str, v: f32) -> Result<(), SceneError> {

@@ -30,7 +30,7 @@ pub mod render;
 mod volume;
 
 pub use mesh::{BLOCK, Block, LagrangianGrid, Tet, TetMesh, TetSettings};
-pub use render::TetMode;
+pub use render::{TetMode, TetOptions};
 pub use volume::TetVolume;
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -82,6 +82,9 @@ impl Tet {
 pub struct Block {
     pub tets: std::ops::Range<u32>,
     pub bounds: Aabb,
+    /// Index of the 8³-cell Lagrangian block this group belongs to (the same
+    /// at every level of detail).
+    pub lagrangian: u32,
 }
 
 /// One block's tets grouped by image shift (with their bounds), and its
@@ -115,6 +118,10 @@ pub struct TetMesh {
     pub point_masses: Vec<(Vec3, f64)>,
     /// Mean tet volume (L/N)³/6.
     pub mean_volume: f64,
+    /// Coarser levels of detail: level r (index r − 1) tessellates every
+    /// 2^r-th particle per axis with tet mass × 2^{3r}, its blocks covering the
+    /// same Lagrangian blocks as level 0. Empty unless built by [`TetMesh::with_lod`].
+    pub lod: Vec<TetMesh>,
 }
 
 impl TetMesh {
@@ -142,10 +149,62 @@ impl TetMesh {
                 mass: particle_mass,
             });
         }
+        Ok(TetMesh::build(
+            grid,
+            particle_mass,
+            settings.degenerate_fraction,
+            BLOCK,
+        ))
+    }
+
+    /// Adds up to `levels` coarser levels of detail (each halving N; stops
+    /// when N is odd or the blocks would hold less than one cell).
+    pub fn with_lod(
+        mut self,
+        grid: &LagrangianGrid,
+        levels: usize,
+        settings: &TetSettings,
+    ) -> TetMesh {
+        let particle_mass = self.tet_mass * 6.0;
+        let mut r = 1;
+        while r <= levels && BLOCK >> r >= 1 && grid.n % (1 << r) == 0 && grid.n >> r >= 2 {
+            let step = 1 << r;
+            let nc = grid.n / step;
+            let positions = (0..nc * nc * nc)
+                .map(|c| {
+                    let (i, j, k) = (c / (nc * nc), (c / nc) % nc, c % nc);
+                    grid.positions[((i * step) * grid.n + j * step) * grid.n + k * step]
+                })
+                .collect();
+            let coarse = LagrangianGrid {
+                n: nc,
+                box_size: grid.box_size,
+                positions,
+            };
+            let mass = particle_mass * (step * step * step) as f64;
+            self.lod.push(TetMesh::build(
+                &coarse,
+                mass,
+                settings.degenerate_fraction,
+                BLOCK >> r,
+            ));
+            r += 1;
+        }
+        self
+    }
+
+    /// Tessellates a validated grid with blocks of `block` cells per axis.
+    fn build(
+        grid: &LagrangianGrid,
+        particle_mass: f64,
+        degenerate_fraction: f64,
+        block: usize,
+    ) -> TetMesh {
+        let (n, l) = (grid.n, grid.box_size);
         let tet_mass = particle_mass / 6.0;
         let mean_volume = (l as f64 / n as f64).powi(3) / 6.0;
-        let floor = settings.degenerate_fraction * mean_volume;
-        let nb = n.div_ceil(BLOCK);
+        let floor = degenerate_fraction * mean_volume;
+        let nb = n.div_ceil(block);
         // Per block, in parallel: its tets grouped by image shift.
         let per_block: Vec<BlockTets> = (0..nb * nb * nb)
             .into_par_iter()
@@ -153,9 +212,9 @@ impl TetMesh {
                 let (bi, bj, bk) = (b / (nb * nb), (b / nb) % nb, b % nb);
                 let mut groups: Vec<([i8; 3], Vec<Tet>, Aabb)> = Vec::new();
                 let mut points = Vec::new();
-                for i in bi * BLOCK..((bi + 1) * BLOCK).min(n) {
-                    for j in bj * BLOCK..((bj + 1) * BLOCK).min(n) {
-                        for k in bk * BLOCK..((bk + 1) * BLOCK).min(n) {
+                for i in bi * block..((bi + 1) * block).min(n) {
+                    for j in bj * block..((bj + 1) * block).min(n) {
+                        for k in bk * block..((bk + 1) * block).min(n) {
                             let corners = cell_corners(grid, i, j, k);
                             for t in KUHN {
                                 let v = t.map(|c| corners[c]);
@@ -199,18 +258,19 @@ impl TetMesh {
         let mut tets = Vec::new();
         let mut blocks = Vec::new();
         let mut point_masses = Vec::new();
-        for (groups, points) in per_block {
+        for (b, (groups, points)) in per_block.into_iter().enumerate() {
             for (ts, bounds) in groups {
                 let start = tets.len() as u32;
                 tets.extend(ts);
                 blocks.push(Block {
                     tets: start..tets.len() as u32,
                     bounds,
+                    lagrangian: b as u32,
                 });
             }
             point_masses.extend(points);
         }
-        Ok(TetMesh {
+        TetMesh {
             n,
             box_size: l,
             tet_mass,
@@ -218,7 +278,8 @@ impl TetMesh {
             blocks,
             point_masses,
             mean_volume,
-        })
+            lod: Vec::new(),
+        }
     }
 
     /// The mass inside the box: N³ particles × particle mass. Each tet's

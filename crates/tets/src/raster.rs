@@ -123,38 +123,90 @@ fn corners(b: &Aabb) -> [Vec3; 8] {
 }
 
 /// Everything per frame that does not depend on the tile: each tet's pixel
-/// rectangle (computed once, not once per tile it touches) and, per tile, the
-/// blocks whose screen box overlaps it (block culling).
+/// rectangle (computed once, not once per tile it touches), the level of
+/// detail of each Lagrangian block, and per tile the blocks whose screen box
+/// overlaps it (block culling).
 pub struct Frame {
     pub screen: Screen,
     pub tiles_x: u32,
     pub tiles_y: u32,
-    /// Per tile (row-major), the overlapping blocks.
+    /// Per tile (row-major), the overlapping blocks as `level << 28 | block`.
     pub bins: Vec<Vec<u32>>,
-    /// Per tet, inclusive pixel rect `[x0, x1, y0, y1]`; `x0 > x1` when off screen.
-    rects: Vec<[u16; 4]>,
+    /// Per level, per tet, inclusive pixel rect `[x0, x1, y0, y1]`
+    /// (`x0 > x1` when off screen).
+    rects: Vec<Vec<[u16; 4]>>,
+    /// Blocks drawn at each level (for statistics).
+    pub blocks_per_level: Vec<usize>,
 }
 
+const LEVEL_SHIFT: u32 = 28;
+
 impl Frame {
-    pub fn new(mesh: &TetMesh, camera: &Camera, width: u32, height: u32) -> Frame {
+    /// `lod`: blocks whose screen box is smaller than this many pixels use a
+    /// coarser level (one level per halving), when the mesh has them.
+    pub fn new(
+        mesh: &TetMesh,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        lod: Option<f32>,
+    ) -> Frame {
         use rayon::prelude::*;
         let screen = Screen::new(camera, width, height);
-        let rects = mesh
-            .tets
-            .par_iter()
-            .map(|t| match screen.pixel_rect(&t.v) {
-                Some((x0, x1, y0, y1)) => [x0 as u16, x1 as u16, y0 as u16, y1 as u16],
-                None => [1, 0, 1, 0],
+        let levels: Vec<&TetMesh> = std::iter::once(mesh).chain(mesh.lod.iter()).collect();
+        let rects = levels
+            .iter()
+            .map(|m| {
+                m.tets
+                    .par_iter()
+                    .map(|t| match screen.pixel_rect(&t.v) {
+                        Some((x0, x1, y0, y1)) => [x0 as u16, x1 as u16, y0 as u16, y1 as u16],
+                        None => [1, 0, 1, 0],
+                    })
+                    .collect()
             })
             .collect();
+        // Level per Lagrangian block from its level-0 screen size.
+        let nlag = mesh
+            .blocks
+            .iter()
+            .map(|b| b.lagrangian + 1)
+            .max()
+            .unwrap_or(0) as usize;
+        let mut level_of = vec![0usize; nlag];
+        if let (Some(threshold), true) = (lod, levels.len() > 1) {
+            let mut boxes = vec![Aabb::EMPTY; nlag];
+            for b in &mesh.blocks {
+                boxes[b.lagrangian as usize] = boxes[b.lagrangian as usize].union(b.bounds);
+            }
+            for (l, b) in level_of.iter_mut().zip(&boxes) {
+                let size = match screen.pixel_rect(&corners(b)) {
+                    Some((x0, x1, y0, y1)) => (x1 - x0).max(y1 - y0) as f32 + 1.0,
+                    None if b.is_empty() => 0.0,
+                    None => f32::INFINITY, // off screen: culled anyway
+                };
+                if size < threshold {
+                    let r = 1 + (threshold / size.max(1e-3)).log2().floor() as usize;
+                    *l = r.min(levels.len() - 1);
+                }
+            }
+        }
         let tiles_x = width.div_ceil(TILE);
         let tiles_y = height.div_ceil(TILE);
         let mut bins = vec![Vec::new(); (tiles_x * tiles_y) as usize];
-        for (i, b) in mesh.blocks.iter().enumerate() {
-            if let Some((x0, x1, y0, y1)) = screen.pixel_rect(&corners(&b.bounds)) {
-                for y in y0 / TILE..=y1 / TILE {
-                    for x in x0 / TILE..=x1 / TILE {
-                        bins[(y * tiles_x + x) as usize].push(i as u32);
+        let mut blocks_per_level = vec![0; levels.len()];
+        for (r, m) in levels.iter().enumerate() {
+            for (i, b) in m.blocks.iter().enumerate() {
+                if level_of.get(b.lagrangian as usize).copied().unwrap_or(0) != r {
+                    continue;
+                }
+                if let Some((x0, x1, y0, y1)) = screen.pixel_rect(&corners(&b.bounds)) {
+                    blocks_per_level[r] += 1;
+                    for y in y0 / TILE..=y1 / TILE {
+                        for x in x0 / TILE..=x1 / TILE {
+                            bins[(y * tiles_x + x) as usize]
+                                .push(((r as u32) << LEVEL_SHIFT) | i as u32);
+                        }
                     }
                 }
             }
@@ -165,6 +217,7 @@ impl Frame {
             tiles_y,
             bins,
             rects,
+            blocks_per_level,
         }
     }
 
@@ -319,10 +372,16 @@ pub fn for_each_crossing(
         Projection::Perspective { .. } => Some(frame.screen.camera.eye),
         Projection::Orthographic { .. } => None,
     };
-    for &b in &frame.bins[tile as usize] {
-        let block = &mesh.blocks[b as usize];
+    for &entry in &frame.bins[tile as usize] {
+        let level = (entry >> LEVEL_SHIFT) as usize;
+        let m = if level == 0 {
+            mesh
+        } else {
+            &mesh.lod[level - 1]
+        };
+        let block = &m.blocks[(entry & ((1 << LEVEL_SHIFT) - 1)) as usize];
         let range = block.tets.start as usize..block.tets.end as usize;
-        for (tet, r) in mesh.tets[range.clone()].iter().zip(&frame.rects[range]) {
+        for (tet, r) in m.tets[range.clone()].iter().zip(&frame.rects[level][range]) {
             let (x0, x1) = ((r[0] as u32).max(tx0), (r[1] as u32).min(tx0 + w - 1));
             let (y0, y1) = ((r[2] as u32).max(ty0), (r[3] as u32).min(ty0 + h - 1));
             if x0 > x1 || y0 > y1 {

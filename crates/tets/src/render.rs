@@ -29,6 +29,14 @@ pub enum TetMode {
     KBuffer { k: usize, layers: usize },
 }
 
+/// Options of the tet renderers beyond the integration mode.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TetOptions {
+    /// Level of detail: blocks whose screen box is below this many pixels
+    /// use the mesh's coarser levels ([`TetMesh::with_lod`]). Off when `None`.
+    pub lod_pixels: Option<f32>,
+}
+
 /// Front-to-back compositing of constant-density segments.
 struct Compositor<'a> {
     tf: &'a TransferFunction,
@@ -129,10 +137,11 @@ pub fn render(
     tf: &TransferFunction,
     settings: &RenderSettings,
     mode: TetMode,
+    options: TetOptions,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Image {
     let (w, h) = (settings.width, settings.height);
-    let frame = Frame::new(mesh, camera, w, h);
+    let frame = Frame::new(mesh, camera, w, h, options.lod_pixels);
     let scale = mesh
         .tets
         .iter()
@@ -279,9 +288,10 @@ pub fn project(
     camera: &Camera,
     width: u32,
     height: u32,
+    options: TetOptions,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Vec<f32> {
-    let frame = Frame::new(mesh, camera, width, height);
+    let frame = Frame::new(mesh, camera, width, height, options.lod_pixels);
     let mut out: Vec<f64> = over_tiles(&frame, progress, |i, rays| {
         let mut sum = vec![0.0f64; rays.len()];
         let spans = box_spans(mesh, rays);

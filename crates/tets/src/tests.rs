@@ -80,7 +80,7 @@ fn bad_input_is_a_clear_error() {
 #[test]
 fn uniform_grid_has_mean_density_and_one_stream() {
     let g = grid(6, 2.0, |_| [0.0; 3]);
-    let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+    let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
     let mean = 1.0 / 8.0;
     let mut rng = Lcg(1);
     let mut points: Vec<Vec3> = (0..2000)
@@ -108,10 +108,10 @@ fn axis_camera(l: f32) -> Camera {
 #[test]
 fn projection_of_the_box_conserves_mass() {
     let g = grid(8, 1.0, jitter(3, 0.04));
-    let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+    let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
     for (axis, res) in [(0, 256u32), (1, 200), (2, 320)] {
         let cam = Camera::axis_projection(&Aabb::new(Vec3::ZERO, Vec3::ONE), axis).unwrap();
-        let col = render::project(&v.mesh, &cam, res, res, &|_, _| {});
+        let col = render::project(&v.mesh, &cam, res, res, TetOptions::default(), &|_, _| {});
         let mass: f64 = col.iter().map(|&c| c as f64).sum::<f64>() / (res as f64 * res as f64);
         assert!((mass - 1.0).abs() <= 1e-3, "axis {axis}: {mass}");
     }
@@ -120,7 +120,7 @@ fn projection_of_the_box_conserves_mass() {
 #[test]
 fn sampled_density_integrates_to_the_total_mass() {
     let g = grid(6, 1.0, jitter(5, 0.05));
-    let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+    let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
     let mut errors = Vec::new();
     for m in [16usize, 48] {
         let h = 1.0 / m as f32;
@@ -151,7 +151,7 @@ fn zeldovich(n: usize) -> (LagrangianGrid, impl Fn(f32) -> f32) {
 fn zeldovich_density_matches_the_cell_sum_and_streams() {
     let n = 32;
     let (g, x_of) = zeldovich(n);
-    let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+    let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
     let dq = 1.0 / n as f32;
     let rho_bar = 1.0f64;
     let mut rng = Lcg(9);
@@ -237,7 +237,7 @@ fn zeldovich_error_against_the_analytic_density_halves_with_resolution() {
         let (g, _) = zeldovich(n);
         // Only the x-extent matters: a thin slab of cells suffices, but the
         // tessellation needs the full N³ grid; keep N³ and sample few points.
-        let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+        let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
         let mut total = 0.0;
         let mut count = 0;
         for i in 0..400 {
@@ -335,7 +335,7 @@ fn exact_mode_equals_brute_force_and_kbuffer_converges() {
             .collect(),
         ..g
     };
-    let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+    let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
     let tf = log_tf();
     let cam = Camera::look_at(
         Vec3::new(1.9, 1.4, 2.3),
@@ -346,7 +346,15 @@ fn exact_mode_equals_brute_force_and_kbuffer_converges() {
     .unwrap();
     let s = settings_for(&v, 24, 20);
     let want = brute_force(&v, &cam, &tf, &s);
-    let exact = render::render(&v.mesh, &cam, &tf, &s, TetMode::Exact, &|_, _| {});
+    let exact = render::render(
+        &v.mesh,
+        &cam,
+        &tf,
+        &s,
+        TetMode::Exact,
+        TetOptions::default(),
+        &|_, _| {},
+    );
     let err = |img: &voxless_core::Image| {
         img.pixels
             .iter()
@@ -365,6 +373,7 @@ fn exact_mode_equals_brute_force_and_kbuffer_converges() {
             &tf,
             &s,
             TetMode::KBuffer { k, layers: 32 },
+            TetOptions::default(),
             &|_, _| {},
         );
         let e = img
@@ -385,7 +394,7 @@ fn exact_mode_equals_brute_force_and_kbuffer_converges() {
 #[test]
 fn exact_mode_agrees_with_the_generic_sampled_path() {
     let g = grid(5, 1.0, jitter(13, 0.05));
-    let v = TetVolume::new(&g, &TetSettings::default()).unwrap();
+    let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
     let tf = log_tf();
     let cam = Camera::look_at(
         Vec3::new(2.0, 1.5, 2.5),
@@ -395,7 +404,15 @@ fn exact_mode_agrees_with_the_generic_sampled_path() {
     )
     .unwrap();
     let mut s = settings_for(&v, 16, 16);
-    let exact = render::render(&v.mesh, &cam, &tf, &s, TetMode::Exact, &|_, _| {});
+    let exact = render::render(
+        &v.mesh,
+        &cam,
+        &tf,
+        &s,
+        TetMode::Exact,
+        TetOptions::default(),
+        &|_, _| {},
+    );
     s.step = Some(0.0005);
     let sampled = voxless_render::render(&v, &cam, &tf, &s, &|_, _| {});
     let max = exact
@@ -442,15 +459,15 @@ fn half_box_shift_renders_identically() {
         }
     };
     let shifted = relabel(&shifted);
-    let a = TetVolume::new(&base, &TetSettings::default()).unwrap();
-    let b = TetVolume::new(&shifted, &TetSettings::default()).unwrap();
+    let a = TetVolume::new(&base, &TetSettings::default(), 0).unwrap();
+    let b = TetVolume::new(&shifted, &TetSettings::default(), 0).unwrap();
     // Looking down y with the image covering exactly the box: a shift by half
     // a box in x and z is a periodic relabelling, so the column density is the
     // same map rolled by half the image.
     let cam = Camera::axis_projection(&Aabb::new(Vec3::ZERO, Vec3::ONE), 1).unwrap();
     let res = 64u32;
-    let ca = render::project(&a.mesh, &cam, res, res, &|_, _| {});
-    let cb = render::project(&b.mesh, &cam, res, res, &|_, _| {});
+    let ca = render::project(&a.mesh, &cam, res, res, TetOptions::default(), &|_, _| {});
+    let cb = render::project(&b.mesh, &cam, res, res, TetOptions::default(), &|_, _| {});
     let mut max = 0.0f32;
     for row in 0..res {
         for col in 0..res {
@@ -490,4 +507,55 @@ fn ray_tet_clip_matches_point_sampling() {
         );
     }
     let _ = axis_camera(1.0);
+}
+
+#[test]
+fn lod_conserves_mass_and_approaches_the_full_render() {
+    let g = grid(16, 1.0, jitter(29, 0.02));
+    let v = TetVolume::new(&g, &TetSettings::default(), 3).unwrap();
+    assert_eq!(v.mesh.lod.len(), 3, "levels for N = 16: 8, 4, 2");
+    let cam = axis_camera(1.0);
+    // Every block is below 10⁶ pixels: the coarsest levels are used, and a
+    // projection still carries the whole mass.
+    let opts = TetOptions {
+        lod_pixels: Some(1e6),
+    };
+    let col = render::project(&v.mesh, &cam, 128, 128, opts, &|_, _| {});
+    let mass: f64 = col.iter().map(|&c| c as f64).sum::<f64>() / (128.0 * 128.0);
+    assert!((mass - 1.0).abs() <= 1e-3, "{mass}");
+    // A threshold below every block's size changes nothing.
+    let full = render::project(&v.mesh, &cam, 128, 128, TetOptions::default(), &|_, _| {});
+    let same = render::project(
+        &v.mesh,
+        &cam,
+        128,
+        128,
+        TetOptions {
+            lod_pixels: Some(1.0),
+        },
+        &|_, _| {},
+    );
+    assert_eq!(full, same);
+    // Coarser levels differ from the full mesh, by less as the threshold drops.
+    let diff = |t: f32| {
+        let c = render::project(
+            &v.mesh,
+            &cam,
+            128,
+            128,
+            TetOptions {
+                lod_pixels: Some(t),
+            },
+            &|_, _| {},
+        );
+        c.iter()
+            .zip(&full)
+            .map(|(a, b)| (a - b).abs() as f64)
+            .sum::<f64>()
+    };
+    let (coarse, medium) = (diff(1e6), diff(70.0));
+    assert!(
+        coarse > 0.0 && medium < coarse,
+        "coarse {coarse}, medium {medium}"
+    );
 }

@@ -20,8 +20,16 @@ pub struct TetVolume {
 }
 
 impl TetVolume {
-    pub fn new(grid: &LagrangianGrid, settings: &TetSettings) -> Result<TetVolume, TetError> {
-        let mesh = TetMesh::new(grid, settings)?;
+    /// Tessellates `grid`, with `lod_levels` coarser levels of detail (0 for none).
+    pub fn new(
+        grid: &LagrangianGrid,
+        settings: &TetSettings,
+        lod_levels: usize,
+    ) -> Result<TetVolume, TetError> {
+        let mut mesh = TetMesh::new(grid, settings)?;
+        if lod_levels > 0 {
+            mesh = mesh.with_lod(grid, lod_levels, settings);
+        }
         let boxes: Vec<Aabb> = mesh.tets.par_iter().map(|t| t.bounds()).collect();
         let bvh = Bvh::build(&boxes);
         // The periodic box: image tets fill it exactly, and outside it they
