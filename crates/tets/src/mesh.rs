@@ -167,7 +167,7 @@ impl TetMesh {
     ) -> TetMesh {
         let particle_mass = self.tet_mass * 6.0;
         let mut r = 1;
-        while r <= levels && BLOCK >> r >= 1 && grid.n % (1 << r) == 0 && grid.n >> r >= 2 {
+        while r <= levels && BLOCK >> r >= 1 && grid.n.is_multiple_of(1 << r) && grid.n >> r >= 2 {
             let step = 1 << r;
             let nc = grid.n / step;
             let positions = (0..nc * nc * nc)
