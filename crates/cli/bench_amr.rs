@@ -52,7 +52,7 @@ use voxless_core::{
 use voxless_render::RenderSettings;
 use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
 
-use crate::bench::{bench, count, image_diff, median, ms, print_header, save_png};
+use crate::bench::{count, image_diff, median, ms, print_header, save_png};
 
 #[derive(clap::Args)]
 pub struct AmrArgs {
@@ -415,33 +415,31 @@ fn bench_recon(
             nominal_dt: 0.0,
             hint,
         };
-        let (t_cell, a) = bench(
-            repeats,
-            || (),
-            |_| pts.par_iter().map(|&p| loc.sample(p)).collect::<Vec<_>>(),
-        );
-        let (t_in, r) = bench(
-            repeats,
-            || (),
-            |_| {
-                pts.par_iter()
-                    .zip(&hints)
-                    .map(|(&p, &hint)| match hint {
-                        Interval::NO_HINT => None,
-                        _ => vol.sample_in(p, &interval(hint)).map(|x| x.value),
-                    })
-                    .collect::<Vec<_>>()
-            },
-        );
-        let (t_sample, r2) = bench(
-            repeats,
-            || (),
-            |_| {
-                pts.par_iter()
-                    .map(|&p| vol.sample(p).map(|x| x.value))
-                    .collect::<Vec<_>>()
-            },
-        );
+        // Repeats go round the three variants (see `bench_frames`).
+        let (mut times, mut a, mut r, mut r2) =
+            ([(); 3].map(|_| Vec::new()), vec![], vec![], vec![]);
+        for _ in 0..repeats {
+            let t = Instant::now();
+            a = pts.par_iter().map(|&p| loc.sample(p)).collect::<Vec<_>>();
+            times[0].push(t.elapsed().as_secs_f64());
+            let t = Instant::now();
+            r = pts
+                .par_iter()
+                .zip(&hints)
+                .map(|(&p, &hint)| match hint {
+                    Interval::NO_HINT => None,
+                    _ => vol.sample_in(p, &interval(hint)).map(|x| x.value),
+                })
+                .collect::<Vec<_>>();
+            times[1].push(t.elapsed().as_secs_f64());
+            let t = Instant::now();
+            r2 = pts
+                .par_iter()
+                .map(|&p| vol.sample(p).map(|x| x.value))
+                .collect::<Vec<_>>();
+            times[2].push(t.elapsed().as_secs_f64());
+        }
+        let [t_cell, t_in, t_sample] = times.map(median);
         let (mut max_diff, mut covered, mut one_only) = (0.0f32, 0usize, 0usize);
         for ((x, y), y2) in a.iter().zip(&r).zip(&r2) {
             match (x, y) {
@@ -558,7 +556,6 @@ fn bench_frames(s: &Dataset, vol: &mut AmrVolume, o: &AmrArgs) -> Result<Vec<Str
     let tf_visible =
         |r: Range1| tf.max_opacity(adaptive.normalize(r.lo), adaptive.normalize(r.hi)) > 0.0;
     let onoff = |b: bool| if b { "on" } else { "off" };
-    let mut reference: Option<(f64, Image)> = None;
     // (adaptive, skipping): Some(true/false) = BVH of visible/all regions,
     // None = no skipping at all (every interval sampled).
     let configs = [
@@ -569,26 +566,41 @@ fn bench_frames(s: &Dataset, vol: &mut AmrVolume, o: &AmrArgs) -> Result<Vec<Str
         (false, None),
         (true, None),
     ];
-    let mut rows = Vec::new();
-    for (adapt, skip) in configs {
-        if skip == Some(true) {
-            vol.set_visibility(&tf_visible);
-        } else {
-            vol.set_visibility(&|_| true);
+    // Repeats go round all configurations, so that load from elsewhere on
+    // the machine hits every configuration alike.
+    let mut times = vec![Vec::new(); configs.len()];
+    let mut images = vec![None; configs.len()];
+    let mut in_bvh = vec![0; configs.len()];
+    for rep in 0..o.frame_repeats {
+        for (k, &(adapt, skip)) in configs.iter().enumerate() {
+            if skip == Some(true) {
+                vol.set_visibility(&tf_visible);
+            } else {
+                vol.set_visibility(&|_| true);
+            }
+            in_bvh[k] = vol.visible_region_count();
+            let rs = if adapt { &adaptive } else { &fixed };
+            eprintln!(
+                "amr/{}: rendering ({}/{}), adaptive {}, skipping {}",
+                s.label,
+                rep + 1,
+                o.frame_repeats,
+                onoff(adapt),
+                skip.map_or("none", onoff)
+            );
+            let t = Instant::now();
+            let img = match skip {
+                Some(_) => voxless_render::render(&*vol, &camera, &tf, rs, &|_, _| {}),
+                None => voxless_render::render(&NoSkip(vol), &camera, &tf, rs, &|_, _| {}),
+            };
+            times[k].push(t.elapsed().as_secs_f64());
+            images[k] = Some(img);
         }
-        let in_bvh = vol.visible_region_count();
-        let rs = if adapt { &adaptive } else { &fixed };
-        let what = format!(
-            "adaptive {}, skipping {}",
-            onoff(adapt),
-            skip.map_or("none", onoff)
-        );
-        let setup = || eprintln!("amr/{}: rendering, {what}", s.label);
-        let (t, img) = bench(o.frame_repeats, setup, |_| match skip {
-            Some(_) => voxless_render::render(&*vol, &camera, &tf, rs, &|_, _| {}),
-            None => voxless_render::render(&NoSkip(vol), &camera, &tf, rs, &|_, _| {}),
-        });
-        eprintln!("amr/{}: {what}: {t:.2} s", s.label);
+    }
+    let times: Vec<f64> = times.into_iter().map(median).collect();
+    let images: Vec<Image> = images.into_iter().flatten().collect();
+    let mut rows = Vec::new();
+    for (k, &(adapt, skip)) in configs.iter().enumerate() {
         if let Some(dir) = &o.save {
             let stem = format!(
                 "{}-adaptive-{}-skip-{}",
@@ -596,30 +608,26 @@ fn bench_frames(s: &Dataset, vol: &mut AmrVolume, o: &AmrArgs) -> Result<Vec<Str
                 onoff(adapt),
                 skip.map_or("none", onoff)
             );
-            save_png(&dir.join(format!("{stem}.png")), &img)?;
+            save_png(&dir.join(format!("{stem}.png")), &images[k])?;
         }
-        let (t0, diff) = match &reference {
-            Some((t0, img0)) => (*t0, image_diff(img0, &img).0),
-            None => (t, 0.0),
-        };
+        let diff = image_diff(&images[0], &images[k]).0;
         let skipping = match skip {
             Some(true) => "on (BVH of visible regions)",
             Some(false) => "off (BVH of all regions)",
             None => "none (every interval sampled)",
         };
-        let step = match rs.step {
+        let step = match (if adapt { &adaptive } else { &fixed }).step {
             Some(dt) => format!("{dt:.3e} fixed"),
             None => "½ region finest".into(),
         };
         rows.push(format!(
-            "| {} | {cut:.3} | {} | {skipping} | {in_bvh} | {step} | {t:.2} | {:.2} | {diff:.2e} |",
+            "| {} | {cut:.3} | {} | {skipping} | {} | {step} | {:.2} | {:.2} | {diff:.2e} |",
             s.label,
             onoff(adapt),
-            t0 / t
+            in_bvh[k],
+            times[k],
+            times[0] / times[k]
         ));
-        if reference.is_none() {
-            reference = Some((t, img));
-        }
     }
     vol.set_visibility(&|_| true);
     Ok(rows)

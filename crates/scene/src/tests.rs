@@ -12,6 +12,8 @@ fn example_scenes_parse() {
     let amr = read_scene(&dir.join("amr-euler3d.toml")).unwrap();
     assert_eq!(amr.render.iso, Some(vec![1.1, 2.0]));
     assert!(amr.amr.unwrap().amrclaw.is_some());
+    let dm = read_scene(&dir.join("dark-matter.toml")).unwrap();
+    assert_eq!(dm.tets.unwrap().lagrangian, Some(64));
 }
 
 #[test]
