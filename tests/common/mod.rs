@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+pub use voxless_core::SmallRng as Lcg;
 
 pub struct Scratch(pub PathBuf);
 
@@ -55,17 +56,6 @@ pub fn fails(args: &[&str]) -> String {
         "voxless {args:?} panicked:\n{stderr}"
     );
     stderr
-}
-
-pub struct Lcg(pub u64);
-impl Lcg {
-    pub fn f(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-    }
 }
 
 /// `n` random positions in the unit cube, written as N×3 float32 .npy.

@@ -3,18 +3,8 @@
 #![allow(clippy::needless_range_loop)] // loops over x, y, z read clearest
 
 use super::*;
+use voxless_core::SmallRng as Lcg;
 use voxless_core::{Aabb, IntervalQuery, Range1, Ray, Vec3, Volume};
-
-struct Lcg(u64);
-impl Lcg {
-    fn f(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-    }
-}
 
 /// A multi-level grid over [0, 64)³ finest units: level-3 cells, some refined
 /// to 2, 1 and 0 (so level jumps of up to three occur where a refined cell

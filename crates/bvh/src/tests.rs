@@ -1,24 +1,10 @@
 use super::*;
-
-/// A small deterministic generator so tests need no dependency.
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-    }
-    fn vec(&mut self) -> Vec3 {
-        Vec3::new(self.next(), self.next(), self.next())
-    }
-}
+use voxless_core::SmallRng as Lcg;
 
 fn random_boxes(n: usize, seed: u64, max_r: f32) -> Vec<Aabb> {
     let mut rng = Lcg(seed);
     (0..n)
-        .map(|_| Aabb::around(rng.vec(), rng.next() * max_r))
+        .map(|_| Aabb::around(rng.v(), rng.f() * max_r))
         .collect()
 }
 
@@ -30,7 +16,7 @@ fn point_query_equals_brute_force() {
         bvh.validate(&prims).unwrap();
         let mut rng = Lcg(99);
         for _ in 0..500 {
-            let p = rng.vec();
+            let p = rng.v();
             let mut got = Vec::new();
             bvh.point_query(p, |i| got.push(i));
             got.sort_unstable();
@@ -48,8 +34,8 @@ fn ray_query_equals_brute_force() {
     let bvh = Bvh::build(&prims);
     let mut rng = Lcg(3);
     for _ in 0..200 {
-        let o = rng.vec() * 3.0 - Vec3::ONE;
-        let d = (rng.vec() - Vec3::splat(0.5)).normalized();
+        let o = rng.v() * 3.0 - Vec3::ONE;
+        let d = (rng.v() - Vec3::splat(0.5)).normalized();
         let ray = Ray::new(o, d);
         let t = Range1::new(0.0, 10.0);
         let mut got = Vec::new();
@@ -74,7 +60,7 @@ fn refit_after_growth_stays_valid_and_exact() {
     bvh.validate(&prims).unwrap();
     let mut rng = Lcg(11);
     for _ in 0..300 {
-        let p = rng.vec();
+        let p = rng.v();
         let mut got = Vec::new();
         bvh.point_query(p, |i| got.push(i));
         got.sort_unstable();

@@ -10,12 +10,14 @@ pub mod camera;
 pub mod image;
 pub mod macrogrid;
 pub mod math;
+pub mod rng;
 pub mod volume;
 
 pub use camera::{Camera, CameraError, Projection};
 pub use image::{Image, linear_to_srgb, srgb_to_linear};
 pub use macrogrid::MacroGrid;
 pub use math::{Aabb, Range1, Ray, Vec3};
+pub use rng::SmallRng;
 pub use volume::{
     Attribute, Interval, IntervalQuery, Sample, Volume, quadrature_line_integral, simpson,
 };

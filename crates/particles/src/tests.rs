@@ -3,22 +3,9 @@
 //! brute-force sum over all particles written from the kernel definitions.
 
 use super::*;
+use voxless_core::SmallRng as Lcg;
 use voxless_core::{Aabb, Range1, Ray, Vec3, Volume};
 use voxless_transfer::{Colormap, ControlPoints, OpacityMap, TransferFunction};
-
-struct Lcg(u64);
-impl Lcg {
-    fn f(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-    }
-    fn v(&mut self) -> Vec3 {
-        Vec3::new(self.f(), self.f(), self.f())
-    }
-}
 
 fn random_data(n: usize, seed: u64) -> ParticleData {
     let mut rng = Lcg(seed);

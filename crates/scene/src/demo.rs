@@ -1,30 +1,14 @@
 //! Built-in demo particles: a two-armed spiral galaxy with a bulge, so the
 //! main command works on a fresh machine with no data files.
 
-use voxless_core::Vec3;
+use voxless_core::{SmallRng, Vec3};
 use voxless_particles::ParticleData;
-
-/// Deterministic xorshift-style generator (no dependency, same data everywhere).
-struct Rng(u64);
-impl Rng {
-    fn uniform(&mut self) -> f32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        ((self.0 >> 40) as f32 + 0.5) / (1u64 << 24) as f32
-    }
-    /// Standard normal by Box–Muller.
-    fn normal(&mut self) -> f32 {
-        let (a, b) = (self.uniform(), self.uniform());
-        (-2.0 * a.ln()).sqrt() * (std::f32::consts::TAU * b).cos()
-    }
-}
 
 /// `n` particles: 20% in a Gaussian bulge, the rest along two logarithmic
 /// spiral arms in a thin disc of radius ~1. The attribute is a "temperature"
 /// that is high in the bulge and along the arm ridges.
 pub fn galaxy(n: usize) -> ParticleData {
-    let mut rng = Rng(0x5eed_1234_abcd_ef01);
+    let mut rng = SmallRng(0x5eed_1234_abcd_ef01);
     let mut positions = Vec::with_capacity(n);
     let mut attribute = Vec::with_capacity(n);
     for i in 0..n {
@@ -34,7 +18,7 @@ pub fn galaxy(n: usize) -> ParticleData {
             attribute.push(1.0 - (p.length() / 0.5).min(1.0) * 0.5 + 0.1 * rng.normal());
         } else {
             let arm = (i % 2) as f32 * std::f32::consts::PI;
-            let r = 0.1 + 0.9 * rng.uniform().sqrt();
+            let r = 0.1 + 0.9 * rng.f().sqrt();
             // Logarithmic spiral: angle grows with ln r; scatter off the ridge.
             let off = rng.normal() * 0.25;
             let theta = arm + 2.2 * (r / 0.1).ln() + off;

@@ -3,20 +3,10 @@
 //! brute-force renderer that tests every tet against every ray.
 
 use super::*;
+use voxless_core::SmallRng as Lcg;
 use voxless_core::{Aabb, Camera, Range1, Ray, Vec3, Volume};
 use voxless_render::RenderSettings;
 use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
-
-struct Lcg(u64);
-impl Lcg {
-    fn f(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-    }
-}
 
 /// A grid with positions `q + displacement(q)`, wrapped into the box.
 fn grid(n: usize, l: f32, disp: impl Fn([f32; 3]) -> [f32; 3]) -> LagrangianGrid {
@@ -255,6 +245,14 @@ fn zeldovich_error_against_the_analytic_density_halves_with_resolution() {
     );
 }
 
+/// Largest per-channel difference between two RGBA images.
+fn max_abs_diff(a: &[[f32; 4]], b: &[[f32; 4]]) -> f32 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(p, q)| (0..4).map(move |c| (p[c] - q[c]).abs()))
+        .fold(0.0, f32::max)
+}
+
 fn log_tf() -> TransferFunction {
     TransferFunction::new(
         Colormap::preset("inferno").unwrap(),
@@ -355,13 +353,7 @@ fn exact_mode_equals_brute_force_and_kbuffer_converges() {
         TetOptions::default(),
         &|_, _| {},
     );
-    let err = |img: &voxless_core::Image| {
-        img.pixels
-            .iter()
-            .zip(&want)
-            .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max))
-            .fold(0.0f32, f32::max)
-    };
+    let err = |img: &voxless_core::Image| max_abs_diff(&img.pixels, &want);
     assert!(err(&exact) <= 1e-5, "exact vs brute force: {}", err(&exact));
     assert!(want.iter().any(|p| p[3] > 0.05), "the mesh is visible");
     // The k-buffer's error falls as k grows, and vanishes once k holds everything.
@@ -415,12 +407,7 @@ fn exact_mode_agrees_with_the_generic_sampled_path() {
     );
     s.step = Some(0.0005);
     let sampled = voxless_render::render(&v, &cam, &tf, &s, &|_, _| {});
-    let max = exact
-        .pixels
-        .iter()
-        .zip(&sampled.pixels)
-        .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max))
-        .fold(0.0f32, f32::max);
+    let max = max_abs_diff(&exact.pixels, &sampled.pixels);
     assert!(max <= 5e-3, "exact vs sampled (step 5e-4): {max}");
 }
 
@@ -590,12 +577,7 @@ fn uniform_grid_shifted_by_half_a_box_renders_identically() {
             )
         })
         .collect();
-    let max = images[0]
-        .pixels
-        .iter()
-        .zip(&images[1].pixels)
-        .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max))
-        .fold(0.0f32, f32::max);
+    let max = max_abs_diff(&images[0].pixels, &images[1].pixels);
     assert!(images[0].pixels.iter().any(|p| p[3] > 0.1), "visible");
     assert!(max <= 1e-5, "max difference {max}");
 }
