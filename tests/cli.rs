@@ -493,3 +493,80 @@ fn dam_break_projection_conserves_mass() {
         "Σ column × area {integral} vs Σm {total_mass}"
     );
 }
+
+#[test]
+fn time_series_renders_numbered_frames_with_fixed_ranges() {
+    let s = Scratch::new("series");
+    // Three frames with different particle counts and a per-frame attribute.
+    for (f, n) in [(0usize, 400usize), (1, 450), (2, 380)] {
+        write_positions(&s.path(&format!("step_{f}.npy")), n, 10 + f as u64);
+        let attr: Vec<f32> = (0..n).map(|i| (i as f32 * 0.1 + f as f32).sin()).collect();
+        write_values(&s.path(&format!("temp_{f}.npy")), &attr);
+    }
+    let pattern = s.str("step_%d.npy");
+    let attr = s.str("temp_*.npy");
+    let stderr = ok(&[
+        "render",
+        "--particles",
+        &pattern,
+        "--attribute",
+        &attr,
+        "--radius",
+        "0.1",
+        "--size",
+        "32",
+        "24",
+        "--frames",
+        "0..2",
+        "-o",
+        &s.str("out.png"),
+    ]);
+    assert!(stderr.contains("rendered 3 frames"), "{stderr}");
+    let images: Vec<Vec<u8>> = (0..3)
+        .map(|f| std::fs::read(s.path(&format!("out_{f:04}.png"))).unwrap())
+        .collect();
+    assert_ne!(images[0], images[1], "frames differ");
+    // --frame N renders one frame; a printf output pattern is filled in.
+    ok(&[
+        "render",
+        "--particles",
+        &pattern,
+        "--radius",
+        "0.1",
+        "--size",
+        "32",
+        "24",
+        "--frame",
+        "1",
+        "-o",
+        &s.str("one.png"),
+    ]);
+    assert!(s.path("one.png").exists());
+    ok(&[
+        "render",
+        "--particles",
+        &pattern,
+        "--radius",
+        "0.1",
+        "--size",
+        "16",
+        "16",
+        "--frames",
+        "1..2",
+        "-o",
+        &s.str("f_%03d.png"),
+    ]);
+    assert!(s.path("f_001.png").exists() && s.path("f_002.png").exists());
+    let e = fails(&[
+        "render",
+        "--particles",
+        &pattern,
+        "--radius",
+        "0.1",
+        "--frames",
+        "0..5",
+        "-o",
+        &s.str("x.png"),
+    ]);
+    assert!(e.contains("3 frame"), "{e}");
+}

@@ -33,6 +33,7 @@
 //!   for an SPH dam-break snapshot (`positions.npy`, `h.npy`, `mass.npy`,
 //!   `speed.npy`; cubic-spline kernel with radius h, weights = mass).
 //! - `bench amr`: AMR cells (see `bench_amr.rs`).
+//! - `bench tets`: phase-space tessellations (see `bench_tets.rs`).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -74,6 +75,10 @@ enum Which {
     /// cell location vs via regions (Table 3), and frame time with adaptive
     /// sampling and TF space skipping on and off.
     Amr(crate::bench_amr::AmrArgs),
+    /// Phase-space tessellations: build, projection and exact frame times
+    /// (64³ JaxPM run, optionally a refined 128³), block culling, k-buffer
+    /// size and level of detail against exact mode.
+    Tets(crate::bench_tets::TetsArgs),
 }
 
 #[derive(clap::Args)]
@@ -149,6 +154,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             println!();
         }
         Which::Amr(o) => crate::bench_amr::run(o)?,
+        Which::Tets(o) => crate::bench_tets::run(o)?,
     }
     Ok(())
 }

@@ -4,6 +4,7 @@
 mod args;
 mod bench;
 mod bench_amr;
+mod bench_tets;
 mod progress;
 
 use std::path::{Path, PathBuf};
@@ -40,9 +41,18 @@ enum Command {
     },
     /// Render a scene (TOML file and/or flags) to an image.
     Render {
-        /// Output image (.png, or .exr for linear float RGBA).
+        /// Output image (.png, or .exr for linear float RGBA). With --frames,
+        /// `out.png` becomes out_0000.png, out_0001.png, … (or give a
+        /// printf pattern such as frame_%03d.png).
         #[arg(short, long, default_value = "out.png")]
         output: PathBuf,
+        /// Render frames A through B of a time series (the data path is a
+        /// pattern like step_%04d.npy, a glob, or a directory).
+        #[arg(long, value_name = "A..B", conflicts_with = "frame")]
+        frames: Option<String>,
+        /// Render only frame N of a time series.
+        #[arg(long, value_name = "N")]
+        frame: Option<usize>,
         #[command(flatten)]
         scene: SceneArgs,
     },
@@ -130,9 +140,18 @@ fn run(cli: Cli) -> Result<()> {
             desc.light.get_or_insert_with(Default::default);
             render_to(&resolve(&desc, &base)?, &output)
         }
-        Command::Render { output, scene } => {
+        Command::Render {
+            output,
+            frames,
+            frame,
+            scene,
+        } => {
             let (desc, base) = scene.scene()?;
-            render_to(&resolve(&desc, &base)?, &output)
+            match (frames, frame) {
+                (Some(range), _) => render_sequence(&desc, &base, &range, &output),
+                (None, Some(n)) => render_to(&resolve_frame(&desc, &base, n)?, &output),
+                (None, None) => render_to(&resolve(&desc, &base)?, &output),
+            }
         }
         Command::Sample {
             points,
@@ -211,8 +230,16 @@ fn run(cli: Cli) -> Result<()> {
 }
 
 fn resolve(desc: &voxless_scene::SceneDesc, base: &Path) -> Result<LoadedScene> {
+    resolve_frame(desc, base, 0)
+}
+
+fn resolve_frame(
+    desc: &voxless_scene::SceneDesc,
+    base: &Path,
+    frame: usize,
+) -> Result<LoadedScene> {
     let t = Instant::now();
-    let s = voxless_scene::resolve(desc, base)?;
+    let s = voxless_scene::resolve_frame(desc, base, frame)?;
     for n in &s.notes {
         eprintln!("note: {n}");
     }
@@ -249,6 +276,88 @@ fn render_to(s: &LoadedScene, output: &Path) -> Result<()> {
         .render(&s.camera, &s.tf, st, &|d, _| progress.set(d));
     progress.finish();
     let secs = t.elapsed().as_secs_f64();
+    write_image(output, &image, s.background)?;
+    eprintln!(
+        "rendered {}×{} at {} spp in {secs:.2}s → {}",
+        st.width,
+        st.height,
+        st.spp,
+        output.display()
+    );
+    Ok(())
+}
+
+/// Renders frames `range` (A..B, inclusive) to numbered images with one
+/// progress bar. Camera, value range and attribute range come from frame A
+/// and stay fixed, so the sequence does not flicker.
+fn render_sequence(
+    desc: &voxless_scene::SceneDesc,
+    base: &Path,
+    range: &str,
+    output: &Path,
+) -> Result<()> {
+    let range = voxless_scene::frames::parse_range(range)?;
+    let count = voxless_scene::frame_count(desc, base)?;
+    if *range.end() >= count {
+        bail!(
+            "--frames {}..{}: the data has {count} frame(s), 0..{}",
+            range.start(),
+            range.end(),
+            count - 1
+        );
+    }
+    let mut scene = resolve_frame(desc, base, *range.start())?;
+    let frames = range.end() - range.start() + 1;
+    let progress = Progress::new("rendering frames", frames as u64);
+    let t = Instant::now();
+    for (k, f) in range.clone().enumerate() {
+        if k > 0 {
+            scene.load_frame(desc, base, f)?;
+        }
+        let image = scene
+            .volume
+            .render(&scene.camera, &scene.tf, &scene.settings, &|_, _| {});
+        write_image(&frame_path(output, f), &image, scene.background)?;
+        progress.set(k as u64 + 1);
+    }
+    progress.finish();
+    eprintln!(
+        "rendered {frames} frames in {:.2}s → {}",
+        t.elapsed().as_secs_f64(),
+        frame_path(output, *range.start()).display()
+    );
+    Ok(())
+}
+
+/// `out.png` → `out_0007.png`; a printf pattern (`f_%03d.png`) is filled in.
+fn frame_path(output: &Path, frame: usize) -> PathBuf {
+    let name = output
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let name = if let Some(at) = name.find('%') {
+        let rest = &name[at + 1..];
+        match rest.find('d') {
+            Some(d) => {
+                let width: usize = rest[..d].trim_start_matches('0').parse().unwrap_or(0);
+                format!("{}{:0width$}{}", &name[..at], frame, &rest[d + 1..])
+            }
+            None => name,
+        }
+    } else {
+        let stem = output
+            .file_stem()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        match output.extension() {
+            Some(e) => format!("{stem}_{frame:04}.{}", e.to_string_lossy()),
+            None => format!("{stem}_{frame:04}"),
+        }
+    };
+    output.with_file_name(name)
+}
+
+fn write_image(output: &Path, image: &voxless_core::Image, background: [f32; 3]) -> Result<()> {
     if is_exr(output) {
         voxless_io::write_exr_rgba(
             output,
@@ -261,16 +370,9 @@ fn render_to(s: &LoadedScene, output: &Path) -> Result<()> {
             output,
             image.width,
             image.height,
-            &image.to_srgb8(s.background),
+            &image.to_srgb8(background),
         )?;
     }
-    eprintln!(
-        "rendered {}×{} at {} spp in {secs:.2}s → {}",
-        st.width,
-        st.height,
-        st.spp,
-        output.display()
-    );
     Ok(())
 }
 

@@ -476,3 +476,42 @@ fn weight_map_scales_each_kernel() {
         assert!((got - phi).abs() <= 1e-5 * phi.max(1e-3), "{got} vs {phi}");
     }
 }
+
+#[test]
+fn frames_rebuild_in_place_with_a_fixed_attribute_range() {
+    let first = random_data(3000, 31);
+    let mut vol = ParticleVolume::new(first, ParticleSettings::default()).unwrap();
+    let range = vol.attribute_range().unwrap();
+    let nodes = vol.bvh().nodes().as_ptr();
+    // The next frame has fewer particles and a wider attribute spread.
+    let mut next = random_data(2500, 32);
+    for a in next.attribute.as_mut().unwrap() {
+        *a *= 3.0;
+    }
+    vol.load_frame(next.clone()).unwrap();
+    vol.validate().unwrap();
+    assert_eq!(vol.len(), 2500);
+    assert_eq!(
+        vol.attribute_range(),
+        Some(range),
+        "no per-frame autoranging"
+    );
+    assert_eq!(
+        vol.bvh().nodes().as_ptr(),
+        nodes,
+        "the node buffer is reused"
+    );
+    // Fields follow the new particles exactly.
+    let mut rng = Lcg(33);
+    for _ in 0..500 {
+        let p = rng.v();
+        let (phi, ..) = brute_force(&next, Kernel::Gaussian3, p);
+        assert!((vol.density(p) as f64 - phi).abs() <= 1e-5 * phi.max(1e-3));
+    }
+    // A bad frame is refused and leaves the volume as it was.
+    let mut bad = random_data(100, 34);
+    bad.positions[7].x = f32::NAN;
+    assert!(vol.load_frame(bad).is_err());
+    assert_eq!(vol.len(), 2500);
+    vol.validate().unwrap();
+}

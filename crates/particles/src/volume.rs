@@ -153,6 +153,45 @@ impl ParticleVolume {
     /// Validates `data`, sorts it along a Hilbert curve, and builds the
     /// clusters, BVH and macrocells.
     pub fn new(data: ParticleData, settings: ParticleSettings) -> Result<Self, ParticleError> {
+        Self::build(data, settings, Bvh::default())
+    }
+
+    /// Replaces the particles with the next frame of a time series: the
+    /// settings stay, and so does the attribute range (no flicker from
+    /// per-frame autoranging; a range set in the settings still wins). The
+    /// BVH is rebuilt into its existing buffers, which do not reallocate
+    /// unless the particle count grows. On error the volume is unchanged.
+    pub fn load_frame(&mut self, data: ParticleData) -> Result<(), ParticleError> {
+        let mut settings = self.settings.clone();
+        if settings.attribute_range.is_none() {
+            settings.attribute_range = self.attribute_range;
+        }
+        let bvh = std::mem::take(&mut self.bvh);
+        match Self::build(data, settings, bvh) {
+            Ok(mut next) => {
+                // Keep the caller's own settings (an attribute range that was
+                // only inherited for this frame is not written back).
+                next.settings.attribute_range = self.settings.attribute_range;
+                let colors_wanted = !self.colors.is_empty();
+                *self = next;
+                if colors_wanted {
+                    self.colors.clear(); // re-classified by the caller (`classify`)
+                }
+                Ok(())
+            }
+            Err(e) => {
+                // Restore the tree that was lent to the failed build.
+                self.bvh = Bvh::build(&self.cluster_bounds());
+                Err(e)
+            }
+        }
+    }
+
+    fn build(
+        data: ParticleData,
+        settings: ParticleSettings,
+        bvh: Bvh,
+    ) -> Result<Self, ParticleError> {
         check_settings(&settings)?;
         let n = data.positions.len();
         if n == 0 {
@@ -261,7 +300,7 @@ impl ParticleVolume {
             weight: Vec::new(),
             packed: Vec::new(),
             colors: Vec::new(),
-            bvh: Bvh::default(),
+            bvh,
             grid: MacroGrid::with_cell_size(Aabb::EMPTY, 1.0, 1),
             value_range: Range1::new(0.0, 0.0),
             attribute_range,
@@ -269,7 +308,8 @@ impl ParticleVolume {
         };
         vol.derive_radii_and_weights();
         vol.check_support()?;
-        vol.bvh = Bvh::build(&vol.cluster_bounds());
+        let boxes = vol.cluster_bounds();
+        vol.bvh.rebuild(&boxes);
         vol.derive_acceleration();
         Ok(vol)
     }

@@ -14,6 +14,7 @@
 
 pub mod demo;
 pub mod desc;
+pub mod frames;
 mod load;
 
 use std::path::{Path, PathBuf};
@@ -264,8 +265,17 @@ pub struct LoadedScene {
 }
 
 /// Loads the data named by `desc` (paths relative to `base`) and fills every
-/// default.
+/// default. For a time series, this is its first frame.
 pub fn resolve(desc: &SceneDesc, base: &Path) -> Result<LoadedScene, SceneError> {
+    resolve_frame(desc, base, 0)
+}
+
+/// [`resolve`] at frame `frame` of a time series.
+pub fn resolve_frame(
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+) -> Result<LoadedScene, SceneError> {
     let mut notes = Vec::new();
     let tf = transfer_function(&desc.transfer)?;
     let sources = [
@@ -281,7 +291,7 @@ pub fn resolve(desc: &SceneDesc, base: &Path) -> Result<LoadedScene, SceneError>
     }
     let volume = match (&desc.particles, &desc.amr, &desc.tets) {
         (Some(p), _, _) => {
-            let mut volume = load_particles(p, base, &mut notes)?;
+            let mut volume = load_particles(p, base, &mut notes, frame)?;
             volume.classify(&tf);
             AnyVolume::Particles(Box::new(volume))
         }
@@ -619,16 +629,38 @@ fn control_points(
         .transpose()
 }
 
-fn load_particles(
-    p: &ParticlesDesc,
-    base: &Path,
-    notes: &mut Vec<String>,
-) -> Result<ParticleVolume, SceneError> {
-    let kernel = parse_kernel(p)?;
+/// Particle arrays of frame `frame`, the file to blame for bad positions, and
+/// the files that supplied each per-particle array.
+struct FrameData {
+    data: ParticleData,
+    main_file: PathBuf,
+    files: Vec<(&'static str, PathBuf)>,
+}
+
+/// The file of `spec` for frame `frame`: the `frame`-th of a sequence, or the
+/// file itself (the same for every frame).
+fn frame_file(spec: &str, base: &Path, frame: usize) -> Result<PathBuf, SceneError> {
+    let files = frames::expand(spec, base)?;
+    if files.len() == 1 && !frames::is_sequence(spec, base) {
+        return Ok(files[0].clone());
+    }
+    files.get(frame).cloned().ok_or_else(|| {
+        SceneError::data(
+            base.join(spec),
+            format!(
+                "frame {frame} requested, but the pattern matches {} files (frames 0..{})",
+                files.len(),
+                files.len() - 1
+            ),
+        )
+    })
+}
+
+fn read_frame(p: &ParticlesDesc, base: &Path, frame: usize) -> Result<FrameData, SceneError> {
     let mut files: Vec<(&'static str, PathBuf)> = Vec::new();
     let (data, main_file) = match (&p.file, p.demo.unwrap_or(false)) {
         (Some(f), _) => {
-            let path = base.join(f);
+            let path = frame_file(f, base, frame)?;
             let (positions, source) = load::read_positions(&path)?;
             let n = positions.len();
             let mut data = ParticleData {
@@ -640,7 +672,13 @@ fn load_particles(
              -> Result<Option<Vec<f32>>, SceneError> {
                 spec.as_ref()
                     .map(|s| {
-                        let (v, path) = load::read_per_particle(s, base, &source, n, what)?;
+                        // A sequence of per-particle files follows the frames.
+                        let spec = if frames::is_sequence(s, base) {
+                            frame_file(s, base, frame)?.to_string_lossy().into_owned()
+                        } else {
+                            s.clone()
+                        };
+                        let (v, path) = load::read_per_particle(&spec, base, &source, n, what)?;
                         files.push((what, path));
                         Ok(v)
                     })
@@ -659,11 +697,41 @@ fn load_particles(
             ));
         }
     };
-    let radius = match (p.radius, &data.radii) {
+    Ok(FrameData {
+        data,
+        main_file,
+        files,
+    })
+}
+
+/// Attributes a particle error to the file that holds the bad values.
+fn blame(main_file: PathBuf, files: &[(&str, PathBuf)], source: ParticleError) -> SceneError {
+    let blamed = |what: &str| files.iter().find(|f| f.0 == what).map(|f| f.1.clone());
+    let path = match &source {
+        ParticleError::BadRadius { .. } => blamed("radii"),
+        ParticleError::BadWeight { .. } => blamed("weights"),
+        ParticleError::NonFiniteValue { what, .. } | ParticleError::LengthMismatch { what, .. } => {
+            blamed(what)
+        }
+        _ => None,
+    }
+    .unwrap_or(main_file);
+    SceneError::Particles { path, source }
+}
+
+fn load_particles(
+    p: &ParticlesDesc,
+    base: &Path,
+    notes: &mut Vec<String>,
+    frame: usize,
+) -> Result<ParticleVolume, SceneError> {
+    let kernel = parse_kernel(p)?;
+    let fd = read_frame(p, base, frame)?;
+    let radius = match (p.radius, &fd.data.radii) {
         (Some(r), _) => r,
         (None, Some(_)) => 1.0,
         (None, None) => {
-            let r = default_radius(&data.positions, kernel);
+            let r = default_radius(&fd.data.positions, kernel);
             notes.push(format!(
                 "no radius given: using {r:.4} ({} kernel, support = 2.5 × mean particle spacing)",
                 kernel.name()
@@ -694,19 +762,49 @@ fn load_particles(
         attribute_range,
         classification,
     };
-    ParticleVolume::new(data, settings).map_err(|source| {
-        // Blame the file that holds the bad values.
-        let blamed = |what: &str| files.iter().find(|f| f.0 == what).map(|f| f.1.clone());
-        let path = match &source {
-            ParticleError::BadRadius { .. } => blamed("radii"),
-            ParticleError::BadWeight { .. } => blamed("weights"),
-            ParticleError::NonFiniteValue { what, .. }
-            | ParticleError::LengthMismatch { what, .. } => blamed(what),
-            _ => None,
-        }
-        .unwrap_or(main_file);
-        SceneError::Particles { path, source }
-    })
+    let FrameData {
+        data,
+        main_file,
+        files,
+    } = fd;
+    ParticleVolume::new(data, settings).map_err(|source| blame(main_file, &files, source))
+}
+
+/// Number of frames the scene's data source names (1 unless its path is a
+/// sequence; see [`frames`]).
+pub fn frame_count(desc: &SceneDesc, base: &Path) -> Result<usize, SceneError> {
+    match &desc.particles {
+        Some(ParticlesDesc { file: Some(f), .. }) => Ok(frames::expand(f, base)?.len()),
+        _ => Ok(1),
+    }
+}
+
+impl LoadedScene {
+    /// Moves a particle scene to frame `frame` of its sequence: the BVH is
+    /// rebuilt in its buffers, and camera, value range and attribute range stay
+    /// as resolved for the first frame, so a sequence does not flicker.
+    pub fn load_frame(
+        &mut self,
+        desc: &SceneDesc,
+        base: &Path,
+        frame: usize,
+    ) -> Result<(), SceneError> {
+        let (AnyVolume::Particles(v), Some(p)) = (&mut self.volume, &desc.particles) else {
+            return Err(SceneError::setting(
+                "frames",
+                "time series are supported for particle data",
+            ));
+        };
+        let FrameData {
+            data,
+            main_file,
+            files,
+        } = read_frame(p, base, frame)?;
+        v.load_frame(data)
+            .map_err(|source| blame(main_file, &files, source))?;
+        v.classify(&self.tf);
+        Ok(())
+    }
 }
 
 /// Support radius 2.5× the mean particle spacing, converted to the kernel's

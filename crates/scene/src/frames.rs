@@ -1,0 +1,177 @@
+//! Time series: a data path that names many frames.
+//!
+//! A path is a sequence when it is
+//! - a printf-style pattern, `frame_%04d.npy` or `frame_%d.npy`: every file
+//!   in that directory whose name is the prefix, a number, then the suffix;
+//! - a glob in the file name, `frames/step_*.npy` (`*` and `?`);
+//! - a directory: every `.npy` or `.csv` file in it.
+//!
+//! Frames are ordered by the number in their name (then by name), and frame
+//! `i` is the `i`-th of that order. Any other path is a single frame.
+
+use std::path::{Path, PathBuf};
+
+use crate::SceneError;
+
+/// Whether `spec` names a sequence rather than one file.
+pub fn is_sequence(spec: &str, base: &Path) -> bool {
+    let name = Path::new(spec)
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    name.contains('%') || name.contains('*') || name.contains('?') || base.join(spec).is_dir()
+}
+
+/// The files of `spec` in frame order (one file when it is not a sequence).
+pub fn expand(spec: &str, base: &Path) -> Result<Vec<PathBuf>, SceneError> {
+    let full = base.join(spec);
+    if !is_sequence(spec, base) {
+        return Ok(vec![full]);
+    }
+    let (dir, matcher): (PathBuf, Box<dyn Fn(&str) -> bool>) = if full.is_dir() {
+        let m = |n: &str| n.ends_with(".npy") || n.ends_with(".csv");
+        (full.clone(), Box::new(m))
+    } else {
+        let dir = full
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_else(|| PathBuf::from("."));
+        let name = full
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        if let Some(at) = name.find('%') {
+            // %d, %4d, %04d: prefix, digits, suffix.
+            let rest = &name[at + 1..];
+            let spec_len = rest.find('d').ok_or_else(|| {
+                SceneError::data(
+                    &full,
+                    "a frame pattern needs a %d (or %04d) for the frame number",
+                )
+            })?;
+            let (prefix, suffix) = (name[..at].to_string(), rest[spec_len + 1..].to_string());
+            let m = move |n: &str| {
+                n.len() > prefix.len() + suffix.len()
+                    && n.starts_with(&prefix)
+                    && n.ends_with(&suffix)
+                    && n[prefix.len()..n.len() - suffix.len()]
+                        .bytes()
+                        .all(|b| b.is_ascii_digit())
+            };
+            (dir, Box::new(m))
+        } else {
+            let pattern = name.clone();
+            (dir, Box::new(move |n: &str| wildcard(&pattern, n)))
+        }
+    };
+    let entries = std::fs::read_dir(&dir).map_err(|source| voxless_io::IoError::Io {
+        path: dir.clone(),
+        source,
+    })?;
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.is_file() && p.file_name().is_some_and(|n| matcher(&n.to_string_lossy())))
+        .collect();
+    files.sort_by_key(|p| {
+        let name = p
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        (last_number(&name), name)
+    });
+    if files.is_empty() {
+        return Err(SceneError::data(&full, "no files match this frame pattern"));
+    }
+    Ok(files)
+}
+
+/// `*` matches any run, `?` one character.
+fn wildcard(pattern: &str, name: &str) -> bool {
+    let (p, n): (Vec<char>, Vec<char>) = (pattern.chars().collect(), name.chars().collect());
+    // Classic two-pointer match with backtracking to the last `*`.
+    let (mut i, mut j, mut star, mut mark) = (0, 0, None, 0);
+    while j < n.len() {
+        if i < p.len() && (p[i] == '?' || p[i] == n[j]) {
+            i += 1;
+            j += 1;
+        } else if i < p.len() && p[i] == '*' {
+            star = Some(i);
+            mark = j;
+            i += 1;
+        } else if let Some(s) = star {
+            i = s + 1;
+            mark += 1;
+            j = mark;
+        } else {
+            return false;
+        }
+    }
+    p[i..].iter().all(|&c| c == '*')
+}
+
+/// The last run of digits in a file name, for numeric frame order.
+fn last_number(name: &str) -> u64 {
+    let digits: String = name
+        .chars()
+        .rev()
+        .skip_while(|c| !c.is_ascii_digit())
+        .take_while(|c| c.is_ascii_digit())
+        .collect::<Vec<_>>()
+        .into_iter()
+        .rev()
+        .collect();
+    digits.parse().unwrap_or(0)
+}
+
+/// Parses `A..B` (inclusive) into a frame range.
+pub fn parse_range(s: &str) -> Result<std::ops::RangeInclusive<usize>, SceneError> {
+    let bad = || {
+        SceneError::setting(
+            "--frames",
+            format!("'{s}' is not A..B (two frame numbers, A ≤ B)"),
+        )
+    };
+    let (a, b) = s.split_once("..").ok_or_else(bad)?;
+    let (a, b): (usize, usize) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if a > b {
+        return Err(bad());
+    }
+    Ok(a..=b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn patterns_globs_and_directories_expand_in_numeric_order() {
+        let dir = std::env::temp_dir().join(format!("voxless-frames-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        for n in ["step_10.npy", "step_2.npy", "step_1.npy", "other.txt"] {
+            std::fs::write(dir.join(n), b"x").unwrap();
+        }
+        let names = |v: Vec<PathBuf>| -> Vec<String> {
+            v.iter()
+                .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+                .collect()
+        };
+        let want = vec!["step_1.npy", "step_2.npy", "step_10.npy"];
+        assert_eq!(names(expand("step_%d.npy", &dir).unwrap()), want);
+        assert_eq!(names(expand("step_*.npy", &dir).unwrap()), want);
+        assert_eq!(names(expand(".", &dir).unwrap()), want);
+        assert_eq!(
+            expand("single.npy", &dir).unwrap(),
+            vec![dir.join("single.npy")]
+        );
+        assert!(expand("none_%04d.npy", &dir).is_err());
+        assert!(wildcard("a?c*", "abcdef") && !wildcard("a?c", "abcd"));
+        assert_eq!(parse_range("3..7").unwrap(), 3..=7);
+        assert!(parse_range("7..3").is_err() && parse_range("x").is_err());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
