@@ -13,6 +13,9 @@ use std::path::{Path, PathBuf};
 
 use crate::SceneError;
 
+/// Decides whether a file name belongs to a sequence.
+type NameMatcher = Box<dyn Fn(&str) -> bool>;
+
 /// Whether `spec` names a sequence rather than one file.
 pub fn is_sequence(spec: &str, base: &Path) -> bool {
     let name = Path::new(spec)
@@ -28,7 +31,7 @@ pub fn expand(spec: &str, base: &Path) -> Result<Vec<PathBuf>, SceneError> {
     if !is_sequence(spec, base) {
         return Ok(vec![full]);
     }
-    let (dir, matcher): (PathBuf, Box<dyn Fn(&str) -> bool>) = if full.is_dir() {
+    let (dir, matcher): (PathBuf, NameMatcher) = if full.is_dir() {
         let m = |n: &str| n.ends_with(".npy") || n.ends_with(".csv");
         (full.clone(), Box::new(m))
     } else {
