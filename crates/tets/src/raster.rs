@@ -245,6 +245,48 @@ impl Frame {
     }
 }
 
+/// A tet's projected vertices. The projection of a tet is the convex hull of
+/// its four projected vertices, and a horizontal line meets that hull exactly
+/// where it meets the six vertex-to-vertex segments, so a row's covered span
+/// is the min and max of those crossings.
+struct Outline([(f32, f32); 4]);
+
+/// Pixels of slack on each side of a row span, so rounding never drops a
+/// pixel the exact 3D test would accept.
+const OUTLINE_SLACK: f32 = 1e-3;
+
+impl Outline {
+    fn new(screen: &Screen, tet: &Tet) -> Option<Outline> {
+        let mut p = [(0.0, 0.0); 4];
+        for (slot, v) in p.iter_mut().zip(&tet.v) {
+            *slot = screen.project(*v)?;
+        }
+        Some(Outline(p))
+    }
+
+    /// The x-span covered at height `yc`, if any.
+    #[inline]
+    fn row(&self, yc: f32) -> Option<(f32, f32)> {
+        let p = &self.0;
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for (i, j) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+            let ((ax, ay), (bx, by)) = (p[i], p[j]);
+            if (ay - yc) * (by - yc) > 0.0 {
+                continue;
+            }
+            if ay == by {
+                lo = lo.min(ax.min(bx));
+                hi = hi.max(ax.max(bx));
+            } else {
+                let x = ax + (yc - ay) / (by - ay) * (bx - ax);
+                lo = lo.min(x);
+                hi = hi.max(x);
+            }
+        }
+        (lo <= hi).then_some((lo - OUTLINE_SLACK, hi + OUTLINE_SLACK))
+    }
+}
+
 /// Per ray, the parametric range inside the periodic box and in front of the
 /// eye: the images of box-crossing tets fill the box exactly, so only that
 /// range may be integrated.
@@ -312,7 +354,8 @@ impl Planes {
         (t0, t1)
     }
 
-    /// For many rays sharing `dir` (an orthographic camera): n·dir once.
+    /// For many rays sharing `dir` (an orthographic camera): n·dir once,
+    /// and its reciprocal, so each ray multiplies instead of dividing.
     #[inline]
     pub fn with_dir(&self, dir: Vec3) -> [f32; 4] {
         [0, 1, 2, 3].map(|f| self.n[f].dot(dir))
@@ -329,6 +372,24 @@ impl Planes {
                 t1 = t1.min(dist / nd[f]);
             } else if nd[f] < 0.0 {
                 t0 = t0.max(dist / nd[f]);
+            } else if dist < 0.0 {
+                return (1.0, 0.0);
+            }
+        }
+        (t0, t1)
+    }
+
+    /// [`Planes::clip_at`] with precomputed `1/(n·dir)`: `(nd, inv)`.
+    #[inline]
+    #[allow(clippy::needless_range_loop)] // four faces over parallel arrays
+    pub fn clip_at_inv(&self, nd: &[f32; 4], inv: &[f32; 4], origin: Vec3) -> (f32, f32) {
+        let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
+        for f in 0..4 {
+            let dist = self.c[f] - self.n[f].dot(origin);
+            if nd[f] > 0.0 {
+                t1 = t1.min(dist * inv[f]);
+            } else if nd[f] < 0.0 {
+                t0 = t0.max(dist * inv[f]);
             } else if dist < 0.0 {
                 return (1.0, 0.0);
             }
@@ -394,14 +455,30 @@ pub fn for_each_crossing(
                 Some(o) => (planes.with_origin(o), true),
                 None => (planes.with_dir(rays[0].dir), false),
             };
+            let inv = shared.0.map(|v| 1.0 / v);
+            // The tet's screen outline: pixels outside it need no 3D test.
+            let outline = Outline::new(&frame.screen, tet);
             for y in y0..=y1 {
-                for x in x0..=x1 {
+                let (xa, xb) = match &outline {
+                    Some(o) => match o.row(y as f32 + 0.5) {
+                        Some((a, b)) => (
+                            ((a - 0.5).ceil().max(x0 as f32)) as u32,
+                            ((b - 0.5).floor().min(x1 as f32)) as u32,
+                        ),
+                        None => continue,
+                    },
+                    None => (x0, x1),
+                };
+                if xa > xb {
+                    continue;
+                }
+                for x in xa..=xb {
                     let local = ((y - ty0) * w + (x - tx0)) as usize;
                     let ray = &rays[local];
                     let (t0, t1) = if shared.1 {
                         planes.clip_from(&shared.0, ray.dir)
                     } else {
-                        planes.clip_at(&shared.0, ray.origin)
+                        planes.clip_at_inv(&shared.0, &inv, ray.origin)
                     };
                     let (t0, t1) = (t0.max(spans[local].0), t1.min(spans[local].1));
                     if t1 > t0 {
