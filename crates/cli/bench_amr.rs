@@ -41,6 +41,7 @@
 //!   max abs RGBA differences are against (adaptive off, skipping off).
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -261,9 +262,9 @@ pub fn run(o: AmrArgs) -> Result<()> {
         );
         println!(
             "| data set | TF cut | adaptive sampling | TF space skipping | regions in BVH | step \
-             | frame s | speedup vs (off, off) | max abs diff vs (off, off) |"
+             | samples / pixel | frame s | speedup vs (off, off) | max abs diff vs (off, off) |"
         );
-        println!("|---|---:|---|---|---:|---|---:|---:|---:|");
+        println!("|---|---:|---|---|---:|---|---:|---:|---:|---:|");
         for r in rows {
             println!("{r}");
         }
@@ -544,6 +545,71 @@ impl Volume for NoSkip<'_> {
     }
 }
 
+/// Counts the samples the renderer takes (an untimed pass).
+struct Counting<'a, V> {
+    inner: &'a V,
+    samples: AtomicU64,
+}
+
+impl<V: Volume> Counting<'_, V> {
+    fn tick(&self) {
+        self.samples.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+impl<V: Volume> Volume for Counting<'_, V> {
+    fn bounds(&self) -> Aabb {
+        self.inner.bounds()
+    }
+    fn value_range(&self) -> Range1 {
+        self.inner.value_range()
+    }
+    fn attribute_range(&self) -> Option<Range1> {
+        self.inner.attribute_range()
+    }
+    fn sample(&self, p: Vec3) -> Option<Sample> {
+        self.tick();
+        self.inner.sample(p)
+    }
+    fn sample_with_gradient(&self, p: Vec3) -> Option<(Sample, Vec3)> {
+        self.tick();
+        self.inner.sample_with_gradient(p)
+    }
+    fn sample_in(&self, p: Vec3, iv: &Interval) -> Option<Sample> {
+        self.tick();
+        self.inner.sample_in(p, iv)
+    }
+    fn sample_with_gradient_in(&self, p: Vec3, iv: &Interval) -> Option<(Sample, Vec3)> {
+        self.tick();
+        self.inner.sample_with_gradient_in(p, iv)
+    }
+    fn intervals(&self, ray: &Ray, t: Range1, q: &IntervalQuery, out: &mut Vec<Interval>) {
+        self.inner.intervals(ray, t, q, out)
+    }
+    fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
+        self.inner.line_integral(ray, t)
+    }
+}
+
+/// Samples per pixel `render` takes on `v` at a quarter of the resolution
+/// (per pixel the count hardly depends on the resolution).
+fn samples_per_pixel<V: Volume>(
+    v: &V,
+    camera: &Camera,
+    tf: &TransferFunction,
+    rs: &RenderSettings,
+) -> f64 {
+    let mut rs = rs.clone();
+    rs.width = (rs.width / 4).max(16);
+    rs.height = (rs.height / 4).max(16);
+    let c = Counting {
+        inner: v,
+        samples: AtomicU64::new(0),
+    };
+    voxless_render::render(&c, camera, tf, &rs, &|_, _| {});
+    c.samples.load(Ordering::Relaxed) as f64 / (rs.width as f64 * rs.height as f64)
+}
+
 fn bench_frames(s: &Dataset, vol: &mut AmrVolume, o: &AmrArgs) -> Result<Vec<String>> {
     let tf = half_tf(vol, s.field)?;
     let cut = tf.opacity_map().0.points()[1].0;
@@ -571,6 +637,20 @@ fn bench_frames(s: &Dataset, vol: &mut AmrVolume, o: &AmrArgs) -> Result<Vec<Str
     let mut times = vec![Vec::new(); configs.len()];
     let mut images = vec![None; configs.len()];
     let mut in_bvh = vec![0; configs.len()];
+    let mut spp = vec![0.0; configs.len()];
+    for (k, &(adapt, skip)) in configs.iter().enumerate() {
+        eprintln!("amr/{}: counting samples, config {}", s.label, k + 1);
+        if skip == Some(true) {
+            vol.set_visibility(&tf_visible);
+        } else {
+            vol.set_visibility(&|_| true);
+        }
+        let rs = if adapt { &adaptive } else { &fixed };
+        spp[k] = match skip {
+            Some(_) => samples_per_pixel(&*vol, &camera, &tf, rs),
+            None => samples_per_pixel(&NoSkip(vol), &camera, &tf, rs),
+        };
+    }
     for rep in 0..o.frame_repeats {
         for (k, &(adapt, skip)) in configs.iter().enumerate() {
             if skip == Some(true) {
@@ -621,10 +701,11 @@ fn bench_frames(s: &Dataset, vol: &mut AmrVolume, o: &AmrArgs) -> Result<Vec<Str
             None => "½ region finest".into(),
         };
         rows.push(format!(
-            "| {} | {cut:.3} | {} | {skipping} | {} | {step} | {:.2} | {:.2} | {diff:.2e} |",
+            "| {} | {cut:.3} | {} | {skipping} | {} | {step} | {:.0} | {:.2} | {:.2} | {diff:.2e} |",
             s.label,
             onoff(adapt),
             in_bvh[k],
+            spp[k],
             times[k],
             times[0] / times[k]
         ));

@@ -31,7 +31,7 @@ pub mod regions;
 mod volume;
 
 pub use bricks::Brick;
-pub use regions::Region;
+pub use regions::{Region, Regions};
 pub use volume::{AmrCells, AmrSettings, AmrVolume, BuildStats, CellLocator, Reconstruction};
 
 /// Why cells cannot be used. Cell indices are positions in the input.

@@ -23,7 +23,24 @@ pub struct Region {
     /// Doubled finest units, `[lo, hi)` per axis.
     pub lo: [i64; 3],
     pub hi: [i64; 3],
-    pub bricks: Vec<u32>,
+    /// This region's slice of [`Regions::brick_ids`] (sorted brick indices).
+    pub bricks: std::ops::Range<u32>,
+}
+
+/// All regions and, flat, their brick lists (one allocation for millions
+/// of regions instead of one each).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Regions {
+    pub regions: Vec<Region>,
+    pub brick_ids: Vec<u32>,
+}
+
+impl Regions {
+    /// The bricks active in region `r`.
+    pub fn bricks_of(&self, r: usize) -> &[u32] {
+        let range = &self.regions[r].bricks;
+        &self.brick_ids[range.start as usize..range.end as usize]
+    }
 }
 
 /// A brick's support box in doubled units.
@@ -36,24 +53,19 @@ pub fn support(b: &Brick) -> ([i64; 3], [i64; 3]) {
     )
 }
 
-type Fragment = ([i64; 3], [i64; 3], u32);
+type Fragment = ([i64; 3], [i64; 3]);
 
 /// Lists with fewer fragments than this are split on one thread.
 const GRAIN: usize = 2048;
 
 /// Partitions the union of brick supports into active brick regions.
-pub fn build(bricks: &[Brick]) -> Vec<Region> {
+pub fn build(bricks: &[Brick]) -> Regions {
     if bricks.is_empty() {
-        return Vec::new();
+        return Regions::default();
     }
-    let frags: Vec<Fragment> = bricks
-        .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            let (lo, hi) = support(b);
-            (lo, hi, i as u32)
-        })
-        .collect();
+    // Fragment i is brick i's support; nodes pass index lists around, so a
+    // split copies 4-byte ids rather than whole boxes.
+    let frags: Vec<Fragment> = bricks.iter().map(support).collect();
     let mut lo = [i64::MAX; 3];
     let mut hi = [i64::MIN; 3];
     for f in &frags {
@@ -62,83 +74,167 @@ pub fn build(bricks: &[Brick]) -> Vec<Region> {
             hi[a] = hi[a].max(f.1[a]);
         }
     }
-    let mut out = Vec::new();
-    subdivide(lo, hi, frags, &mut out);
+    let ids: Vec<u32> = (0..frags.len() as u32).collect();
+    let mut out = Regions::default();
+    subdivide(lo, hi, ids, &frags, &mut out);
     out
 }
 
-fn subdivide(lo: [i64; 3], hi: [i64; 3], frags: Vec<Fragment>, out: &mut Vec<Region>) {
-    if frags.is_empty() {
-        return; // a hole: no brick reaches here
-    }
+/// The fragment face strictly inside `(lo, hi)` closest to the centre,
+/// trying the widest axis first; `None` when no face cuts the box.
+fn split_plane(
+    lo: &[i64; 3],
+    hi: &[i64; 3],
+    ids: &[u32],
+    frags: &[Fragment],
+) -> Option<(usize, i64)> {
     let centre = [0, 1, 2].map(|a| lo[a] + hi[a]); // doubled again, stays integral
-    let mut axes = [0usize, 1, 2];
-    axes.sort_by_key(|&a| std::cmp::Reverse(hi[a] - lo[a]));
-    let mut plane = None;
-    for &a in &axes {
-        // The fragment face strictly inside (lo, hi) closest to the centre.
-        let best = frags
-            .iter()
-            .flat_map(|f| [f.0[a], f.1[a]])
-            .filter(|&x| x > lo[a] && x < hi[a])
-            .min_by_key(|&x| ((2 * x - centre[a]).abs(), x));
-        if let Some(x) = best {
-            plane = Some((a, x));
-            break;
+    // One pass over the faces for all three axes: per axis the interior face
+    // closest to the centre (ties to the lower coordinate).
+    let mut best = [(i64::MAX, 0i64); 3];
+    for &i in ids {
+        let f = &frags[i as usize];
+        for a in 0..3 {
+            for x in [f.0[a], f.1[a]] {
+                if x > lo[a] && x < hi[a] {
+                    let key = ((2 * x - centre[a]).abs(), x);
+                    if key < (best[a].0, best[a].1) {
+                        best[a] = key;
+                    }
+                }
+            }
         }
     }
-    let Some((axis, x)) = plane else {
-        let mut bricks: Vec<u32> = frags.iter().map(|f| f.2).collect();
-        bricks.sort_unstable();
-        out.push(Region { lo, hi, bricks });
+    let mut axes = [0usize, 1, 2];
+    axes.sort_by_key(|&a| std::cmp::Reverse(hi[a] - lo[a]));
+    axes.into_iter()
+        .find(|&a| best[a].0 != i64::MAX)
+        .map(|a| (a, best[a].1))
+}
+
+fn push_leaf(lo: [i64; 3], hi: [i64; 3], ids: &[u32], out: &mut Regions) {
+    let first = out.brick_ids.len();
+    out.brick_ids.extend_from_slice(ids);
+    out.brick_ids[first..].sort_unstable();
+    out.regions.push(Region {
+        lo,
+        hi,
+        bricks: first as u32..out.brick_ids.len() as u32,
+    });
+}
+
+/// The top of the recursion: big nodes own their id lists and split in
+/// parallel; below [`GRAIN`] the rest runs in [`subdivide_in`] on one stack.
+fn subdivide(lo: [i64; 3], hi: [i64; 3], ids: Vec<u32>, frags: &[Fragment], out: &mut Regions) {
+    if ids.len() <= GRAIN {
+        let mut stack = ids;
+        let len = stack.len();
+        subdivide_in(lo, hi, 0, len, &mut stack, frags, out);
+        return;
+    }
+    let Some((axis, x)) = split_plane(&lo, &hi, &ids, frags) else {
+        push_leaf(lo, hi, &ids, out);
         return;
     };
     let (mut left_hi, mut right_lo) = (hi, lo);
     left_hi[axis] = x;
     right_lo[axis] = x;
-    let (left, right): (Vec<Fragment>, Vec<Fragment>) = (
-        frags.iter().filter(|f| f.0[axis] < x).copied().collect(),
-        frags.iter().filter(|f| f.1[axis] > x).copied().collect(),
+    let left: Vec<u32> = ids
+        .iter()
+        .copied()
+        .filter(|&i| frags[i as usize].0[axis] < x)
+        .collect();
+    let right: Vec<u32> = ids
+        .iter()
+        .copied()
+        .filter(|&i| frags[i as usize].1[axis] > x)
+        .collect();
+    drop(ids);
+    let (mut a, mut b) = (Regions::default(), Regions::default());
+    rayon::join(
+        || subdivide(lo, left_hi, left, frags, &mut a),
+        || subdivide(right_lo, hi, right, frags, &mut b),
     );
-    if left.len() + right.len() > GRAIN {
-        let (mut a, mut b) = (Vec::new(), Vec::new());
-        rayon::join(
-            || subdivide(lo, left_hi, left, &mut a),
-            || subdivide(right_lo, hi, right, &mut b),
-        );
-        out.extend(a);
-        out.extend(b);
-    } else {
-        subdivide(lo, left_hi, left, out);
-        subdivide(right_lo, hi, right, out);
+    for part in [a, b] {
+        let offset = out.brick_ids.len() as u32;
+        out.brick_ids.extend(part.brick_ids);
+        out.regions.extend(part.regions.into_iter().map(|mut r| {
+            r.bricks = r.bricks.start + offset..r.bricks.end + offset;
+            r
+        }));
     }
+}
+
+/// Sequential recursion over `stack[start..start + len]`. Children's id lists
+/// are pushed on the same stack and popped on return, so the millions of
+/// small nodes near the leaves allocate nothing.
+fn subdivide_in(
+    lo: [i64; 3],
+    hi: [i64; 3],
+    start: usize,
+    len: usize,
+    stack: &mut Vec<u32>,
+    frags: &[Fragment],
+    out: &mut Regions,
+) {
+    if len == 0 {
+        return; // a hole: no brick reaches here
+    }
+    let Some((axis, x)) = split_plane(&lo, &hi, &stack[start..start + len], frags) else {
+        push_leaf(lo, hi, &stack[start..start + len], out);
+        return;
+    };
+    let (mut left_hi, mut right_lo) = (hi, lo);
+    left_hi[axis] = x;
+    right_lo[axis] = x;
+    let top = stack.len();
+    for i in start..start + len {
+        let id = stack[i];
+        if frags[id as usize].0[axis] < x {
+            stack.push(id);
+        }
+    }
+    subdivide_in(lo, left_hi, top, stack.len() - top, stack, frags, out);
+    stack.truncate(top);
+    for i in start..start + len {
+        let id = stack[i];
+        if frags[id as usize].1[axis] > x {
+            stack.push(id);
+        }
+    }
+    subdivide_in(right_lo, hi, top, stack.len() - top, stack, frags, out);
+    stack.truncate(top);
 }
 
 /// Per region and field, the range of every cell value whose basis function
 /// reaches into the region (a bound on every basis-reconstructed sample, which
 /// is a convex combination of those values), and the finest cell width there.
 pub fn metadata(
-    regions: &[Region],
+    regions: &Regions,
     bricks: &[Brick],
     fields: &[Vec<f32>],
 ) -> (Vec<Range1>, Vec<i32>) {
     let nf = fields.len();
     let per: Vec<(Vec<Range1>, i32)> = regions
+        .regions
         .par_iter()
-        .map(|r| {
+        .enumerate()
+        .map(|(ri, r)| {
             let mut ranges = vec![Range1::EMPTY; nf];
             let mut finest = i32::MAX;
-            for &b in &r.bricks {
+            for &b in regions.bricks_of(ri) {
                 let b = &bricks[b as usize];
                 let w = b.width() as i64;
                 finest = finest.min(b.width());
                 // Doubled units: cell i has centre c = base + (2i + 1)w and its
                 // hat reaches (c − 2w, c + 2w); keep cells overlapping (lo, hi):
                 // c + 2w > lo ⇔ i > (lo − base − 3w)/2w, c − 2w < hi ⇔ i < (hi − base + w)/2w.
+                // 2w is a power of two: floor division is an arithmetic shift.
+                let shift = b.level as u32 + 1;
                 let span = |a: usize| {
                     let base = 2 * b.lower[a] as i64;
-                    let i0 = (r.lo[a] - base - 3 * w).div_euclid(2 * w) + 1;
-                    let i1 = -(-(r.hi[a] - base + w)).div_euclid(2 * w) - 1;
+                    let i0 = ((r.lo[a] - base - 3 * w) >> shift) + 1;
+                    let i1 = -((-(r.hi[a] - base + w)) >> shift) - 1;
                     (i0.max(0), i1.min(b.size[a] as i64 - 1))
                 };
                 let (x, y, z) = (span(0), span(1), span(2));
@@ -157,8 +253,8 @@ pub fn metadata(
             (ranges, finest)
         })
         .collect();
-    let mut ranges = Vec::with_capacity(regions.len() * nf);
-    let mut finest = Vec::with_capacity(regions.len());
+    let mut ranges = Vec::with_capacity(regions.regions.len() * nf);
+    let mut finest = Vec::with_capacity(regions.regions.len());
     for (r, f) in per {
         ranges.extend(r);
         finest.push(f);

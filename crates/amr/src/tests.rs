@@ -219,8 +219,8 @@ fn no_seams_across_level_boundaries() {
                 // Local Lipschitz bound: the region's value spread over its
                 // finest cell width, per unit world length, summed over axes.
                 let range = vol.region_range(r, 0);
-                let finest = vol.regions()[r]
-                    .bricks
+                let finest = vol
+                    .region_bricks(r)
                     .iter()
                     .map(|&i| vol.bricks()[i as usize].width())
                     .min()

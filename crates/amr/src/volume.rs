@@ -10,7 +10,7 @@ use voxless_core::{
 
 use crate::AmrError;
 use crate::bricks::{self, Brick};
-use crate::regions::{self, Region};
+use crate::regions::{self, Region, Regions};
 
 /// Cells and fields as read from a file.
 #[derive(Clone, Debug, Default)]
@@ -66,7 +66,7 @@ pub struct AmrVolume {
     bricks: Vec<Brick>,
     /// Per field, values in brick order.
     values: Vec<Vec<f32>>,
-    regions: Vec<Region>,
+    regions: Regions,
     /// World boxes of the regions.
     region_bounds: Vec<Aabb>,
     /// `region_ranges[r * fields + f]`.
@@ -76,8 +76,9 @@ pub struct AmrVolume {
     field_ranges: Vec<Range1>,
     /// All regions, for point location.
     region_bvh: Bvh,
-    /// The regions the transfer function can see, for intervals.
-    visible_bvh: Bvh,
+    /// The regions the transfer function can see, for intervals; `None`
+    /// while every region is visible (then `region_bvh` serves).
+    visible_bvh: Option<Bvh>,
     visible: Vec<u32>,
     /// Brick boxes, for nearest-cell lookups and exact projections.
     brick_bvh: Bvh,
@@ -174,6 +175,7 @@ impl AmrVolume {
             )
         };
         let region_bounds: Vec<Aabb> = regions
+            .regions
             .iter()
             .map(|r| to_world(r.lo.map(|v| v as f64 * 0.5), r.hi.map(|v| v as f64 * 0.5)))
             .collect();
@@ -191,12 +193,13 @@ impl AmrVolume {
             })
             .collect();
         stats.bricks = bricks.len();
-        stats.regions = regions.len();
-        let total: usize = regions.iter().map(|r| r.bricks.len()).sum();
-        stats.bricks_per_region = total as f64 / regions.len().max(1) as f64;
+        stats.regions = regions.regions.len();
+        let total = regions.brick_ids.len();
+        stats.bricks_per_region = total as f64 / stats.regions.max(1) as f64;
         let vol = |r: &Region| (0..3).map(|a| (r.hi[a] - r.lo[a]) as f64).product::<f64>();
-        let vsum: f64 = regions.iter().map(vol).sum();
+        let vsum: f64 = regions.regions.iter().map(vol).sum();
         stats.bricks_per_region_by_volume = regions
+            .regions
             .iter()
             .map(|r| vol(r) * r.bricks.len() as f64)
             .sum::<f64>()
@@ -220,7 +223,7 @@ impl AmrVolume {
             region_finest,
             field_ranges,
             region_bvh,
-            visible_bvh: Bvh::default(),
+            visible_bvh: None,
             visible: Vec::new(),
             brick_bvh,
             bounds,
@@ -237,15 +240,22 @@ impl AmrVolume {
         let t = Instant::now();
         let nf = self.values.len();
         let f = self.settings.field;
-        self.visible = (0..self.regions.len() as u32)
+        self.visible = (0..self.regions.regions.len() as u32)
             .filter(|&r| is_visible(self.region_ranges[r as usize * nf + f]))
             .collect();
-        let boxes: Vec<Aabb> = self
-            .visible
-            .iter()
-            .map(|&r| self.region_bounds[r as usize])
-            .collect();
-        self.visible_bvh.rebuild(&boxes);
+        if self.visible.len() == self.regions.regions.len() {
+            // Everything visible: the all-regions tree serves, no second build.
+            self.visible_bvh = None;
+        } else {
+            let boxes: Vec<Aabb> = self
+                .visible
+                .iter()
+                .map(|&r| self.region_bounds[r as usize])
+                .collect();
+            self.visible_bvh
+                .get_or_insert_with(Bvh::default)
+                .rebuild(&boxes);
+        }
         t.elapsed()
     }
 
@@ -259,7 +269,11 @@ impl AmrVolume {
         &self.bricks
     }
     pub fn regions(&self) -> &[Region] {
-        &self.regions
+        &self.regions.regions
+    }
+    /// The bricks active in region `r`.
+    pub fn region_bricks(&self, r: usize) -> &[u32] {
+        self.regions.bricks_of(r)
     }
     pub fn visible_region_count(&self) -> usize {
         self.visible.len()
@@ -306,7 +320,7 @@ impl AmrVolume {
         let (v0, v1) = (&self.values[field], &self.values[color_field]);
         let (mut sw, mut sv, mut sc) = (0.0f64, 0.0f64, 0.0f64);
         let (mut sdw, mut sdv) = ([0.0f64; 3], [0.0f64; 3]);
-        for &b in &self.regions[region].bricks {
+        for &b in self.regions.bricks_of(region) {
             let b = &self.bricks[b as usize];
             let w = b.width() as f32;
             // Per axis: the two cells whose centres are within one width of
@@ -390,7 +404,7 @@ impl AmrVolume {
     }
 
     fn nearest(&self, pu: Vec3, region: usize, field: usize, color_field: usize) -> Option<Recon> {
-        for &b in &self.regions[region].bricks {
+        for &b in self.regions.bricks_of(region) {
             if let Some(cell) = self.cell_in_brick(pu, b as usize) {
                 return Some(Recon {
                     value: self.values[field][cell],
@@ -545,8 +559,16 @@ impl Volume for AmrVolume {
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
         let start = out.len();
         let nf = self.values.len();
-        self.visible_bvh.ray_query(ray, t, |i, hit| {
-            let r = self.visible[i as usize] as usize;
+        let (bvh, remap) = match &self.visible_bvh {
+            Some(b) => (b, true),
+            None => (&self.region_bvh, false),
+        };
+        bvh.ray_query(ray, t, |i, hit| {
+            let r = if remap {
+                self.visible[i as usize] as usize
+            } else {
+                i as usize
+            };
             let range = self.region_ranges[r * nf + self.settings.field];
             if hit.hi > hit.lo && (query.is_visible)(range) {
                 out.push(Interval {
