@@ -572,6 +572,7 @@ fn load_tets(t: &TetsDesc, base: &Path) -> Result<AnyVolume, SceneError> {
         .map_err(|source| SceneError::Tets { path, source })?;
     let options = TetOptions {
         lod_pixels: t.lod_pixels,
+        ..Default::default()
     };
     Ok(AnyVolume::Tets(Box::new(v), mode, options))
 }

@@ -354,47 +354,28 @@ impl Planes {
         (t0, t1)
     }
 
-    /// For many rays sharing `dir` (an orthographic camera): n·dir once,
-    /// and its reciprocal, so each ray multiplies instead of dividing.
-    #[inline]
-    pub fn with_dir(&self, dir: Vec3) -> [f32; 4] {
-        [0, 1, 2, 3].map(|f| self.n[f].dot(dir))
-    }
-
-    /// Clip of a ray from `origin` along the direction given to [`Planes::with_dir`].
-    #[inline]
-    #[allow(clippy::needless_range_loop)] // four faces over parallel arrays
-    pub fn clip_at(&self, nd: &[f32; 4], origin: Vec3) -> (f32, f32) {
-        let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
+    /// Affine per-pixel crossings for the orthographic `screen`.
+    pub fn linear(&self, screen: &Screen) -> LinearPlanes {
+        // Ray origins are affine in the pixel index: o(x, y) = o0 + x·dx + y·dy.
+        let o0 = screen.ray(0, 0).origin;
+        let dx = screen.ray(1, 0).origin - o0;
+        let dy = screen.ray(0, 1).origin - o0;
+        let dir = screen.camera.forward;
+        let mut coef = [[0.0; 3]; 4];
+        let mut kind = [0i8; 4];
         for f in 0..4 {
-            let dist = self.c[f] - self.n[f].dot(origin);
-            if nd[f] > 0.0 {
-                t1 = t1.min(dist / nd[f]);
-            } else if nd[f] < 0.0 {
-                t0 = t0.max(dist / nd[f]);
-            } else if dist < 0.0 {
-                return (1.0, 0.0);
+            let nd = self.n[f].dot(dir);
+            let d0 = self.c[f] - self.n[f].dot(o0);
+            let (ddx, ddy) = (-self.n[f].dot(dx), -self.n[f].dot(dy));
+            if nd != 0.0 {
+                let inv = 1.0 / nd;
+                coef[f] = [d0 * inv, ddx * inv, ddy * inv];
+                kind[f] = if nd > 0.0 { 1 } else { -1 };
+            } else {
+                coef[f] = [d0, ddx, ddy];
             }
         }
-        (t0, t1)
-    }
-
-    /// [`Planes::clip_at`] with precomputed `1/(n·dir)`: `(nd, inv)`.
-    #[inline]
-    #[allow(clippy::needless_range_loop)] // four faces over parallel arrays
-    pub fn clip_at_inv(&self, nd: &[f32; 4], inv: &[f32; 4], origin: Vec3) -> (f32, f32) {
-        let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
-        for f in 0..4 {
-            let dist = self.c[f] - self.n[f].dot(origin);
-            if nd[f] > 0.0 {
-                t1 = t1.min(dist * inv[f]);
-            } else if nd[f] < 0.0 {
-                t0 = t0.max(dist * inv[f]);
-            } else if dist < 0.0 {
-                return (1.0, 0.0);
-            }
-        }
-        (t0, t1)
+        LinearPlanes { coef, kind }
     }
 
     /// The parametric range of `ray` inside the tet, possibly empty.
@@ -416,23 +397,16 @@ impl Planes {
     }
 }
 
-/// Calls `visit(local_pixel_index, t_in, t_out, density)` for every pixel of
-/// tile `tile` whose ray crosses a tet of the tile's blocks, with
-/// `[t_in, t_out]` clipped to the pixel's `spans` entry (the part of its ray
-/// inside the periodic box, in front of the eye).
-pub fn for_each_crossing(
-    mesh: &TetMesh,
+/// Calls `f(tet, rect)` for every tet of tile `tile`'s blocks (at the
+/// level of detail chosen for its block) whose pixel rectangle meets the
+/// tile, with `rect = (x0, x1, y0, y1)` clipped to the tile.
+pub fn for_each_tet<'m>(
+    mesh: &'m TetMesh,
     frame: &Frame,
     tile: u32,
-    rays: &[Ray],
-    spans: &[(f32, f32)],
-    mut visit: impl FnMut(usize, f32, f32, f32),
+    mut f: impl FnMut(&'m Tet, (u32, u32, u32, u32)),
 ) {
     let (tx0, ty0, w, h) = frame.tile(tile);
-    let shared_origin = match frame.screen.camera.projection {
-        Projection::Perspective { .. } => Some(frame.screen.camera.eye),
-        Projection::Orthographic { .. } => None,
-    };
     for &entry in &frame.bins[tile as usize] {
         let level = (entry >> LEVEL_SHIFT) as usize;
         let m = if level == 0 {
@@ -445,47 +419,122 @@ pub fn for_each_crossing(
         for (tet, r) in m.tets[range.clone()].iter().zip(&frame.rects[level][range]) {
             let (x0, x1) = ((r[0] as u32).max(tx0), (r[1] as u32).min(tx0 + w - 1));
             let (y0, y1) = ((r[2] as u32).max(ty0), (r[3] as u32).min(ty0 + h - 1));
-            if x0 > x1 || y0 > y1 {
-                continue;
+            if x0 <= x1 && y0 <= y1 {
+                f(tet, (x0, x1, y0, y1));
             }
-            let planes = Planes::new(tet);
-            // Perspective rays share their origin, orthographic ones their
-            // direction: that half of each plane test is done once per tet.
-            let shared = match shared_origin {
-                Some(o) => (planes.with_origin(o), true),
-                None => (planes.with_dir(rays[0].dir), false),
+        }
+    }
+}
+
+/// Calls `visit(local_pixel_index, t_in, t_out, density)` for every pixel of
+/// tile `tile` whose ray crosses a tet of the tile's blocks, with
+/// `[t_in, t_out]` clipped to the pixel's `spans` entry (the part of its ray
+/// inside the periodic box, in front of the eye).
+pub fn for_each_crossing(
+    mesh: &TetMesh,
+    frame: &Frame,
+    tile: u32,
+    rays: &[Ray],
+    spans: &[(f32, f32)],
+    mut visit: impl FnMut(usize, f32, f32, f32),
+) {
+    for_each_tet(mesh, frame, tile, |tet, rect| {
+        clip_tet(frame, tile, tet, rect, rays, spans, &mut visit)
+    });
+}
+
+/// The pixels of `rect` whose rays cross `tet`, by clipping each ray against
+/// the tet's planes (only pixels inside its projected outline are tried).
+pub fn clip_tet(
+    frame: &Frame,
+    tile: u32,
+    tet: &Tet,
+    rect: (u32, u32, u32, u32),
+    rays: &[Ray],
+    spans: &[(f32, f32)],
+    visit: &mut impl FnMut(usize, f32, f32, f32),
+) {
+    let (tx0, ty0, w, _) = frame.tile(tile);
+    let (x0, x1, y0, y1) = rect;
+    let planes = Planes::new(tet);
+    let perspective = matches!(
+        frame.screen.camera.projection,
+        Projection::Perspective { .. }
+    );
+    // The tet's screen outline: pixels outside it need no 3D test.
+    let outline = Outline::new(&frame.screen, tet);
+    let row_span = |y: u32| -> Option<(u32, u32)> {
+        let (xa, xb) = match &outline {
+            Some(o) => {
+                let (a, b) = o.row(y as f32 + 0.5)?;
+                (
+                    ((a - 0.5).ceil().max(x0 as f32)) as u32,
+                    ((b - 0.5).floor().min(x1 as f32)) as u32,
+                )
+            }
+            None => (x0, x1),
+        };
+        (xa <= xb).then_some((xa, xb))
+    };
+    if perspective {
+        // Rays share their origin: its plane distances once per tet.
+        let dist = planes.with_origin(frame.screen.camera.eye);
+        for y in y0..=y1 {
+            let Some((xa, xb)) = row_span(y) else {
+                continue;
             };
-            let inv = shared.0.map(|v| 1.0 / v);
-            // The tet's screen outline: pixels outside it need no 3D test.
-            let outline = Outline::new(&frame.screen, tet);
-            for y in y0..=y1 {
-                let (xa, xb) = match &outline {
-                    Some(o) => match o.row(y as f32 + 0.5) {
-                        Some((a, b)) => (
-                            ((a - 0.5).ceil().max(x0 as f32)) as u32,
-                            ((b - 0.5).floor().min(x1 as f32)) as u32,
-                        ),
-                        None => continue,
-                    },
-                    None => (x0, x1),
-                };
-                if xa > xb {
-                    continue;
-                }
-                for x in xa..=xb {
-                    let local = ((y - ty0) * w + (x - tx0)) as usize;
-                    let ray = &rays[local];
-                    let (t0, t1) = if shared.1 {
-                        planes.clip_from(&shared.0, ray.dir)
-                    } else {
-                        planes.clip_at_inv(&shared.0, &inv, ray.origin)
-                    };
-                    let (t0, t1) = (t0.max(spans[local].0), t1.min(spans[local].1));
-                    if t1 > t0 {
-                        visit(local, t0, t1, tet.density);
-                    }
+            for x in xa..=xb {
+                let local = ((y - ty0) * w + (x - tx0)) as usize;
+                let (t0, t1) = planes.clip_from(&dist, rays[local].dir);
+                let (t0, t1) = (t0.max(spans[local].0), t1.min(spans[local].1));
+                if t1 > t0 {
+                    visit(local, t0, t1, tet.density);
                 }
             }
         }
+    } else {
+        // Parallel rays: each face's crossing t is an affine function of the
+        // pixel position, so a pixel costs a few multiply-adds, no division.
+        let lin = planes.linear(&frame.screen);
+        for y in y0..=y1 {
+            let Some((xa, xb)) = row_span(y) else {
+                continue;
+            };
+            for x in xa..=xb {
+                let local = ((y - ty0) * w + (x - tx0)) as usize;
+                let (t0, t1) = lin.clip(x as f32, y as f32);
+                let (t0, t1) = (t0.max(spans[local].0), t1.min(spans[local].1));
+                if t1 > t0 {
+                    visit(local, t0, t1, tet.density);
+                }
+            }
+        }
+    }
+}
+
+/// A tet's face crossings as affine functions of the pixel position, for
+/// orthographic views: `t_f(x, y) = a_f + b_f·x + c_f·y`, entering faces
+/// (`n·d < 0`) raising `t_in`, leaving faces lowering `t_out`, and faces
+/// parallel to the view giving an inside test `d_f(x, y) ≥ 0` instead.
+pub struct LinearPlanes {
+    coef: [[f32; 3]; 4],
+    kind: [i8; 4],
+}
+
+impl LinearPlanes {
+    #[inline]
+    pub fn clip(&self, x: f32, y: f32) -> (f32, f32) {
+        let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
+        for f in 0..4 {
+            let [a, b, c] = self.coef[f];
+            let v = a + b * x + c * y;
+            match self.kind[f] {
+                1 => t1 = t1.min(v),
+                -1 => t0 = t0.max(v),
+                _ if v < 0.0 => return (1.0, 0.0),
+                _ => {}
+            }
+        }
+        (t0, t1)
     }
 }

@@ -18,7 +18,7 @@ use voxless_render::RenderSettings;
 use voxless_transfer::TransferFunction;
 
 use crate::mesh::TetMesh;
-use crate::raster::{Frame, box_spans, for_each_crossing};
+use crate::raster::{Frame, box_spans, for_each_crossing, for_each_tet};
 
 /// How a pixel's events become colour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,6 +35,9 @@ pub struct TetOptions {
     /// Level of detail: blocks whose screen box is below this many pixels
     /// use the mesh's coarser levels ([`TetMesh::with_lod`]). Off when `None`.
     pub lod_pixels: Option<f32>,
+    /// Projections: test every pixel of each tet's rectangle with a full
+    /// plane clip (the slow path the fast one is tested against).
+    pub clip_only: bool,
 }
 
 /// Front-to-back compositing of constant-density segments.
@@ -295,9 +298,27 @@ pub fn project(
     let mut out: Vec<f64> = over_tiles(&frame, progress, |i, rays| {
         let mut sum = vec![0.0f64; rays.len()];
         let spans = box_spans(mesh, rays);
-        for_each_crossing(mesh, &frame, i, rays, &spans, |p, t0, t1, rho| {
-            sum[p] += rho as f64 * (t1 - t0) as f64;
-        });
+        let mut add =
+            |p: usize, t0: f32, t1: f32, rho: f32| sum[p] += rho as f64 * (t1 - t0) as f64;
+        if options.clip_only {
+            // The slow path: every pixel of the tet's rectangle, full plane clips.
+            let (tx0, ty0, w, _) = frame.tile(i);
+            for_each_tet(mesh, &frame, i, |tet, (x0, x1, y0, y1)| {
+                let planes = crate::raster::Planes::new(tet);
+                for y in y0..=y1 {
+                    for x in x0..=x1 {
+                        let local = ((y - ty0) * w + (x - tx0)) as usize;
+                        let (t0, t1) = planes.clip(&rays[local]);
+                        let (t0, t1) = (t0.max(spans[local].0), t1.min(spans[local].1));
+                        if t1 > t0 {
+                            add(local, t0, t1, tet.density);
+                        }
+                    }
+                }
+            });
+        } else {
+            for_each_crossing(mesh, &frame, i, rays, &spans, add);
+        }
         sum
     });
     let screen = &frame.screen;
