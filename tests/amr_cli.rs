@@ -201,47 +201,34 @@ fn bad_amr_input_gives_clear_errors() {
     let mut a = std::fs::read(s.path("t.a.scalars")).unwrap();
     a.extend(1.0f32.to_le_bytes());
     std::fs::write(s.path("o.a.scalars"), &a).unwrap();
-    let e = fails(&[
-        "render",
-        "--cells",
-        &s.str("o.cells"),
-        "--scalars",
-        &s.str("o.a.scalars"),
-        "-o",
-        &s.str("x.png"),
-    ]);
-    assert!(e.contains("o.cells") && e.contains("overlap"), "{e}");
-    // Scalars of the wrong length; missing scalars; unknown field; unaligned cell.
-    let e = fails(&[
-        "render",
-        "--cells",
-        &s.str("t.cells"),
-        "--scalars",
-        &s.str("o.a.scalars"),
-        "-o",
-        &s.str("x.png"),
-    ]);
-    assert!(e.contains("o.a.scalars"), "{e}");
-    let e = fails(&[
-        "render",
-        "--cells",
-        &s.str("t.cells"),
-        "-o",
-        &s.str("x.png"),
-    ]);
-    assert!(e.contains("scalars"), "{e}");
-    let e = fails(&[
-        "render",
-        "--cells",
-        &s.str("t.cells"),
-        "--scalars",
-        &s.str("t.a.scalars"),
-        "--field",
-        "pressure",
-        "-o",
-        &s.str("x.png"),
-    ]);
-    assert!(e.contains("pressure") && e.contains('a'), "{e}");
+    // (cells, scalars, extra flags, what the message must mention)
+    let (o_cells, t_cells, o_a, t_a) = (
+        s.str("o.cells"),
+        s.str("t.cells"),
+        s.str("o.a.scalars"),
+        s.str("t.a.scalars"),
+    );
+    let cases: [(&str, Option<&str>, &[&str], &[&str]); 4] = [
+        (&o_cells, Some(&o_a), &[], &["o.cells", "overlap"]),
+        (&t_cells, Some(&o_a), &[], &["o.a.scalars"]),
+        (&t_cells, None, &[], &["scalars"]),
+        (
+            &t_cells,
+            Some(&t_a),
+            &["--field", "pressure"],
+            &["pressure", "a"],
+        ),
+    ];
+    let out = s.str("x.png");
+    for (cells, scalars, extra, mentions) in cases {
+        let mut args = vec!["render", "--cells", cells, "-o", &out];
+        if let Some(sc) = scalars {
+            args.extend(["--scalars", sc]);
+        }
+        args.extend_from_slice(extra);
+        let e = fails(&args);
+        assert!(mentions.iter().all(|m| e.contains(m)), "{args:?}: {e}");
+    }
     std::fs::write(
         s.path("u.cells"),
         [1i32, 0, 0, 1]

@@ -171,27 +171,27 @@ fn project_conserves_the_kernel_mass_for_every_kernel() {
         ("cubic-spline", "0.05", 1.0),
     ] {
         let want = wsum * unit_mass;
-        for axis in ["x", "y", "z"] {
-            // Default bounds: the image covers the particles' supports; the CLI
-            // reports Σ column × pixel area and the exact kernel mass.
-            let stderr = ok(&[
+        let (p, w) = (s.str("p.npy"), s.str("w.npy"));
+        let project = |extra: &[&str]| {
+            let mut args = vec![
                 "project",
                 "--particles",
-                &s.str("p.npy"),
+                &p,
                 "--weights",
-                &s.str("w.npy"),
+                &w,
                 "--kernel",
                 kernel,
                 "--radius",
                 radius,
-                "--axis",
-                axis,
-                "--size",
-                "300",
-                "240",
-                "-o",
-                &s.str("col.npy"),
-            ]);
+            ];
+            args.extend_from_slice(extra);
+            ok(&args)
+        };
+        let col = s.str("col.npy");
+        for axis in ["x", "y", "z"] {
+            // Default bounds: the image covers the particles' supports; the CLI
+            // reports Σ column × pixel area and the exact kernel mass.
+            let stderr = project(&["--axis", axis, "--size", "300", "240", "-o", &col]);
             assert_eq!(read(&s.path("col.npy")).0, vec![240, 300]);
             let (integral, mass) = integral_and_mass(&stderr);
             assert!(
@@ -204,31 +204,10 @@ fn project_conserves_the_kernel_mass_for_every_kernel() {
             );
         }
         // Explicit bounds, with the pixel area computed here.
-        ok(&[
-            "project",
-            "--particles",
-            &s.str("p.npy"),
-            "--weights",
-            &s.str("w.npy"),
-            "--kernel",
-            kernel,
-            "--radius",
-            radius,
-            "--axis",
-            "z",
-            "--size",
-            "280",
-            "280",
-            "--bounds",
-            "-0.2",
-            "-0.2",
-            "-0.2",
-            "1.2",
-            "1.2",
-            "1.2",
-            "-o",
-            &s.str("col.npy"),
-        ]);
+        let bounds = ["--bounds", "-0.2", "-0.2", "-0.2", "1.2", "1.2", "1.2"];
+        let mut extra = vec!["--axis", "z", "--size", "280", "280", "-o", &col];
+        extra.extend(bounds);
+        project(&extra);
         let area = (1.4f64 / 280.0).powi(2);
         let total: f64 = read(&s.path("col.npy")).1.iter().sum::<f64>() * area;
         assert!(
