@@ -190,6 +190,9 @@ fn nearest_projection_conserves_the_integral() {
     }
 }
 
+/// (cells, scalars, extra flags, what the error message must mention)
+type BadCase<'a> = (&'a str, Option<&'a str>, &'a [&'a str], &'a [&'a str]);
+
 #[test]
 fn bad_amr_input_gives_clear_errors() {
     let s = Scratch::new("amr-bad");
@@ -208,7 +211,7 @@ fn bad_amr_input_gives_clear_errors() {
         s.str("o.a.scalars"),
         s.str("t.a.scalars"),
     );
-    let cases: [(&str, Option<&str>, &[&str], &[&str]); 4] = [
+    let cases: [BadCase; 4] = [
         (&o_cells, Some(&o_a), &[], &["o.cells", "overlap"]),
         (&t_cells, Some(&o_a), &[], &["o.a.scalars"]),
         (&t_cells, None, &[], &["scalars"]),

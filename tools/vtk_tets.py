@@ -6,8 +6,8 @@ mappers, for the side-by-side comparison in docs/benchmarks.md.
 Run manually (not in CI):
 
     pip install vtk numpy
-    cargo run --release -- bench tets --export-subblock /tmp/sub
-    python3 tools/vtk_tets.py /tmp/sub --out docs/tets-vtk.png
+    cargo run --release -- bench tets --export-subblock target/tets-sub
+    python3 tools/vtk_tets.py target/tets-sub --out docs/tets-vtk.png
 
 Inputs in DIR: vertices.npy (N×12 f32, four xyz per tet), density.npy (N),
 tf.npy (256×4: linear RGB and opacity of voxless's transfer function at
@@ -40,6 +40,7 @@ and split by the number of overlapping tets (streams) along each pixel's ray.
 import argparse
 import json
 import os
+import sys
 import time
 
 import numpy as np
@@ -228,7 +229,7 @@ def main():
         nxt = float(np.median(times[1:])) if len(times) > 1 else float("nan")
         print(f"| VTK {kind} ({wclass}) | {times[0]:.2f} | {nxt:.2f} | "
               f"{nxt / view['voxless_exact_s']:.1f} | {diff:.1f} | {' / '.join(ratios)} |")
-        print(f"wrote {out}", file=__import__("sys").stderr)
+        print(f"wrote {out}", file=sys.stderr)
     share = {k: f"{100 * m.sum() / max((streams > 0).sum(), 1):.1f} %"
              for k, m in groups.items() if "streams" in k or "(1)" in k}
     print(f"\nCovered pixels by streams along the ray: {share}")

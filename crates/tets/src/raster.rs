@@ -76,15 +76,38 @@ impl Screen {
             f32::INFINITY,
             f32::NEG_INFINITY,
         );
+        let mut grow = |(x, y): (f32, f32)| {
+            x0 = x0.min(x);
+            x1 = x1.max(x);
+            y0 = y0.min(y);
+            y1 = y1.max(y);
+        };
+        let mut behind = false;
         for &p in points {
             match self.project(p) {
-                Some((x, y)) => {
-                    x0 = x0.min(x);
-                    x1 = x1.max(x);
-                    y0 = y0.min(y);
-                    y1 = y1.max(y);
+                Some(q) => grow(q),
+                None => behind = true,
+            }
+        }
+        if behind {
+            // Part of the convex hull is behind the eye: what is seen is the
+            // part in front of a plane just ahead of the eye, whose outline is
+            // the front points plus where hull edges cross that plane. All
+            // points behind: nothing is seen.
+            let c = &self.camera;
+            let depth = |p: Vec3| (p - c.eye).dot(c.forward);
+            const NEAR: f32 = 2e-6;
+            for &a in points.iter().filter(|&&a| depth(a) > NEAR) {
+                for &b in points.iter().filter(|&&b| depth(b) <= NEAR) {
+                    let (za, zb) = (depth(a), depth(b));
+                    let t = (za - NEAR * 1.5) / (za - zb);
+                    if let Some(q) = self.project(a + (b - a) * t) {
+                        grow(q);
+                    }
                 }
-                None => return Some((0, self.width - 1, 0, self.height - 1)),
+            }
+            if x0 > x1 {
+                return None;
             }
         }
         // Pixel c's centre is c + 0.5.
@@ -219,6 +242,15 @@ impl Frame {
             rects,
             blocks_per_level,
         }
+    }
+
+    /// How many tets (of all levels) have a rectangle on screen.
+    pub fn tet_count(&self) -> usize {
+        self.rects
+            .iter()
+            .flatten()
+            .filter(|r| r[0] <= r[1] && r[2] <= r[3])
+            .count()
     }
 
     /// Tile `i`'s pixel rectangle `(x0, y0, w, h)`.

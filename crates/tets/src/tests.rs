@@ -644,3 +644,39 @@ fn fast_projection_equals_full_ray_clipping() {
         assert!((mass - 1.0).abs() <= 2e-3, "{mass}");
     }
 }
+
+#[test]
+fn camera_inside_the_box_renders_exactly_and_culls_what_is_behind() {
+    let g = grid(6, 1.0, jitter(41, 0.04));
+    let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
+    let tf = log_tf();
+    let cam = voxless_core::Camera::look_at(
+        Vec3::new(0.5, 0.45, 0.55),
+        Vec3::new(0.9, 0.6, 0.2),
+        Vec3::new(0.0, 1.0, 0.0),
+        voxless_core::Projection::Perspective { fov_y_deg: 70.0 },
+    )
+    .unwrap();
+    let mut s = settings_for(&v, 24, 20);
+    s.value_range = Range1::new(-1.0, 1.0);
+    let want = brute_force(&v, &cam, &tf, &s);
+    let got = render::render(
+        &v.mesh,
+        &cam,
+        &tf,
+        &s,
+        TetMode::Exact,
+        TetOptions::default(),
+        &|_, _| {},
+    );
+    assert!(want.iter().any(|p| p[3] > 0.05), "visible");
+    assert!(max_abs_diff(&got.pixels, &want) <= 1e-5);
+    // Tets wholly behind the eye are binned nowhere.
+    let frame = raster::Frame::new(&v.mesh, &cam, 24, 20, None);
+    let binned: usize = frame.tet_count();
+    assert!(
+        binned < v.mesh.tets.len(),
+        "{binned} of {} tets binned",
+        v.mesh.tets.len()
+    );
+}
