@@ -75,8 +75,21 @@ pub fn build(bricks: &[Brick]) -> Regions {
         }
     }
     let ids: Vec<u32> = (0..frags.len() as u32).collect();
-    let mut out = Regions::default();
-    subdivide(lo, hi, ids, &frags, &mut out);
+    // Parallel branches return their pieces; they are joined once here, so
+    // millions of regions are not copied up through every parallel level.
+    let pieces = subdivide(lo, hi, ids, &frags);
+    let mut out = Regions {
+        regions: Vec::with_capacity(pieces.iter().map(|p| p.regions.len()).sum()),
+        brick_ids: Vec::with_capacity(pieces.iter().map(|p| p.brick_ids.len()).sum()),
+    };
+    for part in pieces {
+        let offset = out.brick_ids.len() as u32;
+        out.brick_ids.extend(part.brick_ids);
+        out.regions.extend(part.regions.into_iter().map(|mut r| {
+            r.bricks = r.bricks.start + offset..r.bricks.end + offset;
+            r
+        }));
+    }
     out
 }
 
@@ -125,16 +138,17 @@ fn push_leaf(lo: [i64; 3], hi: [i64; 3], ids: &[u32], out: &mut Regions) {
 
 /// The top of the recursion: big nodes own their id lists and split in
 /// parallel; below [`GRAIN`] the rest runs in [`subdivide_in`] on one stack.
-fn subdivide(lo: [i64; 3], hi: [i64; 3], ids: Vec<u32>, frags: &[Fragment], out: &mut Regions) {
+fn subdivide(lo: [i64; 3], hi: [i64; 3], ids: Vec<u32>, frags: &[Fragment]) -> Vec<Regions> {
+    let mut out = Regions::default();
     if ids.len() <= GRAIN {
         let mut stack = ids;
         let len = stack.len();
-        subdivide_in(lo, hi, 0, len, &mut stack, frags, out);
-        return;
+        subdivide_in(lo, hi, 0, len, &mut stack, frags, &mut out);
+        return vec![out];
     }
     let Some((axis, x)) = split_plane(&lo, &hi, &ids, frags) else {
-        push_leaf(lo, hi, &ids, out);
-        return;
+        push_leaf(lo, hi, &ids, &mut out);
+        return vec![out];
     };
     let (mut left_hi, mut right_lo) = (hi, lo);
     left_hi[axis] = x;
@@ -150,19 +164,12 @@ fn subdivide(lo: [i64; 3], hi: [i64; 3], ids: Vec<u32>, frags: &[Fragment], out:
         .filter(|&i| frags[i as usize].1[axis] > x)
         .collect();
     drop(ids);
-    let (mut a, mut b) = (Regions::default(), Regions::default());
-    rayon::join(
-        || subdivide(lo, left_hi, left, frags, &mut a),
-        || subdivide(right_lo, hi, right, frags, &mut b),
+    let (mut a, b) = rayon::join(
+        || subdivide(lo, left_hi, left, frags),
+        || subdivide(right_lo, hi, right, frags),
     );
-    for part in [a, b] {
-        let offset = out.brick_ids.len() as u32;
-        out.brick_ids.extend(part.brick_ids);
-        out.regions.extend(part.regions.into_iter().map(|mut r| {
-            r.bricks = r.bricks.start + offset..r.bricks.end + offset;
-            r
-        }));
-    }
+    a.extend(b);
+    a
 }
 
 /// Sequential recursion over `stack[start..start + len]`. Children's id lists
