@@ -206,7 +206,8 @@ impl AmrVolume {
             / vsum.max(1.0);
 
         let t = Instant::now();
-        let region_bvh = Bvh::build(&region_bounds);
+        // Regions come out of the k-d subdivision depth first: already coherent.
+        let region_bvh = Bvh::build_in_order(&region_bounds);
         let brick_bvh = Bvh::build(&brick_bounds);
         stats.bvh_build = t.elapsed();
         let bounds = region_bvh.bounds();
@@ -254,7 +255,7 @@ impl AmrVolume {
                 .collect();
             self.visible_bvh
                 .get_or_insert_with(Bvh::default)
-                .rebuild(&boxes);
+                .rebuild_in_order(&boxes);
         }
         t.elapsed()
     }

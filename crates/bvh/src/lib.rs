@@ -136,6 +136,30 @@ impl Bvh {
         build_subtree(&mut self.nodes, &self.keys, prims);
     }
 
+    /// Builds over primitives that already come in a spatially coherent
+    /// order — the depth-first leaves of a k-d tree, say: the hierarchy
+    /// follows that order (splitting index ranges where their highest bit
+    /// changes) and skips the Morton keys and their sort.
+    pub fn build_in_order(prims: &[Aabb]) -> Bvh {
+        let mut bvh = Bvh::default();
+        bvh.rebuild_in_order(prims);
+        bvh
+    }
+
+    /// [`Bvh::build_in_order`] into the existing buffers.
+    pub fn rebuild_in_order(&mut self, prims: &[Aabb]) {
+        let n = prims.len();
+        self.nodes.clear();
+        self.keys.clear();
+        if n == 0 {
+            return;
+        }
+        assert!(n < u32::MAX as usize / 2, "BVH limited to 2^31 primitives");
+        self.keys.extend((0..n as u32).map(|i| (i as u64, i)));
+        self.nodes.resize(2 * n - 1, Node::EMPTY);
+        build_subtree(&mut self.nodes, &self.keys, prims);
+    }
+
     /// Recomputes every box from new primitive boxes without changing the tree
     /// (after a radius change, for instance). `prims` must have the length the
     /// tree was built with.

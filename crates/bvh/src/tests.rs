@@ -111,3 +111,23 @@ fn rebuild_reuses_buffers() {
     bvh.validate(&fewer).unwrap();
     assert_eq!(bvh.nodes.capacity(), cap);
 }
+
+#[test]
+fn in_order_build_answers_the_same_queries() {
+    // Boxes in a coherent order (sorted along x), built without keys.
+    let mut prims = random_boxes(5000, 21, 0.02);
+    prims.sort_by(|a, b| a.min.x.total_cmp(&b.min.x));
+    let bvh = Bvh::build_in_order(&prims);
+    bvh.validate(&prims).unwrap();
+    let mut rng = Lcg(22);
+    for _ in 0..500 {
+        let p = rng.v();
+        let mut got = Vec::new();
+        bvh.point_query(p, |i| got.push(i));
+        got.sort_unstable();
+        let want: Vec<u32> = (0..prims.len() as u32)
+            .filter(|&i| prims[i as usize].contains(p))
+            .collect();
+        assert_eq!(got, want);
+    }
+}
