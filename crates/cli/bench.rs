@@ -419,7 +419,7 @@ fn synthetic(scene: &str, n: usize) -> (ParticleData, f32) {
 
 /// Median time in seconds of `repeats` calls of `f(setup())` (`setup` is not
 /// timed), and the last call's result (earlier results are dropped untimed).
-fn bench<S, T>(
+pub(crate) fn bench<S, T>(
     repeats: usize,
     mut setup: impl FnMut() -> S,
     mut f: impl FnMut(S) -> T,

@@ -55,29 +55,10 @@ use voxless_tets::{
 };
 use voxless_transfer::TransferFunction;
 
-use crate::bench::{image_diff, median, print_header, save_png};
+use crate::bench::{bench, image_diff, print_header, save_png};
 
 mod subblock;
 use subblock::export_subblock;
-
-/// Median time in seconds of `repeats` calls of `f(setup())` (`setup` is not
-/// timed), and the last call's result (as `bench.rs`'s helper).
-fn bench<S, T>(
-    repeats: usize,
-    mut setup: impl FnMut() -> S,
-    mut f: impl FnMut(S) -> T,
-) -> (f64, T) {
-    let mut times = Vec::new();
-    let mut last = None;
-    for _ in 0..repeats.max(1) {
-        let input = setup();
-        let t = Instant::now();
-        let out = f(input);
-        times.push(t.elapsed().as_secs_f64());
-        last = Some(out);
-    }
-    (median(times), last.expect("at least one run"))
-}
 
 #[derive(clap::Args)]
 pub struct TetsArgs {

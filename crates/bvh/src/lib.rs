@@ -103,37 +103,30 @@ impl Bvh {
     /// Rebuilds in place, reusing the node and key buffers (no reallocation
     /// when the primitive count does not grow).
     pub fn rebuild(&mut self, prims: &[Aabb]) {
-        let n = prims.len();
-        self.nodes.clear();
-        self.keys.clear();
-        if n == 0 {
-            return;
-        }
-        assert!(n < u32::MAX as usize / 2, "BVH limited to 2^31 primitives");
-        // Key space: the bounds of the box centres, so keys use all their bits.
-        let centroid_bounds = prims
-            .par_iter()
-            .map(|b| {
-                let mut a = Aabb::EMPTY;
-                if !b.is_empty() && b.min.is_finite() && b.max.is_finite() {
-                    a.grow(b.center());
-                }
-                a
-            })
-            .reduce(|| Aabb::EMPTY, Aabb::union);
-        prims
-            .par_iter()
-            .enumerate()
-            .map(|(i, b)| {
-                (
-                    order::morton(order::quantize(b.center(), &centroid_bounds)),
-                    i as u32,
-                )
-            })
-            .collect_into_vec(&mut self.keys);
-        self.keys.par_sort_unstable();
-        self.nodes.resize(2 * n - 1, Node::EMPTY);
-        build_subtree(&mut self.nodes, &self.keys, prims);
+        self.rebuild_with(prims, |keys| {
+            // Key space: the bounds of the box centres, so keys use all their bits.
+            let centroid_bounds = prims
+                .par_iter()
+                .map(|b| {
+                    let mut a = Aabb::EMPTY;
+                    if !b.is_empty() && b.min.is_finite() && b.max.is_finite() {
+                        a.grow(b.center());
+                    }
+                    a
+                })
+                .reduce(|| Aabb::EMPTY, Aabb::union);
+            prims
+                .par_iter()
+                .enumerate()
+                .map(|(i, b)| {
+                    (
+                        order::morton(order::quantize(b.center(), &centroid_bounds)),
+                        i as u32,
+                    )
+                })
+                .collect_into_vec(keys);
+            keys.par_sort_unstable();
+        });
     }
 
     /// Builds over primitives that already come in a spatially coherent
@@ -148,6 +141,15 @@ impl Bvh {
 
     /// [`Bvh::build_in_order`] into the existing buffers.
     pub fn rebuild_in_order(&mut self, prims: &[Aabb]) {
+        self.rebuild_with(prims, |keys| {
+            keys.extend((0..prims.len() as u32).map(|i| (i as u64, i)))
+        });
+    }
+
+    /// The shared build: `make_keys` fills the (cleared) key buffer with one
+    /// sorted `(key, primitive)` pair per primitive, then the hierarchy follows
+    /// the keys' bits.
+    fn rebuild_with(&mut self, prims: &[Aabb], make_keys: impl FnOnce(&mut Vec<(u64, u32)>)) {
         let n = prims.len();
         self.nodes.clear();
         self.keys.clear();
@@ -155,7 +157,7 @@ impl Bvh {
             return;
         }
         assert!(n < u32::MAX as usize / 2, "BVH limited to 2^31 primitives");
-        self.keys.extend((0..n as u32).map(|i| (i as u64, i)));
+        make_keys(&mut self.keys);
         self.nodes.resize(2 * n - 1, Node::EMPTY);
         build_subtree(&mut self.nodes, &self.keys, prims);
     }
