@@ -101,28 +101,28 @@ fn split_plane(
     ids: &[u32],
     frags: &[Fragment],
 ) -> Option<(usize, i64)> {
-    let centre = [0, 1, 2].map(|a| lo[a] + hi[a]); // doubled again, stays integral
-    // One pass over the faces for all three axes: per axis the interior face
-    // closest to the centre (ties to the lower coordinate).
-    let mut best = [(i64::MAX, 0i64); 3];
-    for &i in ids {
-        let f = &frags[i as usize];
-        for a in 0..3 {
+    let mut axes = [0usize, 1, 2];
+    axes.sort_by_key(|&a| std::cmp::Reverse(hi[a] - lo[a]));
+    // Widest axis first; most nodes find a face there and never scan the others.
+    for a in axes {
+        let centre = lo[a] + hi[a]; // doubled again, stays integral
+        let mut best = (i64::MAX, 0i64);
+        for &i in ids {
+            let f = &frags[i as usize];
             for x in [f.0[a], f.1[a]] {
                 if x > lo[a] && x < hi[a] {
-                    let key = ((2 * x - centre[a]).abs(), x);
-                    if key < (best[a].0, best[a].1) {
-                        best[a] = key;
+                    let key = ((2 * x - centre).abs(), x);
+                    if key < best {
+                        best = key;
                     }
                 }
             }
         }
+        if best.0 != i64::MAX {
+            return Some((a, best.1));
+        }
     }
-    let mut axes = [0usize, 1, 2];
-    axes.sort_by_key(|&a| std::cmp::Reverse(hi[a] - lo[a]));
-    axes.into_iter()
-        .find(|&a| best[a].0 != i64::MAX)
-        .map(|a| (a, best[a].1))
+    None
 }
 
 fn push_leaf(lo: [i64; 3], hi: [i64; 3], ids: &[u32], out: &mut Regions) {
