@@ -59,7 +59,7 @@ enum Command {
     /// Evaluate the reconstructed fields at points: writes float32 N×k .npy,
     /// columns Φ, then Θ (with an attribute), then ∂Φ/∂x, ∂Φ/∂y, ∂Φ/∂z (with --gradient).
     Sample {
-        /// Points: .npy N×3, float32 or float64.
+        /// Points: .npy N×3 (float32 or float64) or CSV with x, y, z columns.
         #[arg(long)]
         points: PathBuf,
         /// Output .npy.
@@ -161,7 +161,7 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let (desc, base) = scene.scene()?;
             let s = resolve(&desc, &base)?;
-            let pts = read_points(&points)?;
+            let pts = voxless_scene::read_points(&points)?;
             let cols = s.volume.sample_columns(gradient);
             let t = Instant::now();
             let values = s.volume.sample_points(&pts, gradient);
@@ -383,24 +383,4 @@ fn write_gray(path: &Path, w: u32, h: u32, values: &[f32]) -> Result<()> {
         voxless_io::write_npy_f32(path, &[h as usize, w as usize], values)?;
     }
     Ok(())
-}
-
-fn read_points(path: &Path) -> Result<Vec<Vec3>> {
-    let a = voxless_io::read_npy(path)?;
-    if a.shape.len() != 2 || a.shape[1] != 3 {
-        bail!(
-            "{}: expected an N×3 array of points, found shape {:?}",
-            path.display(),
-            a.shape
-        );
-    }
-    let pts: Vec<Vec3> = a
-        .data
-        .chunks_exact(3)
-        .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
-        .collect();
-    if let Some(i) = pts.iter().position(|p| !p.is_finite()) {
-        bail!("{}: point {i} has a non-finite coordinate", path.display());
-    }
-    Ok(pts)
 }

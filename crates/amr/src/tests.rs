@@ -497,3 +497,30 @@ fn real_frame_matches_brute_force() {
         }
     }
 }
+
+#[test]
+fn colour_field_is_the_basis_reconstruction_of_that_field() {
+    let input = cells_with(synthetic(17, true), smooth);
+    let settings = AmrSettings {
+        color_field: Some(1),
+        ..Default::default()
+    };
+    let vol = AmrVolume::new(input.clone(), settings).unwrap();
+    let mut rng = Lcg(18);
+    let mut checked = 0;
+    for _ in 0..3000 {
+        let p = random_point(&mut rng, &vol.bounds());
+        let (Some(s), Some(want)) = (vol.sample(p), brute_force(&input, 1, p)) else {
+            continue;
+        };
+        let voxless_core::Attribute::Scalar(c) = s.attribute else {
+            panic!("no colour sample")
+        };
+        assert!(
+            (c as f64 - want).abs() <= 1e-5 * want.abs().max(1.0),
+            "{c} vs {want}"
+        );
+        checked += 1;
+    }
+    assert!(checked > 2000);
+}

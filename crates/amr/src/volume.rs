@@ -319,6 +319,8 @@ impl AmrVolume {
             return self.nearest(pu, region, field, color_field);
         }
         let (v0, v1) = (&self.values[field], &self.values[color_field]);
+        // Without a separate colour field its sum is the value's: skip it.
+        let two_fields = color_field != field;
         let (mut sw, mut sv, mut sc) = (0.0f64, 0.0f64, 0.0f64);
         let (mut sdw, mut sdv) = ([0.0f64; 3], [0.0f64; 3]);
         for &b in self.regions.bricks_of(region) {
@@ -368,10 +370,12 @@ impl AmrVolume {
                         }
                         let local = (idx[2][kz] * b.size[1] + idx[1][ky]) * b.size[0] + idx[0][kx];
                         let cell = b.offset as usize + local as usize;
-                        let (v, c) = (v0[cell] as f64, v1[cell] as f64);
+                        let v = v0[cell] as f64;
                         sw += h as f64;
                         sv += h as f64 * v;
-                        sc += h as f64 * c;
+                        if two_fields {
+                            sc += h as f64 * v1[cell] as f64;
+                        }
                         if gradient {
                             let d = [
                                 dwt[0][kx] * wt[1][ky] * wt[2][kz],
@@ -399,7 +403,11 @@ impl AmrVolume {
         }
         Some(Recon {
             value: value as f32,
-            color: (sc / sw) as f32,
+            color: if two_fields {
+                (sc / sw) as f32
+            } else {
+                value as f32
+            },
             gradient: g,
         })
     }

@@ -14,17 +14,7 @@ fn point_query_equals_brute_force() {
         let prims = random_boxes(n, n as u64, 0.05);
         let bvh = Bvh::build(&prims);
         bvh.validate(&prims).unwrap();
-        let mut rng = Lcg(99);
-        for _ in 0..500 {
-            let p = rng.v();
-            let mut got = Vec::new();
-            bvh.point_query(p, |i| got.push(i));
-            got.sort_unstable();
-            let want: Vec<u32> = (0..n as u32)
-                .filter(|&i| prims[i as usize].contains(p))
-                .collect();
-            assert_eq!(got, want, "n = {n}, p = {p:?}");
-        }
+        assert_point_queries_exact(&bvh, &prims, 99);
     }
 }
 
@@ -58,17 +48,7 @@ fn refit_after_growth_stays_valid_and_exact() {
     }
     bvh.refit(&prims);
     bvh.validate(&prims).unwrap();
-    let mut rng = Lcg(11);
-    for _ in 0..300 {
-        let p = rng.v();
-        let mut got = Vec::new();
-        bvh.point_query(p, |i| got.push(i));
-        got.sort_unstable();
-        let want: Vec<u32> = (0..prims.len() as u32)
-            .filter(|&i| prims[i as usize].contains(p))
-            .collect();
-        assert_eq!(got, want);
-    }
+    assert_point_queries_exact(&bvh, &prims, 11);
 }
 
 #[test]
@@ -119,7 +99,12 @@ fn in_order_build_answers_the_same_queries() {
     prims.sort_by(|a, b| a.min.x.total_cmp(&b.min.x));
     let bvh = Bvh::build_in_order(&prims);
     bvh.validate(&prims).unwrap();
-    let mut rng = Lcg(22);
+    assert_point_queries_exact(&bvh, &prims, 22);
+}
+
+/// Every point query returns exactly the boxes containing the point.
+fn assert_point_queries_exact(bvh: &Bvh, prims: &[Aabb], seed: u64) {
+    let mut rng = Lcg(seed);
     for _ in 0..500 {
         let p = rng.v();
         let mut got = Vec::new();
@@ -128,6 +113,6 @@ fn in_order_build_answers_the_same_queries() {
         let want: Vec<u32> = (0..prims.len() as u32)
             .filter(|&i| prims[i as usize].contains(p))
             .collect();
-        assert_eq!(got, want);
+        assert_eq!(got, want, "{} boxes, at {p:?}", prims.len());
     }
 }

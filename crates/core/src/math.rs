@@ -141,9 +141,6 @@ impl Range1 {
     pub fn union(self, o: Range1) -> Range1 {
         Range1::new(self.lo.min(o.lo), self.hi.max(o.hi))
     }
-    pub fn intersect(self, o: Range1) -> Range1 {
-        Range1::new(self.lo.max(o.lo), self.hi.min(o.hi))
-    }
     pub fn contains(&self, v: f32) -> bool {
         v >= self.lo && v <= self.hi
     }
@@ -227,14 +224,6 @@ impl Aabb {
         } else {
             self.extent().length()
         }
-    }
-    /// Half the surface area; the SAH cost measure.
-    pub fn half_area(&self) -> f32 {
-        if self.is_empty() {
-            return 0.0;
-        }
-        let e = self.extent();
-        e.x * e.y + e.y * e.z + e.z * e.x
     }
     /// The parametric range where `ray` is inside this box, clipped to `t`;
     /// empty when the ray misses. Uses the slab method; a zero direction

@@ -68,11 +68,6 @@ impl Kernel {
         }
     }
 
-    /// The peak value `φ(0)` for radius `r` and weight `w`.
-    pub fn peak(&self, r: f32, w: f32) -> f32 {
-        self.pack(r, w).1
-    }
-
     /// `∫ φ dV` over all space, per unit weight, for radius `r`.
     pub fn integral(&self, r: f64) -> f64 {
         match *self {

@@ -296,92 +296,74 @@ fn pre_classification_averages_colours() {
 fn bad_input_is_a_clear_error() {
     let ok = random_data(10, 1);
     let s = ParticleSettings::default();
-    let mut d = ok.clone();
-    d.positions[3].y = f32::NAN;
-    let e = ParticleVolume::new(d, s.clone()).err().unwrap();
-    assert_eq!(
-        e.to_string(),
-        "particle 3 has a non-finite coordinate (".to_string()
-            + &format!("{}, NaN, {})", ok.positions[3].x, ok.positions[3].z)
-    );
-    let mut d = ok.clone();
-    d.radii.as_mut().unwrap()[4] = 0.0;
-    assert!(
-        ParticleVolume::new(d, s.clone())
-            .err()
-            .unwrap()
-            .to_string()
-            .contains("particle 4 has radius 0")
-    );
-    let mut d = ok.clone();
-    d.radii.as_mut().unwrap()[2] = -1.0;
-    assert!(matches!(
-        ParticleVolume::new(d, s.clone()),
-        Err(ParticleError::BadRadius { index: 2, .. })
-    ));
-    let mut d = ok.clone();
-    d.attribute.as_mut().unwrap().pop();
-    assert!(
-        ParticleVolume::new(d, s.clone())
-            .err()
-            .unwrap()
-            .to_string()
-            .contains("attribute has 9 values but there are 10 particles")
-    );
-    assert!(matches!(
-        ParticleVolume::new(ParticleData::default(), s.clone()),
-        Err(ParticleError::Empty)
-    ));
-    let mut d = ok.clone();
-    d.weights.as_mut().unwrap()[0] = f32::INFINITY;
-    assert!(ParticleVolume::new(d, s.clone()).is_err());
-    for radius in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+    // The error a change to the good data (and/or settings) produces.
+    let error = |edit: &dyn Fn(&mut ParticleData), settings: ParticleSettings| {
         let mut d = ok.clone();
-        d.radii = None;
-        assert!(
-            ParticleVolume::new(
-                d,
-                ParticleSettings {
-                    radius,
-                    ..s.clone()
-                }
-            )
-            .is_err()
+        edit(&mut d);
+        ParticleVolume::new(d, settings)
+            .err()
+            .expect("bad input must be refused")
+    };
+    let e = error(&|d| d.positions[3].y = f32::NAN, s.clone());
+    let want = format!(
+        "particle 3 has a non-finite coordinate ({}, NaN, {})",
+        ok.positions[3].x, ok.positions[3].z
+    );
+    assert_eq!(e.to_string(), want);
+    let e = error(&|d| d.radii.as_mut().unwrap()[4] = 0.0, s.clone());
+    assert!(e.to_string().contains("particle 4 has radius 0"), "{e}");
+    let e = error(&|d| d.radii.as_mut().unwrap()[2] = -1.0, s.clone());
+    assert!(
+        matches!(e, ParticleError::BadRadius { index: 2, .. }),
+        "{e}"
+    );
+    let e = error(&|d| drop(d.attribute.as_mut().unwrap().pop()), s.clone());
+    assert!(
+        e.to_string()
+            .contains("attribute has 9 values but there are 10 particles"),
+        "{e}"
+    );
+    assert!(matches!(
+        error(&|d| *d = ParticleData::default(), s.clone()),
+        ParticleError::Empty
+    ));
+    let e = error(
+        &|d| d.weights.as_mut().unwrap()[0] = f32::INFINITY,
+        s.clone(),
+    );
+    assert!(
+        matches!(e, ParticleError::BadWeight { index: 0, .. }),
+        "{e}"
+    );
+    for radius in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        let e = error(
+            &|d| d.radii = None,
+            ParticleSettings {
+                radius,
+                ..s.clone()
+            },
         );
+        assert!(matches!(e, ParticleError::BadGlobalRadius { .. }), "{e}");
     }
-    assert!(
-        ParticleVolume::new(
-            ok.clone(),
+    for cluster_size in [0, 17] {
+        let e = error(
+            &|_| {},
             ParticleSettings {
-                cluster_size: 0,
+                cluster_size,
                 ..s.clone()
-            }
-        )
-        .is_err()
-    );
-    assert!(
-        ParticleVolume::new(
-            ok.clone(),
-            ParticleSettings {
-                cluster_size: 17,
-                ..s.clone()
-            }
-        )
-        .is_err()
-    );
-    let mut d = ok.clone();
-    d.attribute = None;
+            },
+        );
+        assert!(matches!(e, ParticleError::BadClusterSize { .. }), "{e}");
+    }
     let map = ControlPoints::new("weight map", &[(0.0, 1.0)]).unwrap();
-    assert!(
-        ParticleVolume::new(
-            d,
-            ParticleSettings {
-                weight_map: Some(map),
-                ..s
-            }
-        )
-        .is_err()
+    let e = error(
+        &|d| d.attribute = None,
+        ParticleSettings {
+            weight_map: Some(map),
+            ..s
+        },
     );
+    assert!(matches!(e, ParticleError::NeedsAttribute { .. }), "{e}");
 }
 
 #[test]

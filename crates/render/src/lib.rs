@@ -160,10 +160,6 @@ impl Film {
         }
     }
 
-    pub fn passes(&self) -> u32 {
-        self.passes
-    }
-
     /// Renders sample index `sample` for every pixel and adds it in.
     pub fn add_pass<V: Volume>(
         &mut self,

@@ -81,6 +81,19 @@ impl SceneError {
     }
 }
 
+/// Query points for `sample`: an N×3 `.npy` (float32/float64) or a CSV with
+/// x, y, z columns; non-finite coordinates are an error naming the point.
+pub fn read_points(path: &Path) -> Result<Vec<Vec3>, SceneError> {
+    let (points, _) = load::read_positions(path)?;
+    if let Some(i) = points.iter().position(|p| !p.is_finite()) {
+        return Err(SceneError::data(
+            path,
+            format!("point {i} has a non-finite coordinate"),
+        ));
+    }
+    Ok(points)
+}
+
 /// Reads a TOML scene file (unknown keys are errors, so typos surface).
 pub fn read_scene(path: &Path) -> Result<SceneDesc, SceneError> {
     let text = std::fs::read_to_string(path).map_err(|source| IoError::Io {

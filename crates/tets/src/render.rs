@@ -78,27 +78,26 @@ impl<'a> Compositor<'a> {
     }
 }
 
-/// Running densities below this fraction of the largest contribution are
+/// Running densities below this fraction of the ray's largest contribution are
 /// cancellation residue, not data.
 const RESIDUE: f64 = 1e-9;
 
 /// Integrates sorted `(t, Δρ)` events exactly; returns where it stopped
 /// (the last event's t) and the running density there.
-fn sweep(events: &[(f32, f32)], comp: &mut Compositor, scale: f64) -> (f32, f64) {
+fn sweep(events: &[(f32, f32)], comp: &mut Compositor) -> (f32, f64) {
     let mut rho = 0.0f64;
+    // The largest single contribution seen on this ray sets the residue scale.
+    let mut peak = 0.0f64;
     let mut t_prev = f32::NAN;
     for &(t, d) in events {
         if t_prev.is_finite() {
-            let r = if rho.abs() < RESIDUE * scale {
-                0.0
-            } else {
-                rho
-            };
+            let r = if rho.abs() < RESIDUE * peak { 0.0 } else { rho };
             if comp.segment(r, t - t_prev) {
                 return (t, rho);
             }
         }
         rho += d as f64;
+        peak = peak.max(d.abs() as f64);
         t_prev = t;
     }
     (t_prev, rho)
@@ -145,11 +144,6 @@ pub fn render(
 ) -> Image {
     let (w, h) = (settings.width, settings.height);
     let frame = Frame::new(mesh, camera, w, h, options.lod_pixels);
-    let scale = mesh
-        .tets
-        .iter()
-        .map(|t| t.density as f64)
-        .fold(0.0, f64::max);
     let pixels = over_tiles(&frame, progress, |i, rays| {
         let spans = box_spans(mesh, rays);
         match mode {
@@ -164,14 +158,14 @@ pub fn render(
                     .map(|ev| {
                         ev.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
                         let mut comp = Compositor::new(tf, settings);
-                        sweep(ev, &mut comp, scale);
+                        sweep(ev, &mut comp);
                         comp.rgba()
                     })
                     .collect()
             }
-            TetMode::KBuffer { k, layers } => kbuffer_tile(
-                mesh, &frame, i, rays, &spans, k, layers, tf, settings, scale,
-            ),
+            TetMode::KBuffer { k, layers } => {
+                kbuffer_tile(mesh, &frame, i, rays, &spans, k, layers, tf, settings)
+            }
         }
     });
     Image {
@@ -214,7 +208,6 @@ fn kbuffer_tile(
     layers: usize,
     tf: &TransferFunction,
     settings: &RenderSettings,
-    scale: f64,
 ) -> Vec<[f32; 4]> {
     let n = rays.len();
     let k = k.max(1);
@@ -261,7 +254,7 @@ fn kbuffer_tile(
         .map(|p| {
             let mut comp = Compositor::new(tf, settings);
             let buf = &kbuf[p];
-            let (t_k, _) = sweep(buf, &mut comp, scale);
+            let (t_k, _) = sweep(buf, &mut comp);
             if buf.len() < k || comp.alpha >= settings.early_termination {
                 // Every event fitted: the sweep was exact.
                 return comp.rgba();

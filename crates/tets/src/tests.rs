@@ -128,6 +128,18 @@ fn sampled_density_integrates_to_the_total_mass() {
     assert!(errors[1] < errors[0] && errors[1] < 5e-3, "{errors:?}");
 }
 
+/// The Zel'dovich sheet below, jittered in all three axes: shell-crossed,
+/// overlapping and tilted tets.
+fn folded_sheet(n: usize, seed: u64) -> LagrangianGrid {
+    let k = std::f32::consts::TAU;
+    let a = 1.5 / k;
+    let j = jitter(seed, 0.03);
+    grid(n, 1.0, move |q| {
+        let d = j(q);
+        [a * (k * q[0]).sin() + d[0], d[1], d[2]]
+    })
+}
+
 /// The Zel'dovich sheet x = q + A sin(kq) after shell crossing (A·k = 1.5).
 fn zeldovich(n: usize) -> (LagrangianGrid, impl Fn(f32) -> f32) {
     let l = 1.0f32;
@@ -311,28 +323,7 @@ fn brute_force(
 
 #[test]
 fn exact_mode_equals_brute_force_and_kbuffer_converges() {
-    let (g, _) = zeldovich(6);
-    let g = LagrangianGrid {
-        positions: g
-            .positions
-            .iter()
-            .zip(grid(6, 1.0, jitter(11, 0.03)).positions)
-            .map(|(a, b)| {
-                // Shell-crossed sheet plus jitter: overlapping, tilted tets.
-                let d = b - Vec3::new(
-                    (b.x * 6.0).round() / 6.0,
-                    (b.y * 6.0).round() / 6.0,
-                    (b.z * 6.0).round() / 6.0,
-                );
-                Vec3::new(
-                    (a.x + d.x).rem_euclid(1.0),
-                    (a.y + d.y).rem_euclid(1.0),
-                    (a.z + d.z).rem_euclid(1.0),
-                )
-            })
-            .collect(),
-        ..g
-    };
+    let g = folded_sheet(6, 11);
     let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
     let tf = log_tf();
     let cam = Camera::look_at(
@@ -590,29 +581,9 @@ fn uniform_grid_shifted_by_half_a_box_renders_identically() {
 
 #[test]
 fn fast_projection_equals_full_ray_clipping() {
-    // Shell-crossed, jittered sheets: overlapping tets of both classes, and
-    // tets crossing box faces (clipped, not splatted).
-    let (z, _) = zeldovich(8);
-    let j = grid(8, 1.0, jitter(37, 0.03));
-    let g = LagrangianGrid {
-        positions: z
-            .positions
-            .iter()
-            .zip(&j.positions)
-            .enumerate()
-            .map(|(i, (a, b))| {
-                let (ii, jj, kk) = (i / 64, (i / 8) % 8, i % 8);
-                let q = Vec3::new(ii as f32, jj as f32, kk as f32) / 8.0;
-                let d = *b - q;
-                Vec3::new(
-                    (a.x + d.x).rem_euclid(1.0),
-                    (a.y + d.y).rem_euclid(1.0),
-                    (a.z + d.z).rem_euclid(1.0),
-                )
-            })
-            .collect(),
-        ..z
-    };
+    // Overlapping tets of both projection classes, and tets crossing box
+    // faces (clipped to the box).
+    let g = folded_sheet(8, 37);
     let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
     for axis in 0..3 {
         let cam = Camera::axis_projection(&Aabb::new(Vec3::ZERO, Vec3::ONE), axis).unwrap();

@@ -95,14 +95,6 @@ impl ControlPoints {
         let s = if x1 > x0 { (x - x0) / (x1 - x0) } else { 1.0 };
         y0 + s * (y1 - y0)
     }
-
-    /// Largest `y` over all points (the map's maximum, since it is piecewise linear).
-    pub fn max_value(&self) -> f32 {
-        self.points
-            .iter()
-            .map(|p| p.1)
-            .fold(f32::NEG_INFINITY, f32::max)
-    }
 }
 
 /// Colour control points in sRGB.
