@@ -317,7 +317,7 @@ fn bad_input_is_a_clear_error() {
         matches!(e, ParticleError::BadRadius { index: 2, .. }),
         "{e}"
     );
-    let e = error(&|d| drop(d.attribute.as_mut().unwrap().pop()), s.clone());
+    let e = error(&|d| d.attribute.as_mut().unwrap().truncate(9), s.clone());
     assert!(
         e.to_string()
             .contains("attribute has 9 values but there are 10 particles"),
