@@ -25,11 +25,13 @@ pub mod amr;
 pub mod csv;
 pub mod image;
 pub mod npy;
+pub mod table;
 
 pub use amr::{AmrCellData, read_amrclaw, read_exabricks};
 pub use csv::{CsvTable, read_csv};
 pub use image::{read_exr_gray, read_png_rgb8, write_exr_gray, write_exr_rgba, write_png_rgb8};
 pub use npy::{NpyArray, read_npy, write_npy_f32};
+pub use table::ParticleTable;
 
 /// An error while reading or writing a file. Both variants name the file.
 #[derive(Debug, thiserror::Error)]

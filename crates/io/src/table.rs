@@ -1,0 +1,65 @@
+//! The common result of every particle reader: positions plus named
+//! per-particle columns, one frame at a time.
+//!
+//! Formats that hold several frames (a LAMMPS dump, a directory of PySPH
+//! outputs) report how many with their `*_frames` function and read one frame
+//! per call, so a time series never holds more than one frame in memory.
+
+/// Particles of one frame, in file order.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ParticleTable {
+    /// Positions, one per particle (world units of the file).
+    pub positions: Vec<[f32; 3]>,
+    /// Named per-particle columns, each `positions.len()` long, in the order
+    /// the file lists them; derived columns (e.g. `speed` = |v|) come last.
+    /// Vector quantities appear as their components (`vx`, `vy`, `vz`) and, for
+    /// velocities, as `speed`.
+    pub columns: Vec<(String, Vec<f32>)>,
+    /// Simulation time of the frame, when the file says.
+    pub time: Option<f64>,
+    /// The simulation box (lower corner, upper corner), when the file says.
+    pub domain: Option<([f64; 3], [f64; 3])>,
+}
+
+impl ParticleTable {
+    /// The column called `name` (case-insensitive).
+    pub fn column(&self, name: &str) -> Option<&[f32]> {
+        let wanted = name.trim();
+        self.columns
+            .iter()
+            .find(|(n, _)| n.eq_ignore_ascii_case(wanted))
+            .map(|(_, v)| v.as_slice())
+    }
+
+    /// The names of all columns, for error messages ("fields: a, b, c").
+    pub fn column_names(&self) -> Vec<&str> {
+        self.columns.iter().map(|(n, _)| n.as_str()).collect()
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    /// Appends `speed = |(vx, vy, vz)|` when the three components exist and
+    /// `speed` does not.
+    pub fn derive_speed(&mut self, vx: &str, vy: &str, vz: &str) {
+        if self.column("speed").is_some() {
+            return;
+        }
+        let speed = match (self.column(vx), self.column(vy), self.column(vz)) {
+            (Some(x), Some(y), Some(z)) => x
+                .iter()
+                .zip(y)
+                .zip(z)
+                .map(|((a, b), c)| (a * a + b * b + c * c).sqrt())
+                .collect(),
+            _ => return,
+        };
+        self.columns.push(("speed".into(), speed));
+    }
+}
