@@ -177,6 +177,10 @@ pub struct SceneArgs {
     /// Map the value linearly (default except for tessellations).
     #[arg(long, help_heading = "Transfer function")]
     pub linear: bool,
+    /// Sample particles point by point instead of in ray packets (same
+    /// image, slower; for comparisons).
+    #[arg(long, help_heading = "Render")]
+    pub no_packets: bool,
     /// Render only what lies inside this box.
     #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], help_heading = "Render", allow_negative_numbers = true)]
     pub clip: Option<Vec<f32>>,
@@ -335,6 +339,9 @@ impl SceneArgs {
         }
         if self.linear {
             d.render.log_scale = Some(false);
+        }
+        if self.no_packets {
+            d.render.packets = Some(false);
         }
         if let Some(c) = &self.clip {
             d.render.clip = Some([c[0], c[1], c[2], c[3], c[4], c[5]]);

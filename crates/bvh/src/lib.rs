@@ -234,6 +234,43 @@ impl Bvh {
         }
     }
 
+    /// Calls `visit(prim, leaf box)` for every primitive whose box overlaps `b`, depth
+    /// first, left child first — the order [`Bvh::point_query`] uses, so for
+    /// any point in `b` the primitives containing it come in the same relative
+    /// order (packet sampling relies on that to sum bit-identically).
+    pub fn box_query(&self, b: &Aabb, mut visit: impl FnMut(u32, &Aabb)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let overlaps = |n: &Node| {
+            n.min[0] <= b.max.x
+                && n.max[0] >= b.min.x
+                && n.min[1] <= b.max.y
+                && n.max[1] >= b.min.y
+                && n.min[2] <= b.max.z
+                && n.max[2] >= b.min.z
+        };
+        let mut stack = [0u32; STACK];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let mut i = stack[sp] as usize;
+            loop {
+                let node = &self.nodes[i];
+                if !overlaps(node) {
+                    break;
+                }
+                if node.is_leaf() {
+                    visit(node.index, &node.bounds());
+                    break;
+                }
+                stack[sp] = (i + node.index as usize) as u32;
+                sp += 1;
+                i += 1;
+            }
+        }
+    }
+
     /// Calls `visit(prim, t)` for every primitive whose box `ray` crosses
     /// within `t`, with the clipped parametric range, in no particular order.
     pub fn ray_query(&self, ray: &Ray, t: Range1, mut visit: impl FnMut(u32, Range1)) {

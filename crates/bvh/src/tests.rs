@@ -116,3 +116,39 @@ fn assert_point_queries_exact(bvh: &Bvh, prims: &[Aabb], seed: u64) {
         assert_eq!(got, want, "{} boxes, at {p:?}", prims.len());
     }
 }
+
+#[test]
+fn box_query_equals_brute_force_and_keeps_point_query_order() {
+    let prims = random_boxes(5000, 11, 0.04);
+    let bvh = Bvh::build(&prims);
+    let mut rng = Lcg(5);
+    for _ in 0..200 {
+        let b = Aabb::around(rng.v(), rng.f() * 0.1);
+        let mut got = Vec::new();
+        bvh.box_query(&b, |i, _| got.push(i));
+        let mut sorted = got.clone();
+        sorted.sort_unstable();
+        let want: Vec<u32> = (0..prims.len() as u32)
+            .filter(|&i| {
+                let p = &prims[i as usize];
+                p.min.x <= b.max.x
+                    && p.max.x >= b.min.x
+                    && p.min.y <= b.max.y
+                    && p.max.y >= b.min.y
+                    && p.min.z <= b.max.z
+                    && p.max.z >= b.min.z
+            })
+            .collect();
+        assert_eq!(sorted, want);
+        // For a point inside the box, the primitives containing it come in
+        // the point query's order.
+        let p = b.center();
+        let mut by_point = Vec::new();
+        bvh.point_query(p, |i| by_point.push(i));
+        let filtered: Vec<u32> = got
+            .into_iter()
+            .filter(|&i| prims[i as usize].contains(p))
+            .collect();
+        assert_eq!(filtered, by_point);
+    }
+}

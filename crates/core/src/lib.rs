@@ -19,6 +19,7 @@ pub use macrogrid::MacroGrid;
 pub use math::{Aabb, Range1, Ray, Vec3};
 pub use rng::SmallRng;
 pub use volume::{
+    SampleBatch,
     Attribute, Interval, IntervalQuery, Sample, Volume, quadrature_line_integral, simpson,
 };
 

@@ -122,6 +122,34 @@ pub trait Volume: Send + Sync {
         self.sample_with_gradient(p)
     }
 
+    /// Whether [`Volume::sample_batch`] is a real packet path (faster than
+    /// sampling point by point). Integrators use it only then.
+    fn packet_sampling(&self) -> bool {
+        false
+    }
+
+    /// Samples every point of a packet at once: `out` (cleared by the caller)
+    /// receives, for each `t` of `batch` in order, the sample at
+    /// `rays[r].at(t)` (`None` where no data covers it) and, when `gradient`,
+    /// the gradient there (zero otherwise). A packet path must give exactly
+    /// what [`Volume::sample`]/[`Volume::sample_with_gradient`] give; the
+    /// default is that slow path.
+    fn sample_batch(&self, batch: &SampleBatch, gradient: bool, out: &mut Vec<(Option<Sample>, Vec3)>) {
+        for (r, ray) in batch.rays.iter().enumerate() {
+            for &t in batch.samples(r) {
+                let p = ray.at(t);
+                out.push(if gradient {
+                    match self.sample_with_gradient(p) {
+                        Some((s, g)) => (Some(s), g),
+                        None => (None, Vec3::ZERO),
+                    }
+                } else {
+                    (self.sample(p), Vec3::ZERO)
+                });
+            }
+        }
+    }
+
     /// Append the intervals of `ray` within `t` to `out` (which the caller
     /// clears), in increasing `t`, non-overlapping.
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>);
@@ -131,6 +159,24 @@ pub trait Volume: Send + Sync {
     /// path; data kinds with a closed form override it.
     fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
         quadrature_line_integral(self, ray, t)
+    }
+}
+
+/// A packet of rays and the sample positions along each: a sample buffer to
+/// fill in one go (CPU RBF paper §4).
+#[derive(Clone, Copy, Debug)]
+pub struct SampleBatch<'a> {
+    pub rays: &'a [Ray],
+    /// The samples of ray `r` are `t[offsets[r]..offsets[r + 1]]`, increasing.
+    pub offsets: &'a [u32],
+    pub t: &'a [f32],
+}
+
+impl SampleBatch<'_> {
+    /// The sample parameters of ray `r`.
+    #[inline]
+    pub fn samples(&self, r: usize) -> &[f32] {
+        &self.t[self.offsets[r] as usize..self.offsets[r + 1] as usize]
     }
 }
 

@@ -3,12 +3,15 @@
 use rayon::prelude::*;
 use voxless_bvh::{Bvh, order};
 use voxless_core::{
-    Aabb, Attribute, Interval, IntervalQuery, MacroGrid, Range1, Ray, Sample, Vec3, Volume,
+    Aabb, Attribute, Interval, IntervalQuery, MacroGrid, Range1, Ray, Sample, SampleBatch, Vec3,
+    Volume,
 };
 use voxless_transfer::{ControlPoints, TransferFunction};
 
 use crate::error::ParticleError;
 use crate::kernel::{CubicFamily, Family, GaussianFamily, Kernel};
+
+mod packet;
 
 /// Particle arrays as read from a file, in file order.
 #[derive(Clone, Debug, Default)]
@@ -682,6 +685,24 @@ impl Volume for ParticleVolume {
     fn sample_with_gradient(&self, p: Vec3) -> Option<(Sample, Vec3)> {
         let f = self.field(p, true);
         f.covered.then(|| (to_sample(&f), f.gradient))
+    }
+
+    fn packet_sampling(&self) -> bool {
+        true
+    }
+
+    fn sample_batch(
+        &self,
+        batch: &SampleBatch,
+        gradient: bool,
+        out: &mut Vec<(Option<Sample>, Vec3)>,
+    ) {
+        match (self.settings.kernel, gradient) {
+            (Kernel::CubicSpline, false) => self.batch::<CubicFamily, false>(batch, out),
+            (Kernel::CubicSpline, true) => self.batch::<CubicFamily, true>(batch, out),
+            (_, false) => self.batch::<GaussianFamily, false>(batch, out),
+            (_, true) => self.batch::<GaussianFamily, true>(batch, out),
+        }
     }
 
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {

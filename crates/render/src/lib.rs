@@ -18,12 +18,15 @@
 //! order, so the same inputs give the same image bit for bit regardless of
 //! thread count or tile scheduling.
 
+mod march;
+mod packet;
 pub mod sampling;
 
+pub use march::march;
+pub use packet::{PACKET, WINDOW_STEPS};
+
 use rayon::prelude::*;
-use voxless_core::{
-    Aabb, Attribute, Camera, Image, Interval, IntervalQuery, Range1, Ray, Vec3, Volume,
-};
+use voxless_core::{Aabb, Camera, Image, Range1, Vec3, Volume};
 use voxless_transfer::TransferFunction;
 
 use sampling::PixelRng;
@@ -67,6 +70,9 @@ pub struct RenderSettings {
     /// Map `log10(value)` rather than `value` through the transfer function
     /// (`value_range` is then in log10 units; values ≤ 0 map to 0).
     pub log_scale: bool,
+    /// Use the volume's packet path when it has one (module `packet`); the
+    /// per-sample path otherwise. Both give the same image.
+    pub packets: bool,
 }
 
 impl RenderSettings {
@@ -91,6 +97,7 @@ impl RenderSettings {
             iso_opacity: 1.0,
             volume: true,
             log_scale: false,
+            packets: true,
         }
     }
 
@@ -174,21 +181,29 @@ impl Film {
         let results: Vec<(Tile, Vec<[f32; 4]>)> = tiles(w, h)
             .into_par_iter()
             .map(|tile| {
-                let mut scratch = Vec::new();
                 let mut out = Vec::with_capacity((tile.w * tile.h) as usize);
-                for y in tile.y..tile.y + tile.h {
-                    for x in tile.x..tile.x + tile.w {
-                        let pixel = y as u64 * w as u64 + x as u64;
-                        let rng = PixelRng::new(settings.seed, pixel, sample);
-                        // The first sample goes through the pixel centre; later
-                        // ones are jittered over the pixel (antialiasing).
-                        let (jx, jy) = if sample == 0 {
-                            (0.5, 0.5)
-                        } else {
-                            (rng.uniform(0), rng.uniform(1))
-                        };
-                        let ray = camera.ray(x as f32 + jx, y as f32 + jy, w, h);
-                        out.push(march(volume, &ray, tf, settings, &rng, &mut scratch));
+                if settings.packets && volume.packet_sampling() {
+                    let mut scratch = packet::PacketScratch::default();
+                    packet::render_tile(
+                        volume,
+                        camera,
+                        tf,
+                        settings,
+                        sample,
+                        tile,
+                        &mut scratch,
+                        &mut out,
+                    );
+                } else {
+                    let mut scratch = Vec::new();
+                    for y in tile.y..tile.y + tile.h {
+                        for x in tile.x..tile.x + tile.w {
+                            let pixel = y as u64 * w as u64 + x as u64;
+                            let rng = PixelRng::new(settings.seed, pixel, sample);
+                            let (jx, jy) = pixel_offset(&rng, sample);
+                            let ray = camera.ray(x as f32 + jx, y as f32 + jy, w, h);
+                            out.push(march(volume, &ray, tf, settings, &rng, &mut scratch));
+                        }
                     }
                 }
                 tile_done();
@@ -221,8 +236,19 @@ impl Film {
     }
 }
 
+/// Where in the pixel the ray of sample `sample` goes: the first through the
+/// centre, later ones jittered over the pixel (antialiasing).
+#[inline]
+pub(crate) fn pixel_offset(rng: &PixelRng, sample: u32) -> (f32, f32) {
+    if sample == 0 {
+        (0.5, 0.5)
+    } else {
+        (rng.uniform(0), rng.uniform(1))
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
-struct Tile {
+pub(crate) struct Tile {
     x: u32,
     y: u32,
     w: u32,
@@ -242,157 +268,6 @@ fn tiles(width: u32, height: u32) -> Vec<Tile> {
         }
     }
     v
-}
-
-/// Emission–absorption along one ray; returns premultiplied linear RGBA.
-pub fn march<V: Volume>(
-    volume: &V,
-    ray: &Ray,
-    tf: &TransferFunction,
-    settings: &RenderSettings,
-    rng: &PixelRng,
-    scratch: &mut Vec<Interval>,
-) -> [f32; 4] {
-    let mut region = volume.bounds();
-    if let Some(clip) = settings.clip {
-        region = Aabb::new(region.min.max(clip.min), region.max.min(clip.max));
-    }
-    let t = region.clip_ray(ray, Range1::new(0.0, f32::INFINITY));
-    if t.is_empty() {
-        return [0.0; 4];
-    }
-    let visible = |r: Range1| settings.is_visible(tf, r);
-    scratch.clear();
-    volume.intervals(
-        ray,
-        t,
-        &IntervalQuery {
-            is_visible: &visible,
-        },
-        scratch,
-    );
-    let mut acc = Accumulator::default();
-    let attr_range = settings.attribute_range.unwrap_or(Range1::new(0.0, 1.0));
-    let colour_of = |s: &voxless_core::Sample, x: f32| match s.attribute {
-        Attribute::Scalar(v) => tf.color(attr_range.normalize(v)),
-        Attribute::Rgb(c) => c,
-        Attribute::None => tf.color(x),
-    };
-    let needs_gradient = settings.light.is_some();
-    // The previous sample (t, value), for iso-surface crossings; reset at gaps.
-    let mut prev: Option<(f32, f32)> = None;
-    let mut prev_end = f32::NAN;
-    for (k, iv) in scratch.iter().enumerate() {
-        if iv.t.lo != prev_end {
-            prev = None;
-        }
-        prev_end = iv.t.hi;
-        let dt = settings
-            .step
-            .unwrap_or(iv.nominal_dt / settings.sampling_rate)
-            .max(iv.t.span() * 1e-6)
-            .max(f32::MIN_POSITIVE);
-        // Segment boundaries start at a random offset inside the first step.
-        let xi = rng.uniform(2 + k as u32);
-        let mut seg_start = iv.t.lo;
-        let mut seg_end = iv.t.lo + xi * dt;
-        while seg_start < iv.t.hi {
-            let end = seg_end.min(iv.t.hi);
-            let len = end - seg_start;
-            seg_start = end;
-            seg_end = end + dt;
-            if len <= 0.0 {
-                continue;
-            }
-            let tm = end - 0.5 * len;
-            let p = ray.at(tm);
-            let (sample, gradient) = match needs_gradient && settings.volume {
-                true => match volume.sample_with_gradient_in(p, iv) {
-                    Some((s, g)) => (Some(s), g),
-                    None => (None, Vec3::ZERO),
-                },
-                false => (volume.sample_in(p, iv), Vec3::ZERO),
-            };
-            let Some(s) = sample else {
-                prev = None;
-                continue;
-            };
-            // Implicit iso-surfaces: a sign change of value − iso between the
-            // previous sample and this one is a hit, placed by linear interpolation.
-            if let Some((t0, v0)) = prev {
-                for &iso in &settings.iso {
-                    if (v0 - iso) * (s.value - iso) < 0.0 || (s.value == iso && v0 != iso) {
-                        let th = t0 + (iso - v0) / (s.value - v0) * (tm - t0);
-                        let ph = ray.at(th);
-                        // The hit may lie in the previous interval: only use
-                        // this interval's hint when it contains the hit.
-                        let hit = if iv.t.contains(th) {
-                            volume.sample_with_gradient_in(ph, iv)
-                        } else {
-                            volume.sample_with_gradient(ph)
-                        };
-                        let (hs, g) = hit.unwrap_or((s, gradient));
-                        let light = settings.light.unwrap_or(Light {
-                            direction: -ray.dir,
-                            ambient: 0.2,
-                        });
-                        let c = colour_of(&hs, settings.normalize(iso)) * shade(g, light);
-                        if acc.add(c, settings.iso_opacity, settings.early_termination) {
-                            return acc.rgba();
-                        }
-                    }
-                }
-            }
-            prev = Some((tm, s.value));
-            if !settings.volume {
-                continue;
-            }
-            let x = settings.normalize(s.value);
-            let opacity = tf.opacity(x);
-            if opacity > 0.0 {
-                let a = 1.0 - (-opacity * settings.opacity_scale * len).exp();
-                let mut c = colour_of(&s, x);
-                if let Some(light) = settings.light {
-                    c = c * shade(gradient, light);
-                }
-                if acc.add(c, a, settings.early_termination) {
-                    return acc.rgba();
-                }
-            }
-        }
-    }
-    acc.rgba()
-}
-
-/// Front-to-back compositing of premultiplied colour.
-#[derive(Default)]
-struct Accumulator {
-    color: Vec3,
-    alpha: f32,
-}
-
-impl Accumulator {
-    /// Adds colour `c` with opacity `a` behind what is there; returns true
-    /// once the pixel is opaque enough to stop.
-    #[inline]
-    fn add(&mut self, c: Vec3, a: f32, early_termination: f32) -> bool {
-        self.color += c * ((1.0 - self.alpha) * a);
-        self.alpha += (1.0 - self.alpha) * a;
-        self.alpha >= early_termination
-    }
-    fn rgba(&self) -> [f32; 4] {
-        [self.color.x, self.color.y, self.color.z, self.alpha]
-    }
-}
-
-/// Two-sided diffuse term: the gradient's sign depends on which side of a
-/// feature we are, so both sides face the light equally.
-fn shade(gradient: Vec3, light: Light) -> f32 {
-    let n = gradient.normalized();
-    if n.length_squared() == 0.0 {
-        return 1.0;
-    }
-    light.ambient + (1.0 - light.ambient) * n.dot(light.direction).abs()
 }
 
 /// The line integral `∫ value dt` through the centre of every pixel of a

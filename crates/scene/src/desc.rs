@@ -162,6 +162,9 @@ pub struct RenderDesc {
     /// tessellations, whose densities span decades; off otherwise). The value
     /// range is then given in log10 units.
     pub log_scale: Option<bool>,
+    /// Particles: march rays in packets that share one BVH traversal per
+    /// pass (default true); false samples point by point. Same image.
+    pub packets: Option<bool>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]

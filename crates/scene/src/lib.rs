@@ -366,6 +366,7 @@ pub fn resolve_frame(
         positive("render.opacity_scale", s)?;
         settings.opacity_scale = s;
     }
+    settings.packets = r.packets.unwrap_or(true);
     settings.log_scale = r.log_scale.unwrap_or(matches!(volume, AnyVolume::Tets(..)));
     if settings.log_scale {
         // Log-scale transfer functions take their range in log10 units; the
