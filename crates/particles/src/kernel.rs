@@ -23,6 +23,12 @@
 //! drops the `1/s²` factor; we keep the exact form).
 
 use voxless_core::Vec3;
+/// The SIMD type the packet path evaluates kernels on. Four lanes: a ray's
+/// run of samples inside one particle is short (≈ 8 at the default step), so
+/// narrower chunks waste fewer masked lanes (measured in docs/benchmarks.md).
+pub type Lanes = wide::f32x4;
+/// Lanes in [`Lanes`].
+pub const LANES: usize = 4;
 
 /// The kernel family and its global parameters.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -87,6 +93,11 @@ pub trait Family: Copy + Send + Sync {
     fn value(d: Vec3, d2: f32, shape: f32, amp: f32) -> f32;
     /// `(φ, g)` with `∇φ = g·d`.
     fn value_and_gradient_factor(d: Vec3, d2: f32, shape: f32, amp: f32) -> (f32, f32);
+    /// [`Family::value`] for [`LANES`] squared distances at once, in f32 (the
+    /// packet path; within a few ulp of the scalar form).
+    fn value_simd(d2: Lanes, shape: f32, amp: f32) -> Lanes;
+    /// [`Family::value_and_gradient_factor`] for [`LANES`] points at once.
+    fn value_and_gradient_factor_simd(d2: Lanes, shape: f32, amp: f32) -> (Lanes, Lanes);
 }
 
 #[derive(Clone, Copy)]
@@ -103,6 +114,15 @@ impl Family for GaussianFamily {
     fn value_and_gradient_factor(_: Vec3, d2: f32, shape: f32, amp: f32) -> (f32, f32) {
         let v = amp * (-shape * d2).exp();
         (v, -2.0 * shape * v)
+    }
+    #[inline(always)]
+    fn value_simd(d2: Lanes, shape: f32, amp: f32) -> Lanes {
+        Lanes::splat(amp) * (Lanes::splat(-shape) * d2).exp()
+    }
+    #[inline(always)]
+    fn value_and_gradient_factor_simd(d2: Lanes, shape: f32, amp: f32) -> (Lanes, Lanes) {
+        let v = Self::value_simd(d2, shape, amp);
+        (v, Lanes::splat(-2.0 * shape) * v)
     }
 }
 
@@ -132,6 +152,38 @@ impl Family for CubicFamily {
             -3.0 * amp * inv_h * inv_h
         };
         (v as f32, g as f32)
+    }
+    #[inline(always)]
+    fn value_simd(d2: Lanes, inv_h: f32, amp: f32) -> Lanes {
+        let q = d2.sqrt() * Lanes::splat(inv_h);
+        let one = Lanes::ONE;
+        let inner = one + q * q * (Lanes::splat(0.75) * q - Lanes::splat(1.5));
+        let t = Lanes::splat(2.0) - q;
+        let outer = Lanes::splat(0.25) * t * t * t;
+        let m4 = q
+            .simd_lt(one)
+            .select(inner, q.simd_lt(Lanes::splat(2.0)).select(outer, Lanes::ZERO));
+        Lanes::splat(amp) * m4
+    }
+    #[inline(always)]
+    fn value_and_gradient_factor_simd(d2: Lanes, inv_h: f32, amp: f32) -> (Lanes, Lanes) {
+        let dist = d2.sqrt();
+        let q = dist * Lanes::splat(inv_h);
+        let one = Lanes::ONE;
+        let inner = one + q * q * (Lanes::splat(0.75) * q - Lanes::splat(1.5));
+        let t = Lanes::splat(2.0) - q;
+        let outer = Lanes::splat(0.25) * t * t * t;
+        let lt1 = q.simd_lt(one);
+        let lt2 = q.simd_lt(Lanes::splat(2.0));
+        let a = Lanes::splat(amp);
+        let v = a * lt1.select(inner, lt2.select(outer, Lanes::ZERO));
+        // ∇φ = g·d. Inside q < 1, M4'(q)/q = −3 + 2.25q (no division, exact
+        // at d = 0); outside, M4'(q) = −0.75(2 − q)² and |d| ≥ h.
+        let ih = Lanes::splat(inv_h);
+        let g_in = a * ih * ih * (Lanes::splat(2.25) * q - Lanes::splat(3.0));
+        let g_out = a * ih * (Lanes::splat(-0.75) * t * t) / dist.max(Lanes::splat(f32::MIN_POSITIVE));
+        let g = lt1.select(g_in, lt2.select(g_out, Lanes::ZERO));
+        (v, g)
     }
 }
 
