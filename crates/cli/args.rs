@@ -114,6 +114,11 @@ pub struct SceneArgs {
     /// Colormap preset (see `voxless colormaps`).
     #[arg(long, help_heading = "Transfer function")]
     pub colormap: Option<String>,
+    /// Colormap file: ParaView preset JSON ("Export preset") or a JSON list of
+    /// [r, g, b] / [x, r, g, b] sRGB colours; --colormap NAME picks a preset in
+    /// it. Its opacity points apply unless --opacity is given.
+    #[arg(long, value_name = "FILE", help_heading = "Transfer function")]
+    pub colormap_file: Option<PathBuf>,
     /// Opacity preset: linear, constant, ramp-high, ramp-low.
     #[arg(long, help_heading = "Transfer function")]
     pub opacity: Option<String>,
@@ -139,6 +144,18 @@ pub struct SceneArgs {
         allow_negative_numbers = true
     )]
     pub orthographic: Option<f32>,
+    /// Orbit the eye about the up axis through the look-at point (the data
+    /// centre by default), in degrees; positive turns towards the right.
+    #[arg(long, value_name = "DEG", help_heading = "Camera", allow_negative_numbers = true, value_parser = crate::view::degrees)]
+    pub orbit: Option<f32>,
+    /// Raise the eye towards the up vector, in degrees (negative lowers it;
+    /// the view stays within ±89.9° of the horizontal).
+    #[arg(long, value_name = "DEG", help_heading = "Camera", allow_negative_numbers = true, value_parser = crate::view::degrees)]
+    pub elevation: Option<f32>,
+    /// Zoom by F > 0: the eye's distance to the look-at point ÷ F
+    /// (orthographic: the view height ÷ F).
+    #[arg(long, value_name = "F", help_heading = "Camera", allow_negative_numbers = true, value_parser = crate::view::zoom)]
+    pub zoom: Option<f32>,
 
     // ---- render ----
     /// Ray-marching step in world units (default: 1/8 of the median support radius).
@@ -305,6 +322,15 @@ impl SceneArgs {
             d.image.height = Some(s[1]);
         }
         set(&mut d.image.spp, self.spp);
+        if let Some(f) = &self.colormap_file {
+            // The file replaces the scene's colours; --colormap picks in it.
+            let f = std::env::current_dir().map_or_else(|_| f.clone(), |d| d.join(f));
+            d.transfer.colormap_file = Some(f.to_string_lossy().into_owned());
+            d.transfer.colormap_points = None;
+            d.transfer.colormap = None;
+        } else if self.colormap.is_some() {
+            d.transfer.colormap_file = None;
+        }
         if self.colormap.is_some() {
             d.transfer.colormap_points = None;
         }
@@ -318,6 +344,9 @@ impl SceneArgs {
         set(&mut d.camera.look_at, arr3(&self.look_at));
         set(&mut d.camera.up, arr3(&self.up));
         set(&mut d.camera.fov, self.fov);
+        set(&mut d.camera.orbit, self.orbit);
+        set(&mut d.camera.elevation, self.elevation);
+        set(&mut d.camera.zoom, self.zoom);
         if let Some(h) = self.orthographic {
             d.camera.projection = Some("orthographic".into());
             d.camera.ortho_height = Some(h);

@@ -6,6 +6,7 @@ mod bench;
 mod bench_amr;
 mod bench_tets;
 mod progress;
+mod view;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -13,6 +14,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use voxless_core::{Aabb, Camera, Vec3};
+use voxless_render::colorbar::ColorbarSpec;
 use voxless_scene::{LoadedScene, ParticlesDesc};
 
 use args::SceneArgs;
@@ -36,6 +38,9 @@ enum Command {
         /// Output image (.png, or .exr for linear float RGBA).
         #[arg(short, long, default_value = "demo.png")]
         output: PathBuf,
+        /// Draw a labelled colour bar at the right edge of the image.
+        #[arg(long)]
+        colorbar: bool,
         #[command(flatten)]
         scene: SceneArgs,
     },
@@ -53,6 +58,13 @@ enum Command {
         /// Render only frame N of a time series.
         #[arg(long, value_name = "N")]
         frame: Option<usize>,
+        /// Render N frames of a full 360° orbit about the look-at point
+        /// (out.png → out_0000.png … ), starting from the scene's camera.
+        #[arg(long, value_name = "N", conflicts_with = "frames", value_parser = view::frame_count)]
+        turntable: Option<u32>,
+        /// Draw a labelled colour bar at the right edge of the image.
+        #[arg(long)]
+        colorbar: bool,
         #[command(flatten)]
         scene: SceneArgs,
     },
@@ -118,7 +130,11 @@ fn describe(e: &anyhow::Error) -> String {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Demo { output, scene } => {
+        Command::Demo {
+            output,
+            colorbar,
+            scene,
+        } => {
             let (mut desc, base) = scene.scene()?;
             if desc.particles.is_none() {
                 desc.particles = Some(ParticlesDesc {
@@ -131,26 +147,37 @@ fn run(cli: Cli) -> Result<()> {
             desc.image.width.get_or_insert(800);
             desc.image.height.get_or_insert(450);
             desc.render.sampling_rate.get_or_insert(0.5);
-            desc.transfer
-                .colormap
-                .get_or_insert_with(|| "inferno".into());
+            if desc.transfer.colormap_file.is_none() {
+                desc.transfer
+                    .colormap
+                    .get_or_insert_with(|| "inferno".into());
+            }
             desc.camera.eye.get_or_insert([0.0, 1.3, 1.85]);
             desc.render.opacity_scale.get_or_insert(10.0);
             desc.camera.look_at.get_or_insert([0.0, -0.1, 0.0]);
             desc.light.get_or_insert_with(Default::default);
-            render_to(&resolve(&desc, &base)?, &output)
+            let s = resolve(&desc, &base)?;
+            render_to(&s, &output, view::colorbar(&s, &desc, colorbar).as_ref())
         }
         Command::Render {
             output,
             frames,
             frame,
+            turntable,
+            colorbar,
             scene,
         } => {
             let (desc, base) = scene.scene()?;
+            if let Some(n) = turntable {
+                let f = frame.unwrap_or(0);
+                return view::render_turntable(&desc, &base, f, n, &output, colorbar);
+            }
             match (frames, frame) {
-                (Some(range), _) => render_sequence(&desc, &base, &range, &output),
-                (None, Some(n)) => render_to(&resolve_frame(&desc, &base, n)?, &output),
-                (None, None) => render_to(&resolve(&desc, &base)?, &output),
+                (Some(range), _) => render_sequence(&desc, &base, &range, &output, colorbar),
+                (None, n) => {
+                    let s = resolve_frame(&desc, &base, n.unwrap_or(0))?;
+                    render_to(&s, &output, view::colorbar(&s, &desc, colorbar).as_ref())
+                }
             }
         }
         Command::Sample {
@@ -265,17 +292,18 @@ fn is_exr(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
 }
 
-fn render_to(s: &LoadedScene, output: &Path) -> Result<()> {
+fn render_to(s: &LoadedScene, output: &Path, colorbar: Option<&ColorbarSpec>) -> Result<()> {
     let st = &s.settings;
     let tiles = st.width.div_ceil(voxless_render::TILE) as u64
         * st.height.div_ceil(voxless_render::TILE) as u64;
     let progress = Progress::new("rendering", tiles * st.spp as u64);
     let t = Instant::now();
-    let image = s
+    let mut image = s
         .volume
         .render(&s.camera, &s.tf, st, &|d, _| progress.set(d));
     progress.finish();
     let secs = t.elapsed().as_secs_f64();
+    view::decorate(&mut image, s, colorbar);
     write_image(output, &image, s.background)?;
     eprintln!(
         "rendered {}×{} at {} spp in {secs:.2}s → {}",
@@ -295,6 +323,7 @@ fn render_sequence(
     base: &Path,
     range: &str,
     output: &Path,
+    colorbar: bool,
 ) -> Result<()> {
     let range = voxless_scene::frames::parse_range(range)?;
     let count = voxless_scene::frame_count(desc, base)?;
@@ -307,6 +336,7 @@ fn render_sequence(
         );
     }
     let mut scene = resolve_frame(desc, base, *range.start())?;
+    let bar = view::colorbar(&scene, desc, colorbar);
     let frames = range.end() - range.start() + 1;
     let progress = Progress::new("rendering frames", frames as u64);
     let t = Instant::now();
@@ -314,9 +344,10 @@ fn render_sequence(
         if k > 0 {
             scene.load_frame(desc, base, f)?;
         }
-        let image = scene
+        let mut image = scene
             .volume
             .render(&scene.camera, &scene.tf, &scene.settings, &|_, _| {});
+        view::decorate(&mut image, &scene, bar.as_ref());
         write_image(&frame_path(output, f), &image, scene.background)?;
         progress.set(k as u64 + 1);
     }

@@ -12,12 +12,15 @@
 //!   pixel's opacity reaches `early_termination`. Intervals whose value range
 //!   the transfer function maps to zero opacity are skipped.
 //! - [`project`]: the line integral `∫ value dt` per pixel (column density).
+//! - [`colorbar::draw_colorbar`]: a labelled colour bar drawn into an image.
 //!
 //! Determinism: all randomness comes from [`sampling::PixelRng`] keyed by
 //! (seed, pixel, sample, dimension), and passes are accumulated in sample
 //! order, so the same inputs give the same image bit for bit regardless of
 //! thread count or tile scheduling.
 
+pub mod colorbar;
+pub mod font;
 mod march;
 mod packet;
 pub mod sampling;

@@ -1,5 +1,5 @@
 use super::*;
-use voxless_core::{Aabb, Projection, Sample};
+use voxless_core::{Aabb, Interval, IntervalQuery, Projection, Ray, Sample};
 use voxless_transfer::{Colormap, OpacityMap};
 
 /// A procedural homogeneous slab `z ∈ [0, thickness]` of value 1 with exact

@@ -113,6 +113,15 @@ pub struct CameraDesc {
     pub projection: Option<String>,
     /// World-space height of the view (orthographic).
     pub ortho_height: Option<f32>,
+    /// Degrees to orbit the eye about the up vector through the look-at
+    /// point (positive: towards the camera's right).
+    pub orbit: Option<f32>,
+    /// Degrees to raise the eye towards the up vector (negative: lower it);
+    /// the resulting angle above the horizontal stays within ±89.9°.
+    pub elevation: Option<f32>,
+    /// Zoom factor > 0: the eye's distance to the look-at point is divided by
+    /// it (orthographic: the view height is).
+    pub zoom: Option<f32>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
@@ -130,6 +139,11 @@ pub struct TransferDesc {
     pub colormap: Option<String>,
     /// `[[x, r, g, b], ...]` sRGB control points; overrides `colormap`.
     pub colormap_points: Option<Vec<[f32; 4]>>,
+    /// A colormap file (relative to the scene file): ParaView preset JSON or
+    /// a JSON list of `[r, g, b]` / `[x, r, g, b]` sRGB colours. `colormap`
+    /// then names the preset to take from it (default: the first). Its
+    /// opacity points are used unless `opacity` or `opacity_points` is given.
+    pub colormap_file: Option<String>,
     /// An opacity preset: linear (default), constant, ramp-high, ramp-low.
     pub opacity: Option<String>,
     /// `[[x, opacity], ...]`; overrides `opacity`.

@@ -17,6 +17,7 @@ pub mod desc;
 pub mod frames;
 mod load;
 mod sources;
+mod view;
 
 pub use sources::{default_radius, frame_count};
 use sources::{load_amr, load_particles, load_tets, positive, range};
@@ -64,6 +65,8 @@ pub enum SceneError {
     Setting { field: String, message: String },
     #[error("transfer function: {0}")]
     Transfer(#[from] TransferError),
+    #[error(transparent)]
+    ColormapFile(#[from] voxless_transfer::ImportError),
 }
 
 impl SceneError {
@@ -292,7 +295,7 @@ pub fn resolve_frame(
     frame: usize,
 ) -> Result<LoadedScene, SceneError> {
     let mut notes = Vec::new();
-    let tf = transfer_function(&desc.transfer)?;
+    let tf = transfer_function_at(&desc.transfer, base, &mut notes)?;
     let sources = [
         desc.particles.is_some(),
         desc.amr.is_some(),
@@ -425,7 +428,7 @@ pub fn resolve_frame(
     if let Some(l) = &desc.light {
         let dir = match l.direction {
             Some(d) => Vec3::from_array(d).normalized(),
-            None => (camera.up * 0.6 - camera.right * 0.4 - camera.forward * 0.7).normalized(),
+            None => view::default_light_direction(&camera),
         };
         if !(dir.is_finite() && dir.length_squared() > 0.5) {
             return Err(SceneError::setting(
@@ -456,19 +459,62 @@ pub fn resolve_frame(
     })
 }
 
+/// [`transfer_function_at`] with a colormap file relative to the working
+/// directory.
 pub fn transfer_function(t: &TransferDesc) -> Result<TransferFunction, SceneError> {
-    let colormap = match &t.colormap_points {
-        Some(pts) => {
+    transfer_function_at(t, Path::new("."), &mut Vec::new())
+}
+
+/// The transfer function `t` describes. A `colormap_file` is read relative to
+/// `base`, with `colormap` naming the preset in it; its opacity points apply
+/// unless `opacity` or `opacity_points` is given. What came from the file is
+/// added to `notes`.
+pub fn transfer_function_at(
+    t: &TransferDesc,
+    base: &Path,
+    notes: &mut Vec<String>,
+) -> Result<TransferFunction, SceneError> {
+    let own_opacity = t.opacity.is_some() || t.opacity_points.is_some();
+    let imported = match &t.colormap_file {
+        Some(_) if t.colormap_points.is_some() => {
+            return Err(SceneError::setting(
+                "transfer.colormap_file",
+                "give either colormap_file or colormap_points, not both",
+            ));
+        }
+        Some(f) => {
+            let path = base.join(f);
+            let m = voxless_transfer::read_colormap_file(&path, t.colormap.as_deref())?;
+            let with = if m.opacity.is_some() && !own_opacity {
+                " with its opacity points"
+            } else {
+                ""
+            };
+            notes.push(format!(
+                "colormap '{}' from {}{with}",
+                m.name,
+                path.display()
+            ));
+            Some(m)
+        }
+        None => None,
+    };
+    let colormap = match (&imported, &t.colormap_points) {
+        (Some(m), _) => m.colormap.clone(),
+        (None, Some(pts)) => {
             let v: Vec<(f32, [f32; 3])> = pts.iter().map(|p| (p[0], [p[1], p[2], p[3]])).collect();
             Colormap::from_points(&v)?
         }
-        None => Colormap::preset(t.colormap.as_deref().unwrap_or("viridis"))?,
+        (None, None) => Colormap::preset(t.colormap.as_deref().unwrap_or("viridis"))?,
     };
-    let opacity = match &t.opacity_points {
-        Some(pts) => {
+    let from_file = imported.and_then(|m| m.opacity);
+    let opacity = match (&t.opacity_points, &t.opacity, from_file) {
+        (Some(pts), _, _) => {
             OpacityMap::from_points(&pts.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>())?
         }
-        None => OpacityMap::preset(t.opacity.as_deref().unwrap_or("linear"))?,
+        (None, Some(name), _) => OpacityMap::preset(name)?,
+        (None, None, Some(op)) => op,
+        (None, None, None) => OpacityMap::preset("linear")?,
     };
     Ok(TransferFunction::new(colormap, opacity))
 }
@@ -480,6 +526,13 @@ fn camera(c: &CameraDesc, bounds: &Aabb, aspect: f32) -> Result<Camera, SceneErr
     let up =
         c.up.map(Vec3::from_array)
             .unwrap_or(Vec3::new(0.0, 1.0, 0.0));
+    // Orbit, elevation and zoom act on the eye the lines above chose.
+    let view = view::ViewAdjust::from_desc(c)?;
+    let ortho = matches!(
+        c.projection.as_deref(),
+        Some("orthographic") | Some("ortho")
+    );
+    let eye = view.place_eye(eye, look_at, up, !ortho);
     let projection = match c.projection.as_deref().unwrap_or("perspective") {
         "perspective" => Projection::Perspective {
             fov_y_deg: c.fov.unwrap_or(30.0),
@@ -487,6 +540,7 @@ fn camera(c: &CameraDesc, bounds: &Aabb, aspect: f32) -> Result<Camera, SceneErr
         "orthographic" | "ortho" => {
             let h = c.ortho_height.unwrap_or(bounds.diagonal());
             positive("camera.ortho_height", h)?;
+            let h = h / view.zoom;
             Projection::Orthographic {
                 half_width: 0.5 * h * aspect,
                 half_height: 0.5 * h,

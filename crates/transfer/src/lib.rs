@@ -11,12 +11,20 @@
 //!   it to skip intervals whose value range is invisible.
 //! - [`ControlPoints`]: the sparse piecewise-linear map behind all of these,
 //!   reused by particle radius and weight maps.
+//! - [`read_colormap_file`]: colormaps from ParaView preset JSON or
+//!   matplotlib-style colour lists (see the `import` module's notes).
 //!
 //! Invariant: `max_opacity(lo, hi)` is never below the opacity the lookup
 //! tables return for any `x` in `[lo, hi]`, so skipping on it never drops a
 //! visible sample.
 
+mod colorspace;
+mod import;
 mod tables;
+
+pub use import::{
+    ColorSpace, ImportError, ImportedColormap, parse_colormap_json, read_colormap_file,
+};
 
 use voxless_core::{Vec3, srgb_to_linear};
 

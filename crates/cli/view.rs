@@ -1,0 +1,106 @@
+//! View options of the render commands: the colour bar, turntables, and
+//! the parsers that check the camera flags before anything is loaded.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Result;
+use voxless_core::Image;
+use voxless_render::colorbar::{ColorbarSpec, draw_colorbar};
+use voxless_scene::{LoadedScene, SceneDesc};
+
+use crate::progress::Progress;
+
+/// An angle in degrees: any finite number.
+pub fn degrees(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err(format!("{s} is not a finite angle (degrees)")),
+        Err(_) => Err(format!("'{s}' is not a number of degrees")),
+    }
+}
+
+/// A zoom factor: finite and > 0.
+pub fn zoom(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!(
+            "'{s}' is not a zoom factor: it must be a finite number > 0 (2 = twice as close)"
+        )),
+    }
+}
+
+/// A turntable's frame count: at least 1.
+pub fn frame_count(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(0) => Err("a turntable needs at least 1 frame".into()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!("'{s}' is not a whole number of frames")),
+    }
+}
+
+/// The colour bar to draw, when asked for.
+pub fn colorbar(scene: &LoadedScene, desc: &SceneDesc, on: bool) -> Option<ColorbarSpec> {
+    on.then(|| scene.colorbar(desc))
+}
+
+/// Draws the colour bar (if any) into a rendered image.
+pub fn decorate(image: &mut Image, scene: &LoadedScene, bar: Option<&ColorbarSpec>) {
+    if let Some(spec) = bar
+        && draw_colorbar(image, &scene.tf, spec).is_none()
+    {
+        eprintln!(
+            "note: a {}×{} image is too small for a colour bar",
+            image.width, image.height
+        );
+    }
+}
+
+/// Renders `frames` images of a full orbit about the look-at point,
+/// starting from the scene's camera (its `orbit` included), to numbered
+/// files beside `output`, with one progress bar. The data is loaded once.
+pub fn render_turntable(
+    desc: &SceneDesc,
+    base: &Path,
+    data_frame: usize,
+    frames: u32,
+    output: &Path,
+    with_colorbar: bool,
+) -> Result<()> {
+    let mut scene = crate::resolve_frame(desc, base, data_frame)?;
+    let bar = colorbar(&scene, desc, with_colorbar);
+    let st = &scene.settings;
+    let per_frame = st.width.div_ceil(voxless_render::TILE) as u64
+        * st.height.div_ceil(voxless_render::TILE) as u64
+        * st.spp as u64;
+    let progress = Progress::new("rendering turntable", per_frame * frames as u64);
+    let start = desc.camera.orbit.unwrap_or(0.0);
+    let mut view = desc.clone();
+    let t = Instant::now();
+    for k in 0..frames {
+        view.camera.orbit = Some(start + 360.0 * k as f32 / frames as f32);
+        scene.reaim(&view)?;
+        let done = k as u64 * per_frame;
+        let mut image = scene
+            .volume
+            .render(&scene.camera, &scene.tf, &scene.settings, &|d, _| {
+                progress.set(done + d)
+            });
+        decorate(&mut image, &scene, bar.as_ref());
+        crate::write_image(
+            &crate::frame_path(output, k as usize),
+            &image,
+            scene.background,
+        )?;
+    }
+    progress.finish();
+    eprintln!(
+        "rendered a {frames}-frame turntable ({}×{}) in {:.2}s → {} … {}",
+        scene.settings.width,
+        scene.settings.height,
+        t.elapsed().as_secs_f64(),
+        crate::frame_path(output, 0).display(),
+        crate::frame_path(output, frames as usize - 1).display()
+    );
+    Ok(())
+}

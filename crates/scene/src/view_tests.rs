@@ -1,0 +1,256 @@
+use super::*;
+use crate::{ParticlesDesc, TransferDesc, resolve, transfer_function_at};
+use voxless_core::{Aabb, Projection};
+
+fn adjust(orbit: f32, elevation: f32, zoom: f32) -> ViewAdjust {
+    ViewAdjust {
+        orbit,
+        elevation,
+        zoom,
+    }
+}
+
+const Y: Vec3 = Vec3::new(0.0, 1.0, 0.0);
+
+#[test]
+fn orbit_turns_the_eye_about_the_up_axis_through_the_look_at_point() {
+    let (eye, at) = (Vec3::new(0.0, 0.5, 3.0), Vec3::new(0.5, 0.5, 0.5));
+    // A quarter turn lands exactly on the rotated position: towards +x,
+    // the camera's right when it looks down −z.
+    assert_eq!(
+        adjust(90.0, 0.0, 1.0).place_eye(eye, at, Y, true),
+        Vec3::new(3.0, 0.5, 1.0)
+    );
+    assert_eq!(
+        adjust(360.0, 0.0, 1.0).place_eye(eye, at, Y, true),
+        eye,
+        "a full turn comes back"
+    );
+    // Nothing to do: the eye is returned untouched.
+    assert_eq!(adjust(0.0, 0.0, 1.0).place_eye(eye, at, Y, true), eye);
+    // Zoom 2 halves the distance; orthographic cameras keep the eye.
+    let z = adjust(0.0, 0.0, 2.0);
+    assert_eq!(z.place_eye(eye, at, Y, true), Vec3::new(0.25, 0.5, 1.75));
+    assert_eq!(z.place_eye(eye, at, Y, false), eye);
+}
+
+#[test]
+fn elevation_raises_the_eye_and_stops_short_of_the_pole() {
+    let at = Vec3::new(1.0, 2.0, 3.0);
+    let eye = at + Vec3::new(0.0, 0.0, 4.0);
+    let angle = |e: Vec3| {
+        let d = e - at;
+        d.y.atan2((d.x * d.x + d.z * d.z).sqrt()).to_degrees()
+    };
+    let e30 = adjust(0.0, 30.0, 1.0).place_eye(eye, at, Y, true);
+    assert!((angle(e30) - 30.0).abs() < 1e-4, "{}", angle(e30));
+    assert!(((e30 - at).length() - 4.0).abs() < 1e-5);
+    assert!(
+        (e30 - at).x.abs() < 1e-6,
+        "stays in the same vertical plane"
+    );
+    let up = adjust(0.0, 500.0, 1.0).place_eye(eye, at, Y, true);
+    assert!((angle(up) - 89.9).abs() < 0.01, "{}", angle(up));
+    let down = adjust(0.0, -95.0, 1.0).place_eye(eye, at, Y, true);
+    assert!((angle(down) + 89.9).abs() < 0.01, "{}", angle(down));
+    // Elevation adds to the existing angle.
+    let again = adjust(0.0, 30.0, 1.0).place_eye(e30, at, Y, true);
+    assert!((angle(again) - 60.0).abs() < 1e-3);
+}
+
+#[test]
+fn camera_applies_view_keys_and_rejects_bad_values() {
+    let b = Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 1.0));
+    let plain = crate::camera(&CameraDesc::default(), &b, 1.5).unwrap();
+    assert_eq!(plain, Camera::framing(&b, 1.5), "defaults unchanged");
+    let zoomed = crate::camera(
+        &CameraDesc {
+            zoom: Some(2.0),
+            ..Default::default()
+        },
+        &b,
+        1.5,
+    )
+    .unwrap();
+    let d = |c: &Camera| (c.eye - b.center()).length();
+    assert!((d(&zoomed) * 2.0 - d(&plain)).abs() < 1e-5);
+    let ortho = |zoom| {
+        let c = crate::camera(
+            &CameraDesc {
+                projection: Some("orthographic".into()),
+                ortho_height: Some(3.0),
+                zoom,
+                ..Default::default()
+            },
+            &b,
+            2.0,
+        )
+        .unwrap();
+        (c.eye, c.projection)
+    };
+    let (e1, _) = ortho(None);
+    let (e2, p2) = ortho(Some(4.0));
+    assert_eq!(e1, e2, "orthographic zoom leaves the eye");
+    assert_eq!(
+        p2,
+        Projection::Orthographic {
+            half_width: 0.75,
+            half_height: 0.375
+        }
+    );
+    for (desc, field) in [
+        (
+            CameraDesc {
+                zoom: Some(0.0),
+                ..Default::default()
+            },
+            "camera.zoom",
+        ),
+        (
+            CameraDesc {
+                zoom: Some(f32::NAN),
+                ..Default::default()
+            },
+            "camera.zoom",
+        ),
+        (
+            CameraDesc {
+                orbit: Some(f32::INFINITY),
+                ..Default::default()
+            },
+            "camera.orbit",
+        ),
+        (
+            CameraDesc {
+                elevation: Some(f32::NAN),
+                ..Default::default()
+            },
+            "camera.elevation",
+        ),
+    ] {
+        let e = crate::camera(&desc, &b, 1.0).unwrap_err().to_string();
+        assert!(e.contains(field), "{e}");
+    }
+}
+
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("voxless-view-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn colormap_files_resolve_relative_to_the_scene_and_bring_their_opacity() {
+    let dir = scratch("cmap");
+    std::fs::create_dir_all(dir.join("maps")).unwrap();
+    std::fs::write(
+        dir.join("maps/p.json"),
+        r#"[{"Name": "A", "RGBPoints": [0, 0, 0, 0, 1, 1, 0, 0]},
+            {"Name": "B", "RGBPoints": [0, 0, 0, 0, 1, 0, 0, 1],
+             "Points": [0, 1, 0.5, 0, 1, 0, 0.5, 0]}]"#,
+    )
+    .unwrap();
+    let mut t = TransferDesc {
+        colormap_file: Some("maps/p.json".into()),
+        colormap: Some("B".into()),
+        ..Default::default()
+    };
+    let mut notes = Vec::new();
+    let tf = transfer_function_at(&t, &dir, &mut notes).unwrap();
+    assert_eq!(tf.colormap().srgb(1.0), [0.0, 0.0, 1.0]);
+    assert!((tf.opacity(0.0) - 1.0).abs() < 1e-6 && tf.opacity(1.0) < 1e-6);
+    assert!(
+        notes[0].contains("'B'") && notes[0].contains("opacity"),
+        "{notes:?}"
+    );
+    // The scene's own opacity wins over the file's.
+    t.opacity = Some("constant".into());
+    let tf = transfer_function_at(&t, &dir, &mut Vec::new()).unwrap();
+    assert!((tf.opacity(1.0) - 1.0).abs() < 1e-6);
+    // An unknown preset lists the file's names; points and a file clash.
+    t.colormap = Some("viridis".into());
+    let e = transfer_function_at(&t, &dir, &mut Vec::new())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("p.json") && e.contains("A, B"), "{e}");
+    t.colormap = None;
+    t.colormap_points = Some(vec![[0.0, 0.0, 0.0, 0.0]]);
+    let e = transfer_function_at(&t, &dir, &mut Vec::new())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("colormap_file"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn colorbar_reports_the_range_and_name_colour_comes_from() {
+    let dir = scratch("bar");
+    let mut csv = String::from("x,y,z,temp\n");
+    for i in 0..200 {
+        let f = i as f32 / 200.0;
+        csv += &format!(
+            "{f},{},{},{}\n",
+            (f * 7.0).fract(),
+            (f * 13.0).fract(),
+            10.0 * f
+        );
+    }
+    std::fs::write(dir.join("p.csv"), csv).unwrap();
+    let mut desc = SceneDesc {
+        particles: Some(ParticlesDesc {
+            file: Some("p.csv".into()),
+            attribute: Some("temp".into()),
+            radius: Some(0.1),
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let s = resolve(&desc, &dir).unwrap();
+    let bar = s.colorbar(&desc);
+    assert_eq!(bar.label.as_deref(), Some("temp"));
+    assert!(!bar.log10 && bar.lo < 0.1 && bar.hi > 9.9, "{bar:?}");
+    // Without an attribute: the density range, in log10 with --log.
+    desc.particles.as_mut().unwrap().attribute = None;
+    desc.render.log_scale = Some(true);
+    let s = resolve(&desc, &dir).unwrap();
+    let bar = s.colorbar(&desc);
+    assert_eq!(bar.label.as_deref(), Some("density"));
+    assert!(bar.log10 && bar.lo == s.settings.value_range.lo);
+    assert_eq!(name_of("frames/temp_%04d.npy").as_deref(), Some("temp"));
+    assert_eq!(name_of("dir/mass-*.npy").as_deref(), Some("mass"));
+    assert_eq!(name_of("speed").as_deref(), Some("speed"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn reaim_moves_the_camera_and_a_default_light_with_it() {
+    let dir = scratch("reaim");
+    let mut csv = String::from("x,y,z\n");
+    for i in 0..100 {
+        let f = i as f32 / 100.0;
+        csv += &format!("{f},{},{}\n", (f * 7.0).fract(), (f * 3.0).fract());
+    }
+    std::fs::write(dir.join("p.csv"), csv).unwrap();
+    let mut desc = SceneDesc {
+        particles: Some(ParticlesDesc {
+            file: Some("p.csv".into()),
+            radius: Some(0.2),
+            ..Default::default()
+        }),
+        light: Some(Default::default()),
+        ..Default::default()
+    };
+    let mut s = resolve(&desc, &dir).unwrap();
+    let before = (s.camera, s.settings.light.unwrap().direction);
+    desc.camera.orbit = Some(120.0);
+    s.reaim(&desc).unwrap();
+    let again = resolve(&desc, &dir).unwrap();
+    assert_ne!(s.camera, before.0);
+    assert_eq!(s.camera, again.camera);
+    assert_eq!(s.settings.light, again.settings.light);
+    assert_ne!(s.settings.light.unwrap().direction, before.1);
+    let _ = std::fs::remove_dir_all(&dir);
+}
