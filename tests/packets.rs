@@ -7,9 +7,7 @@
 mod common;
 
 use voxless_core::{Camera, Image, Range1, Vec3, Volume};
-use voxless_particles::{
-    Classification, Kernel, ParticleData, ParticleSettings, ParticleVolume,
-};
+use voxless_particles::{Classification, Kernel, ParticleData, ParticleSettings, ParticleVolume};
 use voxless_render::{Light, RenderSettings, render};
 use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
 
@@ -39,7 +37,10 @@ fn assert_same(vol: &ParticleVolume, tf: &TransferFunction, settings: &RenderSet
         "{what}: too little is visible ({lit} pixels) for the test to mean anything"
     );
     let d = max_diff(&a, &b);
-    assert!(d <= TOLERANCE, "{what}: packet and per-sample images differ by {d}");
+    assert!(
+        d <= TOLERANCE,
+        "{what}: packet and per-sample images differ by {d}"
+    );
 }
 
 fn galaxy(n: usize) -> ParticleData {

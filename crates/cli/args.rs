@@ -176,6 +176,24 @@ pub struct SceneArgs {
     /// Direction towards the light (implies --shade).
     #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Render", allow_negative_numbers = true)]
     pub light_dir: Option<Vec<f32>>,
+    /// Single scattering with volumetric shadows (implies --shade's light).
+    #[arg(long, help_heading = "Lighting")]
+    pub shadows: bool,
+    /// A point light at this position (with --shadows).
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Lighting", allow_negative_numbers = true)]
+    pub light_pos: Option<Vec<f32>>,
+    /// Light intensity (with --shadows; default 1).
+    #[arg(long, help_heading = "Lighting")]
+    pub light_intensity: Option<f32>,
+    /// Fraction of colour kept in full shade (default 0.3).
+    #[arg(long, help_heading = "Lighting")]
+    pub ambient: Option<f32>,
+    /// Free-flight sampling with shadows: marching (default) or delta.
+    #[arg(long, value_name = "METHOD", help_heading = "Lighting")]
+    pub free_flight: Option<String>,
+    /// Random numbers with shadows: blue (default) or white noise.
+    #[arg(long, value_name = "KIND", help_heading = "Lighting")]
+    pub noise: Option<String>,
     /// Random seed for jitter.
     #[arg(long, help_heading = "Render")]
     pub seed: Option<u64>,
@@ -375,9 +393,22 @@ impl SceneArgs {
         if let Some(c) = &self.clip {
             d.render.clip = Some([c[0], c[1], c[2], c[3], c[4], c[5]]);
         }
-        if self.shade || self.light_dir.is_some() {
+        let lighting = self.light_pos.is_some()
+            || self.light_intensity.is_some()
+            || self.ambient.is_some()
+            || self.free_flight.is_some()
+            || self.noise.is_some();
+        if self.shade || self.shadows || self.light_dir.is_some() || lighting {
             let l = d.light.get_or_insert_with(LightDesc::default);
             set(&mut l.direction, arr3(&self.light_dir));
+            set(&mut l.position, arr3(&self.light_pos));
+            set(&mut l.intensity, self.light_intensity);
+            set(&mut l.ambient, self.ambient);
+            set(&mut l.free_flight, self.free_flight.clone());
+            set(&mut l.noise, self.noise.clone());
+            if self.shadows {
+                l.shadows = Some(true);
+            }
         }
     }
 }

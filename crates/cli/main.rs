@@ -344,6 +344,8 @@ fn render_sequence(
         if k > 0 {
             scene.load_frame(desc, base, f)?;
         }
+        // Blue noise advances with the frame (spatiotemporal).
+        scene.settings.frame = f as u32;
         let mut image = scene
             .volume
             .render(&scene.camera, &scene.tf, &scene.settings, &|_, _| {});

@@ -80,6 +80,8 @@ pub fn render_turntable(
     for k in 0..frames {
         view.camera.orbit = Some(start + 360.0 * k as f32 / frames as f32);
         scene.reaim(&view)?;
+        // Blue noise advances with the frame (spatiotemporal).
+        scene.settings.frame = k;
         let done = k as u64 * per_frame;
         let mut image = scene
             .volume

@@ -19,8 +19,8 @@ pub use macrogrid::MacroGrid;
 pub use math::{Aabb, Range1, Ray, Vec3};
 pub use rng::SmallRng;
 pub use volume::{
-    SampleBatch,
-    Attribute, Interval, IntervalQuery, Sample, Volume, quadrature_line_integral, simpson,
+    Attribute, Interval, IntervalQuery, Sample, SampleBatch, Volume, quadrature_line_integral,
+    simpson,
 };
 
 #[cfg(test)]

@@ -134,7 +134,12 @@ pub trait Volume: Send + Sync {
     /// the gradient there (zero otherwise). A packet path must give exactly
     /// what [`Volume::sample`]/[`Volume::sample_with_gradient`] give; the
     /// default is that slow path.
-    fn sample_batch(&self, batch: &SampleBatch, gradient: bool, out: &mut Vec<(Option<Sample>, Vec3)>) {
+    fn sample_batch(
+        &self,
+        batch: &SampleBatch,
+        gradient: bool,
+        out: &mut Vec<(Option<Sample>, Vec3)>,
+    ) {
         for (r, ray) in batch.rays.iter().enumerate() {
             for &t in batch.samples(r) {
                 let p = ray.at(t);

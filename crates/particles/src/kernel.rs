@@ -160,9 +160,10 @@ impl Family for CubicFamily {
         let inner = one + q * q * (Lanes::splat(0.75) * q - Lanes::splat(1.5));
         let t = Lanes::splat(2.0) - q;
         let outer = Lanes::splat(0.25) * t * t * t;
-        let m4 = q
-            .simd_lt(one)
-            .select(inner, q.simd_lt(Lanes::splat(2.0)).select(outer, Lanes::ZERO));
+        let m4 = q.simd_lt(one).select(
+            inner,
+            q.simd_lt(Lanes::splat(2.0)).select(outer, Lanes::ZERO),
+        );
         Lanes::splat(amp) * m4
     }
     #[inline(always)]
@@ -181,7 +182,8 @@ impl Family for CubicFamily {
         // at d = 0); outside, M4'(q) = −0.75(2 − q)² and |d| ≥ h.
         let ih = Lanes::splat(inv_h);
         let g_in = a * ih * ih * (Lanes::splat(2.25) * q - Lanes::splat(3.0));
-        let g_out = a * ih * (Lanes::splat(-0.75) * t * t) / dist.max(Lanes::splat(f32::MIN_POSITIVE));
+        let g_out =
+            a * ih * (Lanes::splat(-0.75) * t * t) / dist.max(Lanes::splat(f32::MIN_POSITIVE));
         let g = lt1.select(g_in, lt2.select(g_out, Lanes::ZERO));
         (v, g)
     }

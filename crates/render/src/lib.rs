@@ -19,14 +19,17 @@
 //! order, so the same inputs give the same image bit for bit regardless of
 //! thread count or tile scheduling.
 
+pub mod bluenoise;
 pub mod colorbar;
 pub mod font;
 mod march;
 mod packet;
 pub mod sampling;
+pub mod scatter;
 
 pub use march::march;
 pub use packet::{PACKET, WINDOW_STEPS};
+pub use scatter::{FreeFlight, LightSource, Noise, Scatter};
 
 use rayon::prelude::*;
 use voxless_core::{Aabb, Camera, Image, Range1, Vec3, Volume};
@@ -76,6 +79,12 @@ pub struct RenderSettings {
     /// Use the volume's packet path when it has one (module `packet`); the
     /// per-sample path otherwise. Both give the same image.
     pub packets: bool,
+    /// Single scattering with volumetric shadows instead of emission–
+    /// absorption (module [`scatter`]); `light` and iso-surfaces are then
+    /// not used.
+    pub scatter: Option<Scatter>,
+    /// Frame index in a time series: the blue noise advances with it.
+    pub frame: u32,
 }
 
 impl RenderSettings {
@@ -101,6 +110,8 @@ impl RenderSettings {
             volume: true,
             log_scale: false,
             packets: true,
+            scatter: None,
+            frame: 0,
         }
     }
 
@@ -185,7 +196,28 @@ impl Film {
             .into_par_iter()
             .map(|tile| {
                 let mut out = Vec::with_capacity((tile.w * tile.h) as usize);
-                if settings.packets && volume.packet_sampling() {
+                if let Some(sc) = &settings.scatter {
+                    // Scattering paths are incoherent: one ray at a time.
+                    let mut scratch = Vec::new();
+                    for y in tile.y..tile.y + tile.h {
+                        for x in tile.x..tile.x + tile.w {
+                            let pixel = y as u64 * w as u64 + x as u64;
+                            let rng = PixelRng::new(settings.seed, pixel, sample);
+                            let (jx, jy) = pixel_offset(&rng, sample);
+                            let ray = camera.ray(x as f32 + jx, y as f32 + jy, w, h);
+                            out.push(scatter::path(
+                                volume,
+                                &ray,
+                                tf,
+                                settings,
+                                sc,
+                                (x, y),
+                                sample,
+                                &mut scratch,
+                            ));
+                        }
+                    }
+                } else if settings.packets && volume.packet_sampling() {
                     let mut scratch = packet::PacketScratch::default();
                     packet::render_tile(
                         volume,
@@ -306,5 +338,7 @@ pub fn project<V: Volume>(
         .collect()
 }
 
+#[cfg(test)]
+mod scatter_tests;
 #[cfg(test)]
 mod tests;

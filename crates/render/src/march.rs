@@ -10,9 +10,7 @@
 //! 3. [`RayState::feed`]: one sample composited front to back, with the
 //!    segment-length opacity correction and iso-surface crossings.
 
-use voxless_core::{
-    Aabb, Attribute, Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume,
-};
+use voxless_core::{Aabb, Attribute, Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume};
 use voxless_transfer::TransferFunction;
 
 use crate::sampling::PixelRng;
@@ -28,7 +26,7 @@ pub fn march<V: Volume>(
     scratch: &mut Vec<Interval>,
 ) -> [f32; 4] {
     scratch.clear();
-    if !ray_intervals(volume, ray, tf, settings, scratch) {
+    if !ray_intervals(volume, ray, tf, settings, f32::INFINITY, scratch) {
         return [0.0; 4];
     }
     let ctx = Ctx::new(tf, settings);
@@ -53,20 +51,21 @@ pub fn march<V: Volume>(
     state.rgba()
 }
 
-/// Appends the visible intervals of `ray` to `out`; false when the ray
-/// misses the (clipped) volume.
+/// Appends the visible intervals of `ray` within `t ∈ [0, t_max]` to `out`;
+/// false when the ray misses the (clipped) volume there.
 pub(crate) fn ray_intervals<V: Volume>(
     volume: &V,
     ray: &Ray,
     tf: &TransferFunction,
     settings: &RenderSettings,
+    t_max: f32,
     out: &mut Vec<Interval>,
 ) -> bool {
     let mut region = volume.bounds();
     if let Some(clip) = settings.clip {
         region = Aabb::new(region.min.max(clip.min), region.max.min(clip.max));
     }
-    let t = region.clip_ray(ray, Range1::new(0.0, f32::INFINITY));
+    let t = region.clip_ray(ray, Range1::new(0.0, t_max));
     if t.is_empty() {
         return false;
     }

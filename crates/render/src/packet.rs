@@ -80,7 +80,14 @@ pub(crate) fn render_tile<V: Volume>(
                     let (jx, jy) = crate::pixel_offset(&rng, sample);
                     let ray = camera.ray(x as f32 + jx, y as f32 + jy, w, h);
                     let iv_lo = scratch.intervals.len();
-                    let hit = ray_intervals(volume, &ray, tf, settings, &mut scratch.intervals);
+                    let hit = ray_intervals(
+                        volume,
+                        &ray,
+                        tf,
+                        settings,
+                        f32::INFINITY,
+                        &mut scratch.intervals,
+                    );
                     let mut r = PacketRay {
                         ray,
                         rng,
@@ -91,11 +98,9 @@ pub(crate) fn render_tile<V: Volume>(
                         state: RayState::default(),
                         done: !hit,
                     };
-                    r.next = r.cursor.next(
-                        &scratch.intervals[r.iv_lo..r.iv_hi],
-                        settings,
-                        &r.rng,
-                    );
+                    r.next = r
+                        .cursor
+                        .next(&scratch.intervals[r.iv_lo..r.iv_hi], settings, &r.rng);
                     r.done |= r.next.is_none();
                     scratch.rays.push(r);
                 }

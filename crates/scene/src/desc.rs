@@ -189,4 +189,18 @@ pub struct LightDesc {
     pub direction: Option<[f32; 3]>,
     /// Fraction of colour kept in full shade (default 0.3).
     pub ambient: Option<f32>,
+    /// Single scattering with volumetric shadows (one shadow ray per
+    /// scattering point) instead of gradient shading.
+    pub shadows: Option<bool>,
+    /// A point light at this position instead of a directional light
+    /// (shadows only).
+    pub position: Option<[f32; 3]>,
+    /// Light intensity (default 1; shadows only).
+    pub intensity: Option<f32>,
+    /// Free-flight sampling: marching (default; stochastic ray marching) or
+    /// delta (delta tracking with interval majorants).
+    pub free_flight: Option<String>,
+    /// Random numbers of the free flights: blue (default; spatiotemporal
+    /// blue noise) or white.
+    pub noise: Option<String>,
 }

@@ -29,7 +29,7 @@ use voxless_amr::{AmrError, AmrVolume};
 use voxless_core::{Aabb, Camera, Image, Projection, Range1, Vec3, Volume};
 use voxless_io::IoError;
 use voxless_particles::{ParticleError, ParticleVolume};
-use voxless_render::{Light, RenderSettings};
+use voxless_render::{FreeFlight, Light, LightSource, Noise, RenderSettings, Scatter};
 use voxless_tets::{TetError, TetMode, TetOptions, TetVolume};
 use voxless_transfer::{Colormap, OpacityMap, TransferError, TransferFunction};
 
@@ -447,6 +447,15 @@ pub fn resolve_frame(
             direction: dir,
             ambient,
         });
+        if l.shadows.unwrap_or(false) {
+            settings.scatter = Some(scatter_settings(l, dir, ambient)?);
+            if !settings.iso.is_empty() {
+                return Err(SceneError::setting(
+                    "light.shadows",
+                    "iso-surfaces are not rendered with shadows; drop one of them",
+                ));
+            }
+        }
     }
     let background = r.background.unwrap_or([0.0; 3]);
     Ok(LoadedScene {
@@ -456,6 +465,54 @@ pub fn resolve_frame(
         settings,
         background,
         notes,
+    })
+}
+
+/// The single-scattering settings of a light with `shadows = true`.
+fn scatter_settings(l: &LightDesc, dir: Vec3, ambient: f32) -> Result<Scatter, SceneError> {
+    let light = match l.position {
+        Some(p) => {
+            let p = Vec3::from_array(p);
+            if !p.is_finite() {
+                return Err(SceneError::setting("light.position", "must be finite"));
+            }
+            LightSource::Point(p)
+        }
+        None => LightSource::Directional(dir),
+    };
+    let intensity = l.intensity.unwrap_or(1.0);
+    if !(intensity.is_finite() && intensity >= 0.0) {
+        return Err(SceneError::setting(
+            "light.intensity",
+            format!("{intensity} must be finite and ≥ 0"),
+        ));
+    }
+    let method = match l.free_flight.as_deref().unwrap_or("marching") {
+        "marching" => FreeFlight::Marching,
+        "delta" | "delta-tracking" => FreeFlight::DeltaTracking,
+        other => {
+            return Err(SceneError::setting(
+                "light.free_flight",
+                format!("'{other}' is not 'marching' or 'delta'"),
+            ));
+        }
+    };
+    let noise = match l.noise.as_deref().unwrap_or("blue") {
+        "blue" => Noise::Blue,
+        "white" => Noise::White,
+        other => {
+            return Err(SceneError::setting(
+                "light.noise",
+                format!("'{other}' is not 'blue' or 'white'"),
+            ));
+        }
+    };
+    Ok(Scatter {
+        light,
+        intensity,
+        ambient,
+        method,
+        noise,
     })
 }
 

@@ -164,6 +164,11 @@ impl LoadedScene {
             && follows
         {
             light.direction = default_light_direction(&self.camera);
+            if let Some(sc) = &mut self.settings.scatter
+                && let voxless_render::LightSource::Directional(d) = &mut sc.light
+            {
+                *d = light.direction;
+            }
         }
         Ok(())
     }

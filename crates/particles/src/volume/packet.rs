@@ -179,8 +179,7 @@ impl RayGroup {
         let u = (ox * self.dx + oy * self.dy + oz * self.dz) * self.inv_dd;
         let r2 = f32x8::splat(r2);
         let h2 = (r2 - b2) * self.inv_dd;
-        let h = h2.max(f32x8::ZERO).sqrt() * f32x8::splat(1.001)
-            + f32x8::splat(1e-5) * u.abs();
+        let h = h2.max(f32x8::ZERO).sqrt() * f32x8::splat(1.001) + f32x8::splat(1e-5) * u.abs();
         let miss = b2.simd_gt(r2);
         let lo = miss.select(f32x8::splat(f32::INFINITY), u - h);
         let hi = miss.select(f32x8::splat(f32::NEG_INFINITY), u + h);
