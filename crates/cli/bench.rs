@@ -67,7 +67,16 @@ enum Which {
         /// Timed runs per measurement (the median is reported).
         #[arg(long, default_value_t = 5)]
         repeats: usize,
+        /// Also the SPH dam-break snapshot in DIR (positions.npy, h.npy,
+        /// mass.npy, speed.npy; cubic spline with radius h): the paper's
+        /// Tables 1 and 2 on real frames.
+        #[arg(long, value_name = "DIR")]
+        dam_break: Vec<PathBuf>,
     },
+    /// Packet traversal vs per-sample point queries (same image), a radius
+    /// sweep for clustered and unclustered trees, and blue vs white noise
+    /// frame time with volumetric shadows.
+    Packets(crate::bench_packets::PacketArgs),
     /// Frame time with clustered (8) vs unclustered (1) BVH leaves, and the
     /// max difference between the two images.
     Frame(FrameArgs),
@@ -109,18 +118,44 @@ struct FrameArgs {
 
 pub fn run(args: BenchArgs) -> Result<()> {
     match args.which {
-        Which::Bvh { n, scene, repeats } => {
+        Which::Bvh {
+            n,
+            scene,
+            repeats,
+            dam_break,
+        } => {
             if n == 0 || repeats == 0 {
                 bail!("--n and --repeats must be ≥ 1");
             }
+            let frames = dam_break
+                .iter()
+                .map(|d| Ok((d.clone(), read_dam_break(d)?)))
+                .collect::<Result<Vec<_>>>()?;
             print_header();
             for s in ["galaxy", "uniform"]
                 .into_iter()
                 .filter(|s| scene == "both" || scene == *s)
             {
-                bench_bvh(s, n, repeats)?;
+                let (data, radius) = synthetic(s, n);
+                let what = format!(
+                    "{s}, {} particles, gaussian3, radius {radius:.5} (2.5 × mean spacing)",
+                    count(n)
+                );
+                bench_bvh(&what, data, Kernel::Gaussian3, radius, repeats)?;
+            }
+            for (dir, data) in frames {
+                let name = dir
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                let what = format!(
+                    "dam break {name}, {} particles, cubic spline, radius h per particle",
+                    count(data.positions.len())
+                );
+                bench_bvh(&what, data, Kernel::CubicSpline, 1.0, repeats)?;
             }
         }
+        Which::Packets(o) => crate::bench_packets::run(o)?,
         Which::Frame(o) => {
             if o.size == 0 || o.n == 0 || o.spp == 0 || o.repeats == 0 || !(o.sampling_rate > 0.0) {
                 bail!("--size, --n, --spp, --repeats and --sampling-rate must be > 0");
@@ -161,10 +196,15 @@ pub fn run(args: BenchArgs) -> Result<()> {
 
 // ---------------------------------------------------------------- bvh
 
-fn bench_bvh(scene: &str, n: usize, repeats: usize) -> Result<()> {
-    let (data, radius) = synthetic(scene, n);
-    let kernel = Kernel::Gaussian3;
-    eprintln!("bvh/{scene}: {n} particles, radius {radius:.5}");
+fn bench_bvh(
+    what: &str,
+    data: ParticleData,
+    kernel: Kernel,
+    radius: f32,
+    repeats: usize,
+) -> Result<()> {
+    let n = data.positions.len();
+    eprintln!("bvh/{what}");
     let settings = |cluster_size| ParticleSettings {
         kernel,
         radius,
@@ -184,10 +224,7 @@ fn bench_bvh(scene: &str, n: usize, repeats: usize) -> Result<()> {
     let grown: Vec<f32> = support.iter().map(|s| s * 1.5).collect();
     let particle_bytes = 16.0 * n as f64;
 
-    println!(
-        "### BVH: {scene}, {} particles, gaussian3, radius {radius:.5} (2.5 × mean spacing)\n",
-        count(n)
-    );
+    println!("### BVH: {what}\n");
     println!(
         "`ParticleVolume::new` (cluster size 1, includes Hilbert sort): {:.1} ms\n",
         ms(t_new1)
@@ -199,7 +236,7 @@ fn bench_bvh(scene: &str, n: usize, repeats: usize) -> Result<()> {
     let mut builds = Vec::new();
     let mut mem16 = 0.0;
     for cs in [1usize, 2, 4, 8, 16] {
-        eprintln!("bvh/{scene}: cluster size {cs}");
+        eprintln!("bvh: cluster size {cs}");
         let (t_boxes, boxes) = bench(repeats, || (), |_| cluster_boxes(positions, &support, cs));
         let big = cluster_boxes(positions, &grown, cs);
         let (t_build, mut bvh) = bench(repeats, || (), |_| Bvh::build(&boxes));
@@ -246,7 +283,7 @@ fn bench_bvh(scene: &str, n: usize, repeats: usize) -> Result<()> {
     drop(vol);
 
     // The user-facing path at the default cluster size.
-    eprintln!("bvh/{scene}: set_radius vs new at cluster size 8");
+    eprintln!("bvh: set_radius vs new at cluster size 8");
     let (t_new8, vol8) = bench(
         repeats,
         || data.clone(),
@@ -359,7 +396,7 @@ pub(crate) fn save_png(path: &Path, img: &Image) -> Result<()> {
     Ok(())
 }
 
-fn read_dam_break(dir: &Path) -> Result<ParticleData> {
+pub(crate) fn read_dam_break(dir: &Path) -> Result<ParticleData> {
     let read =
         |name: &str| -> Result<voxless_io::NpyArray> { Ok(voxless_io::read_npy(&dir.join(name))?) };
     let pos = read("positions.npy")?;
@@ -394,7 +431,7 @@ fn read_dam_break(dir: &Path) -> Result<ParticleData> {
 // ---------------------------------------------------------------- data
 
 /// `n` synthetic particles and a gaussian3 radius of 2.5 × their mean spacing.
-fn synthetic(scene: &str, n: usize) -> (ParticleData, f32) {
+pub(crate) fn synthetic(scene: &str, n: usize) -> (ParticleData, f32) {
     let data = if scene == "galaxy" {
         voxless_scene::demo::galaxy(n)
     } else {

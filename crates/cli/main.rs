@@ -4,6 +4,7 @@
 mod args;
 mod bench;
 mod bench_amr;
+mod bench_packets;
 mod bench_tets;
 mod progress;
 mod view;

@@ -69,9 +69,10 @@ fn first_above(ts: &[f32], x: f32, t0: f32, inv_step: f32) -> usize {
 
 #[inline(always)]
 fn guess(ts: &[f32], x: f32, t0: f32, inv_step: f32) -> usize {
-    let g = ((x - t0) * inv_step).max(0.0);
-    // NaN-safe: `as` saturates, and NaN becomes 0.
-    (g as usize).min(ts.len())
+    // Through i32: one conversion instruction, where f32 → usize is a
+    // branchy sequence. NaN-safe: `as` saturates, and NaN becomes 0.
+    let g = ((x - t0) * inv_step).clamp(0.0, ts.len() as f32);
+    g as i32 as usize
 }
 
 /// The sample buffer, structure of arrays, padded by one SIMD width so the
@@ -211,7 +212,7 @@ impl ParticleVolume {
         let r2 = Lanes::splat(q.support2);
         let mut j = j0;
         while j < j1 {
-            let valid = lanes.simd_lt(Lanes::splat((j1 - j) as i32 as f32));
+            let valid = lanes.simd_lt(Lanes::splat((j1 - j).min(LANES) as i32 as f32));
             let dx = ld(&buf.px, j) - cx;
             let dy = ld(&buf.py, j) - cy;
             let dz = ld(&buf.pz, j) - cz;
