@@ -12,21 +12,36 @@ pub struct SceneArgs {
     pub scene: Option<PathBuf>,
 
     // ---- data ----
-    /// Particle positions: .npy N×3 (float32/float64) or CSV with x, y, z columns.
+    /// Particle file: .npy N×3 (float32/float64), CSV with x, y, z columns,
+    /// .vtp/.vtu, .xyz/.extxyz, a LAMMPS dump (dump.*, .lammpstrj, .dump),
+    /// .particles, or .h5/.hdf5 (PySPH, SWIFT/Gadget; JaxPM with
+    /// --lagrangian/--snapshot; needs --features hdf5). A multi-frame file,
+    /// pattern or directory is a time series (--frames).
     #[arg(long, help_heading = "Particles")]
     pub particles: Option<PathBuf>,
-    /// Per-particle attribute: .npy with N values, or a CSV column name.
+    /// Per-particle attribute: a column of the particle file (case-insensitive),
+    /// or .npy with N values.
     #[arg(long, help_heading = "Particles")]
     pub attribute: Option<String>,
     /// Global radius parameter (support for gaussian3, std-dev for gaussian, h for cubic-spline).
     #[arg(long, help_heading = "Particles", allow_negative_numbers = true)]
     pub radius: Option<f32>,
-    /// Per-particle radii: .npy with N values, or a CSV column name.
+    /// Per-particle radii: a column name, or .npy with N values.
     #[arg(long, help_heading = "Particles")]
     pub radii: Option<String>,
-    /// Per-particle weights (masses for cubic-spline): .npy or CSV column.
+    /// Per-particle weights (masses for cubic-spline): a column name or .npy.
     #[arg(long, help_heading = "Particles")]
     pub weights: Option<String>,
+    /// PySPH particle array to read (default: fluid if present, else the first).
+    #[arg(long, value_name = "NAME", help_heading = "Particles")]
+    pub group: Option<String>,
+    /// SWIFT/Gadget particle type N: the group PartTypeN (default 0).
+    #[arg(long, value_name = "N", help_heading = "Particles")]
+    pub part_type: Option<u32>,
+    /// Keep only particles whose `type` column is T (LAMMPS type number; XYZ
+    /// type number or element symbol).
+    #[arg(long, value_name = "T", help_heading = "Particles")]
+    pub species: Option<String>,
     /// RBF kernel: gaussian3 (default), gaussian, cubic-spline.
     #[arg(long, help_heading = "Particles")]
     pub kernel: Option<String>,
@@ -48,9 +63,14 @@ pub struct SceneArgs {
 
     // ---- phase-space tessellation ----
     /// Treat --particles as N³ N-body particles on a Lagrangian grid (Lagrangian
-    /// order, k fastest) and render their phase-space tessellation.
+    /// order, k fastest) and render their phase-space tessellation. A JaxPM
+    /// .h5 file gives N (and L) itself.
     #[arg(long, value_name = "N", help_heading = "Phase-space tessellation")]
     pub lagrangian: Option<usize>,
+    /// JaxPM snapshot K of a .h5 run, the group snap_K (default: the last);
+    /// implies a tessellation.
+    #[arg(long, value_name = "K", help_heading = "Phase-space tessellation")]
+    pub snapshot: Option<usize>,
     /// Periodic box size L (positions in [0, L)³).
     #[arg(
         long = "box",
@@ -268,8 +288,12 @@ impl SceneArgs {
             || self.sigma.is_some()
             || self.cluster.is_some()
             || self.classification.is_some()
-            || self.attribute_range.is_some();
+            || self.attribute_range.is_some()
+            || self.group.is_some()
+            || self.part_type.is_some()
+            || self.species.is_some();
         let has_tet_flags = self.lagrangian.is_some()
+            || self.snapshot.is_some()
             || self.box_size.is_some()
             || self.particle_mass.is_some()
             || self.tet_mode.is_some()
@@ -283,6 +307,7 @@ impl SceneArgs {
                 t.file = Some(cwd_path(&f.to_string_lossy()));
             }
             set(&mut t.lagrangian, self.lagrangian);
+            set(&mut t.snapshot, self.snapshot);
             set(&mut t.box_size, self.box_size);
             set(&mut t.particle_mass, self.particle_mass);
             set(&mut t.mode, self.tet_mode.clone());
@@ -301,6 +326,9 @@ impl SceneArgs {
             set(&mut p.radii, self.radii.as_deref().map(cwd_path));
             set(&mut p.weights, self.weights.as_deref().map(cwd_path));
             set(&mut p.kernel, self.kernel.clone());
+            set(&mut p.group, self.group.clone());
+            set(&mut p.part_type, self.part_type);
+            set(&mut p.species, self.species.clone());
             set(&mut p.kappa, self.kappa);
             set(&mut p.sigma, self.sigma);
             set(&mut p.cluster, self.cluster);

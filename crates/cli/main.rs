@@ -6,6 +6,7 @@ mod bench;
 mod bench_amr;
 mod bench_packets;
 mod bench_tets;
+mod info;
 mod progress;
 mod view;
 
@@ -52,8 +53,9 @@ enum Command {
         /// printf pattern such as frame_%03d.png).
         #[arg(short, long, default_value = "out.png")]
         output: PathBuf,
-        /// Render frames A through B of a time series (the data path is a
-        /// pattern like step_%04d.npy, a glob, or a directory).
+        /// Render frames A through B of a time series (a multi-frame file such
+        /// as a LAMMPS dump or XYZ, a pattern like step_%04d.npy, a glob, or a
+        /// directory, e.g. of PySPH .hdf5 outputs).
         #[arg(long, value_name = "A..B", conflicts_with = "frame")]
         frames: Option<String>,
         /// Render only frame N of a time series.
@@ -99,6 +101,10 @@ enum Command {
         #[command(flatten)]
         scene: SceneArgs,
     },
+    /// Print what a data file holds: particle count, frames and their times,
+    /// columns with ranges and bounds; .npy shape and range; AMR cells per
+    /// level and fields; .vtu meshes; HDF5 layouts and contents.
+    Info(info::InfoArgs),
     /// List the built-in colormaps.
     Colormaps,
     /// Run the benchmarks and print a markdown table (see docs/benchmarks.md).
@@ -253,6 +259,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
+        Command::Info(args) => info::run(&args),
         Command::Bench(args) => bench::run(args),
     }
 }

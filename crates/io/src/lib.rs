@@ -56,8 +56,8 @@ pub use amr::{AmrCellData, read_amrclaw, read_exabricks};
 pub use csv::{CsvTable, read_csv};
 #[cfg(feature = "hdf5")]
 pub use hdf5::{
-    Hdf5Kind, JaxpmSnapshot, describe_hdf5, hdf5_kind, pysph_groups, read_gadget, read_jaxpm,
-    read_pysph,
+    Hdf5Kind, JaxpmSnapshot, describe_hdf5, hdf5_kind, jaxpm_snapshots, pysph_groups, read_gadget,
+    read_jaxpm, read_pysph,
 };
 pub use image::{read_exr_gray, read_png_rgb8, write_exr_gray, write_exr_rgba, write_png_rgb8};
 pub use lammps::{lammps_frames, read_lammps};
@@ -65,7 +65,7 @@ pub use npy::{NpyArray, read_npy, write_npy_f32};
 pub use particles_fmt::{particles_frames, read_particles_file};
 pub use table::ParticleTable;
 pub use vtk::{VtkMesh, read_vtk_points, read_vtu_mesh};
-pub use xyz::{read_xyz, xyz_frames};
+pub use xyz::{read_xyz, xyz_frames, xyz_species};
 
 /// An error while reading or writing a file. Both variants name the file.
 #[derive(Debug, thiserror::Error)]

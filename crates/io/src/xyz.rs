@@ -101,6 +101,35 @@ pub fn read_xyz(path: &Path, frame: usize) -> Result<ParticleTable, IoError> {
     read_atoms(&mut lines, frame, n, &comment, &mut species)
 }
 
+/// The species symbols of frames 0 through `frame` of an XYZ file, in the
+/// order of the numbers the `type` column gives them: symbol `i` (0-based)
+/// is type `i + 1` in frame `frame` and every frame before it. Empty when the
+/// file has no species field (extended XYZ without a species property).
+///
+/// Fails like [`read_xyz`] when the frame does not exist or the file ends
+/// inside a frame.
+pub fn xyz_species(path: &Path, frame: usize) -> Result<Vec<String>, IoError> {
+    let mut lines = LineReader::open(path)?;
+    let mut species = Species::default();
+    for index in 0..=frame {
+        let Some(n) = read_count(&mut lines, index)? else {
+            return Err(past_end(path, frame, index));
+        };
+        let comment = read_comment(&mut lines, index, n)?;
+        let layout = Layout::from_comment(&comment).map_err(|m| lines.error(m))?;
+        for found in 0..n {
+            let Some(line) = lines.next_line()? else {
+                return Err(truncated(&lines, index, n, found));
+            };
+            if let Some(s) = layout.species {
+                let token = line.split_ascii_whitespace().nth(s).unwrap_or("");
+                species.id(token);
+            }
+        }
+    }
+    Ok(species.symbols())
+}
+
 /// Numbers species symbols 1, 2, ... in order of first appearance.
 #[derive(Default)]
 struct Species(HashMap<String, u32>);
@@ -109,6 +138,13 @@ impl Species {
     fn id(&mut self, symbol: &str) -> u32 {
         let next = self.0.len() as u32 + 1;
         *self.0.entry(symbol.to_string()).or_insert(next)
+    }
+
+    /// The symbols in the order of their numbers.
+    fn symbols(self) -> Vec<String> {
+        let mut v: Vec<(u32, String)> = self.0.into_iter().map(|(s, i)| (i, s)).collect();
+        v.sort_unstable();
+        v.into_iter().map(|(_, s)| s).collect()
     }
 }
 

@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use common::TempFile;
 use serde_json::Value;
 use voxless_io::{
-    Hdf5Kind, IoError, NpyArray, ParticleTable, describe_hdf5, hdf5_kind, pysph_groups,
-    read_gadget, read_jaxpm, read_npy, read_pysph,
+    Hdf5Kind, IoError, NpyArray, ParticleTable, describe_hdf5, hdf5_kind, jaxpm_snapshots,
+    pysph_groups, read_gadget, read_jaxpm, read_npy, read_pysph,
 };
 
 fn tiny(name: &str) -> PathBuf {
@@ -226,6 +226,7 @@ fn jaxpm_tiny_run_in_lagrangian_order() {
         let want: Vec<[f32; 3]> = want.as_array().unwrap().iter().map(triple).collect();
         assert_eq!(snap.positions, want, "snapshot {k}");
     }
+    assert_eq!(jaxpm_snapshots(&path).unwrap(), [0, 1]);
     let text = message_naming(read_jaxpm(&path, 7).unwrap_err(), &path);
     assert!(
         text.contains("snap_7") && text.contains("snap_0, snap_1"),

@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use voxless_io::{
     IoError, ParticleTable, lammps_frames, particles_frames, read_lammps, read_particles_file,
-    read_xyz, xyz_frames,
+    read_xyz, xyz_frames, xyz_species,
 };
 
 /// The VTK XML tests (kept in their own file for size).
@@ -406,6 +406,10 @@ O 3.0 0.0 0.0 4.0
     assert_eq!(column(&t, "c4"), [2.0, 3.0, 4.0]);
     let msg = error_message(read_xyz(&path, 2), &path);
     assert!(msg.contains("2 frames"), "{msg}");
+    // The symbols behind those numbers, through each frame.
+    assert_eq!(xyz_species(&path, 0).unwrap(), ["O", "H"]);
+    assert_eq!(xyz_species(&path, 1).unwrap(), ["O", "H", "C"]);
+    assert!(xyz_species(&path, 2).is_err());
 }
 
 #[test]

@@ -25,18 +25,32 @@ pub struct SceneDesc {
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ParticlesDesc {
-    /// `.npy` N×3 (float32/float64) or CSV with a header naming x, y, z.
+    /// Particle file in any supported format, picked by extension and
+    /// content: `.npy` N×3 (float32/float64), CSV with a header naming x, y,
+    /// z, `.vtp`/`.vtu`, `.xyz`/`.extxyz`, a LAMMPS dump, `.particles`, or
+    /// (feature `hdf5`) PySPH/SWIFT/Gadget `.h5`/`.hdf5`. Multi-frame files,
+    /// patterns and directories are time series.
     pub file: Option<String>,
     /// The built-in demo particles instead of a file.
     pub demo: Option<bool>,
-    /// `.npy` with N values, or the name of a CSV column.
+    /// PySPH particle array to read (default: `fluid` if present, else the
+    /// first).
+    pub group: Option<String>,
+    /// SWIFT/Gadget particle type N, the group `PartType<N>` (default 0).
+    pub part_type: Option<u32>,
+    /// Keep only particles whose `type` column equals this (LAMMPS type
+    /// number; XYZ type number or element symbol).
+    pub species: Option<String>,
+    /// `.npy` with N values, or the name of a column of the particle file
+    /// (case-insensitive).
     pub attribute: Option<String>,
     /// Global radius parameter (support radius for gaussian3, standard
     /// deviation for gaussian, smoothing length h for cubic-spline).
     pub radius: Option<f32>,
-    /// Per-particle radii: `.npy` with N values or a CSV column.
+    /// Per-particle radii: `.npy` with N values or a column name.
     pub radii: Option<String>,
-    /// Per-particle weights (masses for cubic-spline): `.npy` or a CSV column.
+    /// Per-particle weights (masses for cubic-spline): `.npy` or a column
+    /// name.
     pub weights: Option<String>,
     /// gaussian3 (default), gaussian, cubic-spline.
     pub kernel: Option<String>,
@@ -81,12 +95,17 @@ pub struct AmrDesc {
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct TetsDesc {
-    /// `.npy` N³×3 positions in Lagrangian order `(i·N + j)·N + k`, k fastest.
+    /// `.npy` N³×3 positions in Lagrangian order `(i·N + j)·N + k`, k
+    /// fastest, or a JaxPM `.h5` run (feature `hdf5`).
     pub file: Option<String>,
-    /// N (particles per axis of the Lagrangian grid).
+    /// N (particles per axis of the Lagrangian grid); a JaxPM file's by
+    /// default.
     pub lagrangian: Option<usize>,
-    /// Periodic box size L (positions in `[0, L)³`).
+    /// Periodic box size L (positions in `[0, L)³`); a JaxPM file's by
+    /// default.
     pub box_size: Option<f32>,
+    /// JaxPM snapshot K (the group `snap_<K>`; default: the last).
+    pub snapshot: Option<usize>,
     /// Mass per particle (default: total mass 1).
     pub particle_mass: Option<f64>,
     /// exact (default) or kbuffer.

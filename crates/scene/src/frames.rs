@@ -4,10 +4,15 @@
 //! - a printf-style pattern, `frame_%04d.npy` or `frame_%d.npy`: every file
 //!   in that directory whose name is the prefix, a number, then the suffix;
 //! - a glob in the file name, `frames/step_*.npy` (`*` and `?`);
-//! - a directory: every `.npy` or `.csv` file in it.
+//! - a directory: every particle file in it (`.npy`, `.csv`, `.hdf5`/`.h5`,
+//!   `.vtp`, `.vtu`, `.xyz`, `.extxyz`, `.lammpstrj`, `.dump`, `.particles`),
+//!   which must all have the same extension — a directory of PySPH outputs,
+//!   say.
 //!
 //! Frames are ordered by the number in their name (then by name), and frame
-//! `i` is the `i`-th of that order. Any other path is a single frame.
+//! `i` is the `i`-th of that order. Any other path is a single frame (which
+//! may itself hold several frames; see `frame_count`). Each file of a
+//! sequence is one frame: its first, for multi-frame formats.
 
 use std::path::{Path, PathBuf};
 
@@ -32,7 +37,7 @@ pub fn expand(spec: &str, base: &Path) -> Result<Vec<PathBuf>, SceneError> {
         return Ok(vec![full]);
     }
     let (dir, matcher): (PathBuf, NameMatcher) = if full.is_dir() {
-        let m = |n: &str| n.ends_with(".npy") || n.ends_with(".csv");
+        let m = |n: &str| dir_extension(n).is_some();
         (full.clone(), Box::new(m))
     } else {
         let dir = full
@@ -84,9 +89,61 @@ pub fn expand(spec: &str, base: &Path) -> Result<Vec<PathBuf>, SceneError> {
         (last_number(&name), name)
     });
     if files.is_empty() {
-        return Err(SceneError::data(&full, "no files match this frame pattern"));
+        let what = if full.is_dir() {
+            "the directory holds no particle files (.npy, .csv, .hdf5, .h5, .vtp, .vtu, .xyz, \
+             .extxyz, .lammpstrj, .dump, .particles)"
+        } else {
+            "no files match this frame pattern"
+        };
+        return Err(SceneError::data(&full, what));
+    }
+    if full.is_dir() {
+        let mut exts: Vec<String> = files
+            .iter()
+            .filter_map(|p| {
+                p.file_name()
+                    .and_then(|n| dir_extension(&n.to_string_lossy()))
+            })
+            .collect();
+        exts.sort();
+        exts.dedup();
+        if exts.len() > 1 {
+            return Err(SceneError::data(
+                &full,
+                format!(
+                    "the directory holds particle files of several kinds (.{}); give a pattern \
+                     such as {}/*.{} to pick one",
+                    exts.join(", ."),
+                    full.display(),
+                    exts[0]
+                ),
+            ));
+        }
     }
     Ok(files)
+}
+
+/// The lower-case extension of a file name when it is a particle format a
+/// directory sequence takes.
+fn dir_extension(name: &str) -> Option<String> {
+    const EXTS: [&str; 11] = [
+        "npy",
+        "csv",
+        "hdf5",
+        "h5",
+        "vtp",
+        "vtu",
+        "xyz",
+        "extxyz",
+        "lammpstrj",
+        "dump",
+        "particles",
+    ];
+    let ext = Path::new(name)
+        .extension()?
+        .to_string_lossy()
+        .to_ascii_lowercase();
+    EXTS.contains(&ext.as_str()).then_some(ext)
 }
 
 /// `*` matches any run, `?` one character.
@@ -155,7 +212,13 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("voxless-frames-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        for n in ["step_10.npy", "step_2.npy", "step_1.npy", "other.txt"] {
+        for n in [
+            "step_10.npy",
+            "step_2.npy",
+            "step_1.npy",
+            "other.txt",
+            "run.info",
+        ] {
             std::fs::write(dir.join(n), b"x").unwrap();
         }
         let names = |v: Vec<PathBuf>| -> Vec<String> {
@@ -172,6 +235,19 @@ mod tests {
             vec![dir.join("single.npy")]
         );
         assert!(expand("none_%04d.npy", &dir).is_err());
+        // A directory of one other kind; a mixed directory is an error.
+        let sub = dir.join("h5");
+        std::fs::create_dir_all(&sub).unwrap();
+        for n in ["run_00250.hdf5", "run_00000.HDF5", "run.info"] {
+            std::fs::write(sub.join(n), b"x").unwrap();
+        }
+        assert_eq!(
+            names(expand("h5", &dir).unwrap()),
+            ["run_00000.HDF5", "run_00250.hdf5"]
+        );
+        std::fs::write(sub.join("extra.npy"), b"x").unwrap();
+        let e = expand("h5", &dir).unwrap_err().to_string();
+        assert!(e.contains(".hdf5") && e.contains(".npy"), "{e}");
         assert!(wildcard("a?c*", "abcdef") && !wildcard("a?c", "abcd"));
         assert_eq!(parse_range("3..7").unwrap(), 3..=7);
         assert!(parse_range("7..3").is_err() && parse_range("x").is_err());

@@ -14,7 +14,9 @@
 
 pub mod demo;
 pub mod desc;
+pub mod formats;
 pub mod frames;
+mod jaxpm;
 mod load;
 mod sources;
 mod view;
@@ -314,7 +316,7 @@ pub fn resolve_frame(
             AnyVolume::Particles(Box::new(volume))
         }
         (_, Some(a), _) => AnyVolume::Amr(Box::new(load_amr(a, base)?)),
-        (_, _, Some(t)) => load_tets(t, base)?,
+        (_, _, Some(t)) => load_tets(t, base, &mut notes)?,
         (None, None, None) => {
             return Err(SceneError::setting(
                 "scene",

@@ -4,22 +4,31 @@
 use std::path::{Path, PathBuf};
 
 use voxless_core::Vec3;
-use voxless_io::{CsvTable, read_csv, read_npy};
+use voxless_io::{ParticleTable, read_npy};
 
 use crate::SceneError;
+use crate::formats::{self, ParticleFormat, TableOptions};
 
-/// Where the particle columns come from.
-pub enum Source {
-    Npy(PathBuf),
-    Csv(PathBuf, CsvTable),
+/// Where the particle columns come from: one frame of a particle file.
+pub struct Source {
+    pub path: PathBuf,
+    pub format: ParticleFormat,
+    /// The frame's table; its positions have been moved out.
+    pub table: ParticleTable,
 }
 
 impl Source {
     pub fn path(&self) -> &Path {
-        match self {
-            Source::Npy(p) | Source::Csv(p, _) => p,
-        }
+        &self.path
     }
+}
+
+/// What to read from a particle file besides its positions.
+#[derive(Default)]
+pub struct Selection<'a> {
+    pub options: TableOptions,
+    /// Keep only this `type` (`particles.species`).
+    pub species: Option<&'a str>,
 }
 
 fn is_npy(path: &Path) -> bool {
@@ -27,61 +36,49 @@ fn is_npy(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("npy"))
 }
 
-/// Reads positions from an N×3 `.npy` or a CSV with x, y, z columns.
+/// Reads positions from an N×3 `.npy`, a CSV with x, y, z columns, or any
+/// other particle format (its first frame).
 pub fn read_positions(path: &Path) -> Result<(Vec<Vec3>, Source), SceneError> {
-    if is_npy(path) {
-        let a = read_npy(path)?;
-        if a.shape.len() != 2 || a.shape[1] != 3 {
-            return Err(SceneError::data(
-                path,
-                format!(
-                    "expected an N×3 array of positions, found shape ({})",
-                    a.shape
-                        .iter()
-                        .map(|s| s.to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            ));
-        }
-        if a.shape[0] == 0 {
-            return Err(SceneError::data(
-                path,
-                "no particles (the array has 0 rows)",
-            ));
-        }
-        let p = a
-            .data
-            .chunks_exact(3)
-            .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
-            .collect();
-        Ok((p, Source::Npy(path.to_path_buf())))
-    } else {
-        let t = read_csv(path)?;
-        let col = |name: &str| {
-            t.column(name).ok_or_else(|| {
-                SceneError::data(
-                    path,
-                    format!("no column '{name}' (columns: {})", t.columns.join(", ")),
-                )
-            })
-        };
-        let (x, y, z) = (col("x")?, col("y")?, col("z")?);
-        if t.rows() == 0 {
-            return Err(SceneError::data(
-                path,
-                "no particles (the table has no rows)",
-            ));
-        }
-        let p = (0..t.rows())
-            .map(|i| Vec3::new(x[i] as f32, y[i] as f32, z[i] as f32))
-            .collect();
-        Ok((p, Source::Csv(path.to_path_buf(), t)))
-    }
+    let (p, s, _) = open(path, 0, &Selection::default())?;
+    Ok((p, s))
 }
 
-/// Reads a per-particle array: a CSV column of the particle table when
-/// `spec` names one, else a `.npy` file (N or N×1 values).
+/// Reads frame `frame` of the particle file at `path` in whichever format it
+/// is (see [`formats`]); returns the positions, the rest of the table, and a
+/// note on what part of the file was read, if worth one.
+pub fn open(
+    path: &Path,
+    frame: usize,
+    select: &Selection,
+) -> Result<(Vec<Vec3>, Source, Option<String>), SceneError> {
+    let format = ParticleFormat::detect(path)?.unwrap_or(ParticleFormat::Csv);
+    let formats::Table { mut table, note } =
+        formats::read_table(path, format, frame, &select.options)?;
+    if let Some(species) = select.species {
+        formats::keep_species(&mut table, species, path, format, frame)?;
+    }
+    if table.is_empty() {
+        let what = match format {
+            ParticleFormat::Npy => "the array has 0 rows",
+            ParticleFormat::Csv => "the table has no rows",
+            _ => "the file holds none",
+        };
+        return Err(SceneError::data(path, format!("no particles ({what})")));
+    }
+    let positions = std::mem::take(&mut table.positions)
+        .into_iter()
+        .map(Vec3::from_array)
+        .collect();
+    let source = Source {
+        path: path.to_path_buf(),
+        format,
+        table,
+    };
+    Ok((positions, source, note))
+}
+
+/// Reads a per-particle array: a column of the particle table when `spec`
+/// names one (case-insensitively), else a `.npy` file (N or N×1 values).
 pub fn read_per_particle(
     spec: &str,
     base: &Path,
@@ -89,19 +86,28 @@ pub fn read_per_particle(
     n: usize,
     what: &str,
 ) -> Result<(Vec<f32>, PathBuf), SceneError> {
-    if let Source::Csv(path, table) = source
-        && let Some(c) = table.column(spec)
-    {
-        return Ok((c.iter().map(|&v| v as f32).collect(), path.clone()));
+    if let Some(c) = source.table.column(spec) {
+        return Ok((c.to_vec(), source.path.clone()));
     }
     let path = base.join(spec);
     if !is_npy(&path) {
-        let hint = match source {
-            Source::Csv(_, t) => format!(
+        if !source.table.columns.is_empty() && !path.exists() {
+            return Err(SceneError::data(
+                &source.path,
+                format!(
+                    "no column '{spec}' for the {what} (columns: {}); give a column name or \
+                     a .npy file with one value per particle",
+                    formats::column_list(&source.table)
+                ),
+            ));
+        }
+        let hint = if source.table.columns.is_empty() {
+            String::new()
+        } else {
+            format!(
                 " or a column of the particle table ({})",
-                t.columns.join(", ")
-            ),
-            Source::Npy(_) => String::new(),
+                formats::column_list(&source.table)
+            )
         };
         return Err(SceneError::data(
             &path,

@@ -12,6 +12,7 @@ use voxless_particles::{
 use voxless_tets::{LagrangianGrid, TetMode, TetOptions, TetSettings, TetVolume};
 use voxless_transfer::ControlPoints;
 
+use crate::formats::{self, ParticleFormat, TableOptions};
 use crate::{
     AmrDesc, AnyVolume, LoadedScene, ParticlesDesc, SceneDesc, SceneError, TetsDesc, demo, frames,
     load,
@@ -98,31 +99,49 @@ pub(crate) fn load_amr(a: &AmrDesc, base: &Path) -> Result<AmrVolume, SceneError
     .map_err(|source| SceneError::Amr { path, source })
 }
 
-pub(crate) fn load_tets(t: &TetsDesc, base: &Path) -> Result<AnyVolume, SceneError> {
+pub(crate) fn load_tets(
+    t: &TetsDesc,
+    base: &Path,
+    notes: &mut Vec<String>,
+) -> Result<AnyVolume, SceneError> {
     let file = t.file.as_ref().ok_or_else(|| {
         SceneError::setting(
             "tets.file",
-            "no positions file given (--particles FILE.npy with --lagrangian N --box L)",
+            "no positions file given (--particles FILE.npy with --lagrangian N --box L, or a \
+             JaxPM FILE.h5)",
         )
     })?;
     let path = base.join(file);
-    let (positions, _) = load::read_positions(&path)?;
-    let n = match t.lagrangian {
-        Some(n) => n,
-        None => {
+    let grid = if ParticleFormat::detect(&path)? == Some(ParticleFormat::Hdf5) {
+        crate::jaxpm::grid(t, &path, notes)?
+    } else {
+        if t.snapshot.is_some() {
             return Err(SceneError::setting(
-                "tets.lagrangian",
-                "the Lagrangian grid size N is needed (--lagrangian N)",
+                "tets.snapshot",
+                format!(
+                    "--snapshot picks a snapshot of a JaxPM .h5 run, but {} is not one",
+                    path.display()
+                ),
             ));
         }
-    };
-    let box_size = t.box_size.ok_or_else(|| {
-        SceneError::setting("tets.box_size", "the periodic box size is needed (--box L)")
-    })?;
-    let grid = LagrangianGrid {
-        n,
-        box_size,
-        positions,
+        let (positions, _) = load::read_positions(&path)?;
+        let n = match t.lagrangian {
+            Some(n) => n,
+            None => {
+                return Err(SceneError::setting(
+                    "tets.lagrangian",
+                    "the Lagrangian grid size N is needed (--lagrangian N)",
+                ));
+            }
+        };
+        let box_size = t.box_size.ok_or_else(|| {
+            SceneError::setting("tets.box_size", "the periodic box size is needed (--box L)")
+        })?;
+        LagrangianGrid {
+            n,
+            box_size,
+            positions,
+        }
     };
     let settings = TetSettings {
         particle_mass: t.particle_mass,
@@ -207,12 +226,15 @@ fn control_points(
         .transpose()
 }
 
-/// Particle arrays of frame `frame`, the file to blame for bad positions, and
-/// the files that supplied each per-particle array.
+/// Particle arrays of frame `frame`, the file to blame for bad positions, the
+/// files that supplied each per-particle array, whether the SPH defaults
+/// (cubic spline, radii = h, weights = m) apply, and notes on what was read.
 struct FrameData {
     data: ParticleData,
     main_file: PathBuf,
     files: Vec<(&'static str, PathBuf)>,
+    sph_defaults: bool,
+    notes: Vec<String>,
 }
 
 /// The file of `spec` for frame `frame`: the `frame`-th of a sequence, or the
@@ -234,17 +256,70 @@ fn frame_file(spec: &str, base: &Path, frame: usize) -> Result<PathBuf, SceneErr
     })
 }
 
+/// The particle file of frame `frame` and the frame to read in it: the
+/// `frame`-th file (its first frame) of a sequence, else frame `frame` of
+/// the file itself (single-frame formats have the same data every frame).
+fn locate(spec: &str, base: &Path, frame: usize) -> Result<(PathBuf, usize), SceneError> {
+    if frames::is_sequence(spec, base) {
+        Ok((frame_file(spec, base, frame)?, 0))
+    } else {
+        Ok((base.join(spec), frame))
+    }
+}
+
+/// The columns SPH output carries for smoothing lengths and masses, when
+/// `p` gives no kernel: PySPH's `h`, `m` or SWIFT/Gadget's
+/// `SmoothingLengths`, `Masses`. `None` unless both are present.
+fn sph_columns(p: &ParticlesDesc, source: &load::Source) -> Option<(String, String)> {
+    if p.kernel.is_some() || source.format != ParticleFormat::Hdf5 {
+        return None;
+    }
+    let t = &source.table;
+    [("h", "m"), ("SmoothingLengths", "Masses")]
+        .into_iter()
+        .find(|(h, m)| t.column(h).is_some() && t.column(m).is_some())
+        .map(|(h, m)| (h.to_string(), m.to_string()))
+}
+
 fn read_frame(p: &ParticlesDesc, base: &Path, frame: usize) -> Result<FrameData, SceneError> {
     let mut files: Vec<(&'static str, PathBuf)> = Vec::new();
+    let mut notes = Vec::new();
+    let mut sph_defaults = false;
     let (data, main_file) = match (&p.file, p.demo.unwrap_or(false)) {
         (Some(f), _) => {
-            let path = frame_file(f, base, frame)?;
-            let (positions, source) = load::read_positions(&path)?;
+            let (path, in_file) = locate(f, base, frame)?;
+            let select = load::Selection {
+                options: TableOptions {
+                    group: p.group.clone(),
+                    part_type: p.part_type,
+                },
+                species: p.species.as_deref(),
+            };
+            let (positions, source, note) = load::open(&path, in_file, &select)?;
+            notes.extend(note);
             let n = positions.len();
             let mut data = ParticleData {
                 positions,
                 ..Default::default()
             };
+            let (mut radii, mut weights) = (p.radii.clone(), p.weights.clone());
+            if let Some((h, m)) = sph_columns(p, &source) {
+                sph_defaults = true;
+                let mut used = Vec::new();
+                if radii.is_none() && p.radius.is_none() {
+                    used.push(format!("radii = {h}"));
+                    radii = Some(h);
+                }
+                if weights.is_none() {
+                    used.push(format!("weights = {m}"));
+                    weights = Some(m);
+                }
+                used.insert(0, "cubic-spline kernel".into());
+                notes.push(format!(
+                    "SPH data and no kernel given: {} (override with --kernel, --radii, --weights)",
+                    used.join(", ")
+                ));
+            }
             let mut per = |spec: &Option<String>,
                            what: &'static str|
              -> Result<Option<Vec<f32>>, SceneError> {
@@ -263,8 +338,8 @@ fn read_frame(p: &ParticlesDesc, base: &Path, frame: usize) -> Result<FrameData,
                     .transpose()
             };
             data.attribute = per(&p.attribute, "attribute")?;
-            data.radii = per(&p.radii, "radii")?;
-            data.weights = per(&p.weights, "weights")?;
+            data.radii = per(&radii, "radii")?;
+            data.weights = per(&weights, "weights")?;
             (data, path)
         }
         (None, true) => (demo::galaxy(120_000), PathBuf::from("<demo>")),
@@ -279,6 +354,8 @@ fn read_frame(p: &ParticlesDesc, base: &Path, frame: usize) -> Result<FrameData,
         data,
         main_file,
         files,
+        sph_defaults,
+        notes,
     })
 }
 
@@ -303,8 +380,12 @@ pub(crate) fn load_particles(
     notes: &mut Vec<String>,
     frame: usize,
 ) -> Result<ParticleVolume, SceneError> {
-    let kernel = parse_kernel(p)?;
-    let fd = read_frame(p, base, frame)?;
+    let mut kernel = parse_kernel(p)?;
+    let mut fd = read_frame(p, base, frame)?;
+    notes.append(&mut fd.notes);
+    if fd.sph_defaults {
+        kernel = Kernel::CubicSpline;
+    }
     let radius = match (p.radius, &fd.data.radii) {
         (Some(r), _) => r,
         (None, Some(_)) => 1.0,
@@ -344,15 +425,26 @@ pub(crate) fn load_particles(
         data,
         main_file,
         files,
+        ..
     } = fd;
     ParticleVolume::new(data, settings).map_err(|source| blame(main_file, &files, source))
 }
 
-/// Number of frames the scene's data source names (1 unless its path is a
-/// sequence; see [`frames`]).
+/// Number of frames the scene's data source names: the files of a sequence
+/// (see [`frames`]), the frames of a multi-frame file (LAMMPS dump, XYZ,
+/// `.particles`), else 1.
 pub fn frame_count(desc: &SceneDesc, base: &Path) -> Result<usize, SceneError> {
     match &desc.particles {
-        Some(ParticlesDesc { file: Some(f), .. }) => Ok(frames::expand(f, base)?.len()),
+        Some(ParticlesDesc { file: Some(f), .. }) if frames::is_sequence(f, base) => {
+            Ok(frames::expand(f, base)?.len())
+        }
+        Some(ParticlesDesc { file: Some(f), .. }) => {
+            let path = base.join(f);
+            match ParticleFormat::detect(&path)? {
+                Some(format) => formats::frames_in(&path, format),
+                None => Ok(1),
+            }
+        }
         _ => Ok(1),
     }
 }
@@ -377,6 +469,7 @@ impl LoadedScene {
             data,
             main_file,
             files,
+            ..
         } = read_frame(p, base, frame)?;
         v.load_frame(data)
             .map_err(|source| blame(main_file, &files, source))?;

@@ -35,6 +35,24 @@ pub struct JaxpmSnapshot {
 /// Root attributes that may hold the box size, in order of preference.
 const BOX_ATTRS: [&str; 4] = ["boxsize_Mpc_h", "box_size", "boxsize", "BoxSize"];
 
+/// The snapshot numbers K of the `snap_<K>` groups of a JaxPM file, in
+/// increasing order (empty when there are none).
+pub fn jaxpm_snapshots(path: &Path) -> Result<Vec<usize>, IoError> {
+    let f = Hdf5File::open(path)?;
+    snapshot_numbers(&f)
+}
+
+/// The numbers of the `snap_<K>` groups of an open file, sorted.
+fn snapshot_numbers(f: &Hdf5File) -> Result<Vec<usize>, IoError> {
+    let mut numbers: Vec<usize> = f
+        .subgroup_names(f.root(), "/", |n| numbered(n, "snap_").is_some())?
+        .iter()
+        .filter_map(|n| numbered(n, "snap_").and_then(|k| usize::try_from(k).ok()))
+        .collect();
+    numbers.sort_unstable();
+    Ok(numbers)
+}
+
 /// Reads snapshot `snapshot` (the group `snap_<snapshot>`) of a JaxPM file
 /// and reorders its positions with `q_index` into Lagrangian order.
 ///
@@ -48,13 +66,10 @@ pub fn read_jaxpm(path: &Path, snapshot: usize) -> Result<JaxpmSnapshot, IoError
     let root = f.root();
     let gname = format!("snap_{snapshot}");
     let Some(group) = f.child_group(root, &gname) else {
-        let mut present: Vec<(u64, String)> = f
-            .subgroup_names(root, "/", |n| numbered(n, "snap_").is_some())?
+        let names: Vec<String> = snapshot_numbers(&f)?
             .into_iter()
-            .map(|n| (numbered(&n, "snap_").unwrap_or(u64::MAX), n))
+            .map(|k| format!("snap_{k}"))
             .collect();
-        present.sort();
-        let names: Vec<String> = present.into_iter().map(|(_, n)| n).collect();
         return Err(f.err(format!(
             "no snapshot group {gname} (snapshots present: {})",
             name_list(&names)

@@ -42,7 +42,7 @@ mod pysph;
 
 pub use describe::describe_hdf5;
 pub use gadget::read_gadget;
-pub use jaxpm::{JaxpmSnapshot, read_jaxpm};
+pub use jaxpm::{JaxpmSnapshot, jaxpm_snapshots, read_jaxpm};
 pub use pysph::{pysph_groups, read_pysph};
 
 /// The 8-byte signature at the start of an HDF5 superblock.

@@ -1,0 +1,110 @@
+//! JaxPM runs (`.h5`) as phase-space tessellations: the grid size N and the
+//! box size L come from the file unless the scene gives them, in which case
+//! they must agree with it.
+
+use std::path::Path;
+
+use voxless_tets::LagrangianGrid;
+
+use crate::{SceneError, TetsDesc};
+
+/// The Lagrangian grid of snapshot `t.snapshot` (default: the last) of the
+/// JaxPM run at `path`; a note says which snapshot was read.
+#[cfg(feature = "hdf5")]
+pub(crate) fn grid(
+    t: &TetsDesc,
+    path: &Path,
+    notes: &mut Vec<String>,
+) -> Result<LagrangianGrid, SceneError> {
+    use voxless_core::Vec3;
+    use voxless_io::{Hdf5Kind, hdf5_kind, jaxpm_snapshots, read_jaxpm};
+
+    let kind = hdf5_kind(path)?;
+    if kind != Hdf5Kind::Jaxpm {
+        let what = match kind {
+            Hdf5Kind::PySph => "PySPH output",
+            Hdf5Kind::Gadget => "a SWIFT/Gadget snapshot",
+            _ => "an HDF5 file of unknown layout",
+        };
+        return Err(SceneError::data(
+            path,
+            format!(
+                "a tessellation needs a JaxPM run (q_index and snap_<K> groups), but this is \
+                 {what}; render its particles without --lagrangian/--box/--snapshot"
+            ),
+        ));
+    }
+    let snapshots = jaxpm_snapshots(path)?;
+    let k = match (t.snapshot, snapshots.last()) {
+        (Some(k), _) => k,
+        (None, Some(&last)) => last,
+        (None, None) => {
+            return Err(SceneError::data(
+                path,
+                "a JaxPM file without snap_<K> groups",
+            ));
+        }
+    };
+    let snap = read_jaxpm(path, k)?;
+    if let Some(n) = t.lagrangian
+        && n != snap.n
+    {
+        return Err(SceneError::setting(
+            "tets.lagrangian",
+            format!(
+                "N = {n} was given, but {} holds a {}³ Lagrangian grid (leave N out to use \
+                 the file's)",
+                path.display(),
+                snap.n
+            ),
+        ));
+    }
+    if let Some(l) = t.box_size
+        && !((l as f64 - snap.box_size).abs() <= 1e-5 * snap.box_size.abs())
+    {
+        return Err(SceneError::setting(
+            "tets.box_size",
+            format!(
+                "L = {l} was given, but {} has a box of size {} (leave L out to use the file's)",
+                path.display(),
+                snap.box_size
+            ),
+        ));
+    }
+    let scale = snap
+        .scale_factor
+        .map(|a| format!(" (a = {a})"))
+        .unwrap_or_default();
+    let others = if t.snapshot.is_none() && snapshots.len() > 1 {
+        format!(
+            " (snapshots {}; pick one with --snapshot K)",
+            snapshots
+                .iter()
+                .map(|s| s.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    } else {
+        String::new()
+    };
+    notes.push(format!(
+        "JaxPM snapshot snap_{k}{scale}: N = {}, box L = {}{others}",
+        snap.n, snap.box_size
+    ));
+    Ok(LagrangianGrid {
+        n: snap.n,
+        box_size: snap.box_size as f32,
+        positions: snap.positions.into_iter().map(Vec3::from_array).collect(),
+    })
+}
+
+/// Without the `hdf5` feature a JaxPM file is an error saying how to build
+/// with it.
+#[cfg(not(feature = "hdf5"))]
+pub(crate) fn grid(
+    _: &TetsDesc,
+    path: &Path,
+    _: &mut Vec<String>,
+) -> Result<LagrangianGrid, SceneError> {
+    Err(crate::formats::hdf5::unsupported(path))
+}
