@@ -122,6 +122,15 @@ pub trait Volume: Send + Sync {
         self.sample_with_gradient(p)
     }
 
+    /// Whether samples come classified: `value` is then the opacity itself
+    /// (the transfer function's output, before `opacity_scale`) and the
+    /// attribute an [`Attribute::Rgb`] colour, so integrators skip the
+    /// transfer function (multi-material volumes classify each material with
+    /// its own). Interval value ranges are then opacity ranges.
+    fn classified(&self) -> bool {
+        false
+    }
+
     /// Whether [`Volume::sample_batch`] is a real packet path (faster than
     /// sampling point by point). Integrators use it only then.
     fn packet_sampling(&self) -> bool {

@@ -28,16 +28,21 @@
 //! **Intervals** come from a macrocell grid whose cells store `[0, Σ peak φᵢ]`
 //! over the particles touching the cell, a conservative range of `Φ`.
 //!
+//! **Multi-material** volumes ([`MaterialVolume`]) give each species its own
+//! density field, radius and transfer function, blended per sample.
+//!
 //! Invariants: positions, radii, weights and attributes are finite (checked
 //! on construction, with the offending particle named); hidden particles have
 //! radius 0 and are skipped by every query.
 
 mod error;
 pub mod kernel;
+mod materials;
 mod volume;
 
 pub use error::ParticleError;
 pub use kernel::{KERNEL_NAMES, Kernel};
+pub use materials::{Material, MaterialClass, MaterialVolume};
 pub use volume::{Classification, FieldSample, ParticleData, ParticleSettings, ParticleVolume};
 
 #[cfg(test)]

@@ -497,3 +497,126 @@ fn frames_rebuild_in_place_with_a_fixed_attribute_range() {
     assert_eq!(vol.len(), 2500);
     vol.validate().unwrap();
 }
+
+// ---------------------------------------------------------------- materials
+
+fn two_materials(opacity_b: &str) -> (ParticleData, ParticleData, MaterialVolume) {
+    let a = random_data(1500, 71);
+    let mut b = random_data(1200, 72);
+    // Material B sits a little to the side and has bigger particles.
+    for p in b.positions.iter_mut() {
+        *p += Vec3::new(0.3, 0.0, 0.0);
+    }
+    if let Some(r) = b.radii.as_mut() {
+        r.iter_mut().for_each(|r| *r *= 1.5);
+    }
+    let material = |name: &str, data: &ParticleData, cmap: &str, op: &str, range: f32| Material {
+        name: name.into(),
+        volume: ParticleVolume::new(
+            ParticleData {
+                attribute: None,
+                ..data.clone()
+            },
+            ParticleSettings {
+                kernel: Kernel::Gaussian3,
+                ..Default::default()
+            },
+        )
+        .unwrap(),
+        class: MaterialClass {
+            tf: TransferFunction::new(
+                Colormap::preset(cmap).unwrap(),
+                OpacityMap::preset(op).unwrap(),
+            ),
+            value_range: Range1::new(0.0, range),
+            color: None,
+        },
+    };
+    let mats = vec![
+        material("a", &a, "viridis", "linear", 40.0),
+        material("b", &b, "magma", opacity_b, 30.0),
+    ];
+    (a, b, MaterialVolume::new(mats).unwrap())
+}
+
+#[test]
+fn materials_blend_brute_force_classifications() {
+    let (a, b, vol) = two_materials("ramp-high");
+    let mut rng = Lcg(5);
+    let mut checked = 0;
+    for _ in 0..3000 {
+        let p = rng.v() * 1.4 - Vec3::splat(0.05);
+        let pa = brute_force(&a, Kernel::Gaussian3, p).0;
+        let pb = brute_force(&b, Kernel::Gaussian3, p).0;
+        let classes: Vec<&MaterialClass> = vol.materials().iter().map(|m| &m.class).collect();
+        let (oa, ca) = classes[0].classify(pa as f32);
+        let (ob, cb) = classes[1].classify(pb as f32);
+        let Some(s) = vol.sample(p) else {
+            assert!(
+                pa == 0.0 && pb == 0.0,
+                "uncovered point with density at {p:?}"
+            );
+            continue;
+        };
+        let want = oa + ob;
+        assert!(
+            (s.value - want).abs() <= 1e-5 * want.max(1e-3),
+            "opacity {} vs {want}",
+            s.value
+        );
+        if want > 1e-3 {
+            let c = (ca * oa + cb * ob) / want;
+            let voxless_core::Attribute::Rgb(got) = s.attribute else {
+                panic!("classified samples carry a colour");
+            };
+            assert!((got - c).length() <= 1e-4, "colour {got:?} vs {c:?}");
+            checked += 1;
+        }
+    }
+    assert!(checked > 300, "only {checked} points inside the materials");
+}
+
+#[test]
+fn materials_render_the_same_with_packets_and_a_hidden_material_drops_out() {
+    use voxless_render::{RenderSettings, render};
+    let (_, _, vol) = two_materials("ramp-high");
+    let camera = voxless_core::Camera::framing(&vol.bounds(), 1.2);
+    let tf = TransferFunction::default_for_density();
+    let mut s = RenderSettings::for_volume(&vol, 48, 40);
+    s.spp = 2;
+    s.opacity_scale = 12.0;
+    s.packets = false;
+    let slow = render(&vol, &camera, &tf, &s, &|_, _| {});
+    s.packets = true;
+    let fast = render(&vol, &camera, &tf, &s, &|_, _| {});
+    let diff = |x: &voxless_core::Image, y: &voxless_core::Image| {
+        x.pixels
+            .iter()
+            .zip(&y.pixels)
+            .flat_map(|(p, q)| (0..4).map(move |c| (p[c] - q[c]).abs()))
+            .fold(0.0f32, f32::max)
+    };
+    assert!(slow.pixels.iter().filter(|p| p[3] > 0.05).count() > 100);
+    assert!(diff(&slow, &fast) <= 1.0 / 255.0);
+    // With material B's opacity zero, the image is material A's alone.
+    let (_, _, mut both) = two_materials("linear");
+    let (_, _, mut alone) = two_materials("linear");
+    let mut mats = std::mem::take(&mut both.materials);
+    mats[1].class.tf = TransferFunction::new(
+        Colormap::preset("magma").unwrap(),
+        OpacityMap::from_points(&[(0.0, 0.0), (1.0, 0.0)]).unwrap(),
+    );
+    let both = MaterialVolume::new(mats).unwrap();
+    let mut mats = std::mem::take(&mut alone.materials);
+    mats.truncate(1);
+    let alone = MaterialVolume::new(mats).unwrap();
+    let camera = voxless_core::Camera::framing(&both.bounds(), 1.2);
+    let x = render(&both, &camera, &tf, &s, &|_, _| {});
+    let y = render(&alone, &camera, &tf, &s, &|_, _| {});
+    assert!(y.pixels.iter().filter(|p| p[3] > 0.05).count() > 100);
+    assert!(
+        diff(&x, &y) <= 1e-6,
+        "a hidden material changed the image by {}",
+        diff(&x, &y)
+    );
+}

@@ -268,7 +268,11 @@ impl RayState {
             return false;
         }
         let x = settings.normalize(s.value);
-        let opacity = ctx.tf.opacity(x);
+        let opacity = if volume.classified() {
+            s.value
+        } else {
+            ctx.tf.opacity(x)
+        };
         if opacity > 0.0 {
             let a = 1.0 - (-opacity * settings.opacity_scale * seg.len).exp();
             let mut c = ctx.colour_of(&s, x);

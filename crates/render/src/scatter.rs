@@ -120,8 +120,13 @@ pub(crate) fn path<V: Volume>(
 
 /// Extinction at a sample.
 #[inline]
-fn sigma(ctx: &Ctx, s: &Sample) -> f32 {
-    ctx.tf.opacity(ctx.settings.normalize(s.value)) * ctx.settings.opacity_scale
+fn sigma<V: Volume>(volume: &V, ctx: &Ctx, s: &Sample) -> f32 {
+    let opacity = if volume.classified() {
+        s.value
+    } else {
+        ctx.tf.opacity(ctx.settings.normalize(s.value))
+    };
+    opacity * ctx.settings.opacity_scale
 }
 
 /// The first scattering event along `ray` within `intervals`, or `None` if
@@ -146,7 +151,7 @@ fn free_flight<V: Volume>(
                 let Some(s) = volume.sample_in(ray.at(seg.t), iv) else {
                     continue;
                 };
-                let sg = sigma(ctx, &s);
+                let sg = sigma(volume, ctx, &s);
                 let step = sg * seg.len;
                 if tau + step >= target && sg > 0.0 {
                     // Place the event inside the segment where the running
@@ -188,7 +193,7 @@ fn free_flight<V: Volume>(
                     let Some(sample) = volume.sample_in(ray.at(t), iv) else {
                         continue;
                     };
-                    if next() * majorant < sigma(ctx, &sample) {
+                    if next() * majorant < sigma(volume, ctx, &sample) {
                         return Some((t, sample));
                     }
                 }

@@ -41,6 +41,9 @@ pub struct ParticlesDesc {
     /// Keep only particles whose `type` column equals this (LAMMPS type
     /// number; XYZ type number or element symbol).
     pub species: Option<String>,
+    /// Multi-material rendering: one entry per species, each with its own
+    /// radius and transfer function (`[[particles.materials]]`).
+    pub materials: Option<Vec<MaterialDesc>>,
     /// `.npy` with N values, or the name of a column of the particle file
     /// (case-insensitive).
     pub attribute: Option<String>,
@@ -65,6 +68,30 @@ pub struct ParticlesDesc {
     /// `[[attribute, weight], ...]` over the normalised attribute.
     pub weight_map: Option<Vec<[f32; 2]>>,
     pub attribute_range: Option<[f32; 2]>,
+}
+
+/// One material of a multi-material particle scene: the particles of one
+/// species, their radius, and how their density is classified.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDesc {
+    /// The species: a `type` number (LAMMPS, XYZ) or an XYZ element symbol.
+    pub species: String,
+    /// A label for messages (default: the species).
+    pub name: Option<String>,
+    /// Radius parameter of this material's kernel (default: the particles'
+    /// `radius`, else estimated from this material's particles).
+    pub radius: Option<f32>,
+    /// Colormap preset applied to this material's density (default viridis).
+    pub colormap: Option<String>,
+    /// One fixed sRGB colour instead of the colormap (categorical colour).
+    pub color: Option<[f32; 3]>,
+    /// Opacity preset (default linear).
+    pub opacity: Option<String>,
+    /// `[[x, opacity], ...]`; overrides `opacity`.
+    pub opacity_points: Option<Vec<[f32; 2]>>,
+    /// Density range mapped to [0, 1] (default: this material's own range).
+    pub value_range: Option<[f32; 2]>,
 }
 
 /// An AMR data source: ExaBricks cells + scalars, or AMRClaw output.

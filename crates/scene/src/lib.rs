@@ -18,6 +18,7 @@ pub mod formats;
 pub mod frames;
 mod jaxpm;
 mod load;
+mod materials;
 mod sources;
 mod view;
 
@@ -30,7 +31,7 @@ use rayon::prelude::*;
 use voxless_amr::{AmrError, AmrVolume};
 use voxless_core::{Aabb, Camera, Image, Projection, Range1, Vec3, Volume};
 use voxless_io::IoError;
-use voxless_particles::{ParticleError, ParticleVolume};
+use voxless_particles::{MaterialVolume, ParticleError, ParticleVolume};
 use voxless_render::{FreeFlight, Light, LightSource, Noise, RenderSettings, Scatter};
 use voxless_tets::{TetError, TetMode, TetOptions, TetVolume};
 use voxless_transfer::{Colormap, OpacityMap, TransferError, TransferFunction};
@@ -117,6 +118,9 @@ pub enum AnyVolume {
     Amr(Box<AmrVolume>),
     /// A phase-space tessellation and how to render it.
     Tets(Box<TetVolume>, TetMode, TetOptions),
+    /// Several particle species, each with its own radius and transfer
+    /// function, blended per sample.
+    Materials(Box<MaterialVolume>),
 }
 
 /// Runs `$body` with `$v` bound to the concrete volume (monomorphised per kind).
@@ -132,6 +136,10 @@ macro_rules! with_volume {
                 $body
             }
             AnyVolume::Tets($v, ..) => {
+                let $v = &**$v;
+                $body
+            }
+            AnyVolume::Materials($v) => {
                 let $v = &**$v;
                 $body
             }
@@ -151,6 +159,7 @@ impl AnyVolume {
             AnyVolume::Particles(_) => "particles",
             AnyVolume::Amr(_) => "AMR cells",
             AnyVolume::Tets(..) => "phase-space tessellation",
+            AnyVolume::Materials(_) => "multi-material particles",
         }
     }
 
@@ -196,6 +205,9 @@ impl AnyVolume {
             AnyVolume::Particles(v) => Some(v.total_mass()),
             AnyVolume::Amr(v) => v.exact_integral(),
             AnyVolume::Tets(v, ..) => Some(v.mesh.total_mass()),
+            AnyVolume::Materials(v) => {
+                Some(v.materials().iter().map(|m| m.volume.total_mass()).sum())
+            }
         }
     }
 
@@ -214,6 +226,11 @@ impl AnyVolume {
                 c
             }
             AnyVolume::Tets(..) => vec!["density".into(), "streams".into()],
+            AnyVolume::Materials(v) => v
+                .materials()
+                .iter()
+                .map(|m| format!("density ({})", m.name))
+                .collect(),
             AnyVolume::Amr(v) => {
                 let mut c: Vec<String> = v.field_names().to_vec();
                 if gradient {
@@ -241,6 +258,15 @@ impl AnyVolume {
                         row.extend(f.gradient.to_array());
                     }
                     row
+                })
+                .collect(),
+            AnyVolume::Materials(v) => points
+                .par_iter()
+                .flat_map_iter(|&p| {
+                    v.materials()
+                        .iter()
+                        .map(|m| m.volume.density(p))
+                        .collect::<Vec<_>>()
                 })
                 .collect(),
             AnyVolume::Tets(v, ..) => points
@@ -310,6 +336,12 @@ pub fn resolve_frame(
         ));
     }
     let volume = match (&desc.particles, &desc.amr, &desc.tets) {
+        (Some(p), _, _) if p.materials.is_some() => {
+            let mats = p.materials.as_deref().unwrap_or_default();
+            AnyVolume::Materials(Box::new(materials::load_materials(
+                p, mats, base, &mut notes, frame,
+            )?))
+        }
         (Some(p), _, _) => {
             let mut volume = load_particles(p, base, &mut notes, frame)?;
             volume.classify(&tf);

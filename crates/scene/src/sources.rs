@@ -459,6 +459,13 @@ impl LoadedScene {
         base: &Path,
         frame: usize,
     ) -> Result<(), SceneError> {
+        if let (AnyVolume::Materials(_), Some(p)) = (&self.volume, &desc.particles) {
+            // Each material is rebuilt from the new frame (no buffer reuse).
+            let mats = p.materials.as_deref().unwrap_or_default();
+            let v = crate::materials::load_materials(p, mats, base, &mut Vec::new(), frame)?;
+            self.volume = AnyVolume::Materials(Box::new(v));
+            return Ok(());
+        }
         let (AnyVolume::Particles(v), Some(p)) = (&mut self.volume, &desc.particles) else {
             return Err(SceneError::setting(
                 "frames",

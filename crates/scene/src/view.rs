@@ -192,6 +192,7 @@ impl LoadedScene {
                 .and_then(|a| a.color_field.clone().or_else(|| a.field.clone()))
                 .or_else(|| v.field_names().first().cloned()),
             AnyVolume::Tets(..) => Some("density".into()),
+            AnyVolume::Materials(_) => None,
         }
     }
 

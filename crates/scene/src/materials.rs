@@ -1,0 +1,91 @@
+//! Multi-material particle scenes: `[[particles.materials]]` entries, each a
+//! species of the particle file with its own radius and transfer function
+//! (see `voxless_particles::MaterialVolume` for the blending).
+
+use std::path::Path;
+
+use voxless_core::{Range1, Vec3, Volume, srgb_to_linear};
+use voxless_particles::{Material, MaterialClass, MaterialVolume};
+use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
+
+use crate::sources::{load_particles, range};
+use crate::{MaterialDesc, ParticlesDesc, SceneError};
+
+/// Loads every material of `p` at `frame`: the particle file filtered to
+/// each material's species, with the material's radius.
+pub(crate) fn load_materials(
+    p: &ParticlesDesc,
+    mats: &[MaterialDesc],
+    base: &Path,
+    notes: &mut Vec<String>,
+    frame: usize,
+) -> Result<MaterialVolume, SceneError> {
+    if p.species.is_some() {
+        return Err(SceneError::setting(
+            "particles.species",
+            "give the species per material ([[particles.materials]] species = ...), not both",
+        ));
+    }
+    let mut out = Vec::with_capacity(mats.len());
+    for (k, m) in mats.iter().enumerate() {
+        let field = |key: &str| format!("particles.materials[{k}].{key}");
+        let desc = ParticlesDesc {
+            species: Some(m.species.clone()),
+            radius: m.radius.or(p.radius),
+            materials: None,
+            ..p.clone()
+        };
+        let volume = load_particles(&desc, base, notes, frame)?;
+        let colormap = Colormap::preset(m.colormap.as_deref().unwrap_or("viridis"))?;
+        let opacity = match &m.opacity_points {
+            Some(pts) => {
+                let v: Vec<(f32, f32)> = pts.iter().map(|q| (q[0], q[1])).collect();
+                OpacityMap::from_points(&v)?
+            }
+            None => OpacityMap::preset(m.opacity.as_deref().unwrap_or("linear"))?,
+        };
+        let value_range = match m.value_range {
+            Some([lo, hi]) => range(&field("value_range"), lo, hi)?,
+            None => volume.value_range(),
+        };
+        let color = match m.color {
+            Some(c) if c.iter().all(|v| (0.0..=1.0).contains(v)) => Some(Vec3::new(
+                srgb_to_linear(c[0]),
+                srgb_to_linear(c[1]),
+                srgb_to_linear(c[2]),
+            )),
+            Some(c) => {
+                return Err(SceneError::setting(
+                    &field("color"),
+                    format!("{c:?} is not an sRGB colour in [0, 1]"),
+                ));
+            }
+            None => None,
+        };
+        let name = m
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("species {}", m.species));
+        notes.push(format!(
+            "material '{name}': {} particles, density range [{:.4e}, {:.4e}]",
+            volume.len(),
+            value_range.lo,
+            value_range.hi
+        ));
+        out.push(Material {
+            name,
+            volume,
+            class: MaterialClass {
+                tf: TransferFunction::new(colormap, opacity),
+                value_range: if value_range.span() > 0.0 {
+                    value_range
+                } else {
+                    Range1::new(value_range.lo, value_range.lo + 1.0)
+                },
+                color,
+            },
+        });
+    }
+    MaterialVolume::new(out)
+        .ok_or_else(|| SceneError::setting("particles.materials", "the list of materials is empty"))
+}
