@@ -31,6 +31,15 @@ fn assert_same(vol: &ParticleVolume, tf: &TransferFunction, settings: &RenderSet
     fast.packets = true;
     let a = render(vol, &camera, tf, &slow, &|_, _| {});
     let b = render(vol, &camera, tf, &fast, &|_, _| {});
+    // The portable SIMD path too (the AVX2 one is used where the CPU has it).
+    voxless_particles::force_portable_simd(true);
+    let c = render(vol, &camera, tf, &fast, &|_, _| {});
+    voxless_particles::force_portable_simd(false);
+    let d = max_diff(&a, &c);
+    assert!(
+        d <= TOLERANCE,
+        "{what}: portable packet path differs by {d}"
+    );
     let lit = a.pixels.iter().filter(|p| p[3] > 0.05).count();
     assert!(
         lit > a.pixels.len() / 20,

@@ -43,7 +43,10 @@ mod volume;
 pub use error::ParticleError;
 pub use kernel::{KERNEL_NAMES, Kernel};
 pub use materials::{Material, MaterialClass, MaterialVolume};
-pub use volume::{Classification, FieldSample, ParticleData, ParticleSettings, ParticleVolume};
+pub use volume::{
+    Classification, FieldSample, ParticleData, ParticleSettings, ParticleVolume,
+    force_portable_simd,
+};
 
 #[cfg(test)]
 mod tests;

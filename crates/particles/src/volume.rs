@@ -12,6 +12,7 @@ use crate::error::ParticleError;
 use crate::kernel::{CubicFamily, Family, GaussianFamily, Kernel};
 
 mod packet;
+pub use packet::force_portable_simd;
 
 /// Particle arrays as read from a file, in file order.
 #[derive(Clone, Debug, Default)]

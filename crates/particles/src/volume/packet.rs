@@ -1,21 +1,30 @@
 //! Packet sampling (CPU RBF paper §4.1): the sample buffer of a whole packet
 //! of rays filled by one BVH traversal.
 //!
-//! The traversal visits every cluster whose box overlaps the box of all the
-//! packet's samples; for each cluster, each ray whose pass segment crosses
-//! the cluster box, and each member particle, the particle's support cuts the
-//! ray in a chord `[u − h, u + h]`, and only the samples inside that chord are
-//! evaluated (found by binary search along the ray's sorted samples). Each
-//! particle is thus visited once per packet and pass instead of once per
-//! sample, and the per-sample point-query traversal disappears.
+//! The traversal collects every cluster whose box overlaps the box of all
+//! the packet's samples. Rays go in groups of eight (structure of arrays):
+//! one slab test says which groups cross a cluster's box at all, then each
+//! member particle is tested against eight rays at once — its support cuts
+//! each ray in a chord `[u − h, u + h]` — and only the samples inside a ray's
+//! chord are evaluated, several at a time. Each particle is thus visited once
+//! per packet and pass instead of once per sample, and the per-sample
+//! point-query traversal disappears.
 //!
 //! Exactness: a sample takes a particle iff `|p − c|² ≤ R²` with `p =
 //! ray.at(t)` — the point query's own test on the same `p` (the chord only
 //! pre-selects, padded against rounding). Clusters come in the point query's
 //! depth-first order and members in index order, so every sample sums the
 //! same terms in the same order as [`ParticleVolume::field`]; the kernels are
-//! evaluated eight samples at a time in f32 (`wide`), which differs from the
-//! scalar forms by a few ulp only.
+//! evaluated in f32 SIMD, within a few ulp of the scalar forms (the scalar
+//! cubic spline works in f64; the SIMD Gaussians use a polynomial `exp`).
+//!
+//! SIMD: portable `wide` types (four lanes per sample chunk: a ray's run of
+//! samples inside one particle is short, ≈ 8 at the default step, so narrow
+//! chunks waste few masked lanes), and, chosen at run time when the CPU has
+//! AVX2, the whole pass compiled for AVX2 with the chord test and the sample
+//! loop on eight AVX lanes (same operations in the same order; measured in
+//! docs/benchmarks.md). An attempt to let LLVM vectorise plain per-lane array
+//! code instead produced shuffle-heavy code and was slower than both.
 
 use voxless_core::{Aabb, Sample, SampleBatch, Vec3};
 use wide::f32x8;
@@ -88,10 +97,13 @@ struct Buffer {
     covered: Vec<f32>,
     color: [Vec<f32>; 3],
     grad: [Vec<f32>; 3],
+    /// Clusters the pass box overlaps, in traversal order.
+    clusters: Vec<(u32, Aabb)>,
 }
 
 impl Buffer {
     fn reset(&mut self, n: usize, color: bool, grad: bool) {
+        // (`clusters` is refilled by each pass.)
         let len = n + L;
         for v in [
             &mut self.px,
@@ -113,6 +125,16 @@ impl Buffer {
             v.resize(if grad { len } else { 0 }, 0.0);
         }
     }
+}
+
+/// Set by [`crate::force_portable_simd`]: skip the AVX2 pass.
+static PORTABLE_ONLY: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Makes packet sampling use the portable SIMD path even where AVX2 is
+/// available (tests and benchmarks compare the two; both give the same
+/// image within a few ulp).
+pub fn force_portable_simd(on: bool) {
+    PORTABLE_ONLY.store(on, std::sync::atomic::Ordering::Relaxed);
 }
 
 thread_local! {
@@ -163,6 +185,63 @@ impl RayGroup {
         let enter = ax.max(ay).max(az).max(self.lo - pad);
         let exit = bx.min(by).min(bz).min(self.hi + pad);
         enter.simd_le(exit).any()
+    }
+
+    /// [`Self::chord`] as arrays, with bit `k` set iff ray `k`'s chord
+    /// overlaps its pass span.
+    #[inline(always)]
+    fn chord_hits(&self, c: Vec3, r2: f32) -> ([f32; 8], [f32; 8], u32) {
+        let (lo, hi) = self.chord(c, r2);
+        let bits = (lo.simd_le(self.hi) & hi.simd_ge(self.lo)).to_bitmask();
+        (lo.to_array(), hi.to_array(), bits)
+    }
+
+    /// [`Self::chord_hits`] on eight AVX lanes, same operations in the same
+    /// order.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2; called only from `batch_avx2`.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn chord_avx(&self, c: Vec3, r2: f32) -> ([f32; 8], [f32; 8], u32) {
+        use std::arch::x86_64::*;
+        // `f32x8` is 32 bytes of eight f32 lanes in order, like `__m256`.
+        let m = |v: f32x8| -> __m256 { unsafe { std::mem::transmute::<f32x8, __m256>(v) } };
+        unsafe {
+            let s = _mm256_set1_ps;
+            let (dx, dy, dz, inv_dd) = (m(self.dx), m(self.dy), m(self.dz), m(self.inv_dd));
+            let ox = _mm256_sub_ps(s(c.x), m(self.ox));
+            let oy = _mm256_sub_ps(s(c.y), m(self.oy));
+            let oz = _mm256_sub_ps(s(c.z), m(self.oz));
+            let (mul, add, sub) = (_mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps);
+            let cx = sub(mul(oy, dz), mul(oz, dy));
+            let cy = sub(mul(oz, dx), mul(ox, dz));
+            let cz = sub(mul(ox, dy), mul(oy, dx));
+            let b2 = mul(add(add(mul(cx, cx), mul(cy, cy)), mul(cz, cz)), inv_dd);
+            let u = mul(add(add(mul(ox, dx), mul(oy, dy)), mul(oz, dz)), inv_dd);
+            let r2 = s(r2);
+            let h2 = mul(sub(r2, b2), inv_dd);
+            let abs_u = _mm256_andnot_ps(s(-0.0), u);
+            let h = add(
+                mul(_mm256_sqrt_ps(_mm256_max_ps(h2, s(0.0))), s(1.001)),
+                mul(s(1e-5), abs_u),
+            );
+            let hit = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_LE_OQ>(b2, r2),
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_LE_OQ>(sub(u, h), m(self.hi)),
+                    _mm256_cmp_ps::<_CMP_GE_OQ>(add(u, h), m(self.lo)),
+                ),
+            );
+            let bits = _mm256_movemask_ps(hit) as u32;
+            let mut lo = [0.0f32; 8];
+            let mut hi = [0.0f32; 8];
+            if bits != 0 {
+                _mm256_storeu_ps(lo.as_mut_ptr(), sub(u, h));
+                _mm256_storeu_ps(hi.as_mut_ptr(), add(u, h));
+            }
+            (lo, hi, bits)
+        }
     }
 
     /// The chord `[lo, hi]` (in t) each ray cuts from the ball of squared
@@ -248,15 +327,138 @@ impl ParticleVolume {
         }
     }
 
+    /// [`Self::deposit`] on eight AVX lanes, same operations in the same
+    /// order.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2; called only from [`Self::batch_avx2`].
+    #[cfg(target_arch = "x86_64")]
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    unsafe fn deposit_avx<F: Family, const GRAD: bool>(
+        &self,
+        buf: &mut Buffer,
+        i: usize,
+        j0: usize,
+        j1: usize,
+        attr: Option<&[f32]>,
+        pre: bool,
+    ) {
+        use std::arch::x86_64::*;
+        // Loads and adds lanes `j..j + 8` of a padded buffer.
+        #[inline(always)]
+        unsafe fn ld(v: &[f32], j: usize) -> __m256 {
+            unsafe { _mm256_loadu_ps(v[j..j + 8].as_ptr()) }
+        }
+        #[inline(always)]
+        unsafe fn add(v: &mut [f32], j: usize, x: __m256) {
+            unsafe {
+                let s = &mut v[j..j + 8];
+                _mm256_storeu_ps(
+                    s.as_mut_ptr(),
+                    _mm256_add_ps(_mm256_loadu_ps(s.as_ptr()), x),
+                );
+            }
+        }
+        unsafe {
+            let q = &self.packed[i];
+            let (cx, cy, cz) = (
+                _mm256_set1_ps(q.center.x),
+                _mm256_set1_ps(q.center.y),
+                _mm256_set1_ps(q.center.z),
+            );
+            let r2 = _mm256_set1_ps(q.support2);
+            let lanes = _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0);
+            let one = _mm256_set1_ps(1.0);
+            let mut j = j0;
+            while j < j1 {
+                let n = _mm256_set1_ps((j1 - j).min(8) as i32 as f32);
+                let valid = _mm256_cmp_ps::<_CMP_LT_OQ>(lanes, n);
+                let dx = _mm256_sub_ps(ld(&buf.px, j), cx);
+                let dy = _mm256_sub_ps(ld(&buf.py, j), cy);
+                let dz = _mm256_sub_ps(ld(&buf.pz, j), cz);
+                // The point query's own test, as (x² + y²) + z².
+                let d2 = _mm256_add_ps(
+                    _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                    _mm256_mul_ps(dz, dz),
+                );
+                let inside = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(d2, r2), valid);
+                if _mm256_movemask_ps(inside) != 0 {
+                    let v = if GRAD {
+                        let (v, g) = F::value_and_gradient_factor_avx(d2, q.shape, q.amp);
+                        let g = _mm256_and_ps(g, inside);
+                        add(&mut buf.grad[0], j, _mm256_mul_ps(dx, g));
+                        add(&mut buf.grad[1], j, _mm256_mul_ps(dy, g));
+                        add(&mut buf.grad[2], j, _mm256_mul_ps(dz, g));
+                        v
+                    } else {
+                        F::value_avx(d2, q.shape, q.amp)
+                    };
+                    let v = _mm256_and_ps(v, inside);
+                    add(&mut buf.density, j, v);
+                    let cov = _mm256_max_ps(ld(&buf.covered, j), _mm256_and_ps(one, inside));
+                    _mm256_storeu_ps(buf.covered[j..j + 8].as_mut_ptr(), cov);
+                    if let Some(at) = attr {
+                        add(&mut buf.attr, j, _mm256_mul_ps(v, _mm256_set1_ps(at[i])));
+                    }
+                    if pre {
+                        let col = self.colors[i];
+                        add(
+                            &mut buf.color[0],
+                            j,
+                            _mm256_mul_ps(v, _mm256_set1_ps(col.x)),
+                        );
+                        add(
+                            &mut buf.color[1],
+                            j,
+                            _mm256_mul_ps(v, _mm256_set1_ps(col.y)),
+                        );
+                        add(
+                            &mut buf.color[2],
+                            j,
+                            _mm256_mul_ps(v, _mm256_set1_ps(col.z)),
+                        );
+                    }
+                }
+                j += 8;
+            }
+        }
+    }
+
     pub(super) fn batch<F: Family, const GRAD: bool>(
         &self,
         batch: &SampleBatch,
         out: &mut Vec<(Option<Sample>, Vec3)>,
     ) {
-        BUFFER.with_borrow_mut(|buf| self.batch_in::<F, GRAD>(batch, buf, out));
+        BUFFER.with_borrow_mut(|buf| {
+            #[cfg(target_arch = "x86_64")]
+            if !PORTABLE_ONLY.load(std::sync::atomic::Ordering::Relaxed)
+                && std::arch::is_x86_feature_detected!("avx2")
+            {
+                // SAFETY: the CPU has AVX2 (checked just above).
+                unsafe { self.batch_avx2::<F, GRAD>(batch, buf, out) };
+                return;
+            }
+            self.batch_in::<F, GRAD, false>(batch, buf, out);
+        });
     }
 
-    fn batch_in<F: Family, const GRAD: bool>(
+    /// [`ParticleVolume::batch_in`] compiled with AVX2, its sample loop on
+    /// eight AVX lanes.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn batch_avx2<F: Family, const GRAD: bool>(
+        &self,
+        batch: &SampleBatch,
+        buf: &mut Buffer,
+        out: &mut Vec<(Option<Sample>, Vec3)>,
+    ) {
+        self.batch_in::<F, GRAD, true>(batch, buf, out);
+    }
+
+    /// The pass; `AVX`: deposit with AVX2 (only from [`Self::batch_avx2`]).
+    #[inline(always)]
+    fn batch_in<F: Family, const GRAD: bool, const AVX: bool>(
         &self,
         batch: &SampleBatch,
         buf: &mut Buffer,
@@ -324,7 +526,13 @@ impl ParticleVolume {
         let n = self.settings.cluster_size;
         let lanes = Lanes::new(std::array::from_fn(|k| k as f32));
         let mut hit_groups = [0u32; 64];
-        self.bvh.box_query(&bounds, |c, cbox| {
+        // Collect first, so the loop below is compiled in this function
+        // (with AVX2 when dispatched so), not inside the traversal.
+        let mut clusters = std::mem::take(&mut buf.clusters);
+        clusters.clear();
+        self.bvh.box_query(&bounds, |c, b| clusters.push((c, *b)));
+        for &(c, cbox) in &clusters {
+            let cbox = &cbox;
             let start = c as usize * n;
             let end = (start + n).min(self.packed.len());
             // Which ray groups cross the cluster box at all: one slab test
@@ -337,7 +545,7 @@ impl ParticleVolume {
                 }
             }
             if ng == 0 {
-                return;
+                continue;
             }
             for i in start..end {
                 let q = &self.packed[i];
@@ -349,12 +557,18 @@ impl ParticleVolume {
                 for &g in &hit_groups[..ng] {
                     let g = g as usize;
                     let rays = &rg[g];
-                    let (lo, hi) = rays.chord(q.center, r2);
-                    let mut bits = (lo.simd_le(rays.hi) & hi.simd_ge(rays.lo)).to_bitmask();
+                    #[cfg(target_arch = "x86_64")]
+                    let (lo, hi, mut bits) = if AVX {
+                        // SAFETY: AVX is set only under `batch_avx2`.
+                        unsafe { rays.chord_avx(q.center, r2) }
+                    } else {
+                        rays.chord_hits(q.center, r2)
+                    };
+                    #[cfg(not(target_arch = "x86_64"))]
+                    let (lo, hi, mut bits) = rays.chord_hits(q.center, r2);
                     if bits == 0 {
                         continue;
                     }
-                    let (lo, hi) = (lo.to_array(), hi.to_array());
                     while bits != 0 {
                         let k = bits.trailing_zeros() as usize;
                         bits &= bits - 1;
@@ -363,11 +577,18 @@ impl ParticleVolume {
                         let base = batch.offsets[r] as usize;
                         let j0 = base + first_at_least(ts, lo[k], ts[0], inv_steps[r]);
                         let j1 = base + first_above(ts, hi[k], ts[0], inv_steps[r]);
+                        #[cfg(target_arch = "x86_64")]
+                        if AVX {
+                            // SAFETY: AVX is set only under `batch_avx2`.
+                            unsafe { self.deposit_avx::<F, GRAD>(buf, i, j0, j1, attr, pre) };
+                            continue;
+                        }
                         self.deposit::<F, GRAD>(buf, i, j0, j1, lanes, attr, pre);
                     }
                 }
             }
-        });
+        }
+        buf.clusters = clusters;
         out.extend((0..batch.t.len()).map(|j| {
             let density = buf.density[j];
             let f = FieldSample {
