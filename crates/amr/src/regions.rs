@@ -222,17 +222,21 @@ pub fn metadata(
     fields: &[Vec<f32>],
 ) -> (Vec<Range1>, Vec<i32>) {
     let nf = fields.len();
-    let per: Vec<(Vec<Range1>, i32)> = regions
-        .regions
-        .par_iter()
+    // Written in place: one flat allocation rather than a small Vec per
+    // region (millions of them on a 10M-cell set).
+    let width = nf.max(1); // a zero-field set still needs its finest widths
+    let mut ranges = vec![Range1::EMPTY; regions.regions.len() * width];
+    let mut finest = vec![i32::MAX; regions.regions.len()];
+    ranges
+        .par_chunks_mut(width)
+        .zip(finest.par_iter_mut())
         .enumerate()
-        .map(|(ri, r)| {
-            let mut ranges = vec![Range1::EMPTY; nf];
-            let mut finest = i32::MAX;
+        .for_each(|(ri, (ranges, finest))| {
+            let r = &regions.regions[ri];
             for &b in regions.bricks_of(ri) {
                 let b = &bricks[b as usize];
                 let w = b.width() as i64;
-                finest = finest.min(b.width());
+                *finest = (*finest).min(b.width());
                 // Doubled units: cell i has centre c = base + (2i + 1)w and its
                 // hat reaches (c − 2w, c + 2w); keep cells overlapping (lo, hi):
                 // c + 2w > lo ⇔ i > (lo − base − 3w)/2w, c − 2w < hi ⇔ i < (hi − base + w)/2w.
@@ -250,21 +254,16 @@ pub fn metadata(
                         for i in x.0..=x.1 {
                             let idx = b.offset as usize
                                 + ((k * b.size[1] as i64 + j) * b.size[0] as i64 + i) as usize;
-                            for (f, range) in ranges.iter_mut().enumerate() {
+                            for (f, range) in ranges.iter_mut().enumerate().take(nf) {
                                 range.extend(fields[f][idx]);
                             }
                         }
                     }
                 }
             }
-            (ranges, finest)
-        })
-        .collect();
-    let mut ranges = Vec::with_capacity(regions.regions.len() * nf);
-    let mut finest = Vec::with_capacity(regions.regions.len());
-    for (r, f) in per {
-        ranges.extend(r);
-        finest.push(f);
+        });
+    if nf == 0 {
+        ranges.clear();
     }
     (ranges, finest)
 }
