@@ -209,6 +209,14 @@ impl Bvh {
     /// contains `p`.
     #[inline]
     pub fn point_query(&self, p: Vec3, mut visit: impl FnMut(u32)) {
+        self.descend(|n| n.contains(p), |n| visit(n.index));
+    }
+
+    /// Depth-first, left child first, over the nodes `hit` accepts; calls
+    /// `leaf` for each accepted leaf. The left child is descended without
+    /// touching the stack.
+    #[inline(always)]
+    fn descend(&self, hit: impl Fn(&Node) -> bool, mut leaf: impl FnMut(&Node)) {
         if self.nodes.is_empty() {
             return;
         }
@@ -217,14 +225,13 @@ impl Bvh {
         while sp > 0 {
             sp -= 1;
             let mut i = stack[sp] as usize;
-            // Descend without touching the stack while possible.
             loop {
                 let node = &self.nodes[i];
-                if !node.contains(p) {
+                if !hit(node) {
                     break;
                 }
                 if node.is_leaf() {
-                    visit(node.index);
+                    leaf(node);
                     break;
                 }
                 stack[sp] = (i + node.index as usize) as u32;
@@ -239,9 +246,6 @@ impl Bvh {
     /// any point in `b` the primitives containing it come in the same relative
     /// order (packet sampling relies on that to sum bit-identically).
     pub fn box_query(&self, b: &Aabb, mut visit: impl FnMut(u32, &Aabb)) {
-        if self.nodes.is_empty() {
-            return;
-        }
         let overlaps = |n: &Node| {
             n.min[0] <= b.max.x
                 && n.max[0] >= b.min.x
@@ -250,25 +254,7 @@ impl Bvh {
                 && n.min[2] <= b.max.z
                 && n.max[2] >= b.min.z
         };
-        let mut stack = [0u32; STACK];
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let mut i = stack[sp] as usize;
-            loop {
-                let node = &self.nodes[i];
-                if !overlaps(node) {
-                    break;
-                }
-                if node.is_leaf() {
-                    visit(node.index, &node.bounds());
-                    break;
-                }
-                stack[sp] = (i + node.index as usize) as u32;
-                sp += 1;
-                i += 1;
-            }
-        }
+        self.descend(overlaps, |n| visit(n.index, &n.bounds()));
     }
 
     /// Calls `visit(prim, t)` for every primitive whose box `ray` crosses

@@ -199,24 +199,19 @@ impl Film {
                 if let Some(sc) = &settings.scatter {
                     // Scattering paths are incoherent: one ray at a time.
                     let mut scratch = Vec::new();
-                    for y in tile.y..tile.y + tile.h {
-                        for x in tile.x..tile.x + tile.w {
-                            let pixel = y as u64 * w as u64 + x as u64;
-                            let rng = PixelRng::new(settings.seed, pixel, sample);
-                            let (jx, jy) = pixel_offset(&rng, sample);
-                            let ray = camera.ray(x as f32 + jx, y as f32 + jy, w, h);
-                            out.push(scatter::path(
-                                volume,
-                                &ray,
-                                tf,
-                                settings,
-                                sc,
-                                (x, y),
-                                sample,
-                                &mut scratch,
-                            ));
-                        }
-                    }
+                    for_each_pixel(tile, |x, y| {
+                        let (_, ray) = pixel_ray(camera, settings, x, y, sample);
+                        out.push(scatter::path(
+                            volume,
+                            &ray,
+                            tf,
+                            settings,
+                            sc,
+                            (x, y),
+                            sample,
+                            &mut scratch,
+                        ));
+                    });
                 } else if settings.packets && volume.packet_sampling() {
                     let mut scratch = packet::PacketScratch::default();
                     packet::render_tile(
@@ -231,15 +226,10 @@ impl Film {
                     );
                 } else {
                     let mut scratch = Vec::new();
-                    for y in tile.y..tile.y + tile.h {
-                        for x in tile.x..tile.x + tile.w {
-                            let pixel = y as u64 * w as u64 + x as u64;
-                            let rng = PixelRng::new(settings.seed, pixel, sample);
-                            let (jx, jy) = pixel_offset(&rng, sample);
-                            let ray = camera.ray(x as f32 + jx, y as f32 + jy, w, h);
-                            out.push(march(volume, &ray, tf, settings, &rng, &mut scratch));
-                        }
-                    }
+                    for_each_pixel(tile, |x, y| {
+                        let (rng, ray) = pixel_ray(camera, settings, x, y, sample);
+                        out.push(march(volume, &ray, tf, settings, &rng, &mut scratch));
+                    });
                 }
                 tile_done();
                 (tile, out)
@@ -271,14 +261,33 @@ impl Film {
     }
 }
 
-/// Where in the pixel the ray of sample `sample` goes: the first through the
-/// centre, later ones jittered over the pixel (antialiasing).
+/// The random stream and camera ray of sample `sample` of pixel `(x, y)`:
+/// the first sample goes through the pixel centre, later ones are jittered
+/// over the pixel (antialiasing).
 #[inline]
-pub(crate) fn pixel_offset(rng: &PixelRng, sample: u32) -> (f32, f32) {
-    if sample == 0 {
+pub(crate) fn pixel_ray(
+    camera: &Camera,
+    settings: &RenderSettings,
+    x: u32,
+    y: u32,
+    sample: u32,
+) -> (PixelRng, voxless_core::Ray) {
+    let (w, h) = (settings.width, settings.height);
+    let rng = PixelRng::new(settings.seed, y as u64 * w as u64 + x as u64, sample);
+    let (jx, jy) = if sample == 0 {
         (0.5, 0.5)
     } else {
         (rng.uniform(0), rng.uniform(1))
+    };
+    (rng, camera.ray(x as f32 + jx, y as f32 + jy, w, h))
+}
+
+/// Calls `f(x, y)` for the pixels of `tile`, row-major.
+fn for_each_pixel(tile: Tile, mut f: impl FnMut(u32, u32)) {
+    for y in tile.y..tile.y + tile.h {
+        for x in tile.x..tile.x + tile.w {
+            f(x, y);
+        }
     }
 }
 

@@ -63,7 +63,6 @@ pub(crate) fn render_tile<V: Volume>(
     scratch: &mut PacketScratch,
     out: &mut Vec<[f32; 4]>,
 ) {
-    let (w, h) = (settings.width, settings.height);
     out.clear();
     out.resize((tile.w * tile.h) as usize, [0.0; 4]);
     let ctx = Ctx::new(tf, settings);
@@ -75,10 +74,7 @@ pub(crate) fn render_tile<V: Volume>(
             scratch.rays.clear();
             for y in tile.y + py..tile.y + py + ph {
                 for x in tile.x + px..tile.x + px + pw {
-                    let pixel = y as u64 * w as u64 + x as u64;
-                    let rng = PixelRng::new(settings.seed, pixel, sample);
-                    let (jx, jy) = crate::pixel_offset(&rng, sample);
-                    let ray = camera.ray(x as f32 + jx, y as f32 + jy, w, h);
+                    let (rng, ray) = crate::pixel_ray(camera, settings, x, y, sample);
                     let iv_lo = scratch.intervals.len();
                     let hit = ray_intervals(
                         volume,
