@@ -68,9 +68,10 @@ enum Which {
         #[arg(long, default_value_t = 5)]
         repeats: usize,
         /// Also the SPH dam-break snapshot in DIR (positions.npy, h.npy,
-        /// mass.npy, speed.npy; cubic spline with radius h): the paper's
-        /// Tables 1 and 2 on real frames.
-        #[arg(long, value_name = "DIR")]
+        /// mass.npy, speed.npy) or a PySPH .hdf5 frame (built with
+        /// --features hdf5), repeatable; cubic spline with radius h: the
+        /// paper's Tables 1 and 2 on real frames.
+        #[arg(long, value_name = "DIR|FILE")]
         dam_break: Vec<PathBuf>,
     },
     /// Packet traversal vs per-sample point queries (same image), a radius
@@ -396,7 +397,41 @@ pub(crate) fn save_png(path: &Path, img: &Image) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn read_dam_break(dir: &Path) -> Result<ParticleData> {
+/// An SPH snapshot: a directory in the `.npy` layout (`positions.npy`,
+/// `h.npy`, `mass.npy`, `speed.npy`) or any particle file the scene reads
+/// (e.g. a PySPH `.hdf5` frame with the `hdf5` feature; the `fluid` array,
+/// columns h, m and speed).
+pub(crate) fn read_dam_break(path: &Path) -> Result<ParticleData> {
+    if path.is_dir() {
+        return read_dam_break_npy(path);
+    }
+    use voxless_scene::formats::{ParticleFormat, TableOptions, read_table};
+    let Some(format) = ParticleFormat::detect(path)? else {
+        bail!("{}: not a particle file voxless reads", path.display());
+    };
+    let opts = TableOptions {
+        group: (format == ParticleFormat::Hdf5).then(|| "fluid".to_string()),
+        part_type: None,
+    };
+    let t = read_table(path, format, 0, &opts)?.table;
+    let column = |name: &str| -> Result<Vec<f32>> {
+        t.column(name).map(<[f32]>::to_vec).with_context(|| {
+            format!(
+                "{}: no column '{name}' (columns: {})",
+                path.display(),
+                t.column_names().join(", ")
+            )
+        })
+    };
+    Ok(ParticleData {
+        positions: t.positions.iter().map(|p| Vec3::from_array(*p)).collect(),
+        radii: Some(column("h")?),
+        weights: Some(column("m")?),
+        attribute: Some(column("speed")?),
+    })
+}
+
+fn read_dam_break_npy(dir: &Path) -> Result<ParticleData> {
     let read =
         |name: &str| -> Result<voxless_io::NpyArray> { Ok(voxless_io::read_npy(&dir.join(name))?) };
     let pos = read("positions.npy")?;
