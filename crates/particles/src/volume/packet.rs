@@ -32,6 +32,22 @@ use wide::f32x8;
 use super::{FieldSample, ParticleVolume, to_sample};
 use crate::kernel::{Family, LANES, Lanes};
 
+/// `LANE_MASKS[n]`: the first `n` of eight lanes set (all bits), as f32 bits.
+#[cfg(target_arch = "x86_64")]
+static LANE_MASKS: [[u32; 8]; 9] = {
+    let mut m = [[0u32; 8]; 9];
+    let mut n = 0;
+    while n <= 8 {
+        let mut k = 0;
+        while k < n {
+            m[n][k] = u32::MAX;
+            k += 1;
+        }
+        n += 1;
+    }
+    m
+};
+
 /// SIMD width of the sample loop.
 const L: usize = 8;
 
@@ -141,6 +157,30 @@ thread_local! {
     static BUFFER: std::cell::RefCell<Buffer> = std::cell::RefCell::new(Buffer::default());
 }
 
+/// Samples per unit t over sorted `ts` (0 for a single sample).
+fn inv_step(ts: &[f32]) -> f32 {
+    let width = ts[ts.len() - 1] - ts[0];
+    if ts.len() > 1 && width > 0.0 {
+        (ts.len() - 1) as f32 / width
+    } else {
+        0.0
+    }
+}
+
+/// [`first_at_least`] (`strict`: [`first_above`]) walking from index `g`.
+#[inline(always)]
+fn walk(ts: &[f32], x: f32, g: i32, strict: bool) -> usize {
+    let before = |t: f32| if strict { t <= x } else { t < x };
+    let mut j = (g.max(0) as usize).min(ts.len());
+    while j < ts.len() && before(ts[j]) {
+        j += 1;
+    }
+    while j > 0 && !before(ts[j - 1]) {
+        j -= 1;
+    }
+    j
+}
+
 /// `1 / d`, finite: zero becomes ±1e-30 first.
 fn safe_inv(d: f32) -> f32 {
     if d.abs() < 1e-30 {
@@ -166,6 +206,10 @@ struct RayGroup {
     iz: f32x8,
     lo: f32x8,
     hi: f32x8,
+    /// Samples per unit t (mean spacing⁻¹) and sample count, for the
+    /// index guesses of the AVX path.
+    inv_step: f32x8,
+    count: f32x8,
 }
 
 impl RayGroup {
@@ -203,7 +247,7 @@ impl RayGroup {
     /// The CPU must support AVX2; called only from `batch_avx2`.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn chord_avx(&self, c: Vec3, r2: f32) -> ([f32; 8], [f32; 8], u32) {
+    unsafe fn chord_avx(&self, c: Vec3, r2: f32) -> ([f32; 8], [f32; 8], u32, [[i32; 8]; 2]) {
         use std::arch::x86_64::*;
         // `f32x8` is 32 bytes of eight f32 lanes in order, like `__m256`.
         let m = |v: f32x8| -> __m256 { unsafe { std::mem::transmute::<f32x8, __m256>(v) } };
@@ -236,11 +280,20 @@ impl RayGroup {
             let bits = _mm256_movemask_ps(hit) as u32;
             let mut lo = [0.0f32; 8];
             let mut hi = [0.0f32; 8];
+            let mut guess = [[0i32; 8]; 2];
             if bits != 0 {
-                _mm256_storeu_ps(lo.as_mut_ptr(), sub(u, h));
-                _mm256_storeu_ps(hi.as_mut_ptr(), add(u, h));
+                let (l, r) = (sub(u, h), add(u, h));
+                _mm256_storeu_ps(lo.as_mut_ptr(), l);
+                _mm256_storeu_ps(hi.as_mut_ptr(), r);
+                // Index guesses from the mean spacing, for all eight rays.
+                let g = |x: __m256| {
+                    let v = mul(sub(x, m(self.lo)), m(self.inv_step));
+                    _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(v, s(0.0)), m(self.count)))
+                };
+                _mm256_storeu_si256(guess[0].as_mut_ptr().cast(), g(l));
+                _mm256_storeu_si256(guess[1].as_mut_ptr().cast(), g(r));
             }
-            (lo, hi, bits)
+            (lo, hi, bits, guess)
         }
     }
 
@@ -368,12 +421,11 @@ impl ParticleVolume {
                 _mm256_set1_ps(q.center.z),
             );
             let r2 = _mm256_set1_ps(q.support2);
-            let lanes = _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0);
             let one = _mm256_set1_ps(1.0);
             let mut j = j0;
             while j < j1 {
-                let n = _mm256_set1_ps((j1 - j).min(8) as i32 as f32);
-                let valid = _mm256_cmp_ps::<_CMP_LT_OQ>(lanes, n);
+                // The first min(j1 − j, 8) lanes, from a table.
+                let valid = _mm256_loadu_ps(LANE_MASKS[(j1 - j).min(8)].as_ptr().cast());
                 let dx = _mm256_sub_ps(ld(&buf.px, j), cx);
                 let dy = _mm256_sub_ps(ld(&buf.py, j), cy);
                 let dz = _mm256_sub_ps(ld(&buf.pz, j), cz);
@@ -510,19 +562,11 @@ impl ParticleVolume {
                 iz: lane(&|r| safe_inv(ray(r).dir.z), 1.0),
                 lo: lane(&|r| span(r).0, f32::INFINITY),
                 hi: lane(&|r| span(r).1, f32::NEG_INFINITY),
+                inv_step: lane(&|r| inv_step(batch.samples(r)), 0.0),
+                count: lane(&|r| batch.samples(r).len() as f32, 0.0),
             });
         }
-        let inv_steps: Vec<f32> = (0..n_rays)
-            .map(|r| {
-                let ts = batch.samples(r);
-                let width = ts[ts.len() - 1] - ts[0];
-                if ts.len() > 1 && width > 0.0 {
-                    (ts.len() - 1) as f32 / width
-                } else {
-                    0.0
-                }
-            })
-            .collect();
+        let inv_steps: Vec<f32> = (0..n_rays).map(|r| inv_step(batch.samples(r))).collect();
         let n = self.settings.cluster_size;
         let lanes = Lanes::new(std::array::from_fn(|k| k as f32));
         let mut hit_groups = [0u32; 64];
@@ -558,14 +602,18 @@ impl ParticleVolume {
                     let g = g as usize;
                     let rays = &rg[g];
                     #[cfg(target_arch = "x86_64")]
-                    let (lo, hi, mut bits) = if AVX {
+                    let (lo, hi, mut bits, guess) = if AVX {
                         // SAFETY: AVX is set only under `batch_avx2`.
                         unsafe { rays.chord_avx(q.center, r2) }
                     } else {
-                        rays.chord_hits(q.center, r2)
+                        let (lo, hi, bits) = rays.chord_hits(q.center, r2);
+                        (lo, hi, bits, [[-1; 8]; 2])
                     };
                     #[cfg(not(target_arch = "x86_64"))]
-                    let (lo, hi, mut bits) = rays.chord_hits(q.center, r2);
+                    let (lo, hi, mut bits, guess) = {
+                        let (lo, hi, bits) = rays.chord_hits(q.center, r2);
+                        (lo, hi, bits, [[-1i32; 8]; 2])
+                    };
                     if bits == 0 {
                         continue;
                     }
@@ -575,8 +623,18 @@ impl ParticleVolume {
                         let r = g * L + k;
                         let ts = batch.samples(r);
                         let base = batch.offsets[r] as usize;
-                        let j0 = base + first_at_least(ts, lo[k], ts[0], inv_steps[r]);
-                        let j1 = base + first_above(ts, hi[k], ts[0], inv_steps[r]);
+                        let (j0, j1) = if AVX {
+                            (
+                                walk(ts, lo[k], guess[0][k], false),
+                                walk(ts, hi[k], guess[1][k], true),
+                            )
+                        } else {
+                            (
+                                first_at_least(ts, lo[k], ts[0], inv_steps[r]),
+                                first_above(ts, hi[k], ts[0], inv_steps[r]),
+                            )
+                        };
+                        let (j0, j1) = (base + j0, base + j1);
                         #[cfg(target_arch = "x86_64")]
                         if AVX {
                             // SAFETY: AVX is set only under `batch_avx2`.
