@@ -303,6 +303,20 @@ impl Arrays {
     ) -> Result<(), String> {
         let numeric: Vec<&ArraySpec> = specs.iter().filter(|a| a.scalar.is_some()).collect();
         if p == 0 {
+            // Every component becomes a column, even when there are no
+            // tuples to check the count against. A file with data holds at
+            // least one byte per value, so more components than bytes is a
+            // corrupt header (that would allocate billions of columns).
+            let total = numeric
+                .iter()
+                .fold(0usize, |sum, a| sum.saturating_add(a.components));
+            if total > src.bytes.len() {
+                return Err(format!(
+                    "the {section} arrays declare {total} components in all, more than the \
+                     file's {} bytes can describe",
+                    src.bytes.len()
+                ));
+            }
             for (i, spec) in numeric.iter().enumerate() {
                 let name = if spec.name.is_empty() {
                     format!("array{i}")

@@ -382,3 +382,38 @@ fn vtk_malformed_inputs() {
         assert!(msg.contains(expected), "{name}: {msg}");
     }
 }
+
+/// Found while writing the fuzz targets (fuzz/): with no points or cells,
+/// nothing bounds `NumberOfComponents`, and each component becomes a column,
+/// so this 300-byte file made the readers build four billion columns.
+#[test]
+fn vtk_huge_component_count_without_tuples() {
+    let dir = TempDir::new("vtk-components");
+    let array = "<DataArray type=\"Float32\" Name=\"a\" NumberOfComponents=\"4000000000\" \
+                 format=\"ascii\"></DataArray>";
+    let points = "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" \
+                  format=\"ascii\"></DataArray></Points>";
+    let polydata = format!(
+        "<VTKFile type=\"PolyData\"><PolyData><Piece NumberOfPoints=\"0\">\
+         <PointData>{array}</PointData>{points}</Piece></PolyData></VTKFile>\n"
+    );
+    let path = dir.write("components.vtp", &polydata);
+    let msg = error_message(read_vtk_points(&path), &path);
+    assert!(msg.contains("4000000000 components"), "{msg}");
+
+    let grid = format!(
+        "<VTKFile type=\"UnstructuredGrid\"><UnstructuredGrid>\
+         <Piece NumberOfPoints=\"0\" NumberOfCells=\"0\"><CellData>{array}</CellData>{points}\
+         </Piece></UnstructuredGrid></VTKFile>\n"
+    );
+    let path = dir.write("components.vtu", &grid);
+    let msg = error_message(read_vtu_mesh(&path), &path);
+    assert!(msg.contains("4000000000 components"), "{msg}");
+
+    // A few components with no tuples are still fine: empty columns.
+    let small = polydata.replace("4000000000", "2");
+    let path = dir.write("two.vtp", &small);
+    let table = read_vtk_points(&path).unwrap();
+    assert_eq!(table.len(), 0);
+    assert_eq!(table.column("a_1"), Some(&[][..]));
+}

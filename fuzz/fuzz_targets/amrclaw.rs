@@ -1,0 +1,91 @@
+//! `read_amrclaw` on AMRClaw ASCII output. Byte 0 picks the mode (modulo 3),
+//! the rest of the input is one file:
+//!
+//! - 0: the rest is `fort.q0001`, next to a small valid `fort.t0001`
+//!   (time 0.5, meqn 2, 2 grids, ndim 3);
+//! - 1: the rest is `fort.t0001`, next to a small valid `fort.q0001` (two
+//!   grids of 2×2×2 cells with 2 values each, the second one level finer);
+//! - 2: the rest is `fort.q0001` and there is no `fort.t0001`, so `meqn`
+//!   comes from the first data row and grids run to the end of the file.
+
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+
+/// A `fort.t` that fits [`FORT_Q`].
+const FORT_T: &str = "\
+    0.50000000E+00    time
+     2                 meqn
+     2                 ngrids
+     0                 naux
+     3                 ndim
+     2                 nghost
+  ascii                format
+";
+
+/// A `fort.q` of two grids: AMR level 1 with dx = 0.5 and AMR level 2 with
+/// dx = 0.25 covering the first coarse cell.
+const FORT_Q: &str = "\
+     1                 grid_number
+     1                 AMR_level
+     2                 mx
+     2                 my
+     2                 mz
+    0.0000000000000000E+00    xlow
+    0.0000000000000000E+00    ylow
+    0.0000000000000000E+00    zlow
+    0.5000000000000000E+00    dx
+    0.5000000000000000E+00    dy
+    0.5000000000000000E+00    dz
+
+    0.1000000000000000E+01    0.2000000000000000E+00
+    0.1100000000000000E+01    0.2100000000000000E+00
+    0.1200000000000000E+01    0.2200000000000000E+00
+    0.1300000000000000E+01    0.2300000000000000E+00
+    0.1400000000000000E+01    0.2400000000000000E+00
+    0.1500000000000000E+01    0.2500000000000000E+00
+    0.1600000000000000E+01    0.2600000000000000E+00
+    0.1700000000000000E+01    0.2700000000000000E+00
+
+     2                 grid_number
+     2                 AMR_level
+     2                 mx
+     2                 my
+     2                 mz
+    0.0000000000000000E+00    xlow
+    0.0000000000000000E+00    ylow
+    0.0000000000000000E+00    zlow
+    0.2500000000000000E+00    dx
+    0.2500000000000000E+00    dy
+    0.2500000000000000E+00    dz
+
+    0.2000000000000000E+01    0.3000000000000000E+00
+    0.2100000000000000E+01    0.3100000000000000E+00
+    0.2200000000000000E+01    0.3200000000000000E+00
+    0.2300000000000000E+01    0.3300000000000000E+00
+    0.2400000000000000E+01    0.3400000000000000E+00
+    0.2500000000000000E+01    0.3500000000000000E+00
+    0.2600000000000000E+01    0.3600000000000000E+00
+    0.2700000000000000E+01    0.3700000000000000E+00
+";
+
+fuzz_target!(|data: &[u8]| {
+    let Some((&mode, rest)) = data.split_first() else {
+        return;
+    };
+    let fort_q = match mode % 3 {
+        0 => {
+            voxless_fuzz::write("fort.t0001", FORT_T.as_bytes());
+            voxless_fuzz::write("fort.q0001", rest)
+        }
+        1 => {
+            voxless_fuzz::write("fort.t0001", rest);
+            voxless_fuzz::write("fort.q0001", FORT_Q.as_bytes())
+        }
+        _ => {
+            voxless_fuzz::remove("fort.t0001");
+            voxless_fuzz::write("fort.q0001", rest)
+        }
+    };
+    let _ = voxless_io::read_amrclaw(&fort_q);
+});
