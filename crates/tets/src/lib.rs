@@ -22,9 +22,12 @@
 //!
 //! **Rendering** ([`render`]): exact per-pixel event sorting by default, or
 //! the paper's bounded-memory k-buffer + log-depth layers; blocks of 8³ cells
-//! with precomputed bounds are culled per screen tile.
+//! with precomputed bounds are culled per screen tile. Column-density
+//! projections ([`render::project`]) of orthographic views evaluate eight
+//! pixels of a tet's row at a time (AVX2 where the CPU has it).
 
 pub mod mesh;
+mod ortho;
 pub mod raster;
 pub mod render;
 mod volume;

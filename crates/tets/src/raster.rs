@@ -8,6 +8,7 @@
 //! lower `t_out`).
 
 use voxless_core::{Aabb, Camera, Projection, Ray, Vec3};
+use wide::f32x4;
 
 use crate::mesh::{Tet, TetMesh};
 
@@ -110,14 +111,60 @@ impl Screen {
                 return None;
             }
         }
-        // Pixel c's centre is c + 0.5.
-        let lo = |v: f32| (v - 0.5).ceil().max(0.0);
-        let hi = |v: f32, n: u32| (v - 0.5).floor().min(n as f32 - 1.0);
-        let (ax, bx, ay, by) = (lo(x0), hi(x1, self.width), lo(y0), hi(y1, self.height));
+        self.rect_of(x0, x1, y0, y1)
+    }
+
+    /// [`Screen::pixel_rect`] of a tet's vertices under an orthographic
+    /// camera: the four projected at once, with the same operations, so the
+    /// same rectangle.
+    #[inline]
+    fn ortho_rect(&self, v: &[Vec3; 4], half: (f32, f32)) -> Option<(u32, u32, u32, u32)> {
+        let c = &self.camera;
+        let s = f32x4::splat;
+        let lanes = |f: fn(&Vec3) -> f32| f32x4::new([f(&v[0]), f(&v[1]), f(&v[2]), f(&v[3])]);
+        let x = lanes(|p| p.x) - s(c.eye.x);
+        let y = lanes(|p| p.y) - s(c.eye.y);
+        let z = lanes(|p| p.z) - s(c.eye.z);
+        let dot = |d: Vec3| x * s(d.x) + y * s(d.y) + z * s(d.z);
+        let (sx, sy) = (dot(c.right) / s(half.0), dot(c.up) / s(half.1));
+        let px = ((sx + s(1.0)) * s(0.5) * s(self.width as f32)).to_array();
+        let py = ((s(1.0) - sy) * s(0.5) * s(self.height as f32)).to_array();
+        let (mut x0, mut x1, mut y0, mut y1) = (px[0], px[0], py[0], py[0]);
+        for k in 1..4 {
+            (x0, x1) = (x0.min(px[k]), x1.max(px[k]));
+            (y0, y1) = (y0.min(py[k]), y1.max(py[k]));
+        }
+        self.rect_of(x0, x1, y0, y1)
+    }
+
+    /// The pixels whose centres lie in `[x0, x1] × [y0, y1]`, clipped to the
+    /// image.
+    #[inline]
+    fn rect_of(&self, x0: f32, x1: f32, y0: f32, y1: f32) -> Option<(u32, u32, u32, u32)> {
+        // Pixel c's centre is c + 0.5. Clamped to [-1, n] before rounding
+        // (NaN to the side `ceil`/`floor` then `max`/`min` would take it):
+        // the same rectangle, with the rounding done through i32.
+        let lo = |v: f32, n: u32| ceil_small((v - 0.5).max(-1.0).min(n as f32)).max(0.0);
+        let hi =
+            |v: f32, n: u32| floor_small((v - 0.5).min(n as f32).max(-1.0)).min(n as f32 - 1.0);
+        let (ax, bx) = (lo(x0, self.width), hi(x1, self.width));
+        let (ay, by) = (lo(y0, self.height), hi(y1, self.height));
         if !(ax <= bx && ay <= by) {
             return None;
         }
         Some((ax as u32, bx as u32, ay as u32, by as u32))
+    }
+
+    /// [`Screen::pixel_rect`] of a tet's four vertices.
+    #[inline]
+    pub fn tet_rect(&self, v: &[Vec3; 4]) -> Option<(u32, u32, u32, u32)> {
+        match self.camera.projection {
+            Projection::Orthographic {
+                half_width,
+                half_height,
+            } => self.ortho_rect(v, (half_width, half_height)),
+            Projection::Perspective { .. } => self.pixel_rect(v),
+        }
     }
 
     pub fn width(&self) -> u32 {
@@ -131,6 +178,21 @@ impl Screen {
         self.camera
             .ray(x as f32 + 0.5, y as f32 + 0.5, self.width, self.height)
     }
+}
+
+/// `v.floor()` for |v| < 2³¹, up to the sign of a zero (inlined; without
+/// SSE4.1 `floor` is a call).
+#[inline(always)]
+fn floor_small(v: f32) -> f32 {
+    let t = v as i32 as f32;
+    if t > v { t - 1.0 } else { t }
+}
+
+/// `v.ceil()` for |v| < 2³¹, up to the sign of a zero.
+#[inline(always)]
+fn ceil_small(v: f32) -> f32 {
+    let t = v as i32 as f32;
+    if t < v { t + 1.0 } else { t }
 }
 
 fn corners(b: &Aabb) -> [Vec3; 8] {
@@ -151,6 +213,8 @@ fn corners(b: &Aabb) -> [Vec3; 8] {
 /// overlaps it (block culling).
 pub struct Frame {
     pub screen: Screen,
+    /// Side of a tile in pixels ([`TILE`] unless chosen).
+    pub tile_size: u32,
     pub tiles_x: u32,
     pub tiles_y: u32,
     /// Per tile (row-major), the overlapping blocks as `level << 28 | block`.
@@ -174,7 +238,20 @@ impl Frame {
         height: u32,
         lod: Option<f32>,
     ) -> Frame {
+        Frame::with_tile(mesh, camera, width, height, lod, TILE)
+    }
+
+    /// [`Frame::new`] with tiles of `tile_size`² pixels.
+    pub fn with_tile(
+        mesh: &TetMesh,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        lod: Option<f32>,
+        tile_size: u32,
+    ) -> Frame {
         use rayon::prelude::*;
+        let tile_size = tile_size.max(1);
         let screen = Screen::new(camera, width, height);
         let levels: Vec<&TetMesh> = std::iter::once(mesh).chain(mesh.lod.iter()).collect();
         let rects = levels
@@ -182,7 +259,7 @@ impl Frame {
             .map(|m| {
                 m.tets
                     .par_iter()
-                    .map(|t| match screen.pixel_rect(&t.v) {
+                    .map(|t| match screen.tet_rect(&t.v) {
                         Some((x0, x1, y0, y1)) => [x0 as u16, x1 as u16, y0 as u16, y1 as u16],
                         None => [1, 0, 1, 0],
                     })
@@ -214,8 +291,8 @@ impl Frame {
                 }
             }
         }
-        let tiles_x = width.div_ceil(TILE);
-        let tiles_y = height.div_ceil(TILE);
+        let tiles_x = width.div_ceil(tile_size);
+        let tiles_y = height.div_ceil(tile_size);
         let mut bins = vec![Vec::new(); (tiles_x * tiles_y) as usize];
         let mut blocks_per_level = vec![0; levels.len()];
         for (r, m) in levels.iter().enumerate() {
@@ -225,8 +302,8 @@ impl Frame {
                 }
                 if let Some((x0, x1, y0, y1)) = screen.pixel_rect(&corners(&b.bounds)) {
                     blocks_per_level[r] += 1;
-                    for y in y0 / TILE..=y1 / TILE {
-                        for x in x0 / TILE..=x1 / TILE {
+                    for y in y0 / tile_size..=y1 / tile_size {
+                        for x in x0 / tile_size..=x1 / tile_size {
                             bins[(y * tiles_x + x) as usize]
                                 .push(((r as u32) << LEVEL_SHIFT) | i as u32);
                         }
@@ -236,6 +313,7 @@ impl Frame {
         }
         Frame {
             screen,
+            tile_size,
             tiles_x,
             tiles_y,
             bins,
@@ -253,14 +331,30 @@ impl Frame {
             .count()
     }
 
+    /// The tets of bin entry `entry` (a block at its level of detail) and
+    /// their pixel rectangles.
+    #[inline]
+    pub(crate) fn block<'m>(&self, mesh: &'m TetMesh, entry: u32) -> (&'m [Tet], &[[u16; 4]]) {
+        let level = (entry >> LEVEL_SHIFT) as usize;
+        let m = if level == 0 {
+            mesh
+        } else {
+            &mesh.lod[level - 1]
+        };
+        let block = &m.blocks[(entry & ((1 << LEVEL_SHIFT) - 1)) as usize];
+        let range = block.tets.start as usize..block.tets.end as usize;
+        (&m.tets[range.clone()], &self.rects[level][range])
+    }
+
     /// Tile `i`'s pixel rectangle `(x0, y0, w, h)`.
     pub fn tile(&self, i: u32) -> (u32, u32, u32, u32) {
-        let (x0, y0) = ((i % self.tiles_x) * TILE, (i / self.tiles_x) * TILE);
+        let t = self.tile_size;
+        let (x0, y0) = ((i % self.tiles_x) * t, (i / self.tiles_x) * t);
         (
             x0,
             y0,
-            TILE.min(self.screen.width - x0),
-            TILE.min(self.screen.height - y0),
+            t.min(self.screen.width - x0),
+            t.min(self.screen.height - y0),
         )
     }
 
@@ -440,15 +534,8 @@ pub fn for_each_tet<'m>(
 ) {
     let (tx0, ty0, w, h) = frame.tile(tile);
     for &entry in &frame.bins[tile as usize] {
-        let level = (entry >> LEVEL_SHIFT) as usize;
-        let m = if level == 0 {
-            mesh
-        } else {
-            &mesh.lod[level - 1]
-        };
-        let block = &m.blocks[(entry & ((1 << LEVEL_SHIFT) - 1)) as usize];
-        let range = block.tets.start as usize..block.tets.end as usize;
-        for (tet, r) in m.tets[range.clone()].iter().zip(&frame.rects[level][range]) {
+        let (tets, rects) = frame.block(mesh, entry);
+        for (tet, r) in tets.iter().zip(rects) {
             let (x0, x1) = ((r[0] as u32).max(tx0), (r[1] as u32).min(tx0 + w - 1));
             let (y0, y1) = ((r[2] as u32).max(ty0), (r[3] as u32).min(ty0 + h - 1));
             if x0 <= x1 && y0 <= y1 {

@@ -18,7 +18,8 @@ use voxless_render::RenderSettings;
 use voxless_transfer::TransferFunction;
 
 use crate::mesh::TetMesh;
-use crate::raster::{Frame, box_spans, for_each_crossing, for_each_tet};
+use crate::ortho::{Kernel, OrthoMap, TileJob};
+use crate::raster::{Frame, TILE, box_spans, for_each_crossing, for_each_tet};
 
 /// How a pixel's events become colour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -278,7 +279,9 @@ fn kbuffer_tile(
 
 /// Column density `Σ ρ·chord` per pixel centre (row-major), plus each
 /// degenerate tet's point mass spread over the pixel containing it. Order
-/// independent, so no events are kept.
+/// independent, so no events are kept. Orthographic views go through the
+/// row kernels of `ortho` (AVX2 where the CPU has it), others through the
+/// per-pixel clip of [`for_each_crossing`].
 pub fn project(
     mesh: &TetMesh,
     camera: &Camera,
@@ -287,10 +290,57 @@ pub fn project(
     options: TetOptions,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Vec<f32> {
-    let frame = Frame::new(mesh, camera, width, height, options.lod_pixels);
+    project_with(
+        mesh,
+        camera,
+        (width, height),
+        options,
+        Kernel::best(),
+        progress,
+    )
+}
+
+/// Tile side of the orthographic projection: up to 128 pixels, so that a
+/// tet is set up in fewer tiles (the 128³ set at 1024²: 1.70 tiles per tet
+/// on screen at 32 px, 1.31 at 64, 1.14 at 128), while keeping four tiles
+/// per thread.
+fn project_tile(width: u32, height: u32) -> u32 {
+    let want = 4 * rayon::current_num_threads() as u32;
+    [128, 64]
+        .into_iter()
+        .find(|&t| width.div_ceil(t) * height.div_ceil(t) >= want)
+        .unwrap_or(TILE)
+}
+
+/// [`project`] with the given kernel for orthographic views.
+pub(crate) fn project_with(
+    mesh: &TetMesh,
+    camera: &Camera,
+    (width, height): (u32, u32),
+    options: TetOptions,
+    kernel: Kernel,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Vec<f32> {
+    let ortho = OrthoMap::new(camera, width, height).filter(|_| !options.clip_only);
+    let tile = if ortho.is_some() {
+        project_tile(width, height)
+    } else {
+        TILE
+    };
+    let frame = Frame::with_tile(mesh, camera, width, height, options.lod_pixels, tile);
     let mut out: Vec<f64> = over_tiles(&frame, progress, |i, rays| {
-        let mut sum = vec![0.0f64; rays.len()];
         let spans = box_spans(mesh, rays);
+        if let Some(map) = &ortho {
+            let job = TileJob {
+                mesh,
+                frame: &frame,
+                map,
+                tile: i,
+                spans: &spans,
+            };
+            return job.run(kernel);
+        }
+        let mut sum = vec![0.0f64; rays.len()];
         let mut add =
             |p: usize, t0: f32, t1: f32, rho: f32| sum[p] += rho as f64 * (t1 - t0) as f64;
         if options.clip_only {

@@ -651,3 +651,5 @@ fn camera_inside_the_box_renders_exactly_and_culls_what_is_behind() {
         v.mesh.tets.len()
     );
 }
+
+mod ortho;
