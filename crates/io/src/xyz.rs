@@ -80,15 +80,31 @@ pub fn xyz_frames(path: &Path) -> Result<usize, IoError> {
 pub fn read_xyz(path: &Path, frame: usize) -> Result<ParticleTable, IoError> {
     let mut lines = LineReader::open(path)?;
     let mut species = Species::default();
-    for index in 0..frame {
-        let Some(n) = read_count(&mut lines, index)? else {
+    scan_species(&mut lines, path, frame, 0..frame, &mut species)?;
+    let n = read_count(&mut lines, frame)?.ok_or_else(|| past_end(path, frame, frame))?;
+    let comment = read_comment(&mut lines, frame, n)?;
+    read_atoms(&mut lines, frame, n, &comment, &mut species)
+}
+
+/// Reads frames `frames` past, numbering the species they use in order of
+/// first appearance and parsing nothing else (`frame` is the frame asked
+/// for, named in the error when the file ends first).
+fn scan_species(
+    lines: &mut LineReader,
+    path: &Path,
+    frame: usize,
+    frames: std::ops::Range<usize>,
+    species: &mut Species,
+) -> Result<(), IoError> {
+    for index in frames {
+        let Some(n) = read_count(lines, index)? else {
             return Err(past_end(path, frame, index));
         };
-        let comment = read_comment(&mut lines, index, n)?;
+        let comment = read_comment(lines, index, n)?;
         let layout = Layout::from_comment(&comment).map_err(|m| lines.error(m))?;
         for found in 0..n {
             let Some(line) = lines.next_line()? else {
-                return Err(truncated(&lines, index, n, found));
+                return Err(truncated(lines, index, n, found));
             };
             if let Some(s) = layout.species {
                 let token = line.split_ascii_whitespace().nth(s).unwrap_or("");
@@ -96,9 +112,7 @@ pub fn read_xyz(path: &Path, frame: usize) -> Result<ParticleTable, IoError> {
             }
         }
     }
-    let n = read_count(&mut lines, frame)?.ok_or_else(|| past_end(path, frame, frame))?;
-    let comment = read_comment(&mut lines, frame, n)?;
-    read_atoms(&mut lines, frame, n, &comment, &mut species)
+    Ok(())
 }
 
 /// The species symbols of frames 0 through `frame` of an XYZ file, in the
@@ -111,22 +125,7 @@ pub fn read_xyz(path: &Path, frame: usize) -> Result<ParticleTable, IoError> {
 pub fn xyz_species(path: &Path, frame: usize) -> Result<Vec<String>, IoError> {
     let mut lines = LineReader::open(path)?;
     let mut species = Species::default();
-    for index in 0..=frame {
-        let Some(n) = read_count(&mut lines, index)? else {
-            return Err(past_end(path, frame, index));
-        };
-        let comment = read_comment(&mut lines, index, n)?;
-        let layout = Layout::from_comment(&comment).map_err(|m| lines.error(m))?;
-        for found in 0..n {
-            let Some(line) = lines.next_line()? else {
-                return Err(truncated(&lines, index, n, found));
-            };
-            if let Some(s) = layout.species {
-                let token = line.split_ascii_whitespace().nth(s).unwrap_or("");
-                species.id(token);
-            }
-        }
-    }
+    scan_species(&mut lines, path, frame, 0..frame + 1, &mut species)?;
     Ok(species.symbols())
 }
 
