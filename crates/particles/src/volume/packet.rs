@@ -63,41 +63,15 @@ fn add(v: &mut [f32], j: usize, x: Lanes) {
     s.copy_from_slice(&sum.to_array());
 }
 
-/// The first index of sorted `ts` with `ts[j] ≥ x`. Samples are nearly
-/// evenly spaced (jitter restarts only at interval boundaries), so a guess
-/// from the mean spacing is within a step or two; walk from there. Cheaper
-/// than a binary search, which dominated the pass.
+/// A first guess at the index of `x` in sorted `ts` from the mean sample
+/// spacing (`inv_step` samples per unit t from `t0`). Samples are nearly
+/// evenly spaced (jitter restarts only at interval boundaries), so it is
+/// within a step or two; [`walk`] finishes. Cheaper than a binary search,
+/// which dominated the pass. Through i32: one conversion instruction, where
+/// f32 → usize is a branchy sequence; NaN-safe (`as` saturates, NaN → 0).
 #[inline(always)]
-fn first_at_least(ts: &[f32], x: f32, t0: f32, inv_step: f32) -> usize {
-    let mut j = guess(ts, x, t0, inv_step);
-    while j < ts.len() && ts[j] < x {
-        j += 1;
-    }
-    while j > 0 && ts[j - 1] >= x {
-        j -= 1;
-    }
-    j
-}
-
-/// The first index of sorted `ts` with `ts[j] > x`.
-#[inline(always)]
-fn first_above(ts: &[f32], x: f32, t0: f32, inv_step: f32) -> usize {
-    let mut j = guess(ts, x, t0, inv_step);
-    while j < ts.len() && ts[j] <= x {
-        j += 1;
-    }
-    while j > 0 && ts[j - 1] > x {
-        j -= 1;
-    }
-    j
-}
-
-#[inline(always)]
-fn guess(ts: &[f32], x: f32, t0: f32, inv_step: f32) -> usize {
-    // Through i32: one conversion instruction, where f32 → usize is a
-    // branchy sequence. NaN-safe: `as` saturates, and NaN becomes 0.
-    let g = ((x - t0) * inv_step).clamp(0.0, ts.len() as f32);
-    g as i32 as usize
+fn guess(ts: &[f32], x: f32, t0: f32, inv_step: f32) -> i32 {
+    ((x - t0) * inv_step).clamp(0.0, ts.len() as f32) as i32
 }
 
 /// The sample buffer, structure of arrays, padded by one SIMD width so the
@@ -167,7 +141,8 @@ fn inv_step(ts: &[f32]) -> f32 {
     }
 }
 
-/// [`first_at_least`] (`strict`: [`first_above`]) walking from index `g`.
+/// The first index of sorted `ts` with `ts[j] ≥ x` (`strict`: `> x`),
+/// walking from the guess `g`.
 #[inline(always)]
 fn walk(ts: &[f32], x: f32, g: i32, strict: bool) -> usize {
     let before = |t: f32| if strict { t <= x } else { t < x };
@@ -537,6 +512,8 @@ impl ParticleVolume {
         // tested against eight rays at once. Padding lanes get an empty span.
         let groups = n_rays.div_ceil(L);
         let mut rg = Vec::with_capacity(groups);
+        // Samples per unit t of each ray, for the index guesses (once per pass).
+        let inv_steps: Vec<f32> = (0..n_rays).map(|r| inv_step(batch.samples(r))).collect();
         for g in 0..groups {
             let lane = |f: &dyn Fn(usize) -> f32, pad: f32| {
                 f32x8::new(std::array::from_fn(|k| {
@@ -562,11 +539,10 @@ impl ParticleVolume {
                 iz: lane(&|r| safe_inv(ray(r).dir.z), 1.0),
                 lo: lane(&|r| span(r).0, f32::INFINITY),
                 hi: lane(&|r| span(r).1, f32::NEG_INFINITY),
-                inv_step: lane(&|r| inv_step(batch.samples(r)), 0.0),
+                inv_step: lane(&|r| inv_steps[r], 0.0),
                 count: lane(&|r| batch.samples(r).len() as f32, 0.0),
             });
         }
-        let inv_steps: Vec<f32> = (0..n_rays).map(|r| inv_step(batch.samples(r))).collect();
         let n = self.settings.cluster_size;
         let lanes = Lanes::new(std::array::from_fn(|k| k as f32));
         let mut hit_groups = [0u32; 64];
@@ -602,7 +578,7 @@ impl ParticleVolume {
                     let g = g as usize;
                     let rays = &rg[g];
                     #[cfg(target_arch = "x86_64")]
-                    let (lo, hi, mut bits, guess) = if AVX {
+                    let (lo, hi, mut bits, guesses) = if AVX {
                         // SAFETY: AVX is set only under `batch_avx2`.
                         unsafe { rays.chord_avx(q.center, r2) }
                     } else {
@@ -610,7 +586,7 @@ impl ParticleVolume {
                         (lo, hi, bits, [[-1; 8]; 2])
                     };
                     #[cfg(not(target_arch = "x86_64"))]
-                    let (lo, hi, mut bits, guess) = {
+                    let (lo, hi, mut bits, guesses) = {
                         let (lo, hi, bits) = rays.chord_hits(q.center, r2);
                         (lo, hi, bits, [[-1i32; 8]; 2])
                     };
@@ -625,13 +601,13 @@ impl ParticleVolume {
                         let base = batch.offsets[r] as usize;
                         let (j0, j1) = if AVX {
                             (
-                                walk(ts, lo[k], guess[0][k], false),
-                                walk(ts, hi[k], guess[1][k], true),
+                                walk(ts, lo[k], guesses[0][k], false),
+                                walk(ts, hi[k], guesses[1][k], true),
                             )
                         } else {
                             (
-                                first_at_least(ts, lo[k], ts[0], inv_steps[r]),
-                                first_above(ts, hi[k], ts[0], inv_steps[r]),
+                                walk(ts, lo[k], guess(ts, lo[k], ts[0], inv_steps[r]), false),
+                                walk(ts, hi[k], guess(ts, hi[k], ts[0], inv_steps[r]), true),
                             )
                         };
                         let (j0, j1) = (base + j0, base + j1);
