@@ -8,7 +8,7 @@ use voxless_transfer::TransferFunction;
 
 #[test]
 fn image_is_identical_across_thread_counts() {
-    let data = voxless_scene::demo::galaxy(5000);
+    let data = voxless::demo::galaxy(5000);
     let vol = ParticleVolume::new(
         ParticleData { ..data },
         ParticleSettings {
@@ -30,7 +30,7 @@ fn image_is_identical_across_thread_counts() {
             .num_threads(n)
             .build()
             .unwrap()
-            .install(|| render(&vol, &camera, &tf, &settings, &|_, _| {}))
+            .install(|| render(&vol, &camera, &tf, &settings, &voxless::Control::new()).unwrap())
     };
     let one = with_threads(1);
     let three = with_threads(3);

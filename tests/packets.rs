@@ -29,11 +29,11 @@ fn assert_same(vol: &ParticleVolume, tf: &TransferFunction, settings: &RenderSet
     slow.packets = false;
     let mut fast = settings.clone();
     fast.packets = true;
-    let a = render(vol, &camera, tf, &slow, &|_, _| {});
-    let b = render(vol, &camera, tf, &fast, &|_, _| {});
+    let a = render(vol, &camera, tf, &slow, &voxless::Control::new()).unwrap();
+    let b = render(vol, &camera, tf, &fast, &voxless::Control::new()).unwrap();
     // The portable SIMD path too (the AVX2 one is used where the CPU has it).
     voxless_particles::force_portable_simd(true);
-    let c = render(vol, &camera, tf, &fast, &|_, _| {});
+    let c = render(vol, &camera, tf, &fast, &voxless::Control::new()).unwrap();
     voxless_particles::force_portable_simd(false);
     let d = max_diff(&a, &c);
     assert!(
@@ -53,7 +53,7 @@ fn assert_same(vol: &ParticleVolume, tf: &TransferFunction, settings: &RenderSet
 }
 
 fn galaxy(n: usize) -> ParticleData {
-    let mut data = voxless_scene::demo::galaxy(n);
+    let mut data = voxless::demo::galaxy(n);
     // A second attribute-like column for radius-independent checks.
     if data.attribute.is_none() {
         data.attribute = Some(data.positions.iter().map(|p| p.x).collect());

@@ -2,8 +2,12 @@
 
 use std::path::{Path, PathBuf};
 
+use anyhow::bail;
 use clap::Args;
-use voxless_scene::{AmrDesc, LightDesc, ParticlesDesc, SceneDesc, TetsDesc};
+use voxless::{
+    AmrDesc, ClassificationName, FreeFlightName, KernelName, LightDesc, NoiseName, ParticlesDesc,
+    ProjectionName, ReconstructionName, SceneDesc, Species, TetModeName, TetsDesc,
+};
 
 /// Every scene setting a one-off run needs, as flags (they override the scene file).
 #[derive(Args, Debug, Default, Clone)]
@@ -42,9 +46,9 @@ pub struct SceneArgs {
     /// type number or element symbol).
     #[arg(long, value_name = "T", help_heading = "Particles")]
     pub species: Option<String>,
-    /// RBF kernel: gaussian3 (default), gaussian, cubic-spline.
-    #[arg(long, help_heading = "Particles")]
-    pub kernel: Option<String>,
+    /// RBF kernel (default gaussian3; SPH files: cubic-spline).
+    #[arg(long, value_enum, help_heading = "Particles")]
+    pub kernel: Option<KernelName>,
     /// Global density scale κ of the gaussian kernel (default 1).
     #[arg(long, help_heading = "Particles", allow_negative_numbers = true)]
     pub kappa: Option<f32>,
@@ -54,9 +58,9 @@ pub struct SceneArgs {
     /// Particles per BVH leaf cluster, 1..=16 (default 8).
     #[arg(long, help_heading = "Particles")]
     pub cluster: Option<usize>,
-    /// Attribute classification: post (average, then colour-map) or pre.
-    #[arg(long, help_heading = "Particles")]
-    pub classification: Option<String>,
+    /// Attribute classification (default post).
+    #[arg(long, value_enum, help_heading = "Particles")]
+    pub classification: Option<ClassificationName>,
     /// Attribute range mapped to the colormap / maps.
     #[arg(long, num_args = 2, value_names = ["LO", "HI"], help_heading = "Particles", allow_negative_numbers = true)]
     pub attribute_range: Option<Vec<f32>>,
@@ -82,9 +86,9 @@ pub struct SceneArgs {
     /// Mass per particle (default: total mass 1).
     #[arg(long, help_heading = "Phase-space tessellation")]
     pub particle_mass: Option<f64>,
-    /// exact (default: every tet event sorted per pixel) or kbuffer (bounded memory).
-    #[arg(long, help_heading = "Phase-space tessellation")]
-    pub tet_mode: Option<String>,
+    /// How crossing events become colour (default exact).
+    #[arg(long, value_enum, help_heading = "Phase-space tessellation")]
+    pub tet_mode: Option<TetModeName>,
     /// k-buffer depth for --tet-mode kbuffer (default 16).
     #[arg(long, help_heading = "Phase-space tessellation")]
     pub k: Option<usize>,
@@ -118,9 +122,9 @@ pub struct SceneArgs {
     /// Field driving colour (multi-field rendering).
     #[arg(long, help_heading = "AMR")]
     pub color_field: Option<String>,
-    /// Reconstruction: basis (default, smooth across levels) or nearest.
-    #[arg(long, help_heading = "AMR")]
-    pub reconstruction: Option<String>,
+    /// Reconstruction between cell centres (default basis).
+    #[arg(long, value_enum, help_heading = "AMR")]
+    pub reconstruction: Option<ReconstructionName>,
 
     // ---- image ----
     /// Image size in pixels.
@@ -208,12 +212,12 @@ pub struct SceneArgs {
     /// Fraction of colour kept in full shade (default 0.3).
     #[arg(long, help_heading = "Lighting")]
     pub ambient: Option<f32>,
-    /// Free-flight sampling with shadows: marching (default) or delta.
-    #[arg(long, value_name = "METHOD", help_heading = "Lighting")]
-    pub free_flight: Option<String>,
-    /// Random numbers with shadows: blue (default) or white noise.
-    #[arg(long, value_name = "KIND", help_heading = "Lighting")]
-    pub noise: Option<String>,
+    /// Free-flight sampling with shadows (default marching).
+    #[arg(long, value_enum, help_heading = "Lighting")]
+    pub free_flight: Option<FreeFlightName>,
+    /// Random numbers with shadows (default blue).
+    #[arg(long, value_enum, help_heading = "Lighting")]
+    pub noise: Option<NoiseName>,
     /// Random seed for jitter.
     #[arg(long, help_heading = "Render")]
     pub seed: Option<u64>,
@@ -267,17 +271,45 @@ impl SceneArgs {
     pub fn scene(&self) -> anyhow::Result<(SceneDesc, PathBuf)> {
         let (mut d, base) = match &self.scene {
             Some(path) => {
-                let d = voxless_scene::read_scene(path)?;
+                let d = voxless::read_scene(path)?;
                 let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
                 (d, base)
             }
             None => (SceneDesc::default(), PathBuf::from(".")),
         };
-        self.apply(&mut d);
+        self.apply(&mut d)?;
         Ok((d, base))
     }
 
-    fn apply(&self, d: &mut SceneDesc) {
+    /// Particle-only flags given with a tessellation: they would be
+    /// dropped, so they are errors naming them.
+    fn refuse_particle_flags_with_tets(&self) -> anyhow::Result<()> {
+        let given = [
+            ("--attribute", self.attribute.is_some()),
+            ("--radius", self.radius.is_some()),
+            ("--radii", self.radii.is_some()),
+            ("--weights", self.weights.is_some()),
+            ("--kernel", self.kernel.is_some()),
+            ("--kappa", self.kappa.is_some()),
+            ("--sigma", self.sigma.is_some()),
+            ("--cluster", self.cluster.is_some()),
+            ("--classification", self.classification.is_some()),
+            ("--attribute-range", self.attribute_range.is_some()),
+            ("--group", self.group.is_some()),
+            ("--part-type", self.part_type.is_some()),
+            ("--species", self.species.is_some()),
+        ];
+        if let Some((flag, _)) = given.iter().find(|g| g.1) {
+            bail!(
+                "{flag} applies to particles rendered as RBFs, not to a phase-space \
+                 tessellation (--lagrangian, --box, --snapshot, or a [tets] scene), whose \
+                 density comes from the tets and has no per-particle attribute"
+            );
+        }
+        Ok(())
+    }
+
+    fn apply(&self, d: &mut SceneDesc) -> anyhow::Result<()> {
         let has_particle_flags = self.particles.is_some()
             || self.attribute.is_some()
             || self.radius.is_some()
@@ -302,6 +334,7 @@ impl SceneArgs {
             || self.lod.is_some();
         if has_tet_flags || d.tets.is_some() {
             // Positions on a Lagrangian grid: a tessellation, not RBF particles.
+            self.refuse_particle_flags_with_tets()?;
             let t = d.tets.get_or_insert_with(TetsDesc::default);
             if let Some(f) = &self.particles {
                 t.file = Some(cwd_path(&f.to_string_lossy()));
@@ -310,7 +343,7 @@ impl SceneArgs {
             set(&mut t.snapshot, self.snapshot);
             set(&mut t.box_size, self.box_size);
             set(&mut t.particle_mass, self.particle_mass);
-            set(&mut t.mode, self.tet_mode.clone());
+            set(&mut t.mode, self.tet_mode);
             set(&mut t.k, self.k);
             set(&mut t.layers, self.layers);
             set(&mut t.lod_pixels, self.lod);
@@ -325,14 +358,14 @@ impl SceneArgs {
             set(&mut p.radius, self.radius);
             set(&mut p.radii, self.radii.as_deref().map(cwd_path));
             set(&mut p.weights, self.weights.as_deref().map(cwd_path));
-            set(&mut p.kernel, self.kernel.clone());
+            set(&mut p.kernel, self.kernel);
             set(&mut p.group, self.group.clone());
             set(&mut p.part_type, self.part_type);
-            set(&mut p.species, self.species.clone());
+            set(&mut p.species, self.species.as_deref().map(Species::from));
             set(&mut p.kappa, self.kappa);
             set(&mut p.sigma, self.sigma);
             set(&mut p.cluster, self.cluster);
-            set(&mut p.classification, self.classification.clone());
+            set(&mut p.classification, self.classification);
             set(&mut p.attribute_range, arr2(&self.attribute_range));
         }
         let has_amr_flags = self.cells.is_some()
@@ -361,7 +394,7 @@ impl SceneArgs {
             set(&mut a.cell_size, self.cell_size);
             set(&mut a.field, self.field.clone());
             set(&mut a.color_field, self.color_field.clone());
-            set(&mut a.reconstruction, self.reconstruction.clone());
+            set(&mut a.reconstruction, self.reconstruction);
         }
         if let Some(s) = &self.size {
             d.image.width = Some(s[0]);
@@ -394,7 +427,7 @@ impl SceneArgs {
         set(&mut d.camera.elevation, self.elevation);
         set(&mut d.camera.zoom, self.zoom);
         if let Some(h) = self.orthographic {
-            d.camera.projection = Some("orthographic".into());
+            d.camera.projection = Some(ProjectionName::Orthographic);
             d.camera.ortho_height = Some(h);
         }
         set(&mut d.render.step, self.step);
@@ -432,12 +465,13 @@ impl SceneArgs {
             set(&mut l.position, arr3(&self.light_pos));
             set(&mut l.intensity, self.light_intensity);
             set(&mut l.ambient, self.ambient);
-            set(&mut l.free_flight, self.free_flight.clone());
-            set(&mut l.noise, self.noise.clone());
+            set(&mut l.free_flight, self.free_flight);
+            set(&mut l.noise, self.noise);
             if self.shadows {
                 l.shadows = Some(true);
             }
         }
+        Ok(())
     }
 }
 

@@ -23,7 +23,7 @@
 //!   Why: the targets are a build ≤ 100 ms for 1M particles on two
 //!   cores and a tree ≤ 0.5× the particle data at 16 particles per leaf.
 //! - `bench frame`: what clustering buys in a real render. One frame through
-//!   `voxless_render::render` with `Camera::framing` and
+//!   `voxless::render::render` with `Camera::framing` and
 //!   `RenderSettings::for_volume` defaults, once with cluster size 8 (the
 //!   default path) and once with cluster size 1 (the reference path: one BVH
 //!   leaf per particle). Both use the same render settings (taken from the
@@ -41,10 +41,10 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
 use voxless_bvh::Bvh;
-use voxless_core::{Aabb, Camera, Image, Vec3, Volume};
+use voxless::core::{Aabb, Camera, Image, Vec3, Volume};
 use voxless_particles::{Kernel, ParticleData, ParticleSettings, ParticleVolume};
-use voxless_render::RenderSettings;
-use voxless_transfer::TransferFunction;
+use voxless::render::RenderSettings;
+use voxless::transfer::TransferFunction;
 
 /// Run the benchmarks and print markdown tables (see docs/benchmarks.md).
 #[derive(clap::Args)]
@@ -357,7 +357,7 @@ fn bench_frame(
     let render = |v: &ParticleVolume, what: &str| {
         let setup = || eprintln!("frame/{label}: rendering {what}");
         let (t, img) = bench(o.repeats, setup, |_| {
-            voxless_render::render(v, &camera, &tf, &rs, &|_, _| {})
+            voxless::render::render(v, &camera, &tf, &rs, &|_, _| {})
         });
         eprintln!("frame/{label}: {what}: median {t:.2} s");
         (t, img)
@@ -392,7 +392,7 @@ pub(crate) fn image_diff(a: &Image, b: &Image) -> (f32, f64) {
 }
 
 pub(crate) fn save_png(path: &Path, img: &Image) -> Result<()> {
-    voxless_io::write_png_rgb8(path, img.width, img.height, &img.to_srgb8([0.0; 3]))?;
+    voxless::io::write_png_rgb8(path, img.width, img.height, &img.to_srgb8([0.0; 3]))?;
     eprintln!("wrote {}", path.display());
     Ok(())
 }
@@ -433,7 +433,7 @@ pub(crate) fn read_dam_break(path: &Path) -> Result<ParticleData> {
 
 fn read_dam_break_npy(dir: &Path) -> Result<ParticleData> {
     let read =
-        |name: &str| -> Result<voxless_io::NpyArray> { Ok(voxless_io::read_npy(&dir.join(name))?) };
+        |name: &str| -> Result<voxless::io::NpyArray> { Ok(voxless::io::read_npy(&dir.join(name))?) };
     let pos = read("positions.npy")?;
     if pos.shape.len() != 2 || pos.shape[1] != 3 {
         bail!(

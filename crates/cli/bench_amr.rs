@@ -28,7 +28,7 @@
 //!   the bounds (dominated by coarse cells, as volume is), and one uniform
 //!   point in each of N random cells (dominated by fine cells).
 //! - **Frame**: `--size`² frames of frame 3 and of the synthetic set through
-//!   `voxless_render::render` (`Camera::framing`, `RenderSettings::for_volume`,
+//!   `voxless::render::render` (`Camera::framing`, `RenderSettings::for_volume`,
 //!   viridis, opacity 0 below the cut of the TF-change table, then linear to
 //!   1: about half the regions invisible). Adaptive sampling on:
 //!   the default step, half the finest cell width of each region; off:
@@ -47,11 +47,11 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
 use voxless_amr::{AmrCells, AmrSettings, AmrVolume, CellLocator};
-use voxless_core::{
+use voxless::core::{
     Aabb, Camera, Image, Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume,
 };
-use voxless_render::RenderSettings;
-use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
+use voxless::render::RenderSettings;
+use voxless::transfer::{Colormap, OpacityMap, TransferFunction};
 
 use crate::bench::{count, image_diff, median, ms, print_header, save_png};
 
@@ -606,7 +606,7 @@ fn samples_per_pixel<V: Volume>(
         inner: v,
         samples: AtomicU64::new(0),
     };
-    voxless_render::render(&c, camera, tf, &rs, &|_, _| {});
+    voxless::render::render(&c, camera, tf, &rs, &|_, _| {});
     c.samples.load(Ordering::Relaxed) as f64 / (rs.width as f64 * rs.height as f64)
 }
 
@@ -670,8 +670,8 @@ fn bench_frames(s: &Dataset, vol: &mut AmrVolume, o: &AmrArgs) -> Result<Vec<Str
             );
             let t = Instant::now();
             let img = match skip {
-                Some(_) => voxless_render::render(&*vol, &camera, &tf, rs, &|_, _| {}),
-                None => voxless_render::render(&NoSkip(vol), &camera, &tf, rs, &|_, _| {}),
+                Some(_) => voxless::render::render(&*vol, &camera, &tf, rs, &|_, _| {}),
+                None => voxless::render::render(&NoSkip(vol), &camera, &tf, rs, &|_, _| {}),
             };
             times[k].push(t.elapsed().as_secs_f64());
             images[k] = Some(img);
@@ -736,7 +736,7 @@ fn read_frame(dir: &Path, frame: u32) -> Result<(AmrCells, usize)> {
     if scalars.is_empty() {
         bail!("no {prefix}*.scalars in {}", ex.display());
     }
-    let d = voxless_io::read_exabricks(&cells, &scalars)?;
+    let d = voxless::io::read_exabricks(&cells, &scalars)?;
     let field = d.fields.iter().position(|f| f.0 == "density").unwrap_or(0);
     let o = d.origin.map(|v| v as f32);
     Ok((

@@ -20,10 +20,10 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use voxless_core::{Camera, Vec3, Volume};
+use voxless::core::{Camera, Vec3, Volume};
 use voxless_particles::{Kernel, ParticleData, ParticleSettings, ParticleVolume};
-use voxless_render::{FreeFlight, LightSource, Noise, RenderSettings, Scatter, render};
-use voxless_transfer::TransferFunction;
+use voxless::render::{FreeFlight, LightSource, Noise, RenderSettings, Scatter, render};
+use voxless::transfer::TransferFunction;
 
 use crate::bench::{bench, count, image_diff, print_header, read_dam_break, synthetic};
 
@@ -149,7 +149,7 @@ pub fn run(o: PacketArgs) -> Result<()> {
     println!("| data | blue s | white s | white / blue |");
     println!("|---|---:|---:|---:|");
     // Build the mask before timing.
-    let _ = voxless_render::bluenoise::mask();
+    let _ = voxless::render::bluenoise::mask();
     for (label, data, kernel, radius) in &sets {
         let vol = volume(data, *kernel, *radius, 8)?;
         let camera = Camera::framing(&vol.bounds(), 1.0);
@@ -201,10 +201,10 @@ fn scaled(
     data: &ParticleData,
     radius: f32,
     scale: f32,
-) -> (f32, Option<voxless_transfer::ControlPoints>) {
+) -> (f32, Option<voxless::transfer::ControlPoints>) {
     if data.radii.is_some() && data.attribute.is_some() {
         let map =
-            voxless_transfer::ControlPoints::new("radius map", &[(0.0, scale), (1.0, scale)]).ok();
+            voxless::transfer::ControlPoints::new("radius map", &[(0.0, scale), (1.0, scale)]).ok();
         (radius, map)
     } else {
         (radius * scale, None)

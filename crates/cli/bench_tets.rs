@@ -45,15 +45,15 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
-use voxless_core::{Aabb, Camera, Image, Projection, Range1, Vec3, Volume};
-use voxless_render::RenderSettings;
+use voxless::core::{Aabb, Camera, Image, Projection, Range1, Vec3, Volume};
+use voxless::render::RenderSettings;
 use voxless_tets::mesh::KUHN;
 use voxless_tets::raster::{Frame, TILE, box_spans, for_each_crossing};
 use voxless_tets::render::{project, render};
 use voxless_tets::{
     BLOCK, Block, LagrangianGrid, Tet, TetMesh, TetMode, TetOptions, TetSettings, TetVolume,
 };
-use voxless_transfer::TransferFunction;
+use voxless::transfer::TransferFunction;
 
 use crate::bench::{bench, image_diff, print_header, save_png};
 
@@ -182,7 +182,7 @@ pub fn run(o: TetsArgs) -> Result<()> {
 
 fn read_grid(dir: &Path, box_size: f32) -> Result<LagrangianGrid> {
     let path = dir.join("positions.npy");
-    let a = voxless_io::read_npy(&path)?;
+    let a = voxless::io::read_npy(&path)?;
     if a.shape.len() != 2 || a.shape[1] != 3 {
         bail!("{}: expected N³×3, found {:?}", path.display(), a.shape);
     }
@@ -347,7 +347,7 @@ fn bench_main(
     let stem = label.replace(['³', ' '], "");
     if let Some(dir) = &o.save {
         save_png(&dir.join(format!("{stem}-exact.png")), &image)?;
-        voxless_io::write_npy_f32(
+        voxless::io::write_npy_f32(
             &dir.join(format!("{stem}-project.npy")),
             &[size as usize, size as usize],
             &col,

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
 use clap::Args;
-use voxless_io::ParticleTable;
-use voxless_scene::formats::{self, ParticleFormat, TableOptions};
+use voxless::formats::{self, ParticleFormat, TableOptions};
+use voxless::io::ParticleTable;
 
 /// Frames listed one by one (each is read for its time and count); longer
 /// series show the first and last.
@@ -40,8 +40,8 @@ fn describe(args: &InfoArgs) -> Result<String> {
     let path = args.file.as_path();
     let spec = path.to_string_lossy();
     let mut out = String::new();
-    if voxless_scene::frames::is_sequence(&spec, Path::new("")) {
-        let files = voxless_scene::frames::expand(&spec, Path::new(""))?;
+    if voxless::frames::is_sequence(&spec, Path::new("")) {
+        let files = voxless::frames::expand(&spec, Path::new(""))?;
         writeln!(out, "{spec}: a sequence of {} frame(s)", files.len())?;
         let options = TableOptions {
             group: args.group.clone(),
@@ -101,7 +101,7 @@ fn describe_file(args: &InfoArgs) -> Result<String> {
         return amr(path, "ExaBricks cells", exabricks(path));
     }
     if name.starts_with("fort.q") {
-        return amr(path, "AMRClaw output", voxless_io::read_amrclaw(path));
+        return amr(path, "AMRClaw output", voxless::io::read_amrclaw(path));
     }
     if ext == "vtu" {
         return mesh(path);
@@ -276,7 +276,7 @@ fn plural(n: usize) -> &'static str {
 }
 
 fn npy(path: &Path) -> Result<String> {
-    let a = voxless_io::read_npy(path)?;
+    let a = voxless::io::read_npy(path)?;
     let shape: Vec<String> = a.shape.iter().map(|d| d.to_string()).collect();
     let mut out = String::new();
     writeln!(
@@ -317,7 +317,7 @@ fn cube_root(n: usize) -> Option<usize> {
 
 /// The `.scalars` files beside an ExaBricks `.cells` file:
 /// `<stem>.<field>.scalars`.
-fn exabricks(cells: &Path) -> Result<voxless_io::AmrCellData, voxless_io::IoError> {
+fn exabricks(cells: &Path) -> Result<voxless::io::AmrCellData, voxless::io::IoError> {
     let stem = cells
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -327,7 +327,7 @@ fn exabricks(cells: &Path) -> Result<voxless_io::AmrCellData, voxless_io::IoErro
         _ => PathBuf::from("."),
     };
     let mut scalars: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .map_err(|source| voxless_io::IoError::Io {
+        .map_err(|source| voxless::io::IoError::Io {
             path: dir.clone(),
             source,
         })?
@@ -341,13 +341,13 @@ fn exabricks(cells: &Path) -> Result<voxless_io::AmrCellData, voxless_io::IoErro
         })
         .collect();
     scalars.sort();
-    voxless_io::read_exabricks(cells, &scalars)
+    voxless::io::read_exabricks(cells, &scalars)
 }
 
 fn amr(
     path: &Path,
     what: &str,
-    data: Result<voxless_io::AmrCellData, voxless_io::IoError>,
+    data: Result<voxless::io::AmrCellData, voxless::io::IoError>,
 ) -> Result<String> {
     let d = data?;
     let mut out = String::new();
@@ -394,7 +394,7 @@ fn amr(
 }
 
 fn mesh(path: &Path) -> Result<String> {
-    let m = voxless_io::read_vtu_mesh(path)?;
+    let m = voxless::io::read_vtu_mesh(path)?;
     let mut out = String::new();
     writeln!(
         out,
@@ -431,12 +431,12 @@ fn mesh(path: &Path) -> Result<String> {
 
 #[cfg(feature = "hdf5")]
 fn hdf5(path: &Path, args: &InfoArgs) -> Result<String> {
-    use voxless_io::Hdf5Kind;
+    use voxless::io::Hdf5Kind;
     let mut out = String::new();
-    let kind = voxless_io::hdf5_kind(path)?;
+    let kind = voxless::io::hdf5_kind(path)?;
     match kind {
         Hdf5Kind::PySph => {
-            let groups = voxless_io::pysph_groups(path)?;
+            let groups = voxless::io::pysph_groups(path)?;
             writeln!(
                 out,
                 "{}: HDF5, PySPH output (particle arrays: {})",
@@ -446,7 +446,7 @@ fn hdf5(path: &Path, args: &InfoArgs) -> Result<String> {
         }
         Hdf5Kind::Gadget => writeln!(out, "{}: HDF5, SWIFT/Gadget snapshot", path.display())?,
         Hdf5Kind::Jaxpm => {
-            let snaps: Vec<String> = voxless_io::jaxpm_snapshots(path)?
+            let snaps: Vec<String> = voxless::io::jaxpm_snapshots(path)?
                 .iter()
                 .map(|k| format!("snap_{k}"))
                 .collect();
@@ -471,7 +471,7 @@ fn hdf5(path: &Path, args: &InfoArgs) -> Result<String> {
         table_summary(&mut out, &table.table, ParticleFormat::Hdf5, None)?;
     }
     writeln!(out, "\ncontents:")?;
-    out.push_str(&voxless_io::describe_hdf5(path)?);
+    out.push_str(&voxless::io::describe_hdf5(path)?);
     Ok(out)
 }
 

@@ -1,11 +1,9 @@
-//! `voxless`: render particles in their native form from the terminal.
-//! Thin front-end: parse flags, resolve the scene, call the libraries, write files.
+//! `voxless`: render particles, AMR cells and tessellations from the
+//! terminal. A thin front-end over the `voxless` library: parse flags into a
+//! scene description, open the scene, call render / project / sample, write
+//! files, show progress.
 
 mod args;
-mod bench;
-mod bench_amr;
-mod bench_packets;
-mod bench_tets;
 mod info;
 mod progress;
 mod view;
@@ -14,10 +12,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use clap::{Parser, Subcommand};
-use voxless_core::{Aabb, Camera, Vec3};
-use voxless_render::colorbar::ColorbarSpec;
-use voxless_scene::{LoadedScene, ParticlesDesc};
+use clap::{Parser, Subcommand, ValueEnum};
+use voxless::render::colorbar::ColorbarSpec;
+use voxless::{Aabb, Camera, Control, ParticlesDesc, Scene, Vec3};
 
 use args::SceneArgs;
 use progress::Progress;
@@ -89,9 +86,9 @@ enum Command {
     /// Column density ∫Φ dt per pixel, orthographic down an axis, covering the
     /// data bounds: float32 H×W .npy (or .exr), row 0 at the top.
     Project {
-        /// View axis: x, y or z (looking down −axis).
-        #[arg(long, default_value = "z")]
-        axis: String,
+        /// View axis (looking down −axis).
+        #[arg(long, value_enum, default_value_t = Axis::Z)]
+        axis: Axis,
         /// Override the bounds covered: x0 y0 z0 x1 y1 z1.
         #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], allow_negative_numbers = true)]
         bounds: Option<Vec<f32>>,
@@ -107,8 +104,17 @@ enum Command {
     Info(info::InfoArgs),
     /// List the built-in colormaps.
     Colormaps,
-    /// Run the benchmarks and print a markdown table (see docs/benchmarks.md).
-    Bench(bench::BenchArgs),
+}
+
+/// A coordinate axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Axis {
+    #[value(alias = "X")]
+    X,
+    #[value(alias = "Y")]
+    Y,
+    #[value(alias = "Z")]
+    Z,
 }
 
 fn main() {
@@ -195,11 +201,11 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let (desc, base) = scene.scene()?;
             let s = resolve(&desc, &base)?;
-            let pts = voxless_scene::read_points(&points)?;
+            let pts = voxless::read_points(&points)?;
             let cols = s.volume.sample_columns(gradient);
             let t = Instant::now();
             let values = s.volume.sample_points(&pts, gradient);
-            voxless_io::write_npy_f32(&output, &[pts.len(), cols.len()], &values)?;
+            voxless::io::write_npy_f32(&output, &[pts.len(), cols.len()], &values)?;
             eprintln!(
                 "sampled {} points in {:.2}s → {} (columns: {})",
                 pts.len(),
@@ -217,21 +223,19 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let (desc, base) = scene.scene()?;
             let s = resolve(&desc, &base)?;
-            let axis_index = match axis.as_str() {
-                "x" | "X" => 0,
-                "y" | "Y" => 1,
-                "z" | "Z" => 2,
-                other => bail!("--axis must be x, y or z, not '{other}'"),
-            };
+            let axis_index = axis as usize;
             let b = match bounds {
                 Some(v) => Aabb::new(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5])),
                 None => s.volume.bounds(),
             };
             let camera = Camera::axis_projection(&b, axis_index).context("--bounds")?;
             let (w, h) = (s.settings.width, s.settings.height);
-            let progress = Progress::new("projecting", h as u64);
+            let progress = Progress::new("projecting", 1);
+            let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
             let t = Instant::now();
-            let column = s.volume.project(&camera, w, h, &|d, _| progress.set(d));
+            let column = s
+                .volume
+                .project(&camera, w, h, &Control::new().with_progress(&report))?;
             progress.finish();
             write_gray(&output, w, h, &column)?;
             let (u, v) = match axis_index {
@@ -254,27 +258,22 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Colormaps => {
-            for name in voxless_transfer::COLORMAP_NAMES {
+            for name in voxless::transfer::COLORMAP_NAMES {
                 println!("{name}");
             }
             Ok(())
         }
         Command::Info(args) => info::run(&args),
-        Command::Bench(args) => bench::run(args),
     }
 }
 
-fn resolve(desc: &voxless_scene::SceneDesc, base: &Path) -> Result<LoadedScene> {
+fn resolve(desc: &voxless::SceneDesc, base: &Path) -> Result<Scene> {
     resolve_frame(desc, base, 0)
 }
 
-fn resolve_frame(
-    desc: &voxless_scene::SceneDesc,
-    base: &Path,
-    frame: usize,
-) -> Result<LoadedScene> {
+fn resolve_frame(desc: &voxless::SceneDesc, base: &Path, frame: usize) -> Result<Scene> {
     let t = Instant::now();
-    let s = voxless_scene::resolve_frame(desc, base, frame)?;
+    let s = Scene::open(desc, base, frame)?;
     for n in &s.notes {
         eprintln!("note: {n}");
     }
@@ -300,15 +299,12 @@ fn is_exr(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
 }
 
-fn render_to(s: &LoadedScene, output: &Path, colorbar: Option<&ColorbarSpec>) -> Result<()> {
+fn render_to(s: &Scene, output: &Path, colorbar: Option<&ColorbarSpec>) -> Result<()> {
     let st = &s.settings;
-    let tiles = st.width.div_ceil(voxless_render::TILE) as u64
-        * st.height.div_ceil(voxless_render::TILE) as u64;
-    let progress = Progress::new("rendering", tiles * st.spp as u64);
+    let progress = Progress::new("rendering", 1);
+    let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
     let t = Instant::now();
-    let mut image = s
-        .volume
-        .render(&s.camera, &s.tf, st, &|d, _| progress.set(d));
+    let mut image = s.render(&Control::new().with_progress(&report))?;
     progress.finish();
     let secs = t.elapsed().as_secs_f64();
     view::decorate(&mut image, s, colorbar);
@@ -327,14 +323,14 @@ fn render_to(s: &LoadedScene, output: &Path, colorbar: Option<&ColorbarSpec>) ->
 /// progress bar. Camera, value range and attribute range come from frame A
 /// and stay fixed, so the sequence does not flicker.
 fn render_sequence(
-    desc: &voxless_scene::SceneDesc,
+    desc: &voxless::SceneDesc,
     base: &Path,
     range: &str,
     output: &Path,
     colorbar: bool,
 ) -> Result<()> {
-    let range = voxless_scene::frames::parse_range(range)?;
-    let count = voxless_scene::frame_count(desc, base)?;
+    let range = voxless::frames::parse_range(range)?;
+    let count = voxless::frame_count(desc, base)?;
     if *range.end() >= count {
         bail!(
             "--frames {}..{}: the data has {count} frame(s), 0..{}",
@@ -354,9 +350,8 @@ fn render_sequence(
         }
         // Blue noise advances with the frame (spatiotemporal).
         scene.settings.frame = f as u32;
-        let mut image = scene
-            .volume
-            .render(&scene.camera, &scene.tf, &scene.settings, &|_, _| {});
+        let report = |d: u64, total: u64| progress.set_fraction(k as u64, d, total);
+        let mut image = scene.render(&Control::new().with_progress(&report))?;
         view::decorate(&mut image, &scene, bar.as_ref());
         write_image(&frame_path(output, f), &image, scene.background)?;
         progress.set(k as u64 + 1);
@@ -398,16 +393,16 @@ fn frame_path(output: &Path, frame: usize) -> PathBuf {
     output.with_file_name(name)
 }
 
-fn write_image(output: &Path, image: &voxless_core::Image, background: [f32; 3]) -> Result<()> {
+fn write_image(output: &Path, image: &voxless::Image, background: [f32; 3]) -> Result<()> {
     if is_exr(output) {
-        voxless_io::write_exr_rgba(
+        voxless::io::write_exr_rgba(
             output,
             image.width as usize,
             image.height as usize,
             &image.to_rgba_f32(),
         )?;
     } else {
-        voxless_io::write_png_rgb8(
+        voxless::io::write_png_rgb8(
             output,
             image.width,
             image.height,
@@ -419,9 +414,9 @@ fn write_image(output: &Path, image: &voxless_core::Image, background: [f32; 3])
 
 fn write_gray(path: &Path, w: u32, h: u32, values: &[f32]) -> Result<()> {
     if is_exr(path) {
-        voxless_io::write_exr_gray(path, w as usize, h as usize, values)?;
+        voxless::io::write_exr_gray(path, w as usize, h as usize, values)?;
     } else {
-        voxless_io::write_npy_f32(path, &[h as usize, w as usize], values)?;
+        voxless::io::write_npy_f32(path, &[h as usize, w as usize], values)?;
     }
     Ok(())
 }

@@ -1,20 +1,36 @@
-//! A progress bar that appears only once work has taken over a second, so
-//! quick runs stay quiet and long ones show where they are.
+//! Progress for long work: a bar on a terminal that appears only once work
+//! has taken over a second (quick runs stay quiet), and a plain line every
+//! few seconds when stderr is not a terminal (a render piped to a log still
+//! says where it is).
+//!
+//! Positions are kept in thousandths of a unit, so a unit (a frame) can be
+//! split by the renderer's own (done, total) reports.
 
+use std::io::IsTerminal;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
+/// Sub-steps per unit.
+const SUB: u64 = 1000;
+/// How often a line is printed when stderr is not a terminal.
+const LINE_EVERY: Duration = Duration::from_secs(5);
+
 pub struct Progress {
     bar: ProgressBar,
+    what: String,
     start: Instant,
-    shown: Mutex<bool>,
+    terminal: bool,
+    /// Terminal: whether the bar is drawn yet. Otherwise: when the last
+    /// line was printed.
+    state: Mutex<(bool, Instant)>,
 }
 
 impl Progress {
-    pub fn new(what: &str, total: u64) -> Self {
-        let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
+    /// Progress over `units` units of work (frames, or 1 for one render).
+    pub fn new(what: &str, units: u64) -> Self {
+        let bar = ProgressBar::with_draw_target(Some(units * SUB), ProgressDrawTarget::hidden());
         bar.set_style(
             ProgressStyle::with_template(
                 "{msg} [{bar:40}] {percent}% ({elapsed} elapsed, ~{eta} left)",
@@ -25,20 +41,54 @@ impl Progress {
         bar.set_message(what.to_string());
         Progress {
             bar,
+            what: what.to_string(),
             start: Instant::now(),
-            shown: Mutex::new(false),
+            terminal: std::io::stderr().is_terminal(),
+            state: Mutex::new((false, Instant::now())),
         }
     }
 
+    /// `done` whole units.
     pub fn set(&self, done: u64) {
-        if self.start.elapsed() > Duration::from_secs(1)
-            && let Ok(mut shown) = self.shown.lock()
-            && !*shown
-        {
-            *shown = true;
-            self.bar.set_draw_target(ProgressDrawTarget::stderr());
+        self.set_position(done * SUB);
+    }
+
+    /// Unit `unit` is `done / total` done (a renderer's report).
+    pub fn set_fraction(&self, unit: u64, done: u64, total: u64) {
+        let part = if total == 0 { 0 } else { done * SUB / total };
+        self.set_position(unit * SUB + part.min(SUB));
+    }
+
+    fn set_position(&self, pos: u64) {
+        self.bar.set_position(pos);
+        let elapsed = self.start.elapsed();
+        let Ok(mut state) = self.state.lock() else {
+            return;
+        };
+        if self.terminal {
+            if elapsed > Duration::from_secs(1) && !state.0 {
+                state.0 = true;
+                self.bar.set_draw_target(ProgressDrawTarget::stderr());
+            }
+        } else if state.1.elapsed() >= LINE_EVERY {
+            state.1 = Instant::now();
+            let len = self.bar.length().unwrap_or(1).max(1);
+            let frac = pos as f64 / len as f64;
+            let left = if frac > 0.0 {
+                format!(
+                    ", ~{:.0} s left",
+                    elapsed.as_secs_f64() * (1.0 - frac) / frac
+                )
+            } else {
+                String::new()
+            };
+            eprintln!(
+                "{}: {:.0}% ({:.0} s elapsed{left})",
+                self.what,
+                100.0 * frac,
+                elapsed.as_secs_f64()
+            );
         }
-        self.bar.set_position(done);
     }
 
     pub fn finish(&self) {

@@ -5,9 +5,9 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Result;
-use voxless_core::Image;
-use voxless_render::colorbar::{ColorbarSpec, draw_colorbar};
-use voxless_scene::{LoadedScene, SceneDesc};
+use voxless::core::Image;
+use voxless::render::colorbar::{ColorbarSpec, draw_colorbar};
+use voxless::{Control, Scene, SceneDesc};
 
 use crate::progress::Progress;
 
@@ -40,12 +40,12 @@ pub fn frame_count(s: &str) -> Result<u32, String> {
 }
 
 /// The colour bar to draw, when asked for.
-pub fn colorbar(scene: &LoadedScene, desc: &SceneDesc, on: bool) -> Option<ColorbarSpec> {
+pub fn colorbar(scene: &Scene, desc: &SceneDesc, on: bool) -> Option<ColorbarSpec> {
     on.then(|| scene.colorbar(desc))
 }
 
 /// Draws the colour bar (if any) into a rendered image.
-pub fn decorate(image: &mut Image, scene: &LoadedScene, bar: Option<&ColorbarSpec>) {
+pub fn decorate(image: &mut Image, scene: &Scene, bar: Option<&ColorbarSpec>) {
     if let Some(spec) = bar
         && draw_colorbar(image, &scene.tf, spec).is_none()
     {
@@ -69,11 +69,7 @@ pub fn render_turntable(
 ) -> Result<()> {
     let mut scene = crate::resolve_frame(desc, base, data_frame)?;
     let bar = colorbar(&scene, desc, with_colorbar);
-    let st = &scene.settings;
-    let per_frame = st.width.div_ceil(voxless_render::TILE) as u64
-        * st.height.div_ceil(voxless_render::TILE) as u64
-        * st.spp as u64;
-    let progress = Progress::new("rendering turntable", per_frame * frames as u64);
+    let progress = Progress::new("rendering turntable", frames as u64);
     let start = desc.camera.orbit.unwrap_or(0.0);
     let mut view = desc.clone();
     let t = Instant::now();
@@ -82,12 +78,9 @@ pub fn render_turntable(
         scene.reaim(&view)?;
         // Blue noise advances with the frame (spatiotemporal).
         scene.settings.frame = k;
-        let done = k as u64 * per_frame;
-        let mut image = scene
-            .volume
-            .render(&scene.camera, &scene.tf, &scene.settings, &|d, _| {
-                progress.set(done + d)
-            });
+        // Each frame's tiles are one unit of the bar, in fractions.
+        let report = |d: u64, total: u64| progress.set_fraction(k as u64, d, total);
+        let mut image = scene.render(&Control::new().with_progress(&report))?;
         decorate(&mut image, &scene, bar.as_ref());
         crate::write_image(
             &crate::frame_path(output, k as usize),

@@ -11,8 +11,10 @@
 //! fully filled, ≤ 32 cells per axis, from a k-d tree), then the space covered
 //! by the bricks' supports is cut into [`regions::Region`]s, each knowing the
 //! bricks active inside it, the value range of every field there, and its
-//! finest cell width. A BVH over the regions hands out ray intervals; regions
-//! the transfer function makes invisible are left out of it.
+//! finest cell width. A BVH over the regions hands out ray intervals; a
+//! render's prepared [`AmrContext`] holds a second BVH over only the regions
+//! its transfer function can see (the volume itself is never changed, so
+//! several transfer functions can render it at once).
 //!
 //! **Reconstruction.** *Basis* (default): every cell carries a tent
 //! `Ĥ(p) = Π_axes max(0, 1 − |c − p|/w)` around its centre `c`, and
@@ -27,10 +29,12 @@
 //! in exactly one region (up to shared faces).
 
 pub mod bricks;
+mod context;
 pub mod regions;
 mod volume;
 
 pub use bricks::Brick;
+pub use context::AmrContext;
 pub use regions::{Region, Regions};
 pub use volume::{AmrCells, AmrSettings, AmrVolume, BuildStats, CellLocator, Reconstruction};
 

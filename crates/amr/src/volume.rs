@@ -74,12 +74,9 @@ pub struct AmrVolume {
     /// Finest cell width per region, finest units.
     region_finest: Vec<i32>,
     field_ranges: Vec<Range1>,
-    /// All regions, for point location.
+    /// All regions, for point location and intervals (a prepared
+    /// [`crate::AmrContext`] has its own tree over the visible ones).
     region_bvh: Bvh,
-    /// The regions the transfer function can see, for intervals; `None`
-    /// while every region is visible (then `region_bvh` serves).
-    visible_bvh: Option<Bvh>,
-    visible: Vec<u32>,
     /// Brick boxes, for nearest-cell lookups and exact projections.
     brick_bvh: Bvh,
     bounds: Aabb,
@@ -211,7 +208,7 @@ impl AmrVolume {
         let brick_bvh = Bvh::build(&brick_bounds);
         stats.bvh_build = t.elapsed();
         let bounds = region_bvh.bounds();
-        let mut vol = AmrVolume {
+        Ok(AmrVolume {
             names,
             origin,
             h,
@@ -224,40 +221,10 @@ impl AmrVolume {
             region_finest,
             field_ranges,
             region_bvh,
-            visible_bvh: None,
-            visible: Vec::new(),
             brick_bvh,
             bounds,
             stats,
-        };
-        vol.set_visibility(&|_| true);
-        Ok(vol)
-    }
-
-    /// Rebuilds the interval BVH over the regions whose range of the opacity
-    /// field `is_visible` accepts (TF space skipping, ExaBricks §4.1); returns
-    /// how long that took. Call it when the transfer function changes.
-    pub fn set_visibility(&mut self, is_visible: &dyn Fn(Range1) -> bool) -> Duration {
-        let t = Instant::now();
-        let nf = self.values.len();
-        let f = self.settings.field;
-        self.visible = (0..self.regions.regions.len() as u32)
-            .filter(|&r| is_visible(self.region_ranges[r as usize * nf + f]))
-            .collect();
-        if self.visible.len() == self.regions.regions.len() {
-            // Everything visible: the all-regions tree serves, no second build.
-            self.visible_bvh = None;
-        } else {
-            let boxes: Vec<Aabb> = self
-                .visible
-                .iter()
-                .map(|&r| self.region_bounds[r as usize])
-                .collect();
-            self.visible_bvh
-                .get_or_insert_with(Bvh::default)
-                .rebuild_in_order(&boxes);
-        }
-        t.elapsed()
+        })
     }
 
     pub fn stats(&self) -> &BuildStats {
@@ -276,9 +243,6 @@ impl AmrVolume {
     pub fn region_bricks(&self, r: usize) -> &[u32] {
         self.regions.bricks_of(r)
     }
-    pub fn visible_region_count(&self) -> usize {
-        self.visible.len()
-    }
     pub fn settings(&self) -> &AmrSettings {
         &self.settings
     }
@@ -293,6 +257,50 @@ impl AmrVolume {
     /// Range of `field` over all cells.
     pub fn field_range(&self, field: usize) -> Range1 {
         self.field_ranges[field]
+    }
+
+    /// The intervals of the regions `bvh` holds (region `remap[i]` for leaf
+    /// `i`, or `i` itself), in increasing `t`.
+    pub(crate) fn region_intervals(
+        &self,
+        bvh: &Bvh,
+        remap: Option<&[u32]>,
+        ray: &Ray,
+        t: Range1,
+        query: &IntervalQuery,
+        out: &mut Vec<Interval>,
+    ) {
+        let start = out.len();
+        let nf = self.values.len();
+        bvh.ray_query(ray, t, |i, hit| {
+            let r = remap.map_or(i as usize, |m| m[i as usize] as usize);
+            let range = self.region_ranges[r * nf + self.settings.field];
+            if hit.hi > hit.lo && (query.is_visible)(range) {
+                out.push(Interval {
+                    hint: r as u32,
+                    ..Interval::sampled(hit, range, 0.5 * self.region_finest[r] as f32 * self.h)
+                });
+            }
+        });
+        out[start..].sort_unstable_by(|a, b| a.t.lo.total_cmp(&b.t.lo));
+    }
+
+    /// The regions whose range of the opacity field `is_visible` accepts.
+    pub(crate) fn visible_regions(&self, is_visible: &dyn Fn(Range1) -> bool) -> Vec<u32> {
+        let nf = self.values.len();
+        let f = self.settings.field;
+        (0..self.regions.regions.len() as u32)
+            .filter(|&r| is_visible(self.region_ranges[r as usize * nf + f]))
+            .collect()
+    }
+
+    /// How many regions a transfer function accepting `is_visible` sees.
+    pub fn visible_region_count(&self, is_visible: &dyn Fn(Range1) -> bool) -> usize {
+        self.visible_regions(is_visible).len()
+    }
+
+    pub(crate) fn region_bvh(&self) -> &Bvh {
+        &self.region_bvh
     }
 
     fn to_units(&self, p: Vec3) -> Vec3 {
@@ -564,31 +572,11 @@ impl Volume for AmrVolume {
 
     /// One interval per visible region the ray crosses, in order; the step is
     /// half the region's finest cell width (two samples per finest cell at
-    /// sampling rate 1: adaptive sampling, ExaBricks §4.2).
+    /// sampling rate 1: adaptive sampling, ExaBricks §4.2). Every region is
+    /// traversed here; a prepared [`crate::AmrContext`] traverses only the
+    /// visible ones.
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
-        let start = out.len();
-        let nf = self.values.len();
-        let (bvh, remap) = match &self.visible_bvh {
-            Some(b) => (b, true),
-            None => (&self.region_bvh, false),
-        };
-        bvh.ray_query(ray, t, |i, hit| {
-            let r = if remap {
-                self.visible[i as usize] as usize
-            } else {
-                i as usize
-            };
-            let range = self.region_ranges[r * nf + self.settings.field];
-            if hit.hi > hit.lo && (query.is_visible)(range) {
-                out.push(Interval {
-                    t: hit,
-                    value_range: range,
-                    nominal_dt: 0.5 * self.region_finest[r] as f32 * self.h,
-                    hint: r as u32,
-                });
-            }
-        });
-        out[start..].sort_unstable_by(|a, b| a.t.lo.total_cmp(&b.t.lo));
+        self.region_intervals(&self.region_bvh, None, ray, t, query, out);
     }
 
     fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {

@@ -1,26 +1,36 @@
 //! Plain data shared by every voxless crate: vectors, boxes, rays, value
 //! ranges, cameras, images, and the [`Volume`] trait — the one seam between
-//! data kinds (particles, AMR, tetrahedra) and integrators.
+//! data kinds (particles, AMR, tetrahedra) and integrators — with its
+//! per-render [`Prepare`] step, its per-tile hook ([`TileIntervals`]) and
+//! render [`Control`] (progress and cancellation).
 //!
 //! Conventions: `f32` world coordinates; rays have unit directions so the ray
 //! parameter `t` is a distance; images are row-major with row 0 at the top and
 //! hold linear, premultiplied RGBA.
 
 pub mod camera;
+pub mod control;
 pub mod image;
 pub mod macrogrid;
 pub mod math;
+pub mod prepare;
 pub mod rng;
+#[cfg(any(test, feature = "testing"))]
+pub mod testing;
+pub mod tiles;
 pub mod volume;
 
 pub use camera::{Camera, CameraError, Projection};
+pub use control::{CancelToken, Cancelled, Control};
 pub use image::{Image, linear_to_srgb, srgb_to_linear};
 pub use macrogrid::MacroGrid;
 pub use math::{Aabb, Range1, Ray, Vec3};
+pub use prepare::{EventBudget, Prepare, PrepareQuery};
 pub use rng::SmallRng;
+pub use tiles::{IntervalLists, TileIntervals, TileRays, View};
 pub use volume::{
-    Attribute, Interval, IntervalQuery, Sample, SampleBatch, Volume, quadrature_line_integral,
-    simpson,
+    Attribute, Interval, IntervalKind, IntervalQuery, Sample, SampleBatch, Volume,
+    quadrature_line_integral, simpson,
 };
 
 #[cfg(test)]

@@ -124,12 +124,7 @@ impl MacroGrid {
                             last.t.hi = t_exit;
                             last.value_range = last.value_range.union(r);
                         }
-                        _ => out.push(Interval {
-                            t: Range1::new(t_cur, t_exit),
-                            value_range: r,
-                            nominal_dt,
-                            hint: Interval::NO_HINT,
-                        }),
+                        _ => out.push(Interval::sampled(Range1::new(t_cur, t_exit), r, nominal_dt)),
                     }
                     open = true;
                 } else {

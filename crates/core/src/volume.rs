@@ -5,8 +5,23 @@
 //! `value_range`. Gaps between intervals are space the field is zero (or invisible)
 //! in, so integrators skip them. Integrators are generic over `V: Volume` so the hot
 //! loop is monomorphised; dispatch on the data kind happens once per frame.
+//!
+//! An interval is either *sampled* (the integrator steps through it) or
+//! *constant* (the field is the same everywhere in it, so it is integrated in
+//! closed form — tessellations, whose density is constant inside each tet).
+//! A volume that hands out constant intervals hands out every non-zero piece,
+//! visible or not, so a gap next to a constant interval means the field is
+//! zero there (iso-surfaces are found at such gaps).
+//!
+//! Optional hooks with correct defaults let a kind go faster without a second
+//! renderer: [`Volume::sample_batch`] (a packet of samples at once),
+//! [`Volume::tile_view`] (the intervals of a whole screen tile at once) and
+//! [`Volume::project_image`] (a whole column-density image at once).
 
+use crate::camera::Camera;
+use crate::control::{Cancelled, Control};
 use crate::math::{Range1, Ray, Vec3};
+use crate::tiles::{TileIntervals, View};
 
 /// A piece of a ray over which a volume is (possibly) non-zero.
 ///
@@ -23,10 +38,54 @@ pub struct Interval {
     /// came from (AMR: the active brick region), handed back through
     /// [`Volume::sample_in`]. [`Interval::NO_HINT`] when unused.
     pub hint: u32,
+    /// How the field varies over the interval.
+    pub kind: IntervalKind,
+}
+
+/// How the field varies over an [`Interval`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum IntervalKind {
+    /// Anything within `value_range`: integrators sample it.
+    #[default]
+    Sampled,
+    /// Exactly `value_range.lo` (= `value_range.hi`) everywhere: integrators
+    /// take it whole, in closed form, without sampling or jitter.
+    Constant,
 }
 
 impl Interval {
     pub const NO_HINT: u32 = u32::MAX;
+
+    /// A sampled interval without a hint.
+    pub fn sampled(t: Range1, value_range: Range1, nominal_dt: f32) -> Self {
+        Interval {
+            t,
+            value_range,
+            nominal_dt,
+            hint: Interval::NO_HINT,
+            kind: IntervalKind::Sampled,
+        }
+    }
+
+    /// An interval over which the field is `value` everywhere.
+    pub fn constant(t: Range1, value: f32) -> Self {
+        Interval {
+            t,
+            value_range: Range1::new(value, value),
+            nominal_dt: t.span(),
+            hint: Interval::NO_HINT,
+            kind: IntervalKind::Constant,
+        }
+    }
+
+    /// The field's value over a constant interval.
+    #[inline]
+    pub fn constant_value(&self) -> Option<f32> {
+        match self.kind {
+            IntervalKind::Constant => Some(self.value_range.lo),
+            IntervalKind::Sampled => None,
+        }
+    }
 }
 
 /// What an integrator tells the volume about the intervals it wants.
@@ -168,6 +227,32 @@ pub trait Volume: Send + Sync {
     /// clears), in increasing `t`, non-overlapping.
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>);
 
+    /// A faster way to get the intervals of every ray of a screen tile at
+    /// once, prepared for one camera and image size (tessellations: each
+    /// tet rasterised once per tile, every pixel's crossings sorted). `None`
+    /// (the default): integrators call [`Volume::intervals`] per ray. The
+    /// lists must equal what [`Volume::intervals`] gives, up to a stated
+    /// tolerance.
+    fn tile_view(&self, view: &View) -> Option<Box<dyn TileIntervals + '_>> {
+        let _ = view;
+        None
+    }
+
+    /// A faster way to compute a whole column-density image (`∫ value dt`
+    /// through every pixel centre, row-major, row 0 at the top). `None` (the
+    /// default): integrators call [`Volume::line_integral`] per pixel. Must
+    /// report progress and stop when `control` is cancelled.
+    fn project_image(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        control: &Control,
+    ) -> Option<Result<Vec<f32>, Cancelled>> {
+        let _ = (camera, width, height, control);
+        None
+    }
+
     /// ∫ value dt along `ray` over `t`. The default is composite Simpson
     /// quadrature over the intervals with 16 panels per `nominal_dt` — the slow
     /// path; data kinds with a closed form override it.
@@ -203,6 +288,10 @@ pub fn quadrature_line_integral<V: Volume + ?Sized>(volume: &V, ray: &Ray, t: Ra
     intervals
         .iter()
         .map(|iv| {
+            if let Some(v) = iv.constant_value() {
+                // Constant: the integral is exact.
+                return v as f64 * iv.t.span() as f64;
+            }
             let f = |t: f64| {
                 volume
                     .sample_in(ray.at(t as f32), iv)
@@ -224,4 +313,66 @@ pub fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64, n: usize) -> f64 {
         sum += w * f(a + i as f64 * h);
     }
     sum * h / 3.0
+}
+
+/// A borrowed volume is a volume: prepared contexts that need nothing of
+/// their own are plain references ([`crate::Prepare`]). Every method
+/// forwards, so a volume's overrides are kept.
+impl<V: Volume + ?Sized> Volume for &V {
+    fn bounds(&self) -> crate::Aabb {
+        (**self).bounds()
+    }
+    fn value_range(&self) -> Range1 {
+        (**self).value_range()
+    }
+    fn attribute_range(&self) -> Option<Range1> {
+        (**self).attribute_range()
+    }
+    fn sample(&self, p: Vec3) -> Option<Sample> {
+        (**self).sample(p)
+    }
+    fn gradient(&self, p: Vec3) -> Vec3 {
+        (**self).gradient(p)
+    }
+    fn sample_with_gradient(&self, p: Vec3) -> Option<(Sample, Vec3)> {
+        (**self).sample_with_gradient(p)
+    }
+    fn sample_in(&self, p: Vec3, interval: &Interval) -> Option<Sample> {
+        (**self).sample_in(p, interval)
+    }
+    fn sample_with_gradient_in(&self, p: Vec3, interval: &Interval) -> Option<(Sample, Vec3)> {
+        (**self).sample_with_gradient_in(p, interval)
+    }
+    fn classified(&self) -> bool {
+        (**self).classified()
+    }
+    fn packet_sampling(&self) -> bool {
+        (**self).packet_sampling()
+    }
+    fn sample_batch(
+        &self,
+        batch: &SampleBatch,
+        gradient: bool,
+        out: &mut Vec<(Option<Sample>, Vec3)>,
+    ) {
+        (**self).sample_batch(batch, gradient, out)
+    }
+    fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
+        (**self).intervals(ray, t, query, out)
+    }
+    fn tile_view(&self, view: &View) -> Option<Box<dyn TileIntervals + '_>> {
+        (**self).tile_view(view)
+    }
+    fn project_image(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        control: &Control,
+    ) -> Option<Result<Vec<f32>, Cancelled>> {
+        (**self).project_image(camera, width, height, control)
+    }
+    fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
+        (**self).line_integral(ray, t)
+    }
 }

@@ -212,12 +212,11 @@ impl Volume for MaterialVolume {
                     last.t.hi = last.t.hi.max(iv.t.hi);
                     last.nominal_dt = last.nominal_dt.min(iv.nominal_dt);
                 }
-                _ => out.push(Interval {
-                    t: iv.t,
-                    value_range: Range1::new(0.0, self.max_opacity),
-                    nominal_dt: iv.nominal_dt,
-                    hint: Interval::NO_HINT,
-                }),
+                _ => out.push(Interval::sampled(
+                    iv.t,
+                    Range1::new(0.0, self.max_opacity),
+                    iv.nominal_dt,
+                )),
             }
         }
     }
@@ -230,3 +229,5 @@ impl Volume for MaterialVolume {
             .sum()
     }
 }
+
+voxless_core::prepare_as_self!(MaterialVolume);

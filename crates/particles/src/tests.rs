@@ -586,9 +586,9 @@ fn materials_render_the_same_with_packets_and_a_hidden_material_drops_out() {
     s.spp = 2;
     s.opacity_scale = 12.0;
     s.packets = false;
-    let slow = render(&vol, &camera, &tf, &s, &|_, _| {});
+    let slow = render(&vol, &camera, &tf, &s, &voxless_core::Control::new()).unwrap();
     s.packets = true;
-    let fast = render(&vol, &camera, &tf, &s, &|_, _| {});
+    let fast = render(&vol, &camera, &tf, &s, &voxless_core::Control::new()).unwrap();
     let diff = |x: &voxless_core::Image, y: &voxless_core::Image| {
         x.pixels
             .iter()
@@ -611,8 +611,8 @@ fn materials_render_the_same_with_packets_and_a_hidden_material_drops_out() {
     mats.truncate(1);
     let alone = MaterialVolume::new(mats).unwrap();
     let camera = voxless_core::Camera::framing(&both.bounds(), 1.2);
-    let x = render(&both, &camera, &tf, &s, &|_, _| {});
-    let y = render(&alone, &camera, &tf, &s, &|_, _| {});
+    let x = render(&both, &camera, &tf, &s, &voxless_core::Control::new()).unwrap();
+    let y = render(&alone, &camera, &tf, &s, &voxless_core::Control::new()).unwrap();
     assert!(y.pixels.iter().filter(|p| p[3] > 0.05).count() > 100);
     assert!(
         diff(&x, &y) <= 1e-6,

@@ -753,3 +753,6 @@ fn to_sample(f: &FieldSample) -> Sample {
         },
     }
 }
+
+// TEMPORARY: replaced by a context holding the pre-classified colours.
+voxless_core::prepare_as_self!(ParticleVolume);

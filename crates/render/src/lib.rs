@@ -14,6 +14,22 @@
 //! - [`project`]: the line integral `∫ value dt` per pixel (column density).
 //! - [`colorbar::draw_colorbar`]: a labelled colour bar drawn into an image.
 //!
+//! Constant intervals (tessellations) are composited whole, in closed form:
+//! on a piece of constant value the colour and extinction are constant, so
+//! it contributes `C·(1 − e^{−σL})` exactly — no step, no jitter. Their
+//! iso-surfaces lie at the interval boundaries where the value crosses the
+//! iso-value (gaps beside constant intervals count as zero).
+//!
+//! **Passes and control.** A render is `spp` passes over the image's tiles;
+//! [`Job::pass`] renders one pass into a [`Film`], which can be resolved at
+//! any moment (a viewer shows pass 1 while pass 2 runs). Each pass reports
+//! progress per finished tile and stops between tiles once its
+//! [`Control`]'s token is cancelled, leaving the film as it was.
+//!
+//! **Preparation.** Integrators work on the volume [`prepare`]d for the
+//! transfer function and settings (see [`voxless_core::Prepare`]), so the
+//! volume itself stays immutable and can serve several renders at once.
+//!
 //! Determinism: all randomness comes from [`sampling::PixelRng`] keyed by
 //! (seed, pixel, sample, dimension), and passes are accumulated in sample
 //! order, so the same inputs give the same image bit for bit regardless of
@@ -26,13 +42,17 @@ mod march;
 mod packet;
 pub mod sampling;
 pub mod scatter;
+mod tile;
 
 pub use march::march;
 pub use packet::{PACKET, WINDOW_STEPS};
 pub use scatter::{FreeFlight, LightSource, Noise, Scatter};
 
 use rayon::prelude::*;
-use voxless_core::{Aabb, Camera, Image, Range1, Vec3, Volume};
+use voxless_core::{
+    Aabb, Camera, Cancelled, Control, EventBudget, Image, Prepare, PrepareQuery, Range1,
+    TileIntervals, Vec3, View, Volume,
+};
 use voxless_transfer::TransferFunction;
 
 use sampling::PixelRng;
@@ -85,6 +105,12 @@ pub struct RenderSettings {
     pub scatter: Option<Scatter>,
     /// Frame index in a time series: the blue noise advances with it.
     pub frame: u32,
+    /// Tessellations: the k-buffer (first `k` events exact, the rest in
+    /// depth layers) instead of sorting every event.
+    pub event_budget: Option<EventBudget>,
+    /// Level of detail: pieces smaller than this many pixels on screen may
+    /// be drawn coarser (tessellations with LOD levels).
+    pub lod_pixels: Option<f32>,
 }
 
 impl RenderSettings {
@@ -112,6 +138,8 @@ impl RenderSettings {
             packets: true,
             scatter: None,
             frame: 0,
+            event_budget: None,
+            lod_pixels: None,
         }
     }
 
@@ -138,29 +166,146 @@ impl RenderSettings {
     }
 }
 
-/// Side of a square render tile in pixels.
+/// Side of a square render tile in pixels, unless the volume's tile view
+/// asks for another.
 pub const TILE: u32 = 16;
 
-/// Renders `spp` passes and returns their average. `progress(done, total)` is
-/// called after every finished tile.
-pub fn render<V: Volume>(
-    volume: &V,
+/// `volume` prepared for `tf` and `settings`: what the integrators sample.
+pub fn prepare<'a, P: Prepare>(
+    volume: &'a P,
+    tf: &TransferFunction,
+    settings: &RenderSettings,
+) -> P::Prepared<'a> {
+    let is_visible = |r: Range1| settings.is_visible(tf, r);
+    let attr_range = settings.attribute_range.unwrap_or(Range1::new(0.0, 1.0));
+    let attribute_color = |a: f32| tf.color(attr_range.normalize(a));
+    volume.prepare(&PrepareQuery {
+        is_visible: &is_visible,
+        attribute_color: &attribute_color,
+        event_budget: settings.event_budget,
+        lod_pixels: settings.lod_pixels,
+    })
+}
+
+/// Prepares `volume`, renders `spp` passes and returns their average.
+/// Progress is reported in tiles (all passes together); a cancelled render
+/// returns [`Cancelled`].
+pub fn render<P: Prepare>(
+    volume: &P,
     camera: &Camera,
     tf: &TransferFunction,
     settings: &RenderSettings,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Image {
-    let mut film = Film::new(settings.width, settings.height);
-    let tiles = tiles(settings.width, settings.height);
-    let total = tiles.len() as u64 * settings.spp as u64;
-    let done = std::sync::atomic::AtomicU64::new(0);
-    for sample in 0..settings.spp {
-        film.add_pass(volume, camera, tf, settings, sample, &|| {
-            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress(d, total);
+    control: &Control,
+) -> Result<Image, Cancelled> {
+    let prepared = prepare(volume, tf, settings);
+    let job = Job::new(&prepared, camera, tf, settings);
+    let mut film = job.film();
+    job.run(&mut film, control)?;
+    Ok(film.resolve())
+}
+
+/// One render's fixed inputs, over an already prepared volume: renders
+/// passes into a [`Film`] one at a time.
+pub struct Job<'a, V: Volume> {
+    volume: &'a V,
+    view: Option<Box<dyn TileIntervals + 'a>>,
+    camera: &'a Camera,
+    tf: &'a TransferFunction,
+    settings: &'a RenderSettings,
+    tiles: Vec<Tile>,
+}
+
+impl<'a, V: Volume> Job<'a, V> {
+    /// Sets up the passes: the volume's tile view for this camera and image
+    /// size, if it has one, and the tiles.
+    pub fn new(
+        volume: &'a V,
+        camera: &'a Camera,
+        tf: &'a TransferFunction,
+        settings: &'a RenderSettings,
+    ) -> Self {
+        let view = volume.tile_view(&View {
+            camera: *camera,
+            width: settings.width,
+            height: settings.height,
         });
+        let size = view.as_ref().map_or(TILE, |v| v.tile_size().max(1));
+        Job {
+            volume,
+            view,
+            camera,
+            tf,
+            settings,
+            tiles: tiles(settings.width, settings.height, size),
+        }
     }
-    film.resolve()
+
+    /// An empty film of this job's size.
+    pub fn film(&self) -> Film {
+        Film::new(self.settings.width, self.settings.height)
+    }
+
+    /// Units of progress per pass (tiles).
+    pub fn tiles_per_pass(&self) -> u64 {
+        self.tiles.len() as u64
+    }
+
+    /// Runs the remaining passes (from `film.passes()` up to `spp`), with
+    /// progress over all of them.
+    pub fn run(&self, film: &mut Film, control: &Control) -> Result<(), Cancelled> {
+        let per = self.tiles_per_pass();
+        let total = per * self.settings.spp as u64;
+        while film.passes() < self.settings.spp {
+            let sample = film.passes();
+            self.pass(film, sample, &control.part(sample as u64 * per, total))?;
+        }
+        Ok(())
+    }
+
+    /// Renders sample index `sample` of every pixel and adds it to `film`.
+    /// Progress is reported per tile (of [`Job::tiles_per_pass`]); once
+    /// `control` is cancelled the remaining tiles are skipped and the film
+    /// is left as it was.
+    pub fn pass(&self, film: &mut Film, sample: u32, control: &Control) -> Result<(), Cancelled> {
+        assert!(
+            film.width == self.settings.width && film.height == self.settings.height,
+            "film size differs from the render settings"
+        );
+        control.check()?;
+        let total = self.tiles.len() as u64;
+        let done = std::sync::atomic::AtomicU64::new(0);
+        let results: Vec<Option<Vec<[f32; 4]>>> = self
+            .tiles
+            .par_iter()
+            .map(|&tile| {
+                if control.is_cancelled() {
+                    return None;
+                }
+                let pixels = tile::render_tile(self, tile, sample);
+                let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                control.report(d, total);
+                Some(pixels)
+            })
+            .collect();
+        if control.is_cancelled() || results.iter().any(Option::is_none) {
+            return Err(Cancelled);
+        }
+        let w = film.width;
+        for (tile, pixels) in self.tiles.iter().zip(results.into_iter().flatten()) {
+            let mut it = pixels.into_iter();
+            for y in tile.y..tile.y + tile.h {
+                for x in tile.x..tile.x + tile.w {
+                    let p = it.next().unwrap_or_default();
+                    let s = &mut film.sum[(y * w + x) as usize];
+                    for c in 0..4 {
+                        s[c] += p[c];
+                    }
+                }
+            }
+        }
+        film.passes += 1;
+        Ok(())
+    }
 }
 
 /// Progressive accumulation: one pass per sample index, averaged on resolve.
@@ -181,76 +326,12 @@ impl Film {
         }
     }
 
-    /// Renders sample index `sample` for every pixel and adds it in.
-    pub fn add_pass<V: Volume>(
-        &mut self,
-        volume: &V,
-        camera: &Camera,
-        tf: &TransferFunction,
-        settings: &RenderSettings,
-        sample: u32,
-        tile_done: &(dyn Fn() + Sync),
-    ) {
-        let (w, h) = (self.width, self.height);
-        let results: Vec<(Tile, Vec<[f32; 4]>)> = tiles(w, h)
-            .into_par_iter()
-            .map(|tile| {
-                let mut out = Vec::with_capacity((tile.w * tile.h) as usize);
-                if let Some(sc) = &settings.scatter {
-                    // Scattering paths are incoherent: one ray at a time.
-                    let mut scratch = Vec::new();
-                    for_each_pixel(tile, |x, y| {
-                        let (_, ray) = pixel_ray(camera, settings, x, y, sample);
-                        out.push(scatter::path(
-                            volume,
-                            &ray,
-                            tf,
-                            settings,
-                            sc,
-                            (x, y),
-                            sample,
-                            &mut scratch,
-                        ));
-                    });
-                } else if settings.packets && volume.packet_sampling() {
-                    let mut scratch = packet::PacketScratch::default();
-                    packet::render_tile(
-                        volume,
-                        camera,
-                        tf,
-                        settings,
-                        sample,
-                        tile,
-                        &mut scratch,
-                        &mut out,
-                    );
-                } else {
-                    let mut scratch = Vec::new();
-                    for_each_pixel(tile, |x, y| {
-                        let (rng, ray) = pixel_ray(camera, settings, x, y, sample);
-                        out.push(march(volume, &ray, tf, settings, &rng, &mut scratch));
-                    });
-                }
-                tile_done();
-                (tile, out)
-            })
-            .collect();
-        for (tile, pixels) in results {
-            let mut it = pixels.into_iter();
-            for y in tile.y..tile.y + tile.h {
-                for x in tile.x..tile.x + tile.w {
-                    let p = it.next().unwrap_or_default();
-                    let s = &mut self.sum[(y * w + x) as usize];
-                    for c in 0..4 {
-                        s[c] += p[c];
-                    }
-                }
-            }
-        }
-        self.passes += 1;
+    /// How many passes have been added.
+    pub fn passes(&self) -> u32 {
+        self.passes
     }
 
-    /// The average of the passes so far.
+    /// The average of the passes so far (transparent before the first).
     pub fn resolve(&self) -> Image {
         let inv = 1.0 / self.passes.max(1) as f32;
         Image {
@@ -282,15 +363,6 @@ pub(crate) fn pixel_ray(
     (rng, camera.ray(x as f32 + jx, y as f32 + jy, w, h))
 }
 
-/// Calls `f(x, y)` for the pixels of `tile`, row-major.
-fn for_each_pixel(tile: Tile, mut f: impl FnMut(u32, u32)) {
-    for y in tile.y..tile.y + tile.h {
-        for x in tile.x..tile.x + tile.w {
-            f(x, y);
-        }
-    }
-}
-
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Tile {
     x: u32,
@@ -299,15 +371,15 @@ pub(crate) struct Tile {
     h: u32,
 }
 
-fn tiles(width: u32, height: u32) -> Vec<Tile> {
+fn tiles(width: u32, height: u32, size: u32) -> Vec<Tile> {
     let mut v = Vec::new();
-    for y in (0..height).step_by(TILE as usize) {
-        for x in (0..width).step_by(TILE as usize) {
+    for y in (0..height).step_by(size as usize) {
+        for x in (0..width).step_by(size as usize) {
             v.push(Tile {
                 x,
                 y,
-                w: TILE.min(width - x),
-                h: TILE.min(height - y),
+                w: size.min(width - x),
+                h: size.min(height - y),
             });
         }
     }
@@ -315,20 +387,40 @@ fn tiles(width: u32, height: u32) -> Vec<Tile> {
 }
 
 /// The line integral `∫ value dt` through the centre of every pixel of a
-/// `width`×`height` image, row-major, row 0 at the top. `progress(done,
-/// total)` counts finished rows.
+/// `width`×`height` image, row-major, row 0 at the top: the volume's own
+/// whole-image projection when it has one, else one line integral per
+/// pixel (progress in rows, cancellation checked between rows).
 pub fn project<V: Volume>(
     volume: &V,
     camera: &Camera,
     width: u32,
     height: u32,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Vec<f32> {
+    control: &Control,
+) -> Result<Vec<f32>, Cancelled> {
+    control.check()?;
+    if let Some(image) = volume.project_image(camera, width, height, control) {
+        return image;
+    }
+    Ok(project_per_pixel(volume, camera, width, height, control)?)
+}
+
+/// [`project`] without the volume's whole-image path: one line integral per
+/// pixel centre (the slow path fast paths are tested against).
+pub fn project_per_pixel<V: Volume>(
+    volume: &V,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    control: &Control,
+) -> Result<Vec<f32>, Cancelled> {
     let done = std::sync::atomic::AtomicU64::new(0);
     let bounds = volume.bounds();
-    (0..height)
+    let rows: Vec<Option<Vec<f32>>> = (0..height)
         .into_par_iter()
-        .flat_map_iter(|y| {
+        .map(|y| {
+            if control.is_cancelled() {
+                return None;
+            }
             let row: Vec<f32> = (0..width)
                 .map(|x| {
                     let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5, width, height);
@@ -341,10 +433,14 @@ pub fn project<V: Volume>(
                 })
                 .collect();
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress(d, height as u64);
-            row
+            control.report(d, height as u64);
+            Some(row)
         })
-        .collect()
+        .collect();
+    if control.is_cancelled() {
+        return Err(Cancelled);
+    }
+    Ok(rows.into_iter().flatten().flatten().collect())
 }
 
 #[cfg(test)]

@@ -1,13 +1,14 @@
-//! Emission–absorption along one ray, split into the three steps both the
-//! per-sample path ([`march`]) and the packet path ([`crate::packet`]) share,
-//! so the two place and integrate samples identically:
+//! Emission–absorption along one ray, split into the three steps every path
+//! (per-sample [`march`], the packet path of [`crate::packet`], single
+//! scattering) shares, so they place and integrate samples identically:
 //!
-//! 1. [`ray_intervals`]: the ray clipped to the volume (and clip box), and the
-//!    volume's visible intervals along it;
+//! 1. the ray's span inside the volume (and clip box) and the volume's
+//!    visible intervals along it ([`crate::tile`] gets them per tile);
 //! 2. [`Cursor`]: the sample segments inside those intervals, in order — per
-//!    interval a random first boundary (jitter), then steps of `dt`; each
-//!    segment is sampled at its midpoint;
-//! 3. [`RayState::feed`]: one sample composited front to back, with the
+//!    sampled interval a random first boundary (jitter), then steps of `dt`,
+//!    each segment sampled at its midpoint; a constant interval is one
+//!    segment, whole;
+//! 3. [`RayState::feed`]: one segment composited front to back, with the
 //!    segment-length opacity correction and iso-surface crossings.
 
 use voxless_core::{Aabb, Attribute, Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume};
@@ -17,6 +18,7 @@ use crate::sampling::PixelRng;
 use crate::{Light, RenderSettings};
 
 /// Emission–absorption along one ray; returns premultiplied linear RGBA.
+/// (Renders get their intervals per tile; this is the one-ray entry.)
 pub fn march<V: Volume>(
     volume: &V,
     ray: &Ray,
@@ -26,17 +28,41 @@ pub fn march<V: Volume>(
     scratch: &mut Vec<Interval>,
 ) -> [f32; 4] {
     scratch.clear();
-    if !ray_intervals(volume, ray, tf, settings, f32::INFINITY, scratch) {
+    let span = ray_span(volume, ray, settings, f32::INFINITY);
+    if span.is_empty() {
         return [0.0; 4];
     }
-    let ctx = Ctx::new(tf, settings);
+    let visible = |r: Range1| settings.is_visible(tf, r);
+    volume.intervals(
+        ray,
+        span,
+        &IntervalQuery {
+            is_visible: &visible,
+        },
+        scratch,
+    );
+    let ctx = Ctx::new(tf, settings, volume.classified());
+    march_intervals(volume, ray, scratch, span, rng, &ctx)
+}
+
+/// Emission–absorption along `ray` over its `intervals` (within `span`).
+pub(crate) fn march_intervals<V: Volume>(
+    volume: &V,
+    ray: &Ray,
+    intervals: &[Interval],
+    span: Range1,
+    rng: &PixelRng,
+    ctx: &Ctx,
+) -> [f32; 4] {
     let gradient = ctx.needs_gradient();
-    let mut state = RayState::default();
-    let mut cursor = Cursor::default();
-    while let Some(seg) = cursor.next(scratch, settings, rng) {
-        let iv = &scratch[seg.interval as usize];
+    let mut state = RayState::new(span);
+    let mut cursor = Cursor::new(span.lo);
+    while let Some(seg) = cursor.next(intervals, ctx.settings, rng) {
+        let iv = &intervals[seg.interval as usize];
         let p = ray.at(seg.t);
-        let (sample, g) = if gradient {
+        let (sample, g) = if let Some(v) = iv.constant_value() {
+            (Some(Sample::scalar(v)), Vec3::ZERO)
+        } else if gradient {
             match volume.sample_with_gradient_in(p, iv) {
                 Some((s, g)) => (Some(s), g),
                 None => (None, Vec3::ZERO),
@@ -44,46 +70,33 @@ pub fn march<V: Volume>(
         } else {
             (volume.sample_in(p, iv), Vec3::ZERO)
         };
-        if state.feed(volume, ray, iv, seg, sample, g, &ctx) {
-            break;
+        if state.feed(volume, ray, iv, seg, sample, g, ctx) {
+            return state.rgba();
         }
     }
+    state.finish(volume, ray, ctx);
     state.rgba()
 }
 
-/// Appends the visible intervals of `ray` within `t ∈ [0, t_max]` to `out`;
-/// false when the ray misses the (clipped) volume there.
-pub(crate) fn ray_intervals<V: Volume>(
+/// The part `t ∈ [0, t_max]` of `ray` inside the volume's bounds and the
+/// clip box (empty when it misses).
+pub(crate) fn ray_span<V: Volume>(
     volume: &V,
     ray: &Ray,
-    tf: &TransferFunction,
     settings: &RenderSettings,
     t_max: f32,
-    out: &mut Vec<Interval>,
-) -> bool {
+) -> Range1 {
     let mut region = volume.bounds();
     if let Some(clip) = settings.clip {
         region = Aabb::new(region.min.max(clip.min), region.max.min(clip.max));
     }
-    let t = region.clip_ray(ray, Range1::new(0.0, t_max));
-    if t.is_empty() {
-        return false;
-    }
-    let visible = |r: Range1| settings.is_visible(tf, r);
-    volume.intervals(
-        ray,
-        t,
-        &IntervalQuery {
-            is_visible: &visible,
-        },
-        out,
-    );
-    true
+    region.clip_ray(ray, Range1::new(0.0, t_max))
 }
 
 /// One sample: the midpoint `t` of a segment of length `len` in interval
-/// `interval` of the ray's list; `reset` when the segment follows a gap (the
-/// previous sample no longer brackets iso-surface crossings).
+/// `interval` of the ray's list; `reset` when the segment is the first of an
+/// interval that follows a gap (the previous sample no longer brackets
+/// iso-surface crossings; next to a constant interval the gap is zero).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Segment {
     pub t: f32,
@@ -105,21 +118,21 @@ pub(crate) struct Cursor {
     open: bool,
 }
 
-impl Default for Cursor {
-    fn default() -> Self {
+impl Cursor {
+    /// A cursor at the start of a ray whose span starts at `t0`: an
+    /// interval starting later follows a gap.
+    pub fn new(t0: f32) -> Self {
         Cursor {
             k: 0,
             start: 0.0,
             end: 0.0,
             dt: 0.0,
-            prev_end: f32::NAN,
+            prev_end: t0,
             reset: false,
             open: false,
         }
     }
-}
 
-impl Cursor {
     /// The step of the current interval (valid after the first `next`).
     pub fn dt(&self) -> f32 {
         self.dt
@@ -139,6 +152,20 @@ impl Cursor {
                     self.reset = true;
                 }
                 self.prev_end = iv.t.hi;
+                if iv.constant_value().is_some() {
+                    // Constant: one segment, the whole interval, no jitter.
+                    self.k += 1;
+                    let len = iv.t.hi - iv.t.lo;
+                    if len <= 0.0 {
+                        continue;
+                    }
+                    return Some(Segment {
+                        t: iv.t.lo + 0.5 * len,
+                        len,
+                        interval: (self.k - 1) as u32,
+                        reset: std::mem::take(&mut self.reset),
+                    });
+                }
                 self.dt = settings
                     .step
                     .unwrap_or(iv.nominal_dt / settings.sampling_rate)
@@ -175,14 +202,17 @@ impl Cursor {
 pub(crate) struct Ctx<'a> {
     pub tf: &'a TransferFunction,
     pub settings: &'a RenderSettings,
+    /// Whether samples come classified ([`Volume::classified`]).
+    pub classified: bool,
     attr_range: Range1,
 }
 
 impl<'a> Ctx<'a> {
-    pub fn new(tf: &'a TransferFunction, settings: &'a RenderSettings) -> Self {
+    pub fn new(tf: &'a TransferFunction, settings: &'a RenderSettings, classified: bool) -> Self {
         Ctx {
             tf,
             settings,
+            classified,
             attr_range: settings.attribute_range.unwrap_or(Range1::new(0.0, 1.0)),
         }
     }
@@ -201,17 +231,42 @@ impl<'a> Ctx<'a> {
             Attribute::None => self.tf.color(x),
         }
     }
+
+    /// The opacity (before `opacity_scale`) of a sample whose normalised
+    /// value is `x`.
+    #[inline]
+    pub fn opacity_of(&self, s: &Sample, x: f32) -> f32 {
+        if self.classified {
+            s.value
+        } else {
+            self.tf.opacity(x)
+        }
+    }
 }
 
 /// The compositing state of one ray.
-#[derive(Default)]
 pub(crate) struct RayState {
     acc: Accumulator,
     /// The previous sample (t, value), for iso-surface crossings.
     prev: Option<(f32, f32)>,
+    /// The last interval when it was constant: (end, value). A gap after it
+    /// is a crossing to zero.
+    last_constant: Option<(f32, f32)>,
+    /// The ray's span: a constant interval ending before its end is
+    /// followed by (zero) space.
+    span: Range1,
 }
 
 impl RayState {
+    pub fn new(span: Range1) -> Self {
+        RayState {
+            acc: Accumulator::default(),
+            prev: None,
+            last_constant: None,
+            span,
+        }
+    }
+
     /// Composites the sample of `seg` (in interval `iv`); returns true once
     /// the ray is opaque enough to stop.
     #[allow(clippy::too_many_arguments)]
@@ -227,8 +282,37 @@ impl RayState {
     ) -> bool {
         let settings = ctx.settings;
         if seg.reset {
+            // A gap: leaving a constant interval into it is a step to zero.
+            if let Some((t_end, v0)) = self.last_constant.take()
+                && self.step_crossings(volume, ray, t_end, v0, 0.0, ctx)
+            {
+                return true;
+            }
             self.prev = None;
         }
+        if let Some(v) = iv.constant_value() {
+            // Crossings sit on the boundary: from zero after a gap (not at
+            // the start of the ray's span, where the volume is cut), else
+            // from the previous value.
+            let before = if seg.reset {
+                Some(0.0)
+            } else {
+                self.prev.map(|p| p.1)
+            };
+            if let Some(v0) = before
+                && self.step_crossings(volume, ray, iv.t.lo, v0, v, ctx)
+            {
+                return true;
+            }
+            self.prev = Some((iv.t.hi, v));
+            self.last_constant = Some((iv.t.hi, v));
+            if !settings.volume {
+                return false;
+            }
+            let s = Sample::scalar(v);
+            return self.composite(&s, seg.len, gradient, ctx);
+        }
+        self.last_constant = None;
         let Some(s) = sample else {
             self.prev = None;
             return false;
@@ -249,11 +333,7 @@ impl RayState {
                         volume.sample_with_gradient(ph)
                     };
                     let (hs, g) = hit.unwrap_or((s, gradient));
-                    let light = settings.light.unwrap_or(Light {
-                        direction: -ray.dir,
-                        ambient: 0.2,
-                    });
-                    let c = ctx.colour_of(&hs, settings.normalize(iso)) * shade(g, light);
+                    let c = ctx.colour_of(&hs, settings.normalize(iso)) * iso_shade(ray, g, ctx);
                     if self
                         .acc
                         .add(c, settings.iso_opacity, settings.early_termination)
@@ -267,15 +347,19 @@ impl RayState {
         if !settings.volume {
             return false;
         }
+        self.composite(&s, seg.len, gradient, ctx)
+    }
+
+    /// A segment of length `len` of sample `s`, opacity-corrected for its
+    /// length (exact when the field is constant over it).
+    #[inline]
+    fn composite(&mut self, s: &Sample, len: f32, gradient: Vec3, ctx: &Ctx) -> bool {
+        let settings = ctx.settings;
         let x = settings.normalize(s.value);
-        let opacity = if volume.classified() {
-            s.value
-        } else {
-            ctx.tf.opacity(x)
-        };
+        let opacity = ctx.opacity_of(s, x);
         if opacity > 0.0 {
-            let a = 1.0 - (-opacity * settings.opacity_scale * seg.len).exp();
-            let mut c = ctx.colour_of(&s, x);
+            let a = 1.0 - (-opacity * settings.opacity_scale * len).exp();
+            let mut c = ctx.colour_of(s, x);
             if let Some(light) = settings.light {
                 c = c * shade(gradient, light);
             }
@@ -284,9 +368,57 @@ impl RayState {
         false
     }
 
+    /// Iso-surfaces where a piecewise-constant field steps from `v0` to `v1`
+    /// at `t`: shaded with the volume's gradient there.
+    fn step_crossings<V: Volume>(
+        &mut self,
+        volume: &V,
+        ray: &Ray,
+        t: f32,
+        v0: f32,
+        v1: f32,
+        ctx: &Ctx,
+    ) -> bool {
+        let settings = ctx.settings;
+        for &iso in &settings.iso {
+            if (v0 - iso) * (v1 - iso) < 0.0 || (v1 == iso && v0 != iso) {
+                let g = volume.gradient(ray.at(t));
+                let c = ctx.colour_of(&Sample::scalar(iso), settings.normalize(iso))
+                    * iso_shade(ray, g, ctx);
+                if self
+                    .acc
+                    .add(c, settings.iso_opacity, settings.early_termination)
+                {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// The end of the ray's intervals: a constant interval that ends inside
+    /// the span steps down to zero there.
+    pub fn finish<V: Volume>(&mut self, volume: &V, ray: &Ray, ctx: &Ctx) {
+        if let Some((t_end, v0)) = self.last_constant.take()
+            && t_end < self.span.hi
+        {
+            self.step_crossings(volume, ray, t_end, v0, 0.0, ctx);
+        }
+    }
+
     pub fn rgba(&self) -> [f32; 4] {
         self.acc.rgba()
     }
+}
+
+/// The shading of an iso-surface hit: the volume's light, else a headlight.
+#[inline]
+fn iso_shade(ray: &Ray, gradient: Vec3, ctx: &Ctx) -> f32 {
+    let light = ctx.settings.light.unwrap_or(Light {
+        direction: -ray.dir,
+        ambient: 0.2,
+    });
+    shade(gradient, light)
 }
 
 /// Front-to-back compositing of premultiplied colour.

@@ -10,12 +10,11 @@
 //! [`RayState::feed`] as [`crate::march`], so the packet path draws the same
 //! image; only the sums inside the volume may run in another order.
 
-use voxless_core::{Camera, Interval, Ray, Sample, SampleBatch, Vec3, Volume};
-use voxless_transfer::TransferFunction;
+use voxless_core::{IntervalLists, Range1, Ray, Sample, SampleBatch, Vec3, Volume};
 
-use crate::march::{Ctx, Cursor, RayState, Segment, ray_intervals};
+use crate::Tile;
+use crate::march::{Ctx, Cursor, RayState, Segment};
 use crate::sampling::PixelRng;
-use crate::{RenderSettings, Tile};
 
 /// Side of a packet in pixels.
 pub const PACKET: u32 = 8;
@@ -23,14 +22,21 @@ pub const PACKET: u32 = 8;
 pub const WINDOW_STEPS: f32 = 32.0;
 /// At most this many samples of one ray per pass (tiny steps in a wide window).
 const MAX_PER_RAY: usize = 256;
+/// Marks a segment of a constant interval: it takes no slot in the batch.
+const CONSTANT: u32 = u32::MAX;
+
+/// A tile's rays, their random streams, spans and intervals (row-major).
+pub(crate) struct TileInput<'a> {
+    pub rays: &'a [Ray],
+    pub rngs: &'a [PixelRng],
+    pub spans: &'a [Range1],
+    pub lists: &'a IntervalLists,
+}
 
 /// One ray of a packet.
 struct PacketRay {
-    ray: Ray,
-    rng: PixelRng,
-    /// This ray's intervals: `intervals[iv_lo..iv_hi]` of the packet's list.
-    iv_lo: usize,
-    iv_hi: usize,
+    /// Index of the ray in the tile.
+    r: usize,
     cursor: Cursor,
     /// The next segment, already taken from the cursor.
     next: Option<Segment>,
@@ -41,77 +47,63 @@ struct PacketRay {
 /// Scratch reused across the packets of a tile.
 #[derive(Default)]
 pub(crate) struct PacketScratch {
-    intervals: Vec<Interval>,
     rays: Vec<PacketRay>,
     batch_rays: Vec<Ray>,
-    batch_owner: Vec<usize>,
     offsets: Vec<u32>,
     t: Vec<f32>,
-    segs: Vec<Segment>,
+    /// Per gathered segment, its slot in `t`/`out` (or [`CONSTANT`]).
+    segs: Vec<(Segment, u32)>,
+    /// Per ray gathered in a pass: (packet ray, its first and end segment).
+    gathered: Vec<(usize, usize, usize)>,
     out: Vec<(Option<Sample>, Vec3)>,
 }
 
-/// Renders sample index `sample` of `tile` with packets; pixels row-major.
-#[allow(clippy::too_many_arguments)]
+/// Renders `tile` with packets; pixels row-major into `out`.
 pub(crate) fn render_tile<V: Volume>(
     volume: &V,
-    camera: &Camera,
-    tf: &TransferFunction,
-    settings: &RenderSettings,
-    sample: u32,
+    ctx: &Ctx,
     tile: Tile,
+    input: TileInput,
     scratch: &mut PacketScratch,
     out: &mut Vec<[f32; 4]>,
 ) {
     out.clear();
     out.resize((tile.w * tile.h) as usize, [0.0; 4]);
-    let ctx = Ctx::new(tf, settings);
     for py in (0..tile.h).step_by(PACKET as usize) {
         for px in (0..tile.w).step_by(PACKET as usize) {
             let pw = PACKET.min(tile.w - px);
             let ph = PACKET.min(tile.h - py);
-            scratch.intervals.clear();
             scratch.rays.clear();
-            for y in tile.y + py..tile.y + py + ph {
-                for x in tile.x + px..tile.x + px + pw {
-                    let (rng, ray) = crate::pixel_ray(camera, settings, x, y, sample);
-                    let iv_lo = scratch.intervals.len();
-                    let hit = ray_intervals(
-                        volume,
-                        &ray,
-                        tf,
-                        settings,
-                        f32::INFINITY,
-                        &mut scratch.intervals,
-                    );
-                    let mut r = PacketRay {
-                        ray,
-                        rng,
-                        iv_lo,
-                        iv_hi: scratch.intervals.len(),
-                        cursor: Cursor::default(),
+            for y in py..py + ph {
+                for x in px..px + pw {
+                    let r = (y * tile.w + x) as usize;
+                    let span = input.spans[r];
+                    let mut p = PacketRay {
+                        r,
+                        cursor: Cursor::new(span.lo),
                         next: None,
-                        state: RayState::default(),
-                        done: !hit,
+                        state: RayState::new(span),
+                        done: span.is_empty(),
                     };
-                    r.next = r
-                        .cursor
-                        .next(&scratch.intervals[r.iv_lo..r.iv_hi], settings, &r.rng);
-                    r.done |= r.next.is_none();
-                    scratch.rays.push(r);
+                    if !p.done {
+                        p.next = p
+                            .cursor
+                            .next(input.lists.of(r), ctx.settings, &input.rngs[r]);
+                        p.done = p.next.is_none();
+                    }
+                    scratch.rays.push(p);
                 }
             }
-            run_packet(volume, &ctx, scratch);
-            for (i, r) in scratch.rays.iter().enumerate() {
-                let (x, y) = (px + i as u32 % pw, py + i as u32 / pw);
-                out[(y * tile.w + x) as usize] = r.state.rgba();
+            run_packet(volume, ctx, &input, scratch);
+            for p in &scratch.rays {
+                out[p.r] = p.state.rgba();
             }
         }
     }
 }
 
 /// Runs passes until every ray of the packet is done.
-fn run_packet<V: Volume>(volume: &V, ctx: &Ctx, s: &mut PacketScratch) {
+fn run_packet<V: Volume>(volume: &V, ctx: &Ctx, input: &TileInput, s: &mut PacketScratch) {
     let settings = ctx.settings;
     let gradient = ctx.needs_gradient();
     loop {
@@ -126,60 +118,73 @@ fn run_packet<V: Volume>(volume: &V, ctx: &Ctx, s: &mut PacketScratch) {
             return;
         };
         let window_end = t0 + WINDOW_STEPS * dt;
-        // Gather each running ray's segments inside the window.
+        // Gather each running ray's segments inside the window; samples of
+        // constant intervals need no slot in the batch.
         s.batch_rays.clear();
-        s.batch_owner.clear();
         s.offsets.clear();
         s.t.clear();
         s.segs.clear();
+        s.gathered.clear();
         s.offsets.push(0);
-        for (i, r) in s.rays.iter_mut().enumerate() {
-            if r.done {
+        for (i, p) in s.rays.iter_mut().enumerate() {
+            if p.done {
                 continue;
             }
-            let ivs = &s.intervals[r.iv_lo..r.iv_hi];
-            let first = s.t.len();
-            while let Some(seg) = r.next {
+            let ivs = input.lists.of(p.r);
+            let (first_seg, first_t) = (s.segs.len(), s.t.len());
+            while let Some(seg) = p.next {
                 // The furthest-behind ray always takes its first sample, so
                 // every pass advances even if `t0 + window` rounds to `t0`.
-                let leads = seg.t == t0 && s.t.len() == first;
-                if (seg.t >= window_end && !leads) || s.t.len() - first >= MAX_PER_RAY {
+                let leads = seg.t == t0 && s.segs.len() == first_seg;
+                if (seg.t >= window_end && !leads) || s.segs.len() - first_seg >= MAX_PER_RAY {
                     break;
                 }
-                s.t.push(seg.t);
-                s.segs.push(seg);
-                r.next = r.cursor.next(ivs, settings, &r.rng);
+                if ivs[seg.interval as usize].constant_value().is_some() {
+                    s.segs.push((seg, CONSTANT));
+                } else {
+                    s.segs.push((seg, s.t.len() as u32));
+                    s.t.push(seg.t);
+                }
+                p.next = p.cursor.next(ivs, settings, &input.rngs[p.r]);
             }
-            if s.t.len() > first {
-                s.batch_rays.push(r.ray);
-                s.batch_owner.push(i);
+            if s.t.len() > first_t {
+                s.batch_rays.push(input.rays[p.r]);
                 s.offsets.push(s.t.len() as u32);
             }
+            s.gathered.push((i, first_seg, s.segs.len()));
         }
         s.out.clear();
-        volume.sample_batch(
-            &SampleBatch {
-                rays: &s.batch_rays,
-                offsets: &s.offsets,
-                t: &s.t,
-            },
-            gradient,
-            &mut s.out,
-        );
+        if !s.t.is_empty() {
+            volume.sample_batch(
+                &SampleBatch {
+                    rays: &s.batch_rays,
+                    offsets: &s.offsets,
+                    t: &s.t,
+                },
+                gradient,
+                &mut s.out,
+            );
+        }
         // Composite every ray front to back from the buffer.
-        for (b, &owner) in s.batch_owner.iter().enumerate() {
-            let r = &mut s.rays[owner];
-            let ivs = &s.intervals[r.iv_lo..r.iv_hi];
-            for j in s.offsets[b] as usize..s.offsets[b + 1] as usize {
-                let seg = s.segs[j];
-                let (sample, g) = s.out[j];
+        for &(i, lo, hi) in &s.gathered {
+            let p = &mut s.rays[i];
+            let ray = &input.rays[p.r];
+            let ivs = input.lists.of(p.r);
+            for &(seg, slot) in &s.segs[lo..hi] {
                 let iv = &ivs[seg.interval as usize];
-                if r.state.feed(volume, &r.ray, iv, seg, sample, g, ctx) {
-                    r.done = true;
+                let (sample, g) = match iv.constant_value() {
+                    Some(v) => (Some(Sample::scalar(v)), Vec3::ZERO),
+                    None => s.out[slot as usize],
+                };
+                if p.state.feed(volume, ray, iv, seg, sample, g, ctx) {
+                    p.done = true;
                     break;
                 }
             }
-            r.done |= r.next.is_none();
+            if !p.done && p.next.is_none() {
+                p.state.finish(volume, ray, ctx);
+                p.done = true;
+            }
         }
     }
 }

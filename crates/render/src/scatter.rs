@@ -25,12 +25,11 @@
 //! `ξ` for both the primary and the shadow distance comes from
 //! spatiotemporal blue noise ([`crate::bluenoise`]) or white noise.
 
-use voxless_core::{Interval, Ray, Sample, Vec3, Volume};
-use voxless_transfer::TransferFunction;
+use voxless_core::{Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume};
 
-use crate::march::{Ctx, Cursor, ray_intervals};
+use crate::bluenoise;
+use crate::march::{Ctx, Cursor, ray_span};
 use crate::sampling::PixelRng;
-use crate::{RenderSettings, bluenoise};
 
 /// Where the light comes from.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,18 +73,21 @@ pub struct Scatter {
 const DELTA_DIMS: u32 = 1 << 20;
 const SHADOW_SALT: u64 = 0x5ad0_5ad0_5ad0_5ad0;
 
-/// One sample of pixel `(x, y)`: premultiplied linear RGBA.
+/// One sample of pixel `(x, y)` along camera ray `ray` with its visible
+/// `intervals`: premultiplied linear RGBA. `scratch` holds the shadow ray's
+/// intervals.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn path<V: Volume>(
     volume: &V,
     ray: &Ray,
-    tf: &TransferFunction,
-    settings: &RenderSettings,
+    intervals: &[Interval],
+    ctx: &Ctx,
     sc: &Scatter,
     (x, y): (u32, u32),
     sample: u32,
     scratch: &mut Vec<Interval>,
 ) -> [f32; 4] {
+    let settings = ctx.settings;
     let pixel = y as u64 * settings.width as u64 + x as u64;
     let rng = PixelRng::new(settings.seed, pixel, sample);
     let index = settings.frame as u64 * settings.spp.max(1) as u64 + sample as u64;
@@ -93,12 +95,9 @@ pub(crate) fn path<V: Volume>(
         Noise::Blue => bluenoise::value(x, y, index, dim),
         Noise::White => rng.uniform(DELTA_DIMS - 1 - dim),
     };
-    let ctx = Ctx::new(tf, settings);
-    scratch.clear();
-    if !ray_intervals(volume, ray, tf, settings, f32::INFINITY, scratch) {
-        return [0.0; 4];
-    }
-    let Some((t, s)) = free_flight(volume, ray, scratch, &ctx, sc.method, &rng, xi(0)) else {
+    let span = intervals.first().map_or(0.0, |iv| iv.t.lo);
+    let Some((t, s)) = free_flight(volume, ray, intervals, span, ctx, sc.method, &rng, xi(0))
+    else {
         return [0.0; 4];
     };
     let albedo = ctx.colour_of(&s, settings.normalize(s.value));
@@ -111,8 +110,29 @@ pub(crate) fn path<V: Volume>(
     let shadow = Ray::new(p, dir);
     let srng = PixelRng::new(settings.seed ^ SHADOW_SALT, pixel, sample);
     scratch.clear();
-    let blocked = ray_intervals(volume, &shadow, tf, settings, t_max, scratch)
-        && free_flight(volume, &shadow, scratch, &ctx, sc.method, &srng, xi(1)).is_some();
+    let shadow_span = ray_span(volume, &shadow, settings, t_max);
+    let blocked = !shadow_span.is_empty() && {
+        let visible = |r: Range1| settings.is_visible(ctx.tf, r);
+        volume.intervals(
+            &shadow,
+            shadow_span,
+            &IntervalQuery {
+                is_visible: &visible,
+            },
+            scratch,
+        );
+        free_flight(
+            volume,
+            &shadow,
+            scratch,
+            shadow_span.lo,
+            ctx,
+            sc.method,
+            &srng,
+            xi(1),
+        )
+        .is_some()
+    };
     let light = sc.ambient + (1.0 - sc.ambient) * sc.intensity * if blocked { 0.0 } else { 1.0 };
     let c = albedo * light;
     [c.x, c.y, c.z, 1.0]
@@ -120,21 +140,27 @@ pub(crate) fn path<V: Volume>(
 
 /// Extinction at a sample.
 #[inline]
-fn sigma<V: Volume>(volume: &V, ctx: &Ctx, s: &Sample) -> f32 {
-    let opacity = if volume.classified() {
-        s.value
-    } else {
-        ctx.tf.opacity(ctx.settings.normalize(s.value))
-    };
-    opacity * ctx.settings.opacity_scale
+fn sigma(ctx: &Ctx, s: &Sample) -> f32 {
+    ctx.opacity_of(s, ctx.settings.normalize(s.value)) * ctx.settings.opacity_scale
 }
 
-/// The first scattering event along `ray` within `intervals`, or `None` if
-/// the ray gets through. `xi` is the distance's uniform number.
+/// The sample of segment `t` in interval `iv`: the constant, or a lookup.
+#[inline]
+fn sample_at<V: Volume>(volume: &V, ray: &Ray, iv: &Interval, t: f32) -> Option<Sample> {
+    match iv.constant_value() {
+        Some(v) => Some(Sample::scalar(v)),
+        None => volume.sample_in(ray.at(t), iv),
+    }
+}
+
+/// The first scattering event along `ray` within `intervals` (from `t0`),
+/// or `None` if the ray gets through. `xi` is the distance's uniform number.
+#[allow(clippy::too_many_arguments)]
 fn free_flight<V: Volume>(
     volume: &V,
     ray: &Ray,
     intervals: &[Interval],
+    t0: f32,
     ctx: &Ctx,
     method: FreeFlight,
     rng: &PixelRng,
@@ -145,13 +171,13 @@ fn free_flight<V: Volume>(
     match method {
         FreeFlight::Marching => {
             let mut tau = 0.0f32;
-            let mut cursor = Cursor::default();
+            let mut cursor = Cursor::new(t0);
             while let Some(seg) = cursor.next(intervals, ctx.settings, rng) {
                 let iv = &intervals[seg.interval as usize];
-                let Some(s) = volume.sample_in(ray.at(seg.t), iv) else {
+                let Some(s) = sample_at(volume, ray, iv, seg.t) else {
                     continue;
                 };
-                let sg = sigma(volume, ctx, &s);
+                let sg = sigma(ctx, &s);
                 let step = sg * seg.len;
                 if tau + step >= target && sg > 0.0 {
                     // Place the event inside the segment where the running
@@ -190,10 +216,10 @@ fn free_flight<V: Volume>(
                     if t >= iv.t.hi {
                         break;
                     }
-                    let Some(sample) = volume.sample_in(ray.at(t), iv) else {
+                    let Some(sample) = sample_at(volume, ray, iv, t) else {
                         continue;
                     };
-                    if next() * majorant < sigma(volume, ctx, &sample) {
+                    if next() * majorant < sigma(ctx, &sample) {
                         return Some((t, sample));
                     }
                 }

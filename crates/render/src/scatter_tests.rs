@@ -5,6 +5,8 @@ use super::*;
 use voxless_core::{Aabb, Interval, IntervalQuery, Ray, Sample};
 use voxless_transfer::{Colormap, OpacityMap};
 
+voxless_core::prepare_as_self!(Blob);
+
 /// A smooth Gaussian blob in the unit cube, value in [0, 1].
 struct Blob;
 
@@ -24,12 +26,7 @@ impl Volume for Blob {
     fn intervals(&self, ray: &Ray, t: Range1, _: &IntervalQuery, out: &mut Vec<Interval>) {
         let c = self.bounds().clip_ray(ray, t);
         if !c.is_empty() {
-            out.push(Interval {
-                t: c,
-                value_range: Range1::new(0.0, 1.0),
-                nominal_dt: 0.02,
-                hint: Interval::NO_HINT,
-            });
+            out.push(Interval::sampled(c, Range1::new(0.0, 1.0), 0.02));
         }
     }
 }
@@ -60,7 +57,7 @@ fn render_spp(size: u32, spp: u32, noise: Noise, method: FreeFlight, seed: u64) 
     let (camera, tf, mut s) = setup(size, noise, method);
     s.spp = spp;
     s.seed = seed;
-    render(&Blob, &camera, &tf, &s, &|_, _| {})
+    render(&Blob, &camera, &tf, &s, &Control::new()).unwrap()
 }
 
 fn rmse(a: &Image, b: &Image) -> f64 {
@@ -110,10 +107,10 @@ fn blue_noise_error_has_less_low_frequency_energy_than_white_noise() {
     let mut ea = s.clone();
     ea.scatter = None;
     ea.early_termination = 1.0;
-    let expected = render(&Blob, &camera, &tf, &ea, &|_, _| {});
+    let expected = render(&Blob, &camera, &tf, &ea, &Control::new()).unwrap();
     let mut low_energy = |noise: Noise| {
         s.scatter.as_mut().unwrap().noise = noise;
-        let img = render(&Blob, &camera, &tf, &s, &|_, _| {});
+        let img = render(&Blob, &camera, &tf, &s, &Control::new()).unwrap();
         let err: Vec<f64> = img
             .pixels
             .iter()
@@ -216,9 +213,9 @@ fn marching_and_delta_tracking_converge_to_the_same_image() {
 fn shadows_darken_the_side_away_from_the_light() {
     let (camera, tf, mut s) = setup(32, Noise::Blue, FreeFlight::Marching);
     s.spp = 64;
-    let lit = render(&Blob, &camera, &tf, &s, &|_, _| {});
+    let lit = render(&Blob, &camera, &tf, &s, &Control::new()).unwrap();
     s.scatter.as_mut().unwrap().ambient = 1.0; // no shadows at all
-    let flat = render(&Blob, &camera, &tf, &s, &|_, _| {});
+    let flat = render(&Blob, &camera, &tf, &s, &Control::new()).unwrap();
     let sum = |img: &Image| img.pixels.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>();
     assert!(sum(&lit) < 0.9 * sum(&flat), "shadows must remove light");
 }

@@ -1,5 +1,7 @@
 use super::*;
 use voxless_core::{Aabb, Interval, IntervalQuery, Projection, Ray, Sample};
+
+voxless_core::prepare_as_self!(Slab, Radial);
 use voxless_transfer::{Colormap, OpacityMap};
 
 /// A procedural homogeneous slab `z ∈ [0, thickness]` of value 1 with exact
@@ -24,12 +26,7 @@ impl Volume for Slab {
     fn intervals(&self, ray: &Ray, t: Range1, _: &IntervalQuery, out: &mut Vec<Interval>) {
         let c = self.bounds().clip_ray(ray, t);
         if !c.is_empty() {
-            out.push(Interval {
-                t: c,
-                value_range: Range1::new(1.0, 1.0),
-                nominal_dt: 0.1,
-                hint: Interval::NO_HINT,
-            });
+            out.push(Interval::sampled(c, Range1::new(1.0, 1.0), 0.1));
         }
     }
 }
@@ -90,7 +87,7 @@ fn homogeneous_slab_transmittance_is_exact_at_any_step() {
             early_termination: 1.0,
             ..RenderSettings::for_volume(&slab, 8, 8)
         };
-        let img = render(&slab, &camera, &tf, &settings, &|_, _| {});
+        let img = render(&slab, &camera, &tf, &settings, &Control::new()).unwrap();
         for p in &img.pixels {
             let transmittance = 1.0 - p[3];
             assert!(
@@ -128,7 +125,7 @@ fn project_of_the_slab_is_its_thickness() {
     )
     .unwrap();
     // The default line integral (Simpson over intervals) of a constant 1.
-    for v in project(&slab, &camera, 4, 4, &|_, _| {}) {
+    for v in project(&slab, &camera, 4, 4, &Control::new()).unwrap() {
         assert!((v - 0.25).abs() < 1e-5, "{v}");
     }
 }
@@ -151,12 +148,7 @@ impl Volume for Radial {
     fn intervals(&self, ray: &Ray, t: Range1, _: &IntervalQuery, out: &mut Vec<Interval>) {
         let c = self.bounds().clip_ray(ray, t);
         if !c.is_empty() {
-            out.push(Interval {
-                t: c,
-                value_range: self.value_range(),
-                nominal_dt: 0.05,
-                hint: Interval::NO_HINT,
-            });
+            out.push(Interval::sampled(c, self.value_range(), 0.05));
         }
     }
 }

@@ -1,8 +1,13 @@
 //! The serde description of a scene: what a TOML file (or the command line)
-//! says, before any file is read. Every field is optional; [`crate::resolve`]
-//! fills defaults from the data.
+//! says, before any file is read. Every field is optional; the `voxless`
+//! library fills defaults from the data.
 
 use serde::{Deserialize, Serialize};
+
+use crate::enums::{
+    ClassificationName, FreeFlightName, KernelName, NoiseName, ProjectionName, ReconstructionName,
+    Species, TetModeName,
+};
 
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -40,7 +45,7 @@ pub struct ParticlesDesc {
     pub part_type: Option<u32>,
     /// Keep only particles whose `type` column equals this (LAMMPS type
     /// number; XYZ type number or element symbol).
-    pub species: Option<String>,
+    pub species: Option<Species>,
     /// Multi-material rendering: one entry per species, each with its own
     /// radius and transfer function (`[[particles.materials]]`).
     pub materials: Option<Vec<MaterialDesc>>,
@@ -56,13 +61,13 @@ pub struct ParticlesDesc {
     /// name.
     pub weights: Option<String>,
     /// gaussian3 (default), gaussian, cubic-spline.
-    pub kernel: Option<String>,
+    pub kernel: Option<KernelName>,
     pub kappa: Option<f32>,
     pub sigma: Option<f32>,
     /// Particles per BVH leaf, 1..=16 (default 8).
     pub cluster: Option<usize>,
     /// post (default) or pre.
-    pub classification: Option<String>,
+    pub classification: Option<ClassificationName>,
     /// `[[attribute, fraction], ...]` over the normalised attribute.
     pub radius_map: Option<Vec<[f32; 2]>>,
     /// `[[attribute, weight], ...]` over the normalised attribute.
@@ -76,7 +81,7 @@ pub struct ParticlesDesc {
 #[serde(deny_unknown_fields)]
 pub struct MaterialDesc {
     /// The species: a `type` number (LAMMPS, XYZ) or an XYZ element symbol.
-    pub species: String,
+    pub species: Species,
     /// A label for messages (default: the species).
     pub name: Option<String>,
     /// Radius parameter of this material's kernel (default: the particles'
@@ -114,7 +119,7 @@ pub struct AmrDesc {
     /// Field driving colour (multi-field rendering; default: `field`).
     pub color_field: Option<String>,
     /// basis (default) or nearest.
-    pub reconstruction: Option<String>,
+    pub reconstruction: Option<ReconstructionName>,
 }
 
 /// N-body particles on a Lagrangian grid, rendered as a phase-space
@@ -136,7 +141,7 @@ pub struct TetsDesc {
     /// Mass per particle (default: total mass 1).
     pub particle_mass: Option<f64>,
     /// exact (default) or kbuffer.
-    pub mode: Option<String>,
+    pub mode: Option<TetModeName>,
     /// k-buffer depth (kbuffer mode; default 16).
     pub k: Option<usize>,
     /// Log-spaced depth layers behind the k-buffer (default 64).
@@ -156,7 +161,7 @@ pub struct CameraDesc {
     /// Vertical field of view in degrees (perspective).
     pub fov: Option<f32>,
     /// perspective (default) or orthographic.
-    pub projection: Option<String>,
+    pub projection: Option<ProjectionName>,
     /// World-space height of the view (orthographic).
     pub ortho_height: Option<f32>,
     /// Degrees to orbit the eye about the up vector through the look-at
@@ -245,8 +250,8 @@ pub struct LightDesc {
     pub intensity: Option<f32>,
     /// Free-flight sampling: marching (default; stochastic ray marching) or
     /// delta (delta tracking with interval majorants).
-    pub free_flight: Option<String>,
+    pub free_flight: Option<FreeFlightName>,
     /// Random numbers of the free flights: blue (default; spatiotemporal
     /// blue noise) or white.
-    pub noise: Option<String>,
+    pub noise: Option<NoiseName>,
 }

@@ -20,21 +20,31 @@
 //! contains them, so total mass stays exact; renders and point samples, which
 //! see volumes, ignore them (they cover no volume).
 //!
-//! **Rendering** ([`render`]): exact per-pixel event sorting by default, or
-//! the paper's bounded-memory k-buffer + log-depth layers; blocks of 8³ cells
-//! with precomputed bounds are culled per screen tile. Column-density
+//! **Rendering** goes through the shared integrator: [`TetVolume`] hands out
+//! *constant* intervals — the pieces between sorted tet entry/exit events,
+//! on which the density is constant — which integrators composite in closed
+//! form, so the image has no sampling error. For a whole screen tile at once
+//! ([`events::TetTileView`]) every tet of the tile's 8³-cell culling blocks
+//! is rasterised once; the k-buffer (first `k` events exact, the rest in
+//! log-spaced depth layers, the paper's bounded-memory mode) is an option of
+//! the render ([`voxless_core::EventBudget`]). Single rays (shadows) get
+//! their events from a BVH over the tets, built on first use. Column-density
 //! projections ([`render::project`]) of orthographic views evaluate eight
 //! pixels of a tet's row at a time (AVX2 where the CPU has it).
 
+pub mod events;
 pub mod mesh;
 mod ortho;
 pub mod raster;
 pub mod render;
+#[cfg(any(test, feature = "testing"))]
+pub mod testing;
 mod volume;
 
+pub use events::TetTileView;
 pub use mesh::{BLOCK, Block, LagrangianGrid, Tet, TetMesh, TetSettings};
-pub use render::{TetMode, TetOptions};
-pub use volume::TetVolume;
+pub use render::TetOptions;
+pub use volume::{TetContext, TetVolume};
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum TetError {

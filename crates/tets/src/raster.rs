@@ -71,6 +71,11 @@ impl Screen {
     /// Inclusive pixel ranges `(x0, x1, y0, y1)` whose centres may lie in the
     /// projection of `points`, clipped to the image; `None` if empty.
     pub fn pixel_rect(&self, points: &[Vec3]) -> Option<(u32, u32, u32, u32)> {
+        self.pixel_rect_padded(points, 0.0)
+    }
+
+    /// [`Screen::pixel_rect`] of the projection grown by `pad` pixels.
+    pub fn pixel_rect_padded(&self, points: &[Vec3], pad: f32) -> Option<(u32, u32, u32, u32)> {
         let (mut x0, mut x1, mut y0, mut y1) = (
             f32::INFINITY,
             f32::NEG_INFINITY,
@@ -111,14 +116,19 @@ impl Screen {
                 return None;
             }
         }
-        self.rect_of(x0, x1, y0, y1)
+        self.rect_of(x0 - pad, x1 + pad, y0 - pad, y1 + pad)
     }
 
     /// [`Screen::pixel_rect`] of a tet's vertices under an orthographic
     /// camera: the four projected at once, with the same operations, so the
     /// same rectangle.
     #[inline]
-    fn ortho_rect(&self, v: &[Vec3; 4], half: (f32, f32)) -> Option<(u32, u32, u32, u32)> {
+    fn ortho_rect(
+        &self,
+        v: &[Vec3; 4],
+        half: (f32, f32),
+        pad: f32,
+    ) -> Option<(u32, u32, u32, u32)> {
         let c = &self.camera;
         let s = f32x4::splat;
         let lanes = |f: fn(&Vec3) -> f32| f32x4::new([f(&v[0]), f(&v[1]), f(&v[2]), f(&v[3])]);
@@ -134,7 +144,7 @@ impl Screen {
             (x0, x1) = (x0.min(px[k]), x1.max(px[k]));
             (y0, y1) = (y0.min(py[k]), y1.max(py[k]));
         }
-        self.rect_of(x0, x1, y0, y1)
+        self.rect_of(x0 - pad, x1 + pad, y0 - pad, y1 + pad)
     }
 
     /// The pixels whose centres lie in `[x0, x1] × [y0, y1]`, clipped to the
@@ -158,12 +168,20 @@ impl Screen {
     /// [`Screen::pixel_rect`] of a tet's four vertices.
     #[inline]
     pub fn tet_rect(&self, v: &[Vec3; 4]) -> Option<(u32, u32, u32, u32)> {
+        self.tet_rect_padded(v, 0.0)
+    }
+
+    /// [`Screen::tet_rect`] grown by `pad` pixels on every side before
+    /// rounding (0.5: every pixel whose square meets the tet's outline,
+    /// which rays jittered over the pixel can hit).
+    #[inline]
+    pub fn tet_rect_padded(&self, v: &[Vec3; 4], pad: f32) -> Option<(u32, u32, u32, u32)> {
         match self.camera.projection {
             Projection::Orthographic {
                 half_width,
                 half_height,
-            } => self.ortho_rect(v, (half_width, half_height)),
-            Projection::Perspective { .. } => self.pixel_rect(v),
+            } => self.ortho_rect(v, (half_width, half_height), pad),
+            Projection::Perspective { .. } => self.pixel_rect_padded(v, pad),
         }
     }
 
@@ -250,6 +268,31 @@ impl Frame {
         lod: Option<f32>,
         tile_size: u32,
     ) -> Frame {
+        Frame::build(mesh, camera, (width, height), lod, tile_size, 0.0)
+    }
+
+    /// [`Frame::with_tile`] for rays anywhere inside their pixels (jittered
+    /// passes): rectangles hold every pixel whose square meets a tet's or a
+    /// block's outline, not only the pixels whose centres lie inside.
+    pub fn covering(
+        mesh: &TetMesh,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        lod: Option<f32>,
+        tile_size: u32,
+    ) -> Frame {
+        Frame::build(mesh, camera, (width, height), lod, tile_size, 0.5)
+    }
+
+    fn build(
+        mesh: &TetMesh,
+        camera: &Camera,
+        (width, height): (u32, u32),
+        lod: Option<f32>,
+        tile_size: u32,
+        pad: f32,
+    ) -> Frame {
         use rayon::prelude::*;
         let tile_size = tile_size.max(1);
         let screen = Screen::new(camera, width, height);
@@ -259,7 +302,7 @@ impl Frame {
             .map(|m| {
                 m.tets
                     .par_iter()
-                    .map(|t| match screen.tet_rect(&t.v) {
+                    .map(|t| match screen.tet_rect_padded(&t.v, pad) {
                         Some((x0, x1, y0, y1)) => [x0 as u16, x1 as u16, y0 as u16, y1 as u16],
                         None => [1, 0, 1, 0],
                     })
@@ -300,7 +343,7 @@ impl Frame {
                 if level_of.get(b.lagrangian as usize).copied().unwrap_or(0) != r {
                     continue;
                 }
-                if let Some((x0, x1, y0, y1)) = screen.pixel_rect(&corners(&b.bounds)) {
+                if let Some((x0, x1, y0, y1)) = screen.pixel_rect_padded(&corners(&b.bounds), pad) {
                     blocks_per_level[r] += 1;
                     for y in y0 / tile_size..=y1 / tile_size {
                         for x in x0 / tile_size..=x1 / tile_size {
@@ -559,6 +602,34 @@ pub fn for_each_crossing(
 ) {
     for_each_tet(mesh, frame, tile, |tet, rect| {
         clip_tet(frame, tile, tet, rect, rays, spans, &mut visit)
+    });
+}
+
+/// [`for_each_crossing`] for rays anywhere inside their pixels (jittered
+/// passes, with a [`Frame::covering`] frame): every pixel of each tet's
+/// rectangle clips its own ray against the tet's planes — no outline or
+/// pixel-centre shortcut.
+pub fn for_each_crossing_jittered(
+    mesh: &TetMesh,
+    frame: &Frame,
+    tile: u32,
+    rays: &[Ray],
+    spans: &[(f32, f32)],
+    mut visit: impl FnMut(usize, f32, f32, f32),
+) {
+    let (tx0, ty0, w, _) = frame.tile(tile);
+    for_each_tet(mesh, frame, tile, |tet, (x0, x1, y0, y1)| {
+        let planes = Planes::new(tet);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let local = ((y - ty0) * w + (x - tx0)) as usize;
+                let (t0, t1) = planes.clip(&rays[local]);
+                let (t0, t1) = (t0.max(spans[local].0), t1.min(spans[local].1));
+                if t1 > t0 {
+                    visit(local, t0, t1, tet.density);
+                }
+            }
+        }
     });
 }
 

@@ -3,42 +3,9 @@
 //! brute-force renderer that tests every tet against every ray.
 
 use super::*;
+use crate::testing::{folded_sheet, grid, jitter};
 use voxless_core::SmallRng as Lcg;
-use voxless_core::{Aabb, Camera, Range1, Ray, Vec3, Volume};
-use voxless_render::RenderSettings;
-use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
-
-/// A grid with positions `q + displacement(q)`, wrapped into the box.
-fn grid(n: usize, l: f32, disp: impl Fn([f32; 3]) -> [f32; 3]) -> LagrangianGrid {
-    let dq = l / n as f32;
-    let mut positions = Vec::with_capacity(n * n * n);
-    for i in 0..n {
-        for j in 0..n {
-            for k in 0..n {
-                let q = [i as f32 * dq, j as f32 * dq, k as f32 * dq];
-                let d = disp(q);
-                let w = |x: f32| x.rem_euclid(l);
-                positions.push(Vec3::new(w(q[0] + d[0]), w(q[1] + d[1]), w(q[2] + d[2])));
-            }
-        }
-    }
-    LagrangianGrid {
-        n,
-        box_size: l,
-        positions,
-    }
-}
-
-fn jitter(seed: u64, amp: f32) -> impl Fn([f32; 3]) -> [f32; 3] {
-    move |q| {
-        // Deterministic per point: hash the position.
-        let mut r = Lcg(seed
-            ^ ((q[0] * 1e4) as u64)
-            ^ (((q[1] * 1e4) as u64) << 20)
-            ^ (((q[2] * 1e4) as u64) << 40));
-        [0, 1, 2].map(|_| (r.f() - 0.5) * 2.0 * amp)
-    }
-}
+use voxless_core::{Aabb, Camera, Control, Ray, Vec3};
 
 #[test]
 fn bad_input_is_a_clear_error() {
@@ -101,7 +68,15 @@ fn projection_of_the_box_conserves_mass() {
     let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
     for (axis, res) in [(0, 256u32), (1, 200), (2, 320)] {
         let cam = Camera::axis_projection(&Aabb::new(Vec3::ZERO, Vec3::ONE), axis).unwrap();
-        let col = render::project(&v.mesh, &cam, res, res, TetOptions::default(), &|_, _| {});
+        let col = render::project(
+            &v.mesh,
+            &cam,
+            res,
+            res,
+            TetOptions::default(),
+            &Control::new(),
+        )
+        .unwrap();
         let mass: f64 = col.iter().map(|&c| c as f64).sum::<f64>() / (res as f64 * res as f64);
         assert!((mass - 1.0).abs() <= 1e-3, "axis {axis}: {mass}");
     }
@@ -126,18 +101,6 @@ fn sampled_density_integrates_to_the_total_mass() {
         errors.push((sum * (h as f64).powi(3) - 1.0).abs());
     }
     assert!(errors[1] < errors[0] && errors[1] < 5e-3, "{errors:?}");
-}
-
-/// The Zel'dovich sheet below, jittered in all three axes: shell-crossed,
-/// overlapping and tilted tets.
-fn folded_sheet(n: usize, seed: u64) -> LagrangianGrid {
-    let k = std::f32::consts::TAU;
-    let a = 1.5 / k;
-    let j = jitter(seed, 0.03);
-    grid(n, 1.0, move |q| {
-        let d = j(q);
-        [a * (k * q[0]).sin() + d[0], d[1], d[2]]
-    })
 }
 
 /// The Zel'dovich sheet x = q + A sin(kq) after shell crossing (A·k = 1.5).
@@ -257,151 +220,6 @@ fn zeldovich_error_against_the_analytic_density_halves_with_resolution() {
     );
 }
 
-/// Largest per-channel difference between two RGBA images.
-fn max_abs_diff(a: &[[f32; 4]], b: &[[f32; 4]]) -> f32 {
-    a.iter()
-        .zip(b)
-        .flat_map(|(p, q)| (0..4).map(move |c| (p[c] - q[c]).abs()))
-        .fold(0.0, f32::max)
-}
-
-fn log_tf() -> TransferFunction {
-    TransferFunction::new(
-        Colormap::preset("inferno").unwrap(),
-        OpacityMap::preset("linear").unwrap(),
-    )
-}
-
-fn settings_for(v: &TetVolume, w: u32, h: u32) -> RenderSettings {
-    let mut s = RenderSettings::for_volume(v, w, h);
-    s.log_scale = true;
-    s.value_range = Range1::new(v.value_range().lo.log10(), v.value_range().hi.log10());
-    s.early_termination = 1.0;
-    s
-}
-
-/// Every tet against every ray, events sorted, integrated exactly.
-fn brute_force(
-    v: &TetVolume,
-    cam: &Camera,
-    tf: &TransferFunction,
-    s: &RenderSettings,
-) -> Vec<[f32; 4]> {
-    let mut out = Vec::new();
-    for y in 0..s.height {
-        for x in 0..s.width {
-            let ray = cam.ray(x as f32 + 0.5, y as f32 + 0.5, s.width, s.height);
-            let mut ev: Vec<(f32, f64)> = Vec::new();
-            // Only the ray's part inside the periodic box (in front of the eye).
-            let span = Aabb::new(Vec3::ZERO, Vec3::splat(v.mesh.box_size))
-                .clip_ray(&ray, Range1::new(0.0, f32::INFINITY));
-            for t in &v.mesh.tets {
-                let (a, b) = raster::Planes::new(t).clip(&ray);
-                let (a, b) = (a.max(span.lo), b.min(span.hi));
-                if b > a {
-                    ev.push((a, t.density as f64));
-                    ev.push((b, -(t.density as f64)));
-                }
-            }
-            ev.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let (mut rho, mut c, mut alpha) = (0.0f64, Vec3::ZERO, 0.0f32);
-            for w in ev.windows(2) {
-                rho += w[0].1;
-                let len = w[1].0 - w[0].0;
-                if rho > 1e-9 && len > 0.0 {
-                    let xx = s.normalize(rho as f32);
-                    let a = 1.0 - (-tf.opacity(xx) * s.opacity_scale * len).exp();
-                    c += tf.color(xx) * ((1.0 - alpha) * a);
-                    alpha += (1.0 - alpha) * a;
-                }
-            }
-            out.push([c.x, c.y, c.z, alpha]);
-        }
-    }
-    out
-}
-
-#[test]
-fn exact_mode_equals_brute_force_and_kbuffer_converges() {
-    let g = folded_sheet(6, 11);
-    let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
-    let tf = log_tf();
-    let cam = Camera::look_at(
-        Vec3::new(1.9, 1.4, 2.3),
-        Vec3::splat(0.5),
-        Vec3::new(0.0, 1.0, 0.0),
-        voxless_core::Projection::Perspective { fov_y_deg: 40.0 },
-    )
-    .unwrap();
-    let s = settings_for(&v, 24, 20);
-    let want = brute_force(&v, &cam, &tf, &s);
-    let exact = render::render(
-        &v.mesh,
-        &cam,
-        &tf,
-        &s,
-        TetMode::Exact,
-        TetOptions::default(),
-        &|_, _| {},
-    );
-    let err = |img: &voxless_core::Image| max_abs_diff(&img.pixels, &want);
-    assert!(err(&exact) <= 1e-5, "exact vs brute force: {}", err(&exact));
-    assert!(want.iter().any(|p| p[3] > 0.05), "the mesh is visible");
-    // The k-buffer's error falls as k grows, and vanishes once k holds everything.
-    let mut last = f32::INFINITY;
-    for k in [2usize, 4, 8, 16, 32, 64, 4096] {
-        let img = render::render(
-            &v.mesh,
-            &cam,
-            &tf,
-            &s,
-            TetMode::KBuffer { k, layers: 32 },
-            TetOptions::default(),
-            &|_, _| {},
-        );
-        let e = img
-            .pixels
-            .iter()
-            .zip(&want)
-            .map(|(a, b)| (0..4).map(|c| (a[c] - b[c]).abs()).sum::<f32>())
-            .sum::<f32>();
-        assert!(
-            e <= last * 1.0001 + 1e-6,
-            "k = {k}: error {e} rose from {last}"
-        );
-        last = e;
-    }
-    assert!(last <= 1e-3, "k = 4096 should be exact: {last}");
-}
-
-#[test]
-fn exact_mode_agrees_with_the_generic_sampled_path() {
-    let g = grid(5, 1.0, jitter(13, 0.05));
-    let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
-    let tf = log_tf();
-    let cam = Camera::look_at(
-        Vec3::new(2.0, 1.5, 2.5),
-        Vec3::splat(0.5),
-        Vec3::new(0.0, 1.0, 0.0),
-        voxless_core::Projection::Perspective { fov_y_deg: 35.0 },
-    )
-    .unwrap();
-    let mut s = settings_for(&v, 16, 16);
-    let exact = render::render(
-        &v.mesh,
-        &cam,
-        &tf,
-        &s,
-        TetMode::Exact,
-        TetOptions::default(),
-        &|_, _| {},
-    );
-    s.step = Some(0.0005);
-    let sampled = voxless_render::render(&v, &cam, &tf, &s, &|_, _| {});
-    let max = max_abs_diff(&exact.pixels, &sampled.pixels);
-    assert!(max <= 5e-3, "exact vs sampled (step 5e-4): {max}");
-}
-
 #[test]
 fn half_box_shift_renders_identically() {
     let n = 8;
@@ -444,8 +262,24 @@ fn half_box_shift_renders_identically() {
     // same map rolled by half the image.
     let cam = Camera::axis_projection(&Aabb::new(Vec3::ZERO, Vec3::ONE), 1).unwrap();
     let res = 64u32;
-    let ca = render::project(&a.mesh, &cam, res, res, TetOptions::default(), &|_, _| {});
-    let cb = render::project(&b.mesh, &cam, res, res, TetOptions::default(), &|_, _| {});
+    let ca = render::project(
+        &a.mesh,
+        &cam,
+        res,
+        res,
+        TetOptions::default(),
+        &Control::new(),
+    )
+    .unwrap();
+    let cb = render::project(
+        &b.mesh,
+        &cam,
+        res,
+        res,
+        TetOptions::default(),
+        &Control::new(),
+    )
+    .unwrap();
     let mut max = 0.0f32;
     for row in 0..res {
         for col in 0..res {
@@ -500,11 +334,19 @@ fn lod_conserves_mass_and_approaches_the_full_render() {
 
         ..Default::default()
     };
-    let col = render::project(&v.mesh, &cam, 128, 128, opts, &|_, _| {});
+    let col = render::project(&v.mesh, &cam, 128, 128, opts, &Control::new()).unwrap();
     let mass: f64 = col.iter().map(|&c| c as f64).sum::<f64>() / (128.0 * 128.0);
     assert!((mass - 1.0).abs() <= 1e-3, "{mass}");
     // A threshold below every block's size changes nothing.
-    let full = render::project(&v.mesh, &cam, 128, 128, TetOptions::default(), &|_, _| {});
+    let full = render::project(
+        &v.mesh,
+        &cam,
+        128,
+        128,
+        TetOptions::default(),
+        &Control::new(),
+    )
+    .unwrap();
     let same = render::project(
         &v.mesh,
         &cam,
@@ -515,8 +357,9 @@ fn lod_conserves_mass_and_approaches_the_full_render() {
 
             ..Default::default()
         },
-        &|_, _| {},
-    );
+        &Control::new(),
+    )
+    .unwrap();
     assert_eq!(full, same);
     // Coarser levels differ from the full mesh, by less as the threshold drops.
     let diff = |t: f32| {
@@ -530,8 +373,9 @@ fn lod_conserves_mass_and_approaches_the_full_render() {
 
                 ..Default::default()
             },
-            &|_, _| {},
-        );
+            &Control::new(),
+        )
+        .unwrap();
         c.iter()
             .zip(&full)
             .map(|(a, b)| (a - b).abs() as f64)
@@ -545,41 +389,6 @@ fn lod_conserves_mass_and_approaches_the_full_render() {
 }
 
 #[test]
-fn uniform_grid_shifted_by_half_a_box_renders_identically() {
-    let base = grid(8, 1.0, |_| [0.0; 3]);
-    let shifted = grid(8, 1.0, |_| [0.5, 0.5, 0.5]);
-    let tf = log_tf();
-    let cam = voxless_core::Camera::look_at(
-        Vec3::new(1.8, 1.3, 2.2),
-        Vec3::splat(0.5),
-        Vec3::new(0.0, 1.0, 0.0),
-        voxless_core::Projection::Perspective { fov_y_deg: 40.0 },
-    )
-    .unwrap();
-    let images: Vec<_> = [base, shifted]
-        .iter()
-        .map(|g| {
-            let v = TetVolume::new(g, &TetSettings::default(), 0).unwrap();
-            let mut s = settings_for(&v, 40, 32);
-            // The mean density of a uniform grid sits at the range's low end; widen it.
-            s.value_range = Range1::new(-1.0, 1.0);
-            render::render(
-                &v.mesh,
-                &cam,
-                &tf,
-                &s,
-                TetMode::Exact,
-                TetOptions::default(),
-                &|_, _| {},
-            )
-        })
-        .collect();
-    let max = max_abs_diff(&images[0].pixels, &images[1].pixels);
-    assert!(images[0].pixels.iter().any(|p| p[3] > 0.1), "visible");
-    assert!(max <= 1e-5, "max difference {max}");
-}
-
-#[test]
 fn fast_projection_equals_full_ray_clipping() {
     // Overlapping tets of both projection classes, and tets crossing box
     // faces (clipped to the box).
@@ -587,7 +396,15 @@ fn fast_projection_equals_full_ray_clipping() {
     let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
     for axis in 0..3 {
         let cam = Camera::axis_projection(&Aabb::new(Vec3::ZERO, Vec3::ONE), axis).unwrap();
-        let fast = render::project(&v.mesh, &cam, 96, 80, TetOptions::default(), &|_, _| {});
+        let fast = render::project(
+            &v.mesh,
+            &cam,
+            96,
+            80,
+            TetOptions::default(),
+            &Control::new(),
+        )
+        .unwrap();
         let slow = render::project(
             &v.mesh,
             &cam,
@@ -597,8 +414,9 @@ fn fast_projection_equals_full_ray_clipping() {
                 clip_only: true,
                 ..Default::default()
             },
-            &|_, _| {},
-        );
+            &Control::new(),
+        )
+        .unwrap();
         let scale = slow.iter().copied().fold(0.0f32, f32::max);
         let worst = fast
             .iter()
@@ -614,42 +432,6 @@ fn fast_projection_equals_full_ray_clipping() {
         let mass: f64 = fast.iter().map(|&c| c as f64).sum::<f64>() / (96.0 * 80.0);
         assert!((mass - 1.0).abs() <= 2e-3, "{mass}");
     }
-}
-
-#[test]
-fn camera_inside_the_box_renders_exactly_and_culls_what_is_behind() {
-    let g = grid(6, 1.0, jitter(41, 0.04));
-    let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
-    let tf = log_tf();
-    let cam = voxless_core::Camera::look_at(
-        Vec3::new(0.5, 0.45, 0.55),
-        Vec3::new(0.9, 0.6, 0.2),
-        Vec3::new(0.0, 1.0, 0.0),
-        voxless_core::Projection::Perspective { fov_y_deg: 70.0 },
-    )
-    .unwrap();
-    let mut s = settings_for(&v, 24, 20);
-    s.value_range = Range1::new(-1.0, 1.0);
-    let want = brute_force(&v, &cam, &tf, &s);
-    let got = render::render(
-        &v.mesh,
-        &cam,
-        &tf,
-        &s,
-        TetMode::Exact,
-        TetOptions::default(),
-        &|_, _| {},
-    );
-    assert!(want.iter().any(|p| p[3] > 0.05), "visible");
-    assert!(max_abs_diff(&got.pixels, &want) <= 1e-5);
-    // Tets wholly behind the eye are binned nowhere.
-    let frame = raster::Frame::new(&v.mesh, &cam, 24, 20, None);
-    let binned: usize = frame.tet_count();
-    assert!(
-        binned < v.mesh.tets.len(),
-        "{binned} of {} tets binned",
-        v.mesh.tets.len()
-    );
 }
 
 mod ortho;

@@ -1,22 +1,34 @@
-//! [`TetVolume`]: a tet mesh behind the generic `Volume` seam — point
-//! samples (density and stream count) through a BVH over the tets, macrocell
-//! intervals, and exact line integrals.
+//! [`TetVolume`]: a tet mesh behind the `Volume` seam — exact constant
+//! intervals per ray (through a BVH over the tets) and per screen tile
+//! ([`crate::events::TetTileView`]), point samples (density and stream
+//! count), exact line integrals and whole-image projections.
+//!
+//! The BVH is built on first use: projections and tile renders never need
+//! it, only point samples, single rays (shadows) and per-ray integrals.
+
+use std::sync::OnceLock;
 
 use rayon::prelude::*;
 use voxless_bvh::Bvh;
-use voxless_core::{Aabb, Interval, IntervalQuery, MacroGrid, Range1, Ray, Sample, Vec3, Volume};
+use voxless_core::{
+    Aabb, Camera, Cancelled, Control, EventBudget, Interval, IntervalQuery, Prepare, PrepareQuery,
+    Range1, Ray, Sample, TileIntervals, Vec3, View, Volume,
+};
 
 use crate::TetError;
+use crate::events::{TetTileView, sweep};
 use crate::mesh::{LagrangianGrid, TetMesh, TetSettings};
 use crate::raster::Planes;
+use crate::render::{TetOptions, project};
 
 pub struct TetVolume {
     pub mesh: TetMesh,
-    bvh: Bvh,
-    grid: MacroGrid,
+    bvh: OnceLock<Bvh>,
     bounds: Aabb,
     value_range: Range1,
-    nominal_dt: f32,
+    /// Level of detail for tile renders and projections (blocks smaller
+    /// than this many pixels use the coarser levels); `None`: off.
+    lod_pixels: Option<f32>,
 }
 
 impl TetVolume {
@@ -30,34 +42,9 @@ impl TetVolume {
         if lod_levels > 0 {
             mesh = mesh.with_lod(grid, lod_levels, settings);
         }
-        let boxes: Vec<Aabb> = mesh.tets.par_iter().map(|t| t.bounds()).collect();
-        let bvh = Bvh::build(&boxes);
         // The periodic box: image tets fill it exactly, and outside it they
         // would double what the originals show.
         let bounds = Aabb::new(Vec3::ZERO, Vec3::splat(mesh.box_size));
-        let spacing = mesh.box_size / mesh.n as f32;
-        // Macrocells of about two Lagrangian spacings: [0, Σ ρ of tets touching].
-        let mut mg = MacroGrid::with_cell_size(bounds, 2.0 * spacing, 128);
-        let mut sums = vec![-1.0f32; mg.ranges.len()];
-        for (t, b) in mesh.tets.iter().zip(&boxes) {
-            if let Some((lo, hi)) = mg.cells_overlapping(b) {
-                for k in lo[2]..=hi[2] {
-                    for j in lo[1]..=hi[1] {
-                        for i in lo[0]..=hi[0] {
-                            let c = &mut sums[mg.index(i, j, k)];
-                            *c = c.max(0.0) + t.density;
-                        }
-                    }
-                }
-            }
-        }
-        for (r, s) in mg.ranges.iter_mut().zip(sums) {
-            *r = if s >= 0.0 {
-                Range1::new(0.0, s * 1.0001)
-            } else {
-                Range1::EMPTY
-            };
-        }
         // Density range for the transfer function (log10 by default): from the
         // mean density (voids stay transparent) to the 99.9th-percentile tet density.
         let mean = mesh.total_mass() / (mesh.box_size as f64).powi(3);
@@ -76,12 +63,31 @@ impl TetVolume {
         let value_range = Range1::new(mean as f32, high.max(mean as f32 * 10.0));
         Ok(TetVolume {
             mesh,
-            bvh,
-            grid: mg,
+            bvh: OnceLock::new(),
             bounds,
             value_range,
-            nominal_dt: spacing / 8.0,
+            lod_pixels: None,
         })
+    }
+
+    /// Draws blocks smaller than `pixels` on screen from the coarser levels
+    /// of detail (when the mesh has them).
+    pub fn with_lod_pixels(mut self, pixels: Option<f32>) -> Self {
+        self.lod_pixels = pixels;
+        self
+    }
+
+    /// The BVH over every tet's bounds, built on first use.
+    fn bvh(&self) -> &Bvh {
+        self.bvh.get_or_init(|| {
+            let boxes: Vec<Aabb> = self.mesh.tets.par_iter().map(|t| t.bounds()).collect();
+            Bvh::build(&boxes)
+        })
+    }
+
+    /// The Lagrangian spacing L/N: the scale of the smoothed gradient.
+    fn spacing(&self) -> f32 {
+        self.mesh.box_size / self.mesh.n as f32
     }
 
     /// Density ρ (sum over the covering tets) and stream count at `p`,
@@ -99,7 +105,7 @@ impl TetVolume {
         let p = p + Vec3::new(0.812_403_8, 0.445_259_4, 0.376_556_9) * nudge;
         let p = Vec3::new(p.x.rem_euclid(l), p.y.rem_euclid(l), p.z.rem_euclid(l));
         let (mut rho, mut streams) = (0.0f64, 0u32);
-        self.bvh.point_query(p, |i| {
+        self.bvh().point_query(p, |i| {
             let t = &self.mesh.tets[i as usize];
             if t.contains(p) {
                 rho += t.density as f64;
@@ -125,19 +131,54 @@ impl Volume for TetVolume {
         (streams > 0).then(|| Sample::scalar(rho as f32))
     }
 
-    /// Piecewise constant: zero almost everywhere.
-    fn gradient(&self, _: Vec3) -> Vec3 {
-        Vec3::ZERO
+    /// The density is constant inside each tet, so its gradient is zero
+    /// there and a jump across faces. For shading iso-surfaces (which lie on
+    /// faces) this is the gradient of the density smoothed over a quarter
+    /// of the Lagrangian spacing: central differences at that step.
+    fn gradient(&self, p: Vec3) -> Vec3 {
+        let h = 0.25 * self.spacing();
+        let f = |q: Vec3| self.density_and_streams(q).0 as f32;
+        let d = |e: Vec3| (f(p + e * h) - f(p - e * h)) / (2.0 * h);
+        Vec3::new(
+            d(Vec3::new(1.0, 0.0, 0.0)),
+            d(Vec3::new(0.0, 1.0, 0.0)),
+            d(Vec3::new(0.0, 0.0, 1.0)),
+        )
     }
 
-    fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
-        self.grid.intervals(ray, t, self.nominal_dt, query, out);
+    /// Exact constant pieces: every tet the ray crosses within `t` (BVH ray
+    /// traversal, plane clip), events sorted and swept. Every piece of
+    /// positive density is handed out, visible or not.
+    fn intervals(&self, ray: &Ray, t: Range1, _: &IntervalQuery, out: &mut Vec<Interval>) {
+        let mut events: Vec<(f32, f32)> = Vec::new();
+        self.bvh().ray_query(ray, t, |i, _| {
+            let tet = &self.mesh.tets[i as usize];
+            let (a, b) = Planes::new(tet).clip(ray);
+            let (a, b) = (a.max(t.lo), b.min(t.hi));
+            if b > a {
+                events.push((a, tet.density));
+                events.push((b, -tet.density));
+            }
+        });
+        events.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        sweep(&events, out);
+    }
+
+    fn tile_view(&self, view: &View) -> Option<Box<dyn TileIntervals + '_>> {
+        Some(Box::new(TetTileView::new(
+            &self.mesh,
+            &view.camera,
+            view.width,
+            view.height,
+            self.lod_pixels,
+            None,
+        )))
     }
 
     /// Exact: Σ ρ × chord over every tet the ray crosses within `t`.
     fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
         let mut sum = 0.0f64;
-        self.bvh.ray_query(ray, t, |i, _| {
+        self.bvh().ray_query(ray, t, |i, _| {
             let tet = &self.mesh.tets[i as usize];
             let (a, b) = Planes::new(tet).clip(ray);
             let (a, b) = (a.max(t.lo), b.min(t.hi));
@@ -146,5 +187,79 @@ impl Volume for TetVolume {
             }
         });
         sum
+    }
+
+    /// Per screen tile, every tet's column added to the pixels it covers
+    /// (eight pixels at a time for orthographic views), plus the point
+    /// masses of degenerate tets.
+    fn project_image(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        control: &Control,
+    ) -> Option<Result<Vec<f32>, Cancelled>> {
+        let options = TetOptions {
+            lod_pixels: self.lod_pixels,
+            ..Default::default()
+        };
+        Some(project(&self.mesh, camera, width, height, options, control))
+    }
+}
+
+/// A tessellation prepared for one render: the k-buffer budget, if any.
+pub struct TetContext<'a> {
+    volume: &'a TetVolume,
+    budget: Option<EventBudget>,
+}
+
+impl Prepare for TetVolume {
+    type Prepared<'a> = TetContext<'a>;
+
+    fn prepare<'a>(&'a self, query: &PrepareQuery) -> TetContext<'a> {
+        TetContext {
+            volume: self,
+            budget: query.event_budget,
+        }
+    }
+}
+
+impl Volume for TetContext<'_> {
+    fn bounds(&self) -> Aabb {
+        self.volume.bounds()
+    }
+    fn value_range(&self) -> Range1 {
+        self.volume.value_range()
+    }
+    fn sample(&self, p: Vec3) -> Option<Sample> {
+        self.volume.sample(p)
+    }
+    fn gradient(&self, p: Vec3) -> Vec3 {
+        self.volume.gradient(p)
+    }
+    fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
+        self.volume.intervals(ray, t, query, out)
+    }
+    fn tile_view(&self, view: &View) -> Option<Box<dyn TileIntervals + '_>> {
+        Some(Box::new(TetTileView::new(
+            &self.volume.mesh,
+            &view.camera,
+            view.width,
+            view.height,
+            self.volume.lod_pixels,
+            self.budget,
+        )))
+    }
+    fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
+        self.volume.line_integral(ray, t)
+    }
+    fn project_image(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        control: &Control,
+    ) -> Option<Result<Vec<f32>, Cancelled>> {
+        self.volume.project_image(camera, width, height, control)
     }
 }

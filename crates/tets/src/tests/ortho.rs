@@ -22,7 +22,15 @@ fn project_kernel(
     h: u32,
     k: crate::ortho::Kernel,
 ) -> Vec<f32> {
-    render::project_with(&v.mesh, cam, (w, h), TetOptions::default(), k, &|_, _| {})
+    render::project_with(
+        &v.mesh,
+        cam,
+        (w, h),
+        TetOptions::default(),
+        k,
+        &Control::new(),
+    )
+    .unwrap()
 }
 
 #[test]
@@ -157,8 +165,9 @@ fn ortho_kernels_match_f64_clipping_per_pixel() {
                     clip_only: true,
                     ..Default::default()
                 },
-                &|_, _| {},
-            );
+                &Control::new(),
+            )
+            .unwrap();
             let images: Vec<_> = kernels()
                 .into_iter()
                 .map(|k| (k, project_kernel(&v, &cam, w, h, k)))

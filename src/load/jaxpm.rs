@@ -6,7 +6,9 @@ use std::path::Path;
 
 use voxless_tets::LagrangianGrid;
 
-use crate::{SceneError, TetsDesc};
+use voxless_scene::TetsDesc;
+
+use crate::SceneError;
 
 /// The Lagrangian grid of snapshot `t.snapshot` (default: the last) of the
 /// JaxPM run at `path`; a note says which snapshot was read.

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use voxless_core::Vec3;
 use voxless_io::{ParticleTable, read_npy};
 
+use super::formats::{self, ParticleFormat, TableOptions};
 use crate::SceneError;
-use crate::formats::{self, ParticleFormat, TableOptions};
 
 /// Where the particle columns come from: one frame of a particle file.
 pub struct Source {

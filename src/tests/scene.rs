@@ -1,8 +1,16 @@
-use super::*;
+use std::path::Path;
+
+use crate::load::table as load;
+use crate::{Scene, SceneDesc, formats, read_scene};
+
+/// Loads and resolves frame 0 of `desc`.
+fn resolve(desc: &SceneDesc, base: &Path) -> Result<Scene, crate::SceneError> {
+    Scene::open(desc, base, 0)
+}
 
 #[test]
 fn example_scenes_parse() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     assert!(
         read_scene(&dir.join("galaxy.toml"))
             .unwrap()

@@ -1,6 +1,16 @@
-use super::*;
-use crate::{ParticlesDesc, TransferDesc, resolve, transfer_function_at};
-use voxless_core::{Aabb, Projection};
+use std::path::Path;
+
+use crate::camera::{ViewAdjust, name_of};
+use crate::resolve::camera;
+use crate::{
+    CameraDesc, ParticlesDesc, Scene, SceneDesc, TransferDesc, Vec3, transfer_function_at,
+};
+use voxless_core::{Aabb, Camera, Projection};
+
+/// Loads and resolves frame 0 of `desc`.
+fn resolve(desc: &SceneDesc, base: &Path) -> Result<Scene, crate::SceneError> {
+    Scene::open(desc, base, 0)
+}
 
 fn adjust(orbit: f32, elevation: f32, zoom: f32) -> ViewAdjust {
     ViewAdjust {
@@ -61,9 +71,9 @@ fn elevation_raises_the_eye_and_stops_short_of_the_pole() {
 #[test]
 fn camera_applies_view_keys_and_rejects_bad_values() {
     let b = Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 1.0));
-    let plain = crate::camera(&CameraDesc::default(), &b, 1.5).unwrap();
+    let plain = camera(&CameraDesc::default(), &b, 1.5).unwrap();
     assert_eq!(plain, Camera::framing(&b, 1.5), "defaults unchanged");
-    let zoomed = crate::camera(
+    let zoomed = camera(
         &CameraDesc {
             zoom: Some(2.0),
             ..Default::default()
@@ -75,9 +85,9 @@ fn camera_applies_view_keys_and_rejects_bad_values() {
     let d = |c: &Camera| (c.eye - b.center()).length();
     assert!((d(&zoomed) * 2.0 - d(&plain)).abs() < 1e-5);
     let ortho = |zoom| {
-        let c = crate::camera(
+        let c = camera(
             &CameraDesc {
-                projection: Some("orthographic".into()),
+                projection: Some(crate::ProjectionName::Orthographic),
                 ortho_height: Some(3.0),
                 zoom,
                 ..Default::default()
@@ -128,7 +138,7 @@ fn camera_applies_view_keys_and_rejects_bad_values() {
             "camera.elevation",
         ),
     ] {
-        let e = crate::camera(&desc, &b, 1.0).unwrap_err().to_string();
+        let e = camera(&desc, &b, 1.0).unwrap_err().to_string();
         assert!(e.contains(field), "{e}");
     }
 }

@@ -1,177 +1,20 @@
-//! Loading each data kind a scene names: particles (with time series),
-//! AMR cells, and phase-space tessellations — every failure a [`SceneError`]
-//! naming the file at fault.
+//! Particles: one frame of any particle file (or a sequence of files), or
+//! arrays in memory, through one constructor that fills the data's own
+//! defaults (the radius from the particle spacing, SPH kernels for SPH
+//! files) — every failure a [`SceneError`] naming the file at fault.
 
 use std::path::{Path, PathBuf};
 
-use voxless_amr::{AmrCells, AmrSettings, AmrVolume, Reconstruction};
 use voxless_core::{Aabb, Range1, Vec3};
 use voxless_particles::{
     Classification, Kernel, ParticleData, ParticleError, ParticleSettings, ParticleVolume,
 };
-use voxless_tets::{LagrangianGrid, TetMode, TetOptions, TetSettings, TetVolume};
+use voxless_scene::{ClassificationName, KernelName, ParticlesDesc};
 use voxless_transfer::ControlPoints;
 
-use crate::formats::{self, ParticleFormat, TableOptions};
-use crate::{
-    AmrDesc, AnyVolume, LoadedScene, ParticlesDesc, SceneDesc, SceneError, TetsDesc, demo, frames,
-    load,
-};
-
-pub(crate) fn load_amr(a: &AmrDesc, base: &Path) -> Result<AmrVolume, SceneError> {
-    let (data, path) = match (&a.cells, &a.amrclaw) {
-        (Some(cells), None) => {
-            let scalars: Vec<PathBuf> = a.scalars.iter().flatten().map(|s| base.join(s)).collect();
-            if scalars.is_empty() {
-                return Err(SceneError::setting(
-                    "amr.scalars",
-                    "ExaBricks cells need at least one .scalars file (--scalars FILE)",
-                ));
-            }
-            let path = base.join(cells);
-            (voxless_io::read_exabricks(&path, &scalars)?, path)
-        }
-        (None, Some(q)) => {
-            let path = base.join(q);
-            (voxless_io::read_amrclaw(&path)?, path)
-        }
-        (Some(_), Some(_)) => {
-            return Err(SceneError::setting(
-                "amr",
-                "give either cells (ExaBricks) or amrclaw, not both",
-            ));
-        }
-        (None, None) => {
-            return Err(SceneError::setting(
-                "amr",
-                "no cells: give cells + scalars (ExaBricks) or amrclaw (fort.qNNNN)",
-            ));
-        }
-    };
-    let names: Vec<&str> = data.fields.iter().map(|f| f.0.as_str()).collect();
-    let index = |what: &str, name: &str| {
-        names.iter().position(|n| *n == name).ok_or_else(|| {
-            SceneError::data(
-                &path,
-                format!(
-                    "no field '{name}' for {what} (fields: {})",
-                    names.join(", ")
-                ),
-            )
-        })
-    };
-    let field = a
-        .field
-        .as_deref()
-        .map(|n| index("the opacity field", n))
-        .transpose()?
-        .unwrap_or(0);
-    let color_field = a
-        .color_field
-        .as_deref()
-        .map(|n| index("the colour field", n))
-        .transpose()?;
-    let reconstruction = match a.reconstruction.as_deref().unwrap_or("basis") {
-        "basis" => Reconstruction::Basis,
-        "nearest" => Reconstruction::Nearest,
-        other => {
-            return Err(SceneError::setting(
-                "amr.reconstruction",
-                format!("'{other}' is not 'basis' or 'nearest'"),
-            ));
-        }
-    };
-    let origin = a.origin.unwrap_or(data.origin.map(|v| v as f32));
-    let cells = AmrCells {
-        cells: data.cells,
-        fields: data.fields,
-        origin: Vec3::from_array(origin),
-        cell_size: a.cell_size.unwrap_or(data.finest_cell_size as f32),
-    };
-    AmrVolume::new(
-        cells,
-        AmrSettings {
-            field,
-            color_field,
-            reconstruction,
-        },
-    )
-    .map_err(|source| SceneError::Amr { path, source })
-}
-
-pub(crate) fn load_tets(
-    t: &TetsDesc,
-    base: &Path,
-    notes: &mut Vec<String>,
-) -> Result<AnyVolume, SceneError> {
-    let file = t.file.as_ref().ok_or_else(|| {
-        SceneError::setting(
-            "tets.file",
-            "no positions file given (--particles FILE.npy with --lagrangian N --box L, or a \
-             JaxPM FILE.h5)",
-        )
-    })?;
-    let path = base.join(file);
-    let grid = if ParticleFormat::detect(&path)? == Some(ParticleFormat::Hdf5) {
-        crate::jaxpm::grid(t, &path, notes)?
-    } else {
-        if t.snapshot.is_some() {
-            return Err(SceneError::setting(
-                "tets.snapshot",
-                format!(
-                    "--snapshot picks a snapshot of a JaxPM .h5 run, but {} is not one",
-                    path.display()
-                ),
-            ));
-        }
-        let (positions, _) = load::read_positions(&path)?;
-        let n = match t.lagrangian {
-            Some(n) => n,
-            None => {
-                return Err(SceneError::setting(
-                    "tets.lagrangian",
-                    "the Lagrangian grid size N is needed (--lagrangian N)",
-                ));
-            }
-        };
-        let box_size = t.box_size.ok_or_else(|| {
-            SceneError::setting("tets.box_size", "the periodic box size is needed (--box L)")
-        })?;
-        LagrangianGrid {
-            n,
-            box_size,
-            positions,
-        }
-    };
-    let settings = TetSettings {
-        particle_mass: t.particle_mass,
-        ..Default::default()
-    };
-    let mode = match t.mode.as_deref().unwrap_or("exact") {
-        "exact" => TetMode::Exact,
-        "kbuffer" | "k-buffer" => TetMode::KBuffer {
-            k: t.k.unwrap_or(16).max(1),
-            layers: t.layers.unwrap_or(64).max(1),
-        },
-        other => {
-            return Err(SceneError::setting(
-                "tets.mode",
-                format!("'{other}' is not 'exact' or 'kbuffer'"),
-            ));
-        }
-    };
-    if let Some(p) = t.lod_pixels {
-        positive("tets.lod_pixels", p)?;
-    }
-    let levels = if t.lod_pixels.is_some() { 3 } else { 0 };
-    let v = TetVolume::new(&grid, &settings, levels)
-        .map_err(|source| SceneError::Tets { path, source })?;
-    let options = TetOptions {
-        lod_pixels: t.lod_pixels,
-        ..Default::default()
-    };
-    Ok(AnyVolume::Tets(Box::new(v), mode, options))
-}
+use super::formats::{self, ParticleFormat, TableOptions};
+use super::{frames, table as load};
+use crate::{SceneError, demo};
 
 pub(crate) fn positive(field: &str, v: f32) -> Result<(), SceneError> {
     if v.is_finite() && v > 0.0 {
@@ -195,22 +38,14 @@ pub(crate) fn range(field: &str, lo: f32, hi: f32) -> Result<Range1, SceneError>
     }
 }
 
-fn parse_kernel(p: &ParticlesDesc) -> Result<Kernel, SceneError> {
-    let name = p.kernel.as_deref().unwrap_or("gaussian3");
-    match name.to_ascii_lowercase().as_str() {
-        "gaussian3" => Ok(Kernel::Gaussian3),
-        "gaussian" => Ok(Kernel::Gaussian {
+fn kernel_of(p: &ParticlesDesc, name: KernelName) -> Kernel {
+    match name {
+        KernelName::Gaussian3 => Kernel::Gaussian3,
+        KernelName::Gaussian => Kernel::Gaussian {
             kappa: p.kappa.unwrap_or(1.0),
             sigma: p.sigma.unwrap_or(2.0),
-        }),
-        "cubic-spline" | "cubic" | "m4" => Ok(Kernel::CubicSpline),
-        _ => Err(SceneError::setting(
-            "particles.kernel",
-            format!(
-                "unknown kernel '{name}' (available: {})",
-                voxless_particles::KERNEL_NAMES.join(", ")
-            ),
-        )),
+        },
+        KernelName::CubicSpline => Kernel::CubicSpline,
     }
 }
 
@@ -229,12 +64,12 @@ fn control_points(
 /// Particle arrays of frame `frame`, the file to blame for bad positions, the
 /// files that supplied each per-particle array, whether the SPH defaults
 /// (cubic spline, radii = h, weights = m) apply, and notes on what was read.
-struct FrameData {
-    data: ParticleData,
-    main_file: PathBuf,
-    files: Vec<(&'static str, PathBuf)>,
-    sph_defaults: bool,
-    notes: Vec<String>,
+pub(crate) struct FrameData {
+    pub data: ParticleData,
+    pub main_file: PathBuf,
+    pub files: Vec<(&'static str, PathBuf)>,
+    pub sph_defaults: bool,
+    pub notes: Vec<String>,
 }
 
 /// The file of `spec` for frame `frame`: the `frame`-th of a sequence, or the
@@ -281,7 +116,11 @@ fn sph_columns(p: &ParticlesDesc, source: &load::Source) -> Option<(String, Stri
         .map(|(h, m)| (h.to_string(), m.to_string()))
 }
 
-fn read_frame(p: &ParticlesDesc, base: &Path, frame: usize) -> Result<FrameData, SceneError> {
+pub(crate) fn read_frame(
+    p: &ParticlesDesc,
+    base: &Path,
+    frame: usize,
+) -> Result<FrameData, SceneError> {
     let mut files: Vec<(&'static str, PathBuf)> = Vec::new();
     let mut notes = Vec::new();
     let mut sph_defaults = false;
@@ -293,7 +132,7 @@ fn read_frame(p: &ParticlesDesc, base: &Path, frame: usize) -> Result<FrameData,
                     group: p.group.clone(),
                     part_type: p.part_type,
                 },
-                species: p.species.as_deref(),
+                species: p.species.as_ref().map(|s| s.0.as_str()),
             };
             let (positions, source, note) = load::open(&path, in_file, &select)?;
             notes.extend(note);
@@ -360,7 +199,11 @@ fn read_frame(p: &ParticlesDesc, base: &Path, frame: usize) -> Result<FrameData,
 }
 
 /// Attributes a particle error to the file that holds the bad values.
-fn blame(main_file: PathBuf, files: &[(&str, PathBuf)], source: ParticleError) -> SceneError {
+pub(crate) fn blame(
+    main_file: PathBuf,
+    files: &[(&str, PathBuf)],
+    source: ParticleError,
+) -> SceneError {
     let blamed = |what: &str| files.iter().find(|f| f.0 == what).map(|f| f.1.clone());
     let path = match &source {
         ParticleError::BadRadius { .. } => blamed("radii"),
@@ -380,17 +223,61 @@ pub(crate) fn load_particles(
     notes: &mut Vec<String>,
     frame: usize,
 ) -> Result<ParticleVolume, SceneError> {
-    let mut kernel = parse_kernel(p)?;
     let mut fd = read_frame(p, base, frame)?;
     notes.append(&mut fd.notes);
-    if fd.sph_defaults {
-        kernel = Kernel::CubicSpline;
+    let FrameData {
+        data,
+        main_file,
+        files,
+        sph_defaults,
+        ..
+    } = fd;
+    build_particles(data, p, sph_defaults, notes).map_err(|e| e.blame(main_file, &files))
+}
+
+/// Why particle arrays cannot become a volume: a bad setting, or bad data
+/// (to be attributed to the file or argument that holds it).
+pub(crate) enum BuildError {
+    Setting(SceneError),
+    Data(ParticleError),
+}
+
+impl BuildError {
+    /// The error, naming the file (or array) that holds the bad values.
+    pub(crate) fn blame(self, main_file: PathBuf, files: &[(&str, PathBuf)]) -> SceneError {
+        match self {
+            BuildError::Setting(e) => e,
+            BuildError::Data(e) => blame(main_file, files, e),
+        }
     }
-    let radius = match (p.radius, &fd.data.radii) {
+}
+
+impl From<SceneError> for BuildError {
+    fn from(e: SceneError) -> Self {
+        BuildError::Setting(e)
+    }
+}
+
+/// A particle volume from arrays and the description's settings, with the
+/// data's defaults: the SPH cubic spline when `sph_defaults`, and a radius
+/// from the particle spacing when neither a radius nor radii are given
+/// (said in `notes`).
+pub(crate) fn build_particles(
+    data: ParticleData,
+    p: &ParticlesDesc,
+    sph_defaults: bool,
+    notes: &mut Vec<String>,
+) -> Result<ParticleVolume, BuildError> {
+    let kernel = if sph_defaults {
+        Kernel::CubicSpline
+    } else {
+        kernel_of(p, p.kernel.unwrap_or(KernelName::Gaussian3))
+    };
+    let radius = match (p.radius, &data.radii) {
         (Some(r), _) => r,
         (None, Some(_)) => 1.0,
         (None, None) => {
-            let r = default_radius(&fd.data.positions, kernel);
+            let r = default_radius(&data.positions, kernel);
             notes.push(format!(
                 "no radius given: using {r:.4} ({} kernel, support = 2.5 × mean particle spacing)",
                 kernel.name()
@@ -398,15 +285,9 @@ pub(crate) fn load_particles(
             r
         }
     };
-    let classification = match p.classification.as_deref().unwrap_or("post") {
-        "post" => Classification::Post,
-        "pre" => Classification::Pre,
-        other => {
-            return Err(SceneError::setting(
-                "particles.classification",
-                format!("'{other}' is not 'post' or 'pre'"),
-            ));
-        }
+    let classification = match p.classification.unwrap_or(ClassificationName::Post) {
+        ClassificationName::Post => Classification::Post,
+        ClassificationName::Pre => Classification::Pre,
     };
     let attribute_range = p
         .attribute_range
@@ -421,19 +302,13 @@ pub(crate) fn load_particles(
         attribute_range,
         classification,
     };
-    let FrameData {
-        data,
-        main_file,
-        files,
-        ..
-    } = fd;
-    ParticleVolume::new(data, settings).map_err(|source| blame(main_file, &files, source))
+    ParticleVolume::new(data, settings).map_err(BuildError::Data)
 }
 
 /// Number of frames the scene's data source names: the files of a sequence
 /// (see [`frames`]), the frames of a multi-frame file (LAMMPS dump, XYZ,
 /// `.particles`), else 1.
-pub fn frame_count(desc: &SceneDesc, base: &Path) -> Result<usize, SceneError> {
+pub fn frame_count(desc: &voxless_scene::SceneDesc, base: &Path) -> Result<usize, SceneError> {
     match &desc.particles {
         Some(ParticlesDesc { file: Some(f), .. }) if frames::is_sequence(f, base) => {
             Ok(frames::expand(f, base)?.len())
@@ -446,42 +321,6 @@ pub fn frame_count(desc: &SceneDesc, base: &Path) -> Result<usize, SceneError> {
             }
         }
         _ => Ok(1),
-    }
-}
-
-impl LoadedScene {
-    /// Moves a particle scene to frame `frame` of its sequence: the BVH is
-    /// rebuilt in its buffers, and camera, value range and attribute range stay
-    /// as resolved for the first frame, so a sequence does not flicker.
-    pub fn load_frame(
-        &mut self,
-        desc: &SceneDesc,
-        base: &Path,
-        frame: usize,
-    ) -> Result<(), SceneError> {
-        if let (AnyVolume::Materials(_), Some(p)) = (&self.volume, &desc.particles) {
-            // Each material is rebuilt from the new frame (no buffer reuse).
-            let mats = p.materials.as_deref().unwrap_or_default();
-            let v = crate::materials::load_materials(p, mats, base, &mut Vec::new(), frame)?;
-            self.volume = AnyVolume::Materials(Box::new(v));
-            return Ok(());
-        }
-        let (AnyVolume::Particles(v), Some(p)) = (&mut self.volume, &desc.particles) else {
-            return Err(SceneError::setting(
-                "frames",
-                "time series are supported for particle data",
-            ));
-        };
-        let FrameData {
-            data,
-            main_file,
-            files,
-            ..
-        } = read_frame(p, base, frame)?;
-        v.load_frame(data)
-            .map_err(|source| blame(main_file, &files, source))?;
-        v.classify(&self.tf);
-        Ok(())
     }
 }
 

@@ -7,9 +7,9 @@
 //!   vector (the result stays within ±89.9° of the horizontal, so the view
 //!   never flips over the pole), and zoom divides its distance to the
 //!   look-at point (orthographic cameras: the view height instead).
-//!   [`LoadedScene::reaim`] applies a new camera description to a resolved
+//!   [`Scene::reaim`] applies a new camera description to a resolved
 //!   scene, which is how a turntable renders without reloading the data.
-//! - [`LoadedScene::colorbar`]: the range, scale and field name a colour bar
+//! - [`Scene::colorbar`]: the range, scale and field name a colour bar
 //!   shows.
 
 use std::path::Path;
@@ -17,8 +17,10 @@ use std::path::Path;
 use voxless_core::{Camera, Vec3};
 use voxless_render::colorbar::ColorbarSpec;
 
-use crate::sources::positive;
-use crate::{AnyVolume, CameraDesc, LoadedScene, SceneDesc, SceneError};
+use voxless_scene::{CameraDesc, SceneDesc};
+
+use crate::load::positive;
+use crate::{AnyVolume, Scene, SceneError};
 
 /// Largest elevation reached, in degrees.
 const MAX_ELEVATION_DEG: f64 = 89.9;
@@ -140,7 +142,7 @@ pub(crate) fn default_light_direction(camera: &Camera) -> Vec3 {
 
 /// A name for a field given as a file (`temp_%04d.npy` → `temp`) or a
 /// CSV column.
-fn name_of(spec: &str) -> Option<String> {
+pub(crate) fn name_of(spec: &str) -> Option<String> {
     let p = Path::new(spec);
     let file = p.file_name()?.to_string_lossy().into_owned();
     let stem = match p.extension() {
@@ -152,13 +154,13 @@ fn name_of(spec: &str) -> Option<String> {
     (!name.is_empty()).then(|| name.to_string())
 }
 
-impl LoadedScene {
+impl Scene {
     /// Points the camera as `desc.camera` says (e.g. a turntable frame's
     /// orbit), keeping the data, image size and settings; a default light
     /// follows the camera.
     pub fn reaim(&mut self, desc: &SceneDesc) -> Result<(), SceneError> {
         let aspect = self.settings.width as f32 / self.settings.height as f32;
-        self.camera = crate::camera(&desc.camera, &self.volume.bounds(), aspect)?;
+        self.camera = crate::resolve::camera(&desc.camera, &self.volume.bounds(), aspect)?;
         let follows = desc.light.as_ref().is_some_and(|l| l.direction.is_none());
         if let Some(light) = &mut self.settings.light
             && follows
@@ -213,7 +215,3 @@ impl LoadedScene {
         }
     }
 }
-
-#[cfg(test)]
-#[path = "view_tests.rs"]
-mod tests;

@@ -5,11 +5,13 @@
 use std::path::Path;
 
 use voxless_core::{Range1, Vec3, Volume, srgb_to_linear};
-use voxless_particles::{Material, MaterialClass, MaterialVolume};
+use voxless_particles::{Material, MaterialClass, MaterialVolume, ParticleVolume};
 use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
 
-use crate::sources::{load_particles, range};
-use crate::{MaterialDesc, ParticlesDesc, SceneError};
+use voxless_scene::{MaterialDesc, ParticlesDesc};
+
+use super::particles::{load_particles, range};
+use crate::SceneError;
 
 /// Loads every material of `p` at `frame`: the particle file filtered to
 /// each material's species, with the material's radius.
@@ -19,6 +21,23 @@ pub(crate) fn load_materials(
     base: &Path,
     notes: &mut Vec<String>,
     frame: usize,
+) -> Result<MaterialVolume, SceneError> {
+    build_materials(p, mats, notes, &mut |desc, notes| {
+        load_particles(desc, base, notes, frame)
+    })
+}
+
+/// The materials of `p`, each material's particles built by `volume_of`
+/// from the material's particle description (the species to keep, its
+/// radius).
+pub(crate) fn build_materials(
+    p: &ParticlesDesc,
+    mats: &[MaterialDesc],
+    notes: &mut Vec<String>,
+    volume_of: &mut dyn FnMut(
+        &ParticlesDesc,
+        &mut Vec<String>,
+    ) -> Result<ParticleVolume, SceneError>,
 ) -> Result<MaterialVolume, SceneError> {
     if p.species.is_some() {
         return Err(SceneError::setting(
@@ -35,7 +54,7 @@ pub(crate) fn load_materials(
             materials: None,
             ..p.clone()
         };
-        let volume = load_particles(&desc, base, notes, frame)?;
+        let volume = volume_of(&desc, notes)?;
         let colormap = Colormap::preset(m.colormap.as_deref().unwrap_or("viridis"))?;
         let opacity = match &m.opacity_points {
             Some(pts) => {

@@ -1,0 +1,143 @@
+//! One tile of one pass: the tile's camera rays, their intervals (from the
+//! volume's tile view when it has one, else ray by ray), then one of the
+//! three integrators over those intervals — packets, per-sample marching,
+//! or single scattering.
+
+use voxless_core::{Aabb, IntervalLists, IntervalQuery, Range1, Ray, TileRays, Volume};
+
+use crate::march::{Ctx, march_intervals};
+use crate::packet::{self, PacketScratch};
+use crate::sampling::PixelRng;
+use crate::{Job, Tile, pixel_ray, scatter};
+
+/// Buffers reused across the tiles a thread renders.
+#[derive(Default)]
+struct Scratch {
+    rays: Vec<Ray>,
+    rngs: Vec<PixelRng>,
+    spans: Vec<Range1>,
+    lists: IntervalLists,
+    shadow: Vec<voxless_core::Interval>,
+    packet: PacketScratch,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::Cell<Option<Box<Scratch>>> = const { std::cell::Cell::new(None) };
+}
+
+/// The part of the world a render integrates: the volume's bounds, cut by
+/// the clip box.
+pub(crate) fn region<V: Volume>(volume: &V, clip: Option<Aabb>) -> Aabb {
+    let b = volume.bounds();
+    match clip {
+        Some(c) => Aabb::new(b.min.max(c.min), b.max.min(c.max)),
+        None => b,
+    }
+}
+
+/// Renders sample index `sample` of `tile`; pixels row-major.
+pub(crate) fn render_tile<V: Volume>(job: &Job<V>, tile: Tile, sample: u32) -> Vec<[f32; 4]> {
+    // Taken out of the thread-local (not borrowed), so a volume that runs
+    // rayon inside a call cannot re-enter a borrowed buffer.
+    let mut s = SCRATCH.take().unwrap_or_default();
+    let out = render_with(job, tile, sample, &mut s);
+    SCRATCH.set(Some(s));
+    out
+}
+
+fn render_with<V: Volume>(job: &Job<V>, tile: Tile, sample: u32, s: &mut Scratch) -> Vec<[f32; 4]> {
+    let (volume, settings, tf) = (job.volume, job.settings, job.tf);
+    let region = region(volume, settings.clip);
+    // 1. The tile's rays and the part of each inside the (clipped) volume.
+    s.rays.clear();
+    s.rngs.clear();
+    s.spans.clear();
+    for y in tile.y..tile.y + tile.h {
+        for x in tile.x..tile.x + tile.w {
+            let (rng, ray) = pixel_ray(job.camera, settings, x, y, sample);
+            s.spans
+                .push(region.clip_ray(&ray, Range1::new(0.0, f32::INFINITY)));
+            s.rays.push(ray);
+            s.rngs.push(rng);
+        }
+    }
+    // 2. Their visible intervals: the whole tile at once where the volume
+    // can, else ray by ray.
+    let visible = |r: Range1| settings.is_visible(tf, r);
+    let query = IntervalQuery {
+        is_visible: &visible,
+    };
+    s.lists.clear();
+    match &job.view {
+        Some(view) => {
+            view.intervals(
+                &TileRays {
+                    x0: tile.x,
+                    y0: tile.y,
+                    w: tile.w,
+                    h: tile.h,
+                    rays: &s.rays,
+                    t: &s.spans,
+                    centred: sample == 0,
+                },
+                &query,
+                &mut s.lists,
+            );
+            debug_assert_eq!(s.lists.rays(), s.rays.len());
+        }
+        None => {
+            for (ray, span) in s.rays.iter().zip(&s.spans) {
+                if !span.is_empty() {
+                    volume.intervals(ray, *span, &query, &mut s.lists.intervals);
+                }
+                s.lists.end_ray();
+            }
+        }
+    }
+    // 3. Integrate.
+    let ctx = Ctx::new(tf, settings, volume.classified());
+    let n = s.rays.len();
+    let mut out = Vec::with_capacity(n);
+    if let Some(sc) = &settings.scatter {
+        // Scattering paths are incoherent: one ray at a time.
+        for r in 0..n {
+            let (x, y) = (tile.x + r as u32 % tile.w, tile.y + r as u32 / tile.w);
+            out.push(scatter::path(
+                volume,
+                &s.rays[r],
+                s.lists.of(r),
+                &ctx,
+                sc,
+                (x, y),
+                sample,
+                &mut s.shadow,
+            ));
+        }
+    } else if settings.packets && volume.packet_sampling() {
+        packet::render_tile(
+            volume,
+            &ctx,
+            tile,
+            packet::TileInput {
+                rays: &s.rays,
+                rngs: &s.rngs,
+                spans: &s.spans,
+                lists: &s.lists,
+            },
+            &mut s.packet,
+            &mut out,
+        );
+    } else {
+        for r in 0..n {
+            out.push(march_intervals(
+                volume,
+                &s.rays[r],
+                s.lists.of(r),
+                s.spans[r],
+                &s.rngs[r],
+                &ctx,
+            ));
+        }
+    }
+    out
+}

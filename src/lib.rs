@@ -1,0 +1,87 @@
+//! voxless: render particles, block-structured AMR cells and N-body
+//! phase-space tessellations in their native form — without resampling
+//! them onto a voxel grid.
+//!
+//! This crate is the library every front-end uses (the `voxless` command,
+//! the browser viewer, the Python package, MPI rendering). The model:
+//!
+//! ```text
+//! files (load) ─┐
+//!               ├─► AnyVolume ──► resolve(desc) ──► camera, transfer function, settings
+//! memory ───────┘        │                                   │
+//!                        └──► render / project / sample ◄────┘   (passes, progress, cancel)
+//! ```
+//!
+//! - **Loading** ([`load()`], [`AnyVolume::from_particles`],
+//!   [`AnyVolume::from_amr`], [`AnyVolume::from_tessellation`]) turns files
+//!   or arrays into an [`AnyVolume`], filling the data's own defaults.
+//! - **Resolving** ([`resolve()`]) turns a volume and a [`SceneDesc`] (a
+//!   TOML scene, the CLI's flags, a Python dictionary) into a [`Resolved`]
+//!   view: camera, transfer function, render settings — the same defaults
+//!   for every front-end. [`Scene`] holds a volume with its view.
+//! - **Rendering** ([`AnyVolume::render`], [`AnyVolume::render_passes`]),
+//!   **projecting** ([`AnyVolume::project`]) and **sampling**
+//!   ([`AnyVolume::sample_points`]) report progress and stop when their
+//!   [`Control`]'s [`CancelToken`] is cancelled.
+//!
+//! Volumes are immutable after they are built and `Sync`: one volume serves
+//! several renders at once, each with its own camera and transfer function.
+//! The crates underneath (`voxless-core`, `-render`, `-particles`, `-amr`,
+//! `-tets`, `-io`, `-transfer`, `-scene`) are re-exported for what this
+//! facade does not wrap. See `docs/architecture.md` for how a camera ray and
+//! a particle flow through them.
+//!
+//! ```no_run
+//! use voxless::{AnyVolume, Control, ParticleArrays, Scene, SceneDesc, Vec3};
+//!
+//! let positions: Vec<Vec3> = (0..1000)
+//!     .map(|i| Vec3::new((i % 10) as f32, (i / 10 % 10) as f32, (i / 100) as f32))
+//!     .collect();
+//! let (volume, _notes) = AnyVolume::from_particles(
+//!     ParticleArrays { positions, ..Default::default() },
+//!     &Default::default(),
+//! )?;
+//! let scene = Scene::with_volume(volume, &SceneDesc::default(), ".".as_ref())?;
+//! let image = scene.render(&Control::new())?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod camera;
+pub mod demo;
+mod error;
+pub mod load;
+mod memory;
+mod resolve;
+mod scene;
+mod volume;
+
+pub use error::{Error, SceneError};
+pub use load::AmrArrays;
+pub use load::{Loaded, frame_count, load, read_points, read_scene};
+pub use memory::ParticleArrays;
+pub use resolve::{Resolved, resolve, transfer_function, transfer_function_at};
+pub use scene::Scene;
+pub use volume::AnyVolume;
+
+/// File formats: which reader a path needs and one frame of any of them.
+pub use load::formats;
+/// Time series: numbered files, patterns, globs, directories.
+pub use load::frames;
+
+pub use voxless_core::{
+    Aabb, Camera, CancelToken, Cancelled, Control, Image, Projection, Range1, Vec3,
+};
+pub use voxless_render::{Film, RenderSettings};
+pub use voxless_scene::*;
+pub use voxless_transfer::TransferFunction;
+
+pub use voxless_amr as amr;
+pub use voxless_core as core;
+pub use voxless_io as io;
+pub use voxless_particles as particles;
+pub use voxless_render as render;
+pub use voxless_tets as tets;
+pub use voxless_transfer as transfer;
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,2 @@
+mod camera;
+mod scene;

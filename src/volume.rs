@@ -1,0 +1,225 @@
+//! [`AnyVolume`]: every data kind behind one enum. Dispatch on the kind
+//! happens once per call (render, project, sample); below it the
+//! integrators are generic over the concrete volume.
+
+use rayon::prelude::*;
+use voxless_amr::AmrVolume;
+use voxless_core::{Aabb, Camera, Cancelled, Control, Image, Range1, Vec3, Volume};
+use voxless_particles::{MaterialVolume, ParticleVolume};
+use voxless_render::{Film, Job, RenderSettings};
+use voxless_tets::TetVolume;
+use voxless_transfer::TransferFunction;
+
+/// Every data kind voxless renders; one variant per kind. Volumes are
+/// immutable once built and `Sync`: one volume can serve several renders at
+/// once, each with its own camera and transfer function.
+pub enum AnyVolume {
+    Particles(Box<ParticleVolume>),
+    Amr(Box<AmrVolume>),
+    /// A phase-space tessellation.
+    Tets(Box<TetVolume>),
+    /// Several particle species, each with its own radius and transfer
+    /// function, blended per sample.
+    Materials(Box<MaterialVolume>),
+}
+
+/// Runs `$body` with `$v` bound to the concrete volume (monomorphised per kind).
+macro_rules! with_volume {
+    ($any:expr, $v:ident => $body:expr) => {
+        match $any {
+            AnyVolume::Particles($v) => {
+                let $v = &**$v;
+                $body
+            }
+            AnyVolume::Amr($v) => {
+                let $v = &**$v;
+                $body
+            }
+            AnyVolume::Tets($v) => {
+                let $v = &**$v;
+                $body
+            }
+            AnyVolume::Materials($v) => {
+                let $v = &**$v;
+                $body
+            }
+        }
+    };
+}
+
+impl AnyVolume {
+    pub fn bounds(&self) -> Aabb {
+        with_volume!(self, v => v.bounds())
+    }
+    pub fn value_range(&self) -> Range1 {
+        with_volume!(self, v => v.value_range())
+    }
+    pub fn attribute_range(&self) -> Option<Range1> {
+        with_volume!(self, v => v.attribute_range())
+    }
+    pub fn kind(&self) -> &'static str {
+        match self {
+            AnyVolume::Particles(_) => "particles",
+            AnyVolume::Amr(_) => "AMR cells",
+            AnyVolume::Tets(..) => "phase-space tessellation",
+            AnyVolume::Materials(_) => "multi-material particles",
+        }
+    }
+
+    /// Render settings with the library's generic defaults for this volume
+    /// (see [`RenderSettings::for_volume`]); [`crate::resolve`] refines them
+    /// from a description.
+    pub fn default_settings(&self, width: u32, height: u32) -> RenderSettings {
+        with_volume!(self, v => RenderSettings::for_volume(v, width, height))
+    }
+
+    /// Renders `settings.spp` passes with the emission–absorption (or
+    /// single-scattering) integrator; progress in tiles over all passes.
+    pub fn render(
+        &self,
+        camera: &Camera,
+        tf: &TransferFunction,
+        settings: &RenderSettings,
+        control: &Control,
+    ) -> Result<Image, Cancelled> {
+        with_volume!(self, v => voxless_render::render(v, camera, tf, settings, control))
+    }
+
+    /// Renders pass by pass into a film: after each pass `on_pass(&film)`
+    /// sees it (resolve it to show it) and returns whether to go on.
+    /// Returns the film with the passes done.
+    pub fn render_passes(
+        &self,
+        camera: &Camera,
+        tf: &TransferFunction,
+        settings: &RenderSettings,
+        control: &Control,
+        on_pass: &mut dyn FnMut(&Film) -> bool,
+    ) -> Result<Film, Cancelled> {
+        with_volume!(self, v => {
+            let prepared = voxless_render::prepare(v, tf, settings);
+            let job = Job::new(&prepared, camera, tf, settings);
+            let mut film = job.film();
+            let per = job.tiles_per_pass();
+            let total = per * settings.spp as u64;
+            while film.passes() < settings.spp {
+                let s = film.passes();
+                job.pass(&mut film, s, &control.part(s as u64 * per, total))?;
+                if !on_pass(&film) {
+                    break;
+                }
+            }
+            Ok(film)
+        })
+    }
+
+    /// Column density `∫ value dt` per pixel centre, row-major.
+    pub fn project(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        control: &Control,
+    ) -> Result<Vec<f32>, Cancelled> {
+        with_volume!(self, v => voxless_render::project(v, camera, width, height, control))
+    }
+
+    /// The integral of the field over all space, when the data kind knows it
+    /// exactly (what a projection over the full bounds must conserve).
+    pub fn total_mass(&self) -> Option<f64> {
+        match self {
+            AnyVolume::Particles(v) => Some(v.total_mass()),
+            AnyVolume::Amr(v) => v.exact_integral(),
+            AnyVolume::Tets(v) => Some(v.mesh.total_mass()),
+            AnyVolume::Materials(v) => {
+                Some(v.materials().iter().map(|m| m.volume.total_mass()).sum())
+            }
+        }
+    }
+
+    /// Names of the columns [`AnyVolume::sample_points`] writes.
+    pub fn sample_columns(&self, gradient: bool) -> Vec<String> {
+        let grad = |name: &str| ["x", "y", "z"].map(|a| format!("d{name}/d{a}"));
+        match self {
+            AnyVolume::Particles(v) => {
+                let mut c = vec!["density".to_string()];
+                if v.has_attribute() {
+                    c.push("attribute".into());
+                }
+                if gradient {
+                    c.extend(grad("density"));
+                }
+                c
+            }
+            AnyVolume::Tets(..) => vec!["density".into(), "streams".into()],
+            AnyVolume::Materials(v) => v
+                .materials()
+                .iter()
+                .map(|m| format!("density ({})", m.name))
+                .collect(),
+            AnyVolume::Amr(v) => {
+                let mut c: Vec<String> = v.field_names().to_vec();
+                if gradient {
+                    for n in v.field_names() {
+                        c.extend(grad(n));
+                    }
+                }
+                c
+            }
+        }
+    }
+
+    /// The fields at every point, row-major `points.len() × columns`.
+    pub fn sample_points(&self, points: &[Vec3], gradient: bool) -> Vec<f32> {
+        match self {
+            AnyVolume::Particles(v) => points
+                .par_iter()
+                .flat_map_iter(|&p| {
+                    let f = v.field(p, gradient);
+                    let mut row = vec![f.density];
+                    if v.has_attribute() {
+                        row.push(f.attribute);
+                    }
+                    if gradient {
+                        row.extend(f.gradient.to_array());
+                    }
+                    row
+                })
+                .collect(),
+            AnyVolume::Materials(v) => points
+                .par_iter()
+                .flat_map_iter(|&p| {
+                    v.materials()
+                        .iter()
+                        .map(|m| m.volume.density(p))
+                        .collect::<Vec<_>>()
+                })
+                .collect(),
+            AnyVolume::Tets(v) => points
+                .par_iter()
+                .flat_map_iter(|&p| {
+                    let (rho, streams) = v.density_and_streams(p);
+                    [rho as f32, streams as f32]
+                })
+                .collect(),
+            AnyVolume::Amr(v) => {
+                let nf = v.field_names().len();
+                let width = if gradient { 4 * nf } else { nf };
+                points
+                    .par_iter()
+                    .flat_map_iter(|&p| match v.fields_at(p, gradient) {
+                        // Values of every field, then every field's gradient.
+                        Some(f) => {
+                            let mut row: Vec<f32> = f.iter().map(|x| x.0).collect();
+                            if gradient {
+                                row.extend(f.iter().flat_map(|x| x.1.to_array()));
+                            }
+                            row
+                        }
+                        None => vec![f32::NAN; width],
+                    })
+                    .collect()
+            }
+        }
+    }
+}
