@@ -248,32 +248,37 @@ fn iso_surface_lies_where_the_density_first_crosses_the_value() {
                 }
             }
             ev.sort_by(|a, b| a.0.total_cmp(&b.0));
-            // Densities along the ray, piece by piece; a step across the iso
-            // value anywhere is a hit (the first piece at the span start
-            // does not count: the volume is cut there).
+            // The positive pieces along the ray, longer than rounding
+            // slivers (16 ulps of t); neighbours closer than that touch.
+            let ulps = |t: f32| 16.0 * f32::EPSILON * t.abs();
+            let mut pieces: Vec<(f32, f32, f64)> = Vec::new();
             let mut rho = 0.0f64;
-            let mut prev: Option<f64> = if ev.first().is_some_and(|e| e.0 > span.lo) {
-                Some(0.0)
-            } else {
-                None
-            };
-            let mut hit = false;
             for (k, e) in ev.iter().enumerate() {
-                // Where the span ends the volume is cut, not bounded.
-                if e.0 >= span.hi {
-                    break;
-                }
                 rho += e.1;
-                // Only pieces of positive length count: several events at
-                // one t are one step.
-                if ev.get(k + 1).is_some_and(|n| n.0 <= e.0) {
-                    continue;
+                if let Some(n) = ev.get(k + 1)
+                    && n.0 - e.0 > ulps(n.0)
+                    && rho > 1e-9
+                {
+                    pieces.push((e.0, n.0, rho));
                 }
-                let r = if rho.abs() < 1e-9 { 0.0 } else { rho };
-                if let Some(p) = prev {
-                    hit |= (p - iso as f64) * (r - iso as f64) < 0.0;
+            }
+            // A step across the iso-value between touching pieces, or from
+            // zero across a gap, is a hit; where the span starts or ends
+            // the volume is cut, not bounded.
+            let crosses = |a: f64, b: f64| (a - iso as f64) * (b - iso as f64) < 0.0;
+            let mut hit = false;
+            for (k, p) in pieces.iter().enumerate() {
+                match k.checked_sub(1).map(|j| pieces[j]) {
+                    Some(q) if p.0 - q.1 <= ulps(p.0) => hit |= crosses(q.2, p.2),
+                    Some(q) => hit |= crosses(q.2, 0.0) || crosses(0.0, p.2),
+                    None if p.0 > span.lo => hit |= crosses(0.0, p.2),
+                    None => {}
                 }
-                prev = Some(r);
+            }
+            if let Some(last) = pieces.last()
+                && last.1 < span.hi
+            {
+                hit |= crosses(last.2, 0.0);
             }
             let a = img[(y * s.width + x) as usize][3];
             assert_eq!(

@@ -126,3 +126,258 @@ impl<V: Volume> Prepare for Resampled<V> {
         self
     }
 }
+
+/// What [`check_contract`] tries, and how closely.
+#[derive(Clone, Debug)]
+pub struct Contract {
+    /// Random rays through the bounds.
+    pub rays: usize,
+    pub seed: u64,
+    /// Points sampled per interval.
+    pub samples_per_interval: usize,
+    /// Relative tolerance of sample values against their interval's range
+    /// (rounding in the volume's sums).
+    pub range_tolerance: f32,
+    /// Gradients against central differences of `sample`: the step (a
+    /// fraction of the bounds' diagonal) and the relative tolerance that
+    /// at least 90 % of the points must meet; `None` skips the check (a
+    /// field whose gradient is not the derivative of its samples, e.g. a
+    /// piecewise-constant one).
+    pub gradient: Option<(f32, f32)>,
+    /// Relative tolerance of `line_integral` against Simpson quadrature of
+    /// the samples over the intervals (with an absolute floor of 1 % of
+    /// this times the largest integral seen); `None` skips the check: a
+    /// classified volume (samples are opacities, projections integrate
+    /// densities), or a prepared context whose intervals leave out what its
+    /// transfer function hides (projections use the volume itself).
+    pub integral_tolerance: Option<f64>,
+    /// The share of samples in constant intervals allowed to differ from
+    /// the interval's value: a point lookup that nudges its point off
+    /// shared faces (tessellations) sees the neighbouring piece when a face
+    /// passes within the nudge.
+    pub constant_mismatch_share: f32,
+}
+
+impl Default for Contract {
+    fn default() -> Self {
+        Contract {
+            rays: 64,
+            seed: 1,
+            samples_per_interval: 5,
+            range_tolerance: 1e-4,
+            gradient: Some((1e-4, 2e-2)),
+            integral_tolerance: Some(1e-3),
+            constant_mismatch_share: 0.0,
+        }
+    }
+}
+
+/// Checks `volume` against the seam's contract on random rays through its
+/// bounds; returns every violation found (empty: it holds):
+///
+/// 1. intervals are non-empty, inside the asked range, sorted and disjoint;
+/// 2. samples inside an interval lie within its value range (a constant
+///    interval's samples equal its value);
+/// 3. [`Volume::sample_batch`] equals [`Volume::sample`] (and the gradients
+///    of `sample_with_gradient`) at the same points;
+/// 4. gradients agree with central differences of the samples;
+/// 5. [`Volume::line_integral`] agrees with quadrature of the samples.
+pub fn check_contract<V: Volume>(volume: &V, c: &Contract) -> Vec<String> {
+    let mut bad = Vec::new();
+    let b = volume.bounds();
+    if b.is_empty() {
+        return vec!["bounds are empty".into()];
+    }
+    let mut rng = crate::SmallRng(c.seed);
+    let point = |rng: &mut crate::SmallRng| {
+        Vec3::new(
+            b.min.x + rng.f() * (b.max.x - b.min.x),
+            b.min.y + rng.f() * (b.max.y - b.min.y),
+            b.min.z + rng.f() * (b.max.z - b.min.z),
+        )
+    };
+    let mut integrals = Vec::new();
+    let (mut constant_samples, mut constant_misses) = (0usize, Vec::new());
+    let mut batch_rays = Vec::new();
+    let mut batch_t = Vec::new();
+    let mut offsets = vec![0u32];
+    for r in 0..c.rays {
+        // A ray from outside the bounds through a random inner point.
+        let target = point(&mut rng);
+        let dir = Vec3::new(rng.f() - 0.5, rng.f() - 0.5, rng.f() - 0.5).normalized();
+        if !dir.is_finite() || dir.length_squared() < 0.5 {
+            continue;
+        }
+        let ray = Ray::new(target - dir * (2.0 * b.diagonal()), dir);
+        let t = b.clip_ray(&ray, Range1::new(0.0, f32::INFINITY));
+        if t.is_empty() {
+            continue;
+        }
+        let mut ivs = Vec::new();
+        volume.intervals(&ray, t, &IntervalQuery::all(), &mut ivs);
+        // 1. Intervals: non-empty, inside t, sorted, disjoint.
+        let slack = 1e-5 * (t.hi.abs() + 1.0);
+        let mut prev_end = f32::NEG_INFINITY;
+        for iv in &ivs {
+            if !(iv.t.hi > iv.t.lo) {
+                bad.push(format!("ray {r}: empty interval {:?}", iv.t));
+            }
+            if iv.t.lo < t.lo - slack || iv.t.hi > t.hi + slack {
+                bad.push(format!("ray {r}: interval {:?} outside {t:?}", iv.t));
+            }
+            if iv.t.lo < prev_end - slack {
+                bad.push(format!(
+                    "ray {r}: interval {:?} overlaps or is unsorted",
+                    iv.t
+                ));
+            }
+            prev_end = iv.t.hi;
+        }
+        // 2. Samples within the value range.
+        let mut ts = Vec::new();
+        for iv in &ivs {
+            for k in 0..c.samples_per_interval {
+                let tt = iv.t.lo + (k as f32 + 0.5) / c.samples_per_interval as f32 * iv.t.span();
+                let Some(s) = volume.sample_in(ray.at(tt), iv) else {
+                    continue;
+                };
+                let tol = c.range_tolerance * iv.value_range.hi.abs().max(iv.value_range.lo.abs())
+                    + f32::MIN_POSITIVE;
+                if let Some(v) = iv.constant_value() {
+                    constant_samples += 1;
+                    if (s.value - v).abs() > tol.max(c.range_tolerance * v.abs()) {
+                        constant_misses.push(format!(
+                            "ray {r}: sample {} in constant interval of value {v}",
+                            s.value
+                        ));
+                    }
+                } else if s.value < iv.value_range.lo - tol || s.value > iv.value_range.hi + tol {
+                    bad.push(format!(
+                        "ray {r}: sample {} outside its interval's range {:?}",
+                        s.value, iv.value_range
+                    ));
+                }
+                ts.push(tt);
+            }
+        }
+        if !ts.is_empty() && batch_rays.len() < 16 {
+            batch_rays.push(ray);
+            batch_t.extend_from_slice(&ts);
+            offsets.push(batch_t.len() as u32);
+        }
+        // 5. Line integral against quadrature.
+        let exact = volume.line_integral(&ray, t);
+        let quad = crate::quadrature_line_integral(volume, &ray, t);
+        integrals.push((r, exact, quad));
+    }
+    if constant_misses.len() as f32 > c.constant_mismatch_share * constant_samples as f32 {
+        bad.extend(constant_misses);
+    }
+    let scale = integrals
+        .iter()
+        .map(|x| x.1.abs().max(x.2.abs()))
+        .fold(0.0f64, f64::max);
+    for (r, exact, quad) in integrals {
+        let Some(tol) = c.integral_tolerance else {
+            break;
+        };
+        if (exact - quad).abs() > tol * (quad.abs() + scale * 1e-2) {
+            bad.push(format!(
+                "ray {r}: line integral {exact} vs quadrature {quad}"
+            ));
+        }
+    }
+    // 3. The batch path against point samples.
+    let batch = SampleBatch {
+        rays: &batch_rays,
+        offsets: &offsets,
+        t: &batch_t,
+    };
+    for gradient in [false, true] {
+        let mut out = Vec::new();
+        volume.sample_batch(&batch, gradient, &mut out);
+        if out.len() != batch_t.len() {
+            bad.push(format!(
+                "sample_batch gave {} samples for {}",
+                out.len(),
+                batch_t.len()
+            ));
+            continue;
+        }
+        let mut j = 0;
+        for (ri, ray) in batch_rays.iter().enumerate() {
+            for &tt in batch.samples(ri) {
+                let p = ray.at(tt);
+                let (want, want_g) = if gradient {
+                    match volume.sample_with_gradient(p) {
+                        Some((s, g)) => (Some(s), g),
+                        None => (None, Vec3::ZERO),
+                    }
+                } else {
+                    (volume.sample(p), Vec3::ZERO)
+                };
+                let (got, got_g) = out[j];
+                j += 1;
+                let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * a.abs().max(b.abs()) + 1e-6;
+                match (got, want) {
+                    (None, None) => {}
+                    (Some(a), Some(b)) if close(a.value, b.value) => {
+                        let gmax = want_g.length().max(got_g.length());
+                        if gradient && (got_g - want_g).length() > 1e-3 * gmax + 1e-6 {
+                            bad.push(format!(
+                                "sample_batch gradient {got_g:?} vs {want_g:?} at {p:?}"
+                            ));
+                        }
+                    }
+                    _ => bad.push(format!("sample_batch {got:?} vs sample {want:?} at {p:?}")),
+                }
+            }
+        }
+    }
+    // 4. Gradients against central differences.
+    if let Some((step, tol)) = c.gradient {
+        let h = step * b.diagonal();
+        let (mut tried, mut ok) = (0, 0);
+        for _ in 0..4 * c.rays {
+            let p = point(&mut rng);
+            let f = |q: Vec3| volume.sample(q).map(|s| s.value);
+            let Some(v0) = f(p) else { continue };
+            let axis = [
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(0.0, 0.0, 1.0),
+            ];
+            let fd: Option<Vec<f32>> = axis
+                .iter()
+                .map(|&e| Some((f(p + e * h)? - f(p - e * h)?) / (2.0 * h)))
+                .collect();
+            let Some(fd) = fd else { continue };
+            let fd = Vec3::new(fd[0], fd[1], fd[2]);
+            let g = volume.gradient(p);
+            if fd.length() < 1e-3 * (v0.abs() / b.diagonal()) {
+                continue; // flat: relative errors mean nothing there
+            }
+            tried += 1;
+            if (g - fd).length() <= tol * fd.length() {
+                ok += 1;
+            }
+        }
+        if tried > 0 && (ok as f32) < 0.9 * tried as f32 {
+            bad.push(format!(
+                "gradients match central differences at only {ok} of {tried} points"
+            ));
+        }
+    }
+    bad
+}
+
+/// Panics listing the violations of [`check_contract`], if any.
+pub fn assert_contract<V: Volume>(name: &str, volume: &V, c: &Contract) {
+    let bad = check_contract(volume, c);
+    assert!(
+        bad.is_empty(),
+        "{name} breaks the Volume contract ({} violations):\n{}",
+        bad.len(),
+        bad.iter().take(12).cloned().collect::<Vec<_>>().join("\n")
+    );
+}

@@ -42,6 +42,8 @@ mod march;
 mod packet;
 pub mod sampling;
 pub mod scatter;
+#[cfg(any(test, feature = "testing"))]
+pub mod testing;
 mod tile;
 
 pub use march::march;
@@ -445,5 +447,7 @@ pub fn project_per_pixel<V: Volume>(
 
 #[cfg(test)]
 mod scatter_tests;
+#[cfg(test)]
+mod seam_tests;
 #[cfg(test)]
 mod tests;

@@ -1,0 +1,213 @@
+//! Every data kind passes the same contract (`voxless_core::testing`):
+//! intervals sorted and disjoint, samples inside their interval's value
+//! range, the packet path equal to point samples, gradients against finite
+//! differences, line integrals against quadrature, and renders and
+//! projections that do not depend on the thread count. Raw volumes and
+//! their prepared contexts both pass.
+
+use voxless::{
+    AmrArrays, AmrDesc, AnyVolume, Camera, ClassificationName, KernelName, MaterialDesc,
+    ParticleArrays, ParticlesDesc, Range1, ReconstructionName, RenderSettings, Species, TetsDesc,
+    TransferFunction, Vec3,
+};
+use voxless_core::testing::{Contract, assert_contract};
+use voxless_core::{Prepare, PrepareQuery, SmallRng};
+use voxless_render::testing::assert_thread_independent;
+use voxless_tets::testing::folded_sheet;
+use voxless_transfer::{Colormap, OpacityMap};
+
+fn particles(n: usize, seed: u64) -> ParticleArrays {
+    let mut rng = SmallRng(seed);
+    let positions: Vec<Vec3> = (0..n)
+        .map(|_| {
+            // A lumpy cloud: clustered and sparse parts.
+            let c = if rng.f() < 0.5 { 0.3 } else { 0.7 };
+            Vec3::new(
+                c + 0.2 * (rng.f() - 0.5),
+                rng.f(),
+                c + 0.3 * (rng.f() - 0.5),
+            )
+        })
+        .collect();
+    let attribute = Some(positions.iter().map(|p| p.x + 2.0 * p.y).collect());
+    let species = Some((0..n).map(|i| (i % 2 + 1) as f32).collect());
+    ParticleArrays {
+        positions,
+        attribute,
+        species,
+        ..Default::default()
+    }
+}
+
+/// Two AMR levels: coarse cells (width 2) over [0, 16)³ but a refined
+/// [0, 8)³ corner of fine cells, with smooth fields.
+fn amr_cells() -> AmrArrays {
+    let mut cells = Vec::new();
+    for z in (0..16).step_by(2) {
+        for y in (0..16).step_by(2) {
+            for x in (0..16).step_by(2) {
+                if x < 8 && y < 8 && z < 8 {
+                    for dz in 0..2 {
+                        for dy in 0..2 {
+                            for dx in 0..2 {
+                                cells.push([x + dx, y + dy, z + dz, 0]);
+                            }
+                        }
+                    }
+                } else {
+                    cells.push([x, y, z, 1]);
+                }
+            }
+        }
+    }
+    let centre = |c: &[i32; 4]| {
+        let w = (1 << c[3]) as f32;
+        Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) + Vec3::splat(0.5 * w)
+    };
+    let density = cells
+        .iter()
+        .map(|c| {
+            let p = centre(c) * (1.0 / 16.0);
+            1.0 + (3.0 * p.x).sin() * (2.0 * p.y).cos() + p.z
+        })
+        .collect();
+    let energy = cells.iter().map(|c| centre(c).length() * 0.1).collect();
+    AmrArrays {
+        cells,
+        fields: vec![("density".into(), density), ("energy".into(), energy)],
+        origin: [0.0; 3],
+        cell_size: 0.125,
+    }
+}
+
+fn tf() -> TransferFunction {
+    TransferFunction::new(
+        Colormap::preset("viridis").unwrap(),
+        OpacityMap::preset("ramp-high").unwrap(),
+    )
+}
+
+/// Runs the contract on the raw volume and on a context prepared for a
+/// transfer function that hides the lower half of the value range, and the
+/// thread check.
+fn check_kind<P: Prepare + voxless_core::Volume>(name: &str, v: &P, contract: &Contract) {
+    assert_contract(name, v, contract);
+    let vr = v.value_range();
+    let cut = vr.lo + 0.5 * vr.span();
+    let visible = move |r: Range1| r.hi >= cut;
+    let color = |a: f32| Vec3::splat(a.clamp(0.0, 1.0));
+    let prepared = v.prepare(&PrepareQuery {
+        is_visible: &visible,
+        attribute_color: &color,
+        event_budget: None,
+        lod_pixels: None,
+    });
+    // A prepared context hands out fewer intervals, never different samples
+    // (and its intervals leave out what its transfer function hides, so its
+    // quadrature is not the volume's line integral).
+    let for_context = Contract {
+        integral_tolerance: None,
+        ..contract.clone()
+    };
+    assert_contract(&format!("{name} (prepared)"), &prepared, &for_context);
+    let b = v.bounds();
+    let camera = Camera::framing(&b, 1.25);
+    let settings = RenderSettings {
+        spp: 2,
+        ..RenderSettings::for_volume(v, 40, 32)
+    };
+    assert_thread_independent(name, v, &camera, &tf(), &settings);
+}
+
+#[test]
+fn particles_of_every_kernel_pass() {
+    for (kernel, classification) in [
+        (KernelName::Gaussian3, ClassificationName::Post),
+        (KernelName::Gaussian, ClassificationName::Pre),
+        (KernelName::CubicSpline, ClassificationName::Post),
+    ] {
+        let desc = ParticlesDesc {
+            kernel: Some(kernel),
+            classification: Some(classification),
+            ..Default::default()
+        };
+        let (v, _) = AnyVolume::from_particles(particles(600, 3), &desc).unwrap();
+        let AnyVolume::Particles(v) = v else {
+            unreachable!()
+        };
+        check_kind(&format!("particles ({kernel})"), &*v, &Contract::default());
+    }
+}
+
+#[test]
+fn multi_material_particles_pass() {
+    let mat = |s: &str, colormap: &str| MaterialDesc {
+        species: Species(s.into()),
+        colormap: Some(colormap.into()),
+        ..Default::default()
+    };
+    let desc = ParticlesDesc {
+        materials: Some(vec![mat("1", "viridis"), mat("2", "inferno")]),
+        ..Default::default()
+    };
+    let (v, _) = AnyVolume::from_particles(particles(800, 5), &desc).unwrap();
+    let AnyVolume::Materials(v) = v else {
+        unreachable!()
+    };
+    // Classified samples: the blended opacity is not the derivative of a
+    // field, so gradients are not compared.
+    let c = Contract {
+        gradient: None,
+        integral_tolerance: None,
+        ..Default::default()
+    };
+    check_kind("materials", &*v, &c);
+}
+
+#[test]
+fn amr_cells_pass_with_both_reconstructions() {
+    for reconstruction in [ReconstructionName::Basis, ReconstructionName::Nearest] {
+        let desc = AmrDesc {
+            reconstruction: Some(reconstruction),
+            color_field: Some("energy".into()),
+            ..Default::default()
+        };
+        let AnyVolume::Amr(v) = AnyVolume::from_amr(amr_cells(), &desc).unwrap() else {
+            unreachable!()
+        };
+        let c = match reconstruction {
+            // Tents are piecewise linear: differences across their kinks
+            // disagree with the one-sided analytic gradient at few points.
+            ReconstructionName::Basis => Contract::default(),
+            // Nearest is piecewise constant: no gradient to compare, and
+            // quadrature of its steps is only first order.
+            ReconstructionName::Nearest => Contract {
+                gradient: None,
+                integral_tolerance: Some(2e-2),
+                ..Default::default()
+            },
+        };
+        check_kind(&format!("AMR ({})", reconstruction.name()), &*v, &c);
+    }
+}
+
+#[test]
+fn tessellations_pass() {
+    let g = folded_sheet(6, 21);
+    let v =
+        AnyVolume::from_tessellation(g.positions.clone(), g.n, g.box_size, &TetsDesc::default())
+            .unwrap();
+    let AnyVolume::Tets(v) = v else {
+        unreachable!()
+    };
+    // The density is piecewise constant: its samples have no derivative to
+    // compare (shading uses a smoothed gradient), and constant pieces make
+    // quadrature exact.
+    let c = Contract {
+        gradient: None,
+        integral_tolerance: Some(1e-4),
+        constant_mismatch_share: 5e-3,
+        ..Default::default()
+    };
+    check_kind("tessellation", &*v, &c);
+}
