@@ -304,8 +304,10 @@ fn render_to(s: &Scene, output: &Path, colorbar: Option<&ColorbarSpec>) -> Resul
     let progress = Progress::new("rendering", 1);
     let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
     let t = Instant::now();
-    let mut image = s.render(&Control::new().with_progress(&report))?;
+    let film = s.render_film(&Control::new().with_progress(&report))?;
     progress.finish();
+    s.check_iso(&film)?;
+    let mut image = film.resolve();
     let secs = t.elapsed().as_secs_f64();
     view::decorate(&mut image, s, colorbar);
     write_image(output, &image, s.background)?;

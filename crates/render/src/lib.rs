@@ -46,7 +46,7 @@ pub mod scatter;
 pub mod testing;
 mod tile;
 
-pub use march::march;
+pub use march::{RayStats, march};
 pub use packet::{PACKET, WINDOW_STEPS};
 pub use scatter::{FreeFlight, LightSource, Noise, Scatter};
 
@@ -276,7 +276,7 @@ impl<'a, V: Volume> Job<'a, V> {
         control.check()?;
         let total = self.tiles.len() as u64;
         let done = std::sync::atomic::AtomicU64::new(0);
-        let results: Vec<Option<Vec<[f32; 4]>>> = self
+        let results: Vec<Option<(Vec<[f32; 4]>, RayStats)>> = self
             .tiles
             .par_iter()
             .map(|&tile| {
@@ -293,7 +293,8 @@ impl<'a, V: Volume> Job<'a, V> {
             return Err(Cancelled);
         }
         let w = film.width;
-        for (tile, pixels) in self.tiles.iter().zip(results.into_iter().flatten()) {
+        for (tile, (pixels, stats)) in self.tiles.iter().zip(results.into_iter().flatten()) {
+            film.stats.merge(&stats);
             let mut it = pixels.into_iter();
             for y in tile.y..tile.y + tile.h {
                 for x in tile.x..tile.x + tile.w {
@@ -316,6 +317,7 @@ pub struct Film {
     height: u32,
     sum: Vec<[f32; 4]>,
     passes: u32,
+    stats: RayStats,
 }
 
 impl Film {
@@ -325,7 +327,14 @@ impl Film {
             height,
             sum: vec![[0.0; 4]; width as usize * height as usize],
             passes: 0,
+            stats: RayStats::default(),
         }
+    }
+
+    /// What the rays of the passes so far saw (iso-surface hits; the range
+    /// of the values sampled when iso-surfaces were asked for).
+    pub fn stats(&self) -> &RayStats {
+        &self.stats
     }
 
     /// How many passes have been added.

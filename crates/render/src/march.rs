@@ -42,10 +42,11 @@ pub fn march<V: Volume>(
         scratch,
     );
     let ctx = Ctx::new(tf, settings, volume.classified());
-    march_intervals(volume, ray, scratch, span, rng, &ctx)
+    march_intervals(volume, ray, scratch, span, rng, &ctx, &mut RayStats::default())
 }
 
-/// Emission–absorption along `ray` over its `intervals` (within `span`).
+/// Emission–absorption along `ray` over its `intervals` (within `span`);
+/// what the ray saw is added to `stats`.
 pub(crate) fn march_intervals<V: Volume>(
     volume: &V,
     ray: &Ray,
@@ -53,6 +54,7 @@ pub(crate) fn march_intervals<V: Volume>(
     span: Range1,
     rng: &PixelRng,
     ctx: &Ctx,
+    stats: &mut RayStats,
 ) -> [f32; 4] {
     let gradient = ctx.needs_gradient();
     let mut state = RayState::new(span);
@@ -71,10 +73,12 @@ pub(crate) fn march_intervals<V: Volume>(
             (volume.sample_in(p, iv), Vec3::ZERO)
         };
         if state.feed(volume, ray, iv, seg, sample, g, ctx) {
+            stats.merge(&state.stats);
             return state.rgba();
         }
     }
     state.finish(volume, ray, ctx);
+    stats.merge(&state.stats);
     state.rgba()
 }
 
@@ -244,9 +248,35 @@ impl<'a> Ctx<'a> {
     }
 }
 
+/// What the rays of a render saw, for the caller to check: how many
+/// iso-surface hits, and the range of the values sampled (tracked only when
+/// iso-surfaces are asked for).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayStats {
+    pub iso_hits: u64,
+    pub values: Range1,
+}
+
+impl Default for RayStats {
+    fn default() -> Self {
+        RayStats {
+            iso_hits: 0,
+            values: Range1::EMPTY,
+        }
+    }
+}
+
+impl RayStats {
+    pub fn merge(&mut self, o: &RayStats) {
+        self.iso_hits += o.iso_hits;
+        self.values = self.values.union(o.values);
+    }
+}
+
 /// The compositing state of one ray.
 pub(crate) struct RayState {
     acc: Accumulator,
+    pub stats: RayStats,
     /// The previous sample (t, value), for iso-surface crossings.
     prev: Option<(f32, f32)>,
     /// The last interval when it was constant: (end, value). A gap after it
@@ -261,6 +291,7 @@ impl RayState {
     pub fn new(span: Range1) -> Self {
         RayState {
             acc: Accumulator::default(),
+            stats: RayStats::default(),
             prev: None,
             last_constant: None,
             span,
@@ -294,6 +325,9 @@ impl RayState {
             // Crossings sit on the boundary: from zero after a gap (not at
             // the start of the ray's span, where the volume is cut), else
             // from the previous value.
+            if !settings.iso.is_empty() {
+                self.stats.values.extend(v);
+            }
             let before = if seg.reset {
                 Some(0.0)
             } else {
@@ -318,6 +352,9 @@ impl RayState {
             return false;
         };
         let tm = seg.t;
+        if !settings.iso.is_empty() {
+            self.stats.values.extend(s.value);
+        }
         // Implicit iso-surfaces: a sign change of value − iso between the
         // previous sample and this one is a hit, placed by linear interpolation.
         if let Some((t0, v0)) = self.prev {
@@ -334,6 +371,7 @@ impl RayState {
                     };
                     let (hs, g) = hit.unwrap_or((s, gradient));
                     let c = ctx.colour_of(&hs, settings.normalize(iso)) * iso_shade(ray, g, ctx);
+                    self.stats.iso_hits += 1;
                     if self
                         .acc
                         .add(c, settings.iso_opacity, settings.early_termination)
@@ -385,6 +423,7 @@ impl RayState {
                 let g = volume.gradient(ray.at(t));
                 let c = ctx.colour_of(&Sample::scalar(iso), settings.normalize(iso))
                     * iso_shade(ray, g, ctx);
+                self.stats.iso_hits += 1;
                 if self
                     .acc
                     .add(c, settings.iso_opacity, settings.early_termination)

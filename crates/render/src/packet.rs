@@ -13,7 +13,7 @@
 use voxless_core::{IntervalLists, Range1, Ray, Sample, SampleBatch, Vec3, Volume};
 
 use crate::Tile;
-use crate::march::{Ctx, Cursor, RayState, Segment};
+use crate::march::{Ctx, Cursor, RayState, RayStats, Segment};
 use crate::sampling::PixelRng;
 
 /// Side of a packet in pixels.
@@ -66,6 +66,7 @@ pub(crate) fn render_tile<V: Volume>(
     input: TileInput,
     scratch: &mut PacketScratch,
     out: &mut Vec<[f32; 4]>,
+    stats: &mut RayStats,
 ) {
     out.clear();
     out.resize((tile.w * tile.h) as usize, [0.0; 4]);
@@ -97,6 +98,7 @@ pub(crate) fn render_tile<V: Volume>(
             run_packet(volume, ctx, &input, scratch);
             for p in &scratch.rays {
                 out[p.r] = p.state.rgba();
+                stats.merge(&p.state.stats);
             }
         }
     }

@@ -5,7 +5,7 @@
 
 use voxless_core::{Aabb, IntervalLists, IntervalQuery, Range1, Ray, TileRays, Volume};
 
-use crate::march::{Ctx, march_intervals};
+use crate::march::{Ctx, RayStats, march_intervals};
 use crate::packet::{self, PacketScratch};
 use crate::sampling::PixelRng;
 use crate::{Job, Tile, pixel_ray, scatter};
@@ -35,17 +35,29 @@ pub(crate) fn region<V: Volume>(volume: &V, clip: Option<Aabb>) -> Aabb {
     }
 }
 
-/// Renders sample index `sample` of `tile`; pixels row-major.
-pub(crate) fn render_tile<V: Volume>(job: &Job<V>, tile: Tile, sample: u32) -> Vec<[f32; 4]> {
+/// Renders sample index `sample` of `tile`; pixels row-major, and what the
+/// tile's rays saw.
+pub(crate) fn render_tile<V: Volume>(
+    job: &Job<V>,
+    tile: Tile,
+    sample: u32,
+) -> (Vec<[f32; 4]>, RayStats) {
     // Taken out of the thread-local (not borrowed), so a volume that runs
     // rayon inside a call cannot re-enter a borrowed buffer.
     let mut s = SCRATCH.take().unwrap_or_default();
-    let out = render_with(job, tile, sample, &mut s);
+    let mut stats = RayStats::default();
+    let out = render_with(job, tile, sample, &mut s, &mut stats);
     SCRATCH.set(Some(s));
-    out
+    (out, stats)
 }
 
-fn render_with<V: Volume>(job: &Job<V>, tile: Tile, sample: u32, s: &mut Scratch) -> Vec<[f32; 4]> {
+fn render_with<V: Volume>(
+    job: &Job<V>,
+    tile: Tile,
+    sample: u32,
+    s: &mut Scratch,
+    stats: &mut RayStats,
+) -> Vec<[f32; 4]> {
     let (volume, settings, tf) = (job.volume, job.settings, job.tf);
     let region = region(volume, settings.clip);
     // 1. The tile's rays and the part of each inside the (clipped) volume.
@@ -126,6 +138,7 @@ fn render_with<V: Volume>(job: &Job<V>, tile: Tile, sample: u32, s: &mut Scratch
             },
             &mut s.packet,
             &mut out,
+            stats,
         );
     } else {
         for r in 0..n {
@@ -136,6 +149,7 @@ fn render_with<V: Volume>(job: &Job<V>, tile: Tile, sample: u32, s: &mut Scratch
                 s.spans[r],
                 &s.rngs[r],
                 &ctx,
+                stats,
             ));
         }
     }
