@@ -1,14 +1,17 @@
-//! `read_amrclaw` on AMRClaw ASCII output. Byte 0 picks the mode (modulo 3),
-//! the rest of the input is one file:
+//! `read_amrclaw_from` on AMRClaw ASCII output. Byte 0 picks the mode
+//! (modulo 3), the rest of the input is one of the two texts:
 //!
-//! - 0: the rest is `fort.q0001`, next to a small valid `fort.t0001`
+//! - 0: the rest is the `fort.q` text, with a small valid `fort.t`
 //!   (time 0.5, meqn 2, 2 grids, ndim 3);
-//! - 1: the rest is `fort.t0001`, next to a small valid `fort.q0001` (two
+//! - 1: the rest is the `fort.t` text, with a small valid `fort.q` (two
 //!   grids of 2×2×2 cells with 2 values each, the second one level finer);
-//! - 2: the rest is `fort.q0001` and there is no `fort.t0001`, so `meqn`
-//!   comes from the first data row and grids run to the end of the file.
+//! - 2: the rest is the `fort.q` text and there is no `fort.t`, so `meqn`
+//!   comes from the first data row and grids run to the end of the text.
 
 #![no_main]
+
+use std::io::Cursor;
+use std::path::Path;
 
 use libfuzzer_sys::fuzz_target;
 
@@ -73,19 +76,10 @@ fuzz_target!(|data: &[u8]| {
     let Some((&mode, rest)) = data.split_first() else {
         return;
     };
-    let fort_q = match mode % 3 {
-        0 => {
-            voxless_fuzz::write("fort.t0001", FORT_T.as_bytes());
-            voxless_fuzz::write("fort.q0001", rest)
-        }
-        1 => {
-            voxless_fuzz::write("fort.t0001", rest);
-            voxless_fuzz::write("fort.q0001", FORT_Q.as_bytes())
-        }
-        _ => {
-            voxless_fuzz::remove("fort.t0001");
-            voxless_fuzz::write("fort.q0001", rest)
-        }
+    let (fort_q, fort_t) = match mode % 3 {
+        0 => (rest, Some(FORT_T.as_bytes())),
+        1 => (FORT_Q.as_bytes(), Some(rest)),
+        _ => (rest, None),
     };
-    let _ = voxless_io::read_amrclaw(&fort_q);
+    let _ = voxless_io::read_amrclaw_from(Cursor::new(fort_q), Path::new("fort.q0001"), fort_t);
 });

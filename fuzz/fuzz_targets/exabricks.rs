@@ -1,12 +1,12 @@
-//! `read_exabricks` on a `.cells` file, up to three `.scalars` files and an
-//! optional `.meta.json`, all cut from the input:
+//! `read_exabricks_bytes` on the contents of a `.cells` file, up to three
+//! `.scalars` files and an optional `.meta.json`, all cut from the input:
 //!
-//! - byte 0: flags; bits 0-1 give the number of scalars files (0 to 3),
-//!   bit 2 says whether `frame.meta.json` is written;
+//! - byte 0: flags; bits 0-1 give the number of scalars parts (0 to 3),
+//!   bit 2 says whether there is a meta JSON part;
 //! - bytes 1-2: the length of the `.cells` part (`u16`, little-endian),
 //!   which follows;
-//! - with a meta file: one length byte, then the JSON;
-//! - the rest: the scalars files, each but the last taking a quarter of the
+//! - with a meta part: one length byte, then the JSON;
+//! - the rest: the scalars parts, each but the last taking a quarter of the
 //!   cells part's length (one `f32` per 16-byte cell), the last taking all
 //!   that remains.
 //!
@@ -14,14 +14,12 @@
 
 #![no_main]
 
+use std::path::Path;
+
 use libfuzzer_sys::fuzz_target;
 use voxless_fuzz::split;
 
-const NAMES: [&str; 3] = [
-    "frame.density.scalars",
-    "frame.energy.scalars",
-    "frame.momentum_x.scalars",
-];
+const FIELDS: [&str; 3] = ["density", "energy", "momentum_x"];
 
 fuzz_target!(|data: &[u8]| {
     let Some((&flags, rest)) = data.split_first() else {
@@ -34,27 +32,25 @@ fuzz_target!(|data: &[u8]| {
         _ => 0,
     };
     let (cells, mut rest) = split(rest, cells_len);
-    let cells_path = voxless_fuzz::write("frame.cells", cells);
 
+    let mut meta = None;
     if flags & 4 != 0 {
         let (len, after) = split(rest, 1);
-        let (meta, after) = split(after, len.first().map_or(0, |&b| usize::from(b)));
-        voxless_fuzz::write("frame.meta.json", meta);
+        let (json, after) = split(after, len.first().map_or(0, |&b| usize::from(b)));
+        meta = Some(json);
         rest = after;
-    } else {
-        voxless_fuzz::remove("frame.meta.json");
     }
 
     let count = usize::from(flags & 3);
     let mut scalars = Vec::with_capacity(count);
-    for (i, name) in NAMES.iter().take(count).enumerate() {
+    for (i, &field) in FIELDS.iter().take(count).enumerate() {
         let part;
         if i + 1 == count {
             part = rest;
         } else {
             (part, rest) = split(rest, cells.len() / 4);
         }
-        scalars.push(voxless_fuzz::write(name, part));
+        scalars.push((field, part));
     }
-    let _ = voxless_io::read_exabricks(&cells_path, &scalars);
+    let _ = voxless_io::read_exabricks_bytes(cells, Path::new("frame.cells"), &scalars, meta);
 });

@@ -1,10 +1,11 @@
-//! `read_vtu_mesh` on the input as a `.vtu` file.
+//! `read_vtu_mesh_bytes` on the input as the content of a `.vtu` file.
 
 #![no_main]
+
+use std::path::Path;
 
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let path = voxless_fuzz::write("mesh.vtu", data);
-    let _ = voxless_io::read_vtu_mesh(&path);
+    let _ = voxless_io::read_vtu_mesh_bytes(data, Path::new("mesh.vtu"));
 });

@@ -9,9 +9,11 @@
 //! names or values wrapped in double quotes are unquoted.
 //!
 //! The file is streamed line by line; only the parsed numbers are kept.
+//! [`read_csv_from`] reads the same text from any reader (bytes in memory,
+//! a socket); [`read_csv`] opens the file and calls it.
 
 use std::fs::File;
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
 use crate::IoError;
@@ -76,9 +78,17 @@ fn fields(line: &str, sep: Separator) -> impl Iterator<Item = &str> + Clone {
 /// number; the message gives the line number and the column name.
 pub fn read_csv(path: &Path) -> Result<CsvTable, IoError> {
     let file = File::open(path).map_err(|e| IoError::io(path, e))?;
-    let mut reader = BufReader::new(file);
+    read_csv_from(file, path)
+}
+
+/// [`read_csv`] over the text `reader` yields (e.g. a byte slice); `name`
+/// only labels errors, which read exactly as [`read_csv`]'s for a file of
+/// that name. Only the parsed numbers are kept, so no allocation depends on
+/// a size the input declares.
+pub fn read_csv_from<R: Read>(reader: R, name: &Path) -> Result<CsvTable, IoError> {
+    let mut reader = BufReader::new(reader);
     let fmt =
-        |line: usize, message: String| IoError::format(path, format!("line {line}: {message}"));
+        |line: usize, message: String| IoError::format(name, format!("line {line}: {message}"));
 
     let mut table = CsvTable::default();
     let mut separator = None;
@@ -88,7 +98,7 @@ pub fn read_csv(path: &Path) -> Result<CsvTable, IoError> {
         buf.clear();
         if reader
             .read_until(b'\n', &mut buf)
-            .map_err(|e| IoError::io(path, e))?
+            .map_err(|e| IoError::io(name, e))?
             == 0
         {
             break;
@@ -129,7 +139,7 @@ pub fn read_csv(path: &Path) -> Result<CsvTable, IoError> {
     }
     if separator.is_none() {
         return Err(IoError::format(
-            path,
+            name,
             "no header line with column names (the file is empty or holds only comments)",
         ));
     }

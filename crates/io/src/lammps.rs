@@ -48,7 +48,12 @@
 //!
 //! **Streaming.** [`read_lammps`] reads the headers of the frames before the
 //! one asked for and skips their atom lines without parsing them.
+//!
+//! **From memory.** [`lammps_frames_from`] and [`read_lammps_from`] read a
+//! dump from any reader (a `Cursor` over bytes, a file already open); the
+//! path functions open the file and share their code.
 
+use std::io::{BufRead, Read, Seek};
 use std::path::Path;
 
 use crate::{IoError, LineReader, ParticleTable};
@@ -105,7 +110,16 @@ struct FrameHeader {
 /// [`IoError::Format`] if a header is malformed or a frame has fewer atom
 /// lines than its NUMBER OF ATOMS.
 pub fn lammps_frames(path: &Path) -> Result<usize, IoError> {
-    let mut lines = LineReader::open(path)?;
+    count_frames(LineReader::open(path)?)
+}
+
+/// [`lammps_frames`] of the dump `reader` yields; `name` only labels errors,
+/// which read as [`lammps_frames`]'s for a file of that name.
+pub fn lammps_frames_from<R: Read>(reader: R, name: &Path) -> Result<usize, IoError> {
+    count_frames(LineReader::from_read(reader, name))
+}
+
+fn count_frames<R: BufRead>(mut lines: LineReader<R>) -> Result<usize, IoError> {
     let mut count = 0;
     while let Some(header) = read_header(&mut lines, count)? {
         skip_atoms(&mut lines, count, &header)?;
@@ -113,7 +127,7 @@ pub fn lammps_frames(path: &Path) -> Result<usize, IoError> {
     }
     if count == 0 {
         return Err(IoError::format(
-            path,
+            lines.path(),
             "not a LAMMPS dump: the file holds no 'ITEM: TIMESTEP' frame",
         ));
     }
@@ -129,14 +143,34 @@ pub fn lammps_frames(path: &Path) -> Result<usize, IoError> {
 /// lines than it declares, or an atom line has the wrong number of values or
 /// a value that is not a number.
 pub fn read_lammps(path: &Path, frame: usize) -> Result<ParticleTable, IoError> {
-    let mut lines = LineReader::open(path)?;
+    read_frame(LineReader::open(path)?, frame)
+}
+
+/// [`read_lammps`] of the dump `reader` yields, from its position to its
+/// end; `name` only labels errors, which read as [`read_lammps`]'s for a file
+/// of that name. The reader's length caps what NUMBER OF ATOMS may make it
+/// allocate, as the file's length does.
+pub fn read_lammps_from<R: Read + Seek>(
+    reader: R,
+    name: &Path,
+    frame: usize,
+) -> Result<ParticleTable, IoError> {
+    read_frame(LineReader::from_seek(reader, name)?, frame)
+}
+
+fn read_frame<R: BufRead>(
+    mut lines: LineReader<R>,
+    frame: usize,
+) -> Result<ParticleTable, IoError> {
+    // Skip the frames before, reading only their headers.
     for index in 0..frame {
         match read_header(&mut lines, index)? {
             Some(header) => skip_atoms(&mut lines, index, &header)?,
-            None => return Err(past_end(path, frame, index)),
+            None => return Err(past_end(lines.path(), frame, index)),
         }
     }
-    let header = read_header(&mut lines, frame)?.ok_or_else(|| past_end(path, frame, frame))?;
+    let header =
+        read_header(&mut lines, frame)?.ok_or_else(|| past_end(lines.path(), frame, frame))?;
     read_atoms(&mut lines, frame, header)
 }
 
@@ -158,7 +192,10 @@ fn past_end(path: &Path, frame: usize, frames: usize) -> IoError {
 
 /// Reads the items of one frame up to and including `ITEM: ATOMS`. Returns
 /// `None` if the file ends (blank lines aside) before the frame starts.
-fn read_header(lines: &mut LineReader, frame: usize) -> Result<Option<FrameHeader>, IoError> {
+fn read_header(
+    lines: &mut LineReader<impl BufRead>,
+    frame: usize,
+) -> Result<Option<FrameHeader>, IoError> {
     let mut timestep = None;
     let mut atoms = None;
     let mut sim_box = None;
@@ -241,7 +278,7 @@ fn read_header(lines: &mut LineReader, frame: usize) -> Result<Option<FrameHeade
 
 /// Reads the line after an item and parses it as one value.
 fn value_line<T: std::str::FromStr>(
-    lines: &mut LineReader,
+    lines: &mut LineReader<impl BufRead>,
     frame: usize,
     item: &str,
 ) -> Result<T, IoError> {
@@ -258,7 +295,11 @@ fn value_line<T: std::str::FromStr>(
 }
 
 /// Reads the three lines of `ITEM: BOX BOUNDS <flags>`.
-fn read_box(lines: &mut LineReader, frame: usize, flags: &[&str]) -> Result<SimBox, IoError> {
+fn read_box(
+    lines: &mut LineReader<impl BufRead>,
+    frame: usize,
+    flags: &[&str],
+) -> Result<SimBox, IoError> {
     let triclinic = flags.contains(&"xy");
     let general = flags.contains(&"abc");
     let per_line = if general {
@@ -356,7 +397,7 @@ fn read_box(lines: &mut LineReader, frame: usize, flags: &[&str]) -> Result<SimB
 
 /// Error for a frame whose atom lines run out early.
 fn short_frame(
-    lines: &LineReader,
+    lines: &LineReader<impl BufRead>,
     frame: usize,
     header: &FrameHeader,
     found: usize,
@@ -373,7 +414,11 @@ fn short_frame(
 }
 
 /// Skips the atom lines of a frame without parsing them.
-fn skip_atoms(lines: &mut LineReader, frame: usize, header: &FrameHeader) -> Result<(), IoError> {
+fn skip_atoms(
+    lines: &mut LineReader<impl BufRead>,
+    frame: usize,
+    header: &FrameHeader,
+) -> Result<(), IoError> {
     for found in 0..header.atoms {
         match lines.skip_line(b"ITEM:")? {
             None => return Err(short_frame(lines, frame, header, found, "the file ends")),
@@ -394,7 +439,7 @@ fn skip_atoms(lines: &mut LineReader, frame: usize, header: &FrameHeader) -> Res
 
 /// Parses the atom lines of a frame into a table.
 fn read_atoms(
-    lines: &mut LineReader,
+    lines: &mut LineReader<impl BufRead>,
     frame: usize,
     header: FrameHeader,
 ) -> Result<ParticleTable, IoError> {

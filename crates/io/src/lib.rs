@@ -26,9 +26,55 @@
 //! - [`vtk`]: VTK XML `.vtp`/`.vtu` files in every encoding VTK writes:
 //!   points and point data as particles ([`read_vtk_points`]) and tetrahedral
 //!   meshes ([`read_vtu_mesh`]).
+//! - [`format`](mod@format): which particle format a file is ([`ParticleFormat`], by
+//!   name, then by its first bytes), how many frames it holds, and one frame
+//!   of any of them as a table ([`format::read_table`]), with the
+//!   [`TableOptions`] that pick a part of an HDF5 file.
 //!
 //! The particle readers return a [`ParticleTable`]; multi-frame formats read
 //! one frame per call and skip the frames before it without parsing them.
+//!
+//! # Reading from memory
+//!
+//! Every reader also reads data that is not a file (an upload, a network
+//! stream, bytes already in memory), through a variant next to its path
+//! function:
+//!
+//! - `_from` variants take a reader and read it from its position to its
+//!   end: [`read_npy_from`], [`read_csv_from`], [`read_lammps_from`],
+//!   [`lammps_frames_from`], [`read_xyz_from`], [`xyz_frames_from`],
+//!   [`xyz_species_from`], [`read_amrclaw_from`] (plus the `fort.t` text),
+//!   [`read_png_rgb8_from`], [`read_exr_gray_from`]. Those that
+//!   pre-allocate from a size the data declares ask for `Read + Seek`, and
+//!   the reader's length then bounds that size as a file's length does;
+//!   those that only stream (frame counts, species lists, CSV, the
+//!   `.particles` index) take any `Read`. Wrap a byte slice in a
+//!   `std::io::Cursor`.
+//! - `_bytes` variants take a byte slice where the parser needs all of it:
+//!   VTK XML ([`read_vtk_points_bytes`], [`read_vtu_mesh_bytes`]), whose
+//!   appended data is addressed by offset, and ExaBricks
+//!   ([`read_exabricks_bytes`]: the cells, each field's name with its
+//!   scalars, and the meta JSON).
+//! - A `.particles` series names one file per timestep, so
+//!   [`read_particles_from`] takes the index text and a closure that opens
+//!   a named timestep; [`read_particles_timestep_from`] reads one
+//!   timestep's data alone.
+//! - Writers have `_to` variants into any writer: [`write_npy_f32_to`],
+//!   [`write_png_rgb8_to`], and (seekable, as OpenEXR writes its offset
+//!   table last) [`write_exr_rgba_to`], [`write_exr_gray_to`].
+//! - [`ParticleFormat::detect_bytes`] detects a format from a name and the
+//!   first bytes; [`format::read_table_from`] and [`format::frames_in_from`]
+//!   dispatch on a reader.
+//!
+//! Each variant takes a `name` that only labels its errors: an error reads
+//! exactly as the path function's does for a file of that name (e.g.
+//! `frame3.cells: size 24 bytes is not a multiple of 16 ...`). The path
+//! functions open the file and run the same code, so both give the same
+//! results. The HDF5 readers stay path-based: the `hdf5-metno` crate opens
+//! files by name and does not offer HDF5's in-memory file images (see the
+//! `hdf5` module).
+//!
+//! # Errors
 //!
 //! Every function reports failures as an [`IoError`] that names the file and
 //! says what is wrong with it. Bad input never panics, and readers check the
@@ -37,11 +83,12 @@
 //! file's contents could fill.
 
 use std::fs::File;
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 pub mod amr;
 pub mod csv;
+pub mod format;
 #[cfg(feature = "hdf5")]
 pub mod hdf5;
 pub mod image;
@@ -52,20 +99,31 @@ pub mod table;
 pub mod vtk;
 pub mod xyz;
 
-pub use amr::{AmrCellData, read_amrclaw, read_exabricks};
-pub use csv::{CsvTable, read_csv};
+pub use amr::{AmrCellData, read_amrclaw, read_amrclaw_from, read_exabricks, read_exabricks_bytes};
+pub use csv::{CsvTable, read_csv, read_csv_from};
+pub use format::{ParticleFormat, TableOptions};
 #[cfg(feature = "hdf5")]
 pub use hdf5::{
     Hdf5Kind, JaxpmSnapshot, describe_hdf5, hdf5_kind, jaxpm_snapshots, pysph_groups, read_gadget,
     read_jaxpm, read_pysph,
 };
-pub use image::{read_exr_gray, read_png_rgb8, write_exr_gray, write_exr_rgba, write_png_rgb8};
-pub use lammps::{lammps_frames, read_lammps};
-pub use npy::{NpyArray, read_npy, write_npy_f32};
-pub use particles_fmt::{particles_frames, read_particles_file};
+pub use image::{
+    read_exr_gray, read_exr_gray_from, read_png_rgb8, read_png_rgb8_from, write_exr_gray,
+    write_exr_gray_to, write_exr_rgba, write_exr_rgba_to, write_png_rgb8, write_png_rgb8_to,
+};
+pub use lammps::{lammps_frames, lammps_frames_from, read_lammps, read_lammps_from};
+pub use npy::{NpyArray, read_npy, read_npy_from, write_npy_f32, write_npy_f32_to};
+pub use particles_fmt::{
+    particles_frames, particles_frames_from, read_particles_file, read_particles_from,
+    read_particles_timestep_from,
+};
 pub use table::ParticleTable;
-pub use vtk::{VtkMesh, read_vtk_points, read_vtu_mesh};
-pub use xyz::{read_xyz, xyz_frames, xyz_species};
+pub use vtk::{
+    VtkMesh, read_vtk_points, read_vtk_points_bytes, read_vtu_mesh, read_vtu_mesh_bytes,
+};
+pub use xyz::{
+    read_xyz, read_xyz_from, xyz_frames, xyz_frames_from, xyz_species, xyz_species_from,
+};
 
 /// An error while reading or writing a file. Both variants name the file.
 #[derive(Debug, thiserror::Error)]
@@ -106,32 +164,80 @@ pub(crate) fn checked_product(dims: &[usize]) -> Option<usize> {
     dims.iter().try_fold(1usize, |acc, &d| acc.checked_mul(d))
 }
 
-/// Reads a text file line by line, counting lines, for the text formats
-/// (LAMMPS dumps, XYZ, `.particles` lists). Lines may end in `\n` or `\r\n`.
-pub(crate) struct LineReader {
-    reader: BufReader<File>,
+/// Bytes from `reader`'s position to its end, for the size checks of the
+/// memory variants (the path functions take a file's length from its
+/// metadata instead). The position is left where it was.
+pub(crate) fn remaining_len<R: Seek>(reader: &mut R, name: &Path) -> Result<u64, IoError> {
+    let io = |e| IoError::io(name, e);
+    // The end's offset minus the current one; a `Cursor` may sit past its
+    // end, which leaves nothing to read.
+    let start = reader.stream_position().map_err(io)?;
+    let end = reader.seek(SeekFrom::End(0)).map_err(io)?;
+    reader.seek(SeekFrom::Start(start)).map_err(io)?;
+    Ok(end.saturating_sub(start))
+}
+
+/// Opens `path` for reading and returns the file with its length.
+pub(crate) fn open_with_len(path: &Path) -> Result<(File, u64), IoError> {
+    let file = File::open(path).map_err(|e| IoError::io(path, e))?;
+    let len = file.metadata().map_err(|e| IoError::io(path, e))?.len();
+    Ok((file, len))
+}
+
+/// Reads text line by line, counting lines, for the text formats (LAMMPS
+/// dumps, XYZ, `.particles` lists). Lines may end in `\n` or `\r\n`. The
+/// text comes from a file or from memory; `path` only names it in errors.
+pub(crate) struct LineReader<R> {
+    reader: R,
     path: PathBuf,
     buf: Vec<u8>,
     /// Byte range of the trimmed text of the last line read by `read`.
     range: (usize, usize),
     line_no: usize,
-    file_len: u64,
+    /// Length of the input in bytes, for capping pre-allocations.
+    len: u64,
     consumed: u64,
 }
 
-impl LineReader {
-    pub(crate) fn open(path: &Path) -> Result<LineReader, IoError> {
-        let file = File::open(path).map_err(|e| IoError::io(path, e))?;
-        let file_len = file.metadata().map_err(|e| IoError::io(path, e))?.len();
-        Ok(LineReader {
-            reader: BufReader::new(file),
+impl LineReader<BufReader<File>> {
+    /// Opens the file at `path`.
+    pub(crate) fn open(path: &Path) -> Result<Self, IoError> {
+        let (file, len) = open_with_len(path)?;
+        Ok(LineReader::new(BufReader::new(file), path, len))
+    }
+}
+
+impl<R: Read> LineReader<BufReader<R>> {
+    /// Reads `reader` from its position to its end; `name` labels errors.
+    /// Its length is unknown and counts as 0, so [`LineReader::remaining_bytes`]
+    /// caps pre-allocations at nothing: use it where nothing is allocated up
+    /// front.
+    pub(crate) fn from_read(reader: R, name: &Path) -> Self {
+        LineReader::new(BufReader::new(reader), name, 0)
+    }
+}
+
+impl<R: Read + Seek> LineReader<BufReader<R>> {
+    /// Reads `reader` from its position to its end, whose length then caps
+    /// pre-allocations as a file's does; `name` labels errors.
+    pub(crate) fn from_seek(mut reader: R, name: &Path) -> Result<Self, IoError> {
+        let len = remaining_len(&mut reader, name)?;
+        Ok(LineReader::new(BufReader::new(reader), name, len))
+    }
+}
+
+impl<R: BufRead> LineReader<R> {
+    /// Reads `reader`, which holds `len` bytes; `path` labels errors.
+    pub(crate) fn new(reader: R, path: &Path, len: u64) -> Self {
+        LineReader {
+            reader,
             path: path.to_path_buf(),
             buf: Vec::new(),
             range: (0, 0),
             line_no: 0,
-            file_len,
+            len,
             consumed: 0,
-        })
+        }
     }
 
     /// Reads the next line into the buffer; `false` at the end of the file.
@@ -212,7 +318,7 @@ impl LineReader {
 
     /// Bytes of the file not read yet (for capping pre-allocations).
     pub(crate) fn remaining_bytes(&self) -> u64 {
-        self.file_len.saturating_sub(self.consumed)
+        self.len.saturating_sub(self.consumed)
     }
 
     pub(crate) fn path(&self) -> &Path {

@@ -16,12 +16,16 @@
 //! `u1`..`u8`, `b1`) in either byte order and converts the values to `f64` in
 //! C (row-major) order. [`write_npy_f32`] writes `<f4` arrays exactly as
 //! `numpy.save` does.
+//!
+//! [`read_npy_from`] and [`write_npy_f32_to`] do the same over any reader
+//! or writer (a `Cursor` over bytes in memory, a socket); the path functions
+//! open the file and share their code.
 
 use std::fs::File;
-use std::io::{BufReader, BufWriter, ErrorKind, Read, Write};
+use std::io::{BufReader, BufWriter, ErrorKind, Read, Seek, Write};
 use std::path::Path;
 
-use crate::{IoError, checked_product};
+use crate::{IoError, checked_product, open_with_len, remaining_len};
 
 /// Magic bytes at the start of every `.npy` file.
 const MAGIC: &[u8; 6] = b"\x93NUMPY";
@@ -51,12 +55,26 @@ pub struct NpyArray {
 /// complex arrays are rejected), or if the file does not hold exactly the
 /// number of bytes the header's shape requires.
 pub fn read_npy(path: &Path) -> Result<NpyArray, IoError> {
-    let file = File::open(path).map_err(|e| IoError::io(path, e))?;
-    let file_len = file.metadata().map_err(|e| IoError::io(path, e))?.len();
-    let mut reader = BufReader::new(file);
+    let (file, len) = open_with_len(path)?;
+    read_npy_sized(file, len, path)
+}
+
+/// [`read_npy`] over the bytes from `reader`'s position to its end (e.g. a
+/// `Cursor` over a `.npy` file held in memory). `name` only labels errors,
+/// which read exactly as [`read_npy`]'s for a file of that name; the
+/// reader's length bounds every allocation as the file's does.
+pub fn read_npy_from<R: Read + Seek>(mut reader: R, name: &Path) -> Result<NpyArray, IoError> {
+    let len = remaining_len(&mut reader, name)?;
+    read_npy_sized(reader, len, name)
+}
+
+/// The reader behind [`read_npy`] and [`read_npy_from`]: `reader` holds
+/// `file_len` bytes, and `path` labels errors.
+fn read_npy_sized(reader: impl Read, file_len: u64, path: &Path) -> Result<NpyArray, IoError> {
+    let mut reader = BufReader::new(reader);
     let fmt = |message: String| IoError::format(path, message);
     // Reads exactly `buf.len()` bytes; running out of file is a format error.
-    let read_exact = |reader: &mut BufReader<File>, buf: &mut [u8], what: &str| {
+    let read_exact = |reader: &mut BufReader<_>, buf: &mut [u8], what: &str| {
         reader.read_exact(buf).map_err(|e| match e.kind() {
             ErrorKind::UnexpectedEof => fmt(format!("file ends inside the {what}")),
             _ => IoError::io(path, e),
@@ -157,28 +175,26 @@ pub fn read_npy(path: &Path) -> Result<NpyArray, IoError> {
 /// with exactly the header layout `numpy.save` produces.
 ///
 /// Fails with [`IoError::Format`] if the product of `shape` is not
-/// `data.len()`.
+/// `data.len()`; the file is then not created.
 pub fn write_npy_f32(path: &Path, shape: &[usize], data: &[f32]) -> Result<(), IoError> {
-    match checked_product(shape) {
-        Some(n) if n == data.len() => {}
-        _ => {
-            return Err(IoError::format(
-                path,
-                format!(
-                    "cannot write .npy: shape {} does not match the {} values given",
-                    shape_text(shape),
-                    data.len()
-                ),
-            ));
-        }
-    }
-    let header = npy_header("<f4", shape);
+    // Check before creating the file, so a bad call leaves no empty file.
+    check_npy_shape(path, shape, data.len())?;
     let file = File::create(path).map_err(|e| IoError::io(path, e))?;
-    let mut out = BufWriter::new(file);
-    let write = |out: &mut BufWriter<File>, bytes: &[u8]| {
-        out.write_all(bytes).map_err(|e| IoError::io(path, e))
-    };
-    write(&mut out, &header)?;
+    write_npy_f32_to(BufWriter::new(file), path, shape, data)
+}
+
+/// [`write_npy_f32`] into any writer (a `Vec<u8>`, a socket): the same
+/// bytes, then a flush. `name` only labels errors.
+pub fn write_npy_f32_to<W: Write>(
+    mut out: W,
+    name: &Path,
+    shape: &[usize],
+    data: &[f32],
+) -> Result<(), IoError> {
+    check_npy_shape(name, shape, data.len())?;
+    let header = npy_header("<f4", shape);
+    let mut write = |bytes: &[u8]| out.write_all(bytes).map_err(|e| IoError::io(name, e));
+    write(&header)?;
     // Convert in blocks to keep the number of write calls small.
     let mut block = Vec::with_capacity(4 * 4096);
     for chunk in data.chunks(4096) {
@@ -186,9 +202,23 @@ pub fn write_npy_f32(path: &Path, shape: &[usize], data: &[f32]) -> Result<(), I
         for v in chunk {
             block.extend_from_slice(&v.to_le_bytes());
         }
-        write(&mut out, &block)?;
+        write(&block)?;
     }
-    out.flush().map_err(|e| IoError::io(path, e))
+    out.flush().map_err(|e| IoError::io(name, e))
+}
+
+/// Fails unless `shape` holds exactly `len` values.
+fn check_npy_shape(path: &Path, shape: &[usize], len: usize) -> Result<(), IoError> {
+    match checked_product(shape) {
+        Some(n) if n == len => Ok(()),
+        _ => Err(IoError::format(
+            path,
+            format!(
+                "cannot write .npy: shape {} does not match the {len} values given",
+                shape_text(shape),
+            ),
+        )),
+    }
 }
 
 /// Builds the magic, version, length and padded header dict, as NumPy's

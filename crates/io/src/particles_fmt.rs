@@ -19,12 +19,20 @@
 //!
 //! The fourth float becomes the column `attribute`. `time` is the timestep
 //! name when it is a number; there is no domain.
+//!
+//! **From memory.** A series is several files, so its memory variant
+//! [`read_particles_from`] takes the index text from a reader and a closure
+//! that opens the data of a named timestep (from a map of byte buffers, an
+//! archive, a network store); [`read_particles_file`] passes one that finds
+//! the file as described above. [`particles_frames_from`] counts the
+//! timesteps of an index text, and [`read_particles_timestep_from`] reads
+//! one timestep's data on its own.
 
 use std::fs::File;
-use std::io::Read;
+use std::io::{BufRead, Read, Seek};
 use std::path::{Path, PathBuf};
 
-use crate::{IoError, LineReader, ParticleTable};
+use crate::{IoError, LineReader, ParticleTable, remaining_len};
 
 /// Bytes per particle record: four `f32`.
 const RECORD: u64 = 16;
@@ -34,7 +42,15 @@ const RECORD: u64 = 16;
 /// Fails with [`IoError::Format`] if the index is not text or lists no
 /// timestep. The timestep files themselves are not opened.
 pub fn particles_frames(path: &Path) -> Result<usize, IoError> {
-    let names = timestep_names(path)?;
+    let names = timestep_names(LineReader::open(path)?)?;
+    Ok(names.len())
+}
+
+/// [`particles_frames`] of the index text `index` yields; `name` only
+/// labels errors, which read as [`particles_frames`]'s for a file of that
+/// name.
+pub fn particles_frames_from<R: Read>(index: R, name: &Path) -> Result<usize, IoError> {
+    let names = timestep_names(LineReader::from_read(index, name))?;
     Ok(names.len())
 }
 
@@ -45,10 +61,43 @@ pub fn particles_frames(path: &Path) -> Result<usize, IoError> {
 /// (the message says how many there are), the timestep file is missing (the
 /// message names the paths tried), or its size does not match its count.
 pub fn read_particles_file(path: &Path, frame: usize) -> Result<ParticleTable, IoError> {
-    let names = timestep_names(path)?;
-    let Some(name) = names.get(frame) else {
+    read_particles_from(
+        File::open(path).map_err(|e| IoError::io(path, e))?,
+        path,
+        frame,
+        |name| {
+            let data = timestep_path(path, name)?;
+            let file = File::open(&data).map_err(|e| IoError::io(&data, e))?;
+            Ok((data, file))
+        },
+    )
+}
+
+/// [`read_particles_file`] with the index text from `index` (`name` labels
+/// its errors) and the timestep data from `open_timestep`, which gets the
+/// timestep's name as the index lists it and returns a label for the data's
+/// errors (e.g. the file name it would have) with a reader over the data.
+/// It is called once, for the timestep asked for, after the index is read.
+///
+/// The data's size is checked against the count it declares before
+/// anything is allocated, as for a file. Errors read as
+/// [`read_particles_file`]'s for files with those names; errors returned by
+/// `open_timestep` are passed on as they are.
+pub fn read_particles_from<R, T, F>(
+    index: R,
+    name: &Path,
+    frame: usize,
+    open_timestep: F,
+) -> Result<ParticleTable, IoError>
+where
+    R: Read,
+    T: Read + Seek,
+    F: FnOnce(&str) -> Result<(PathBuf, T), IoError>,
+{
+    let names = timestep_names(LineReader::from_read(index, name))?;
+    let Some(step) = names.get(frame) else {
         return Err(IoError::format(
-            path,
+            name,
             format!(
                 "frame {frame} requested but the index lists {} timestep{} (numbered from 0)",
                 names.len(),
@@ -56,15 +105,14 @@ pub fn read_particles_file(path: &Path, frame: usize) -> Result<ParticleTable, I
             ),
         ));
     };
-    let data_path = timestep_path(path, name)?;
-    let mut table = read_timestep(&data_path)?;
-    table.time = name.parse::<f64>().ok().filter(|t| t.is_finite());
+    let (label, data) = open_timestep(step)?;
+    let mut table = read_particles_timestep_from(data, &label)?;
+    table.time = step.parse::<f64>().ok().filter(|t| t.is_finite());
     Ok(table)
 }
 
-/// The timestep names listed in the index file.
-fn timestep_names(path: &Path) -> Result<Vec<String>, IoError> {
-    let mut lines = LineReader::open(path)?;
+/// The timestep names listed in the index.
+fn timestep_names<R: BufRead>(mut lines: LineReader<R>) -> Result<Vec<String>, IoError> {
     let mut names = Vec::new();
     while let Some(line) = lines.next_line()? {
         if line.is_empty() {
@@ -77,7 +125,7 @@ fn timestep_names(path: &Path) -> Result<Vec<String>, IoError> {
     }
     if names.is_empty() {
         return Err(IoError::format(
-            path,
+            lines.path(),
             "the .particles index lists no timestep (expected one name per line)",
         ));
     }
@@ -107,19 +155,27 @@ fn timestep_path(index: &Path, name: &str) -> Result<PathBuf, IoError> {
     ))
 }
 
-/// Reads one binary timestep file.
-fn read_timestep(path: &Path) -> Result<ParticleTable, IoError> {
-    let mut file = File::open(path).map_err(|e| IoError::io(path, e))?;
-    let len = file.metadata().map_err(|e| IoError::io(path, e))?.len();
+/// Reads the data of one timestep (a `u64` count, then four `f32` per
+/// particle; see the module docs) from `reader`'s position to its end;
+/// `name` labels errors. The table has no time: that comes from the index.
+///
+/// Fails with [`IoError::Format`] if the length is not `8 + 16 n` for the
+/// count `n` in either byte order; nothing is allocated before that check.
+pub fn read_particles_timestep_from<R: Read + Seek>(
+    mut reader: R,
+    name: &Path,
+) -> Result<ParticleTable, IoError> {
+    let len = remaining_len(&mut reader, name)?;
     if len < 8 {
         return Err(IoError::format(
-            path,
+            name,
             format!("only {len} bytes long, too short for the u64 particle count"),
         ));
     }
     let mut head = [0u8; 8];
-    file.read_exact(&mut head)
-        .map_err(|e| IoError::io(path, e))?;
+    reader
+        .read_exact(&mut head)
+        .map_err(|e| IoError::io(name, e))?;
     let fits = |n: u64| n.checked_mul(RECORD).and_then(|b| b.checked_add(8)) == Some(len);
     let little = u64::from_le_bytes(head);
     let big = u64::from_be_bytes(head);
@@ -132,7 +188,7 @@ fn read_timestep(path: &Path) -> Result<ParticleTable, IoError> {
             .checked_mul(RECORD)
             .map_or("more than 2^64".to_string(), |b| b.to_string());
         return Err(IoError::format(
-            path,
+            name,
             format!(
                 "the header declares {little} particles ({declared} bytes of records) but \
                  {} bytes follow it; a timestep file is a u64 count and 16 bytes per particle",
@@ -142,10 +198,11 @@ fn read_timestep(path: &Path) -> Result<ParticleTable, IoError> {
     };
     // `count * 16 + 8 == len`, so the buffer is exactly the rest of the file.
     let n = usize::try_from(count)
-        .map_err(|_| IoError::format(path, format!("{count} particles is too many")))?;
+        .map_err(|_| IoError::format(name, format!("{count} particles is too many")))?;
     let mut bytes = vec![0u8; n * RECORD as usize];
-    file.read_exact(&mut bytes)
-        .map_err(|e| IoError::io(path, e))?;
+    reader
+        .read_exact(&mut bytes)
+        .map_err(|e| IoError::io(name, e))?;
     let mut positions = Vec::with_capacity(n);
     let mut attribute = Vec::with_capacity(n);
     for record in bytes.chunks_exact(RECORD as usize) {

@@ -42,8 +42,13 @@
 //!
 //! **Streaming.** [`read_xyz`] skips the frames before the one asked for,
 //! reading only their species fields.
+//!
+//! **From memory.** [`xyz_frames_from`], [`read_xyz_from`] and
+//! [`xyz_species_from`] read from any reader (a `Cursor` over bytes, a file
+//! already open); the path functions open the file and share their code.
 
 use std::collections::HashMap;
+use std::io::{BufRead, Read, Seek};
 use std::path::Path;
 
 use crate::{IoError, LineReader, ParticleTable};
@@ -53,7 +58,16 @@ use crate::{IoError, LineReader, ParticleTable};
 /// Fails with [`IoError::Format`] if a count line is not a number or a frame
 /// has fewer lines than its count.
 pub fn xyz_frames(path: &Path) -> Result<usize, IoError> {
-    let mut lines = LineReader::open(path)?;
+    count_frames(LineReader::open(path)?)
+}
+
+/// [`xyz_frames`] of the XYZ text `reader` yields; `name` only labels
+/// errors, which read as [`xyz_frames`]'s for a file of that name.
+pub fn xyz_frames_from<R: Read>(reader: R, name: &Path) -> Result<usize, IoError> {
+    count_frames(LineReader::from_read(reader, name))
+}
+
+fn count_frames<R: BufRead>(mut lines: LineReader<R>) -> Result<usize, IoError> {
     let mut count = 0;
     while let Some(n) = read_count(&mut lines, count)? {
         read_comment(&mut lines, count, n)?;
@@ -65,7 +79,10 @@ pub fn xyz_frames(path: &Path) -> Result<usize, IoError> {
         count += 1;
     }
     if count == 0 {
-        return Err(IoError::format(path, "not an XYZ file: it holds no frame"));
+        return Err(IoError::format(
+            lines.path(),
+            "not an XYZ file: it holds no frame",
+        ));
     }
     Ok(count)
 }
@@ -78,10 +95,30 @@ pub fn xyz_frames(path: &Path) -> Result<usize, IoError> {
 /// inside a frame, an atom line has the wrong number of fields or a field
 /// that is not a number, or `Properties` is malformed or lacks `pos`.
 pub fn read_xyz(path: &Path, frame: usize) -> Result<ParticleTable, IoError> {
-    let mut lines = LineReader::open(path)?;
+    read_frame(LineReader::open(path)?, frame)
+}
+
+/// [`read_xyz`] of the XYZ text `reader` yields, from its position to its
+/// end; `name` only labels errors, which read as [`read_xyz`]'s for a file
+/// of that name. The reader's length caps what an atom count may make it
+/// allocate, as the file's length does.
+pub fn read_xyz_from<R: Read + Seek>(
+    reader: R,
+    name: &Path,
+    frame: usize,
+) -> Result<ParticleTable, IoError> {
+    read_frame(LineReader::from_seek(reader, name)?, frame)
+}
+
+fn read_frame<R: BufRead>(
+    mut lines: LineReader<R>,
+    frame: usize,
+) -> Result<ParticleTable, IoError> {
+    // The frames before only number the species, so that a symbol gets the
+    // same type in every frame.
     let mut species = Species::default();
-    scan_species(&mut lines, path, frame, 0..frame, &mut species)?;
-    let n = read_count(&mut lines, frame)?.ok_or_else(|| past_end(path, frame, frame))?;
+    scan_species(&mut lines, frame, 0..frame, &mut species)?;
+    let n = read_count(&mut lines, frame)?.ok_or_else(|| past_end(lines.path(), frame, frame))?;
     let comment = read_comment(&mut lines, frame, n)?;
     read_atoms(&mut lines, frame, n, &comment, &mut species)
 }
@@ -90,15 +127,14 @@ pub fn read_xyz(path: &Path, frame: usize) -> Result<ParticleTable, IoError> {
 /// first appearance and parsing nothing else (`frame` is the frame asked
 /// for, named in the error when the file ends first).
 fn scan_species(
-    lines: &mut LineReader,
-    path: &Path,
+    lines: &mut LineReader<impl BufRead>,
     frame: usize,
     frames: std::ops::Range<usize>,
     species: &mut Species,
 ) -> Result<(), IoError> {
     for index in frames {
         let Some(n) = read_count(lines, index)? else {
-            return Err(past_end(path, frame, index));
+            return Err(past_end(lines.path(), frame, index));
         };
         let comment = read_comment(lines, index, n)?;
         let layout = Layout::from_comment(&comment).map_err(|m| lines.error(m))?;
@@ -123,9 +159,22 @@ fn scan_species(
 /// Fails like [`read_xyz`] when the frame does not exist or the file ends
 /// inside a frame.
 pub fn xyz_species(path: &Path, frame: usize) -> Result<Vec<String>, IoError> {
-    let mut lines = LineReader::open(path)?;
+    species_of(LineReader::open(path)?, frame)
+}
+
+/// [`xyz_species`] of the XYZ text `reader` yields; `name` only labels
+/// errors, which read as [`xyz_species`]'s for a file of that name.
+pub fn xyz_species_from<R: Read>(
+    reader: R,
+    name: &Path,
+    frame: usize,
+) -> Result<Vec<String>, IoError> {
+    species_of(LineReader::from_read(reader, name), frame)
+}
+
+fn species_of<R: BufRead>(mut lines: LineReader<R>, frame: usize) -> Result<Vec<String>, IoError> {
     let mut species = Species::default();
-    scan_species(&mut lines, path, frame, 0..frame + 1, &mut species)?;
+    scan_species(&mut lines, frame, 0..frame + 1, &mut species)?;
     Ok(species.symbols())
 }
 
@@ -160,7 +209,7 @@ fn past_end(path: &Path, frame: usize, frames: usize) -> IoError {
     )
 }
 
-fn truncated(lines: &LineReader, frame: usize, n: usize, found: usize) -> IoError {
+fn truncated(lines: &LineReader<impl BufRead>, frame: usize, n: usize, found: usize) -> IoError {
     lines.error(format!(
         "frame {frame} declares {n} atoms but the file ends after {found} atom line{}",
         if found == 1 { "" } else { "s" }
@@ -168,7 +217,10 @@ fn truncated(lines: &LineReader, frame: usize, n: usize, found: usize) -> IoErro
 }
 
 /// Reads the count line of a frame; `None` at the end of the file.
-fn read_count(lines: &mut LineReader, frame: usize) -> Result<Option<usize>, IoError> {
+fn read_count(
+    lines: &mut LineReader<impl BufRead>,
+    frame: usize,
+) -> Result<Option<usize>, IoError> {
     loop {
         let Some(line) = lines.next_line()? else {
             return Ok(None);
@@ -195,7 +247,11 @@ fn read_count(lines: &mut LineReader, frame: usize) -> Result<Option<usize>, IoE
     }
 }
 
-fn read_comment(lines: &mut LineReader, frame: usize, n: usize) -> Result<String, IoError> {
+fn read_comment(
+    lines: &mut LineReader<impl BufRead>,
+    frame: usize,
+    n: usize,
+) -> Result<String, IoError> {
     match lines.next_line()? {
         Some(line) => Ok(line.to_string()),
         None => Err(lines.error(format!(
@@ -415,7 +471,7 @@ fn key_values(comment: &str) -> Vec<(String, String)> {
 
 /// Parses the atom lines of one frame.
 fn read_atoms(
-    lines: &mut LineReader,
+    lines: &mut LineReader<impl BufRead>,
     frame: usize,
     n: usize,
     comment: &str,

@@ -25,6 +25,14 @@
 //! cannot make a reader allocate memory the file's contents could not fill.
 //! Datasets whose data live outside the file (external or virtual storage)
 //! are therefore limited by the file's own length too.
+//!
+//! **Paths only.** Unlike the other readers of this crate, these have no
+//! variant reading from memory. The HDF5 library parses the file and
+//! `hdf5-metno` (0.15) opens files by name only: its file access properties
+//! leave out HDF5's file image API (`H5Pset_file_image`, which would let the
+//! library read a buffer), and exposing it would mean unsafe calls into the
+//! raw `hdf5-metno-sys` bindings behind the safe wrapper's back. Data held
+//! in memory has to be written to a file first.
 
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};

@@ -33,6 +33,11 @@
 //! Sizes in headers and attributes are checked against the data present
 //! before any buffer is allocated for them; a corrupt file gives an error,
 //! never a panic or a huge allocation.
+//!
+//! The parser works on the whole file as bytes (appended data is addressed
+//! by offset), so the memory variants [`read_vtk_points_bytes`] and
+//! [`read_vtu_mesh_bytes`] take a byte slice; the path functions read the
+//! file and call them.
 
 mod data;
 mod xml;
@@ -73,9 +78,15 @@ pub struct VtkMesh {
 /// unsupported encoding, or does not hold one tuple per point.
 pub fn read_vtk_points(path: &Path) -> Result<ParticleTable, IoError> {
     let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
-    let doc = xml::parse(&bytes).map_err(|m| IoError::format(path, m))?;
-    let src = Source::new(&bytes, &doc);
-    let err = |m: String| IoError::format(path, m);
+    read_vtk_points_bytes(&bytes, path)
+}
+
+/// [`read_vtk_points`] of a VTK XML file held in memory; `name` only labels
+/// errors, which read as [`read_vtk_points`]'s for a file of that name.
+pub fn read_vtk_points_bytes(bytes: &[u8], name: &Path) -> Result<ParticleTable, IoError> {
+    let doc = xml::parse(bytes).map_err(|m| IoError::format(name, m))?;
+    let src = Source::new(bytes, &doc);
+    let err = |m: String| IoError::format(name, m);
     if doc.pieces.is_empty() {
         return Err(err(no_piece(&doc)));
     }
@@ -111,8 +122,14 @@ pub fn read_vtk_points(path: &Path) -> Result<ParticleTable, IoError> {
 /// four points, or a connectivity index is not a point of its piece.
 pub fn read_vtu_mesh(path: &Path) -> Result<VtkMesh, IoError> {
     let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
-    let doc = xml::parse(&bytes).map_err(|m| IoError::format(path, m))?;
-    let err = |m: String| IoError::format(path, m);
+    read_vtu_mesh_bytes(&bytes, path)
+}
+
+/// [`read_vtu_mesh`] of a VTK XML file held in memory; `name` only labels
+/// errors, which read as [`read_vtu_mesh`]'s for a file of that name.
+pub fn read_vtu_mesh_bytes(bytes: &[u8], name: &Path) -> Result<VtkMesh, IoError> {
+    let doc = xml::parse(bytes).map_err(|m| IoError::format(name, m))?;
+    let err = |m: String| IoError::format(name, m);
     if doc.data_type != "UnstructuredGrid" {
         return Err(err(format!(
             "expected a VTK UnstructuredGrid (.vtu) but the file holds type=\"{}\"",
@@ -122,7 +139,7 @@ pub fn read_vtu_mesh(path: &Path) -> Result<VtkMesh, IoError> {
     if doc.pieces.is_empty() {
         return Err(err(no_piece(&doc)));
     }
-    let src = Source::new(&bytes, &doc);
+    let src = Source::new(bytes, &doc);
     let mut mesh = VtkMesh::default();
     let mut point_arrays = Arrays::default();
     let mut cell_arrays = Arrays::default();

@@ -1,241 +1,29 @@
-//! Readers for block-structured AMR output, converted to leaf cells.
+//! AMRClaw's native ASCII output (`fort.qNNNN` plus `fort.tNNNN`), from
+//! disk or from memory.
 //!
-//! Every reader returns an [`AmrCellData`]: a flat list of cells in the
-//! ExaBricks convention plus one `f32` value per cell and field. A cell is
-//! `(x, y, z, level)`: its lower corner in integer units of the finest cell
-//! width, and its level, where level 0 is the finest and a level-`l` cell is
-//! `2^l` units wide. World coordinates are `origin + finest_cell_size · (x, y,
-//! z)`. The readers do not check that cells are aligned or disjoint; the AMR
-//! crate validates that when it builds its bricks.
-//!
-//! - [`read_exabricks`] reads an ExaBricks `.cells` file (little-endian
-//!   `int32` x, y, z, level per cell, 16 bytes, no header) and any number of
-//!   `.scalars` files (little-endian `float32`, one per cell in the same
-//!   order). Origin and finest cell size come from an optional sibling
-//!   `<stem>.meta.json`.
-//! - [`read_amrclaw`] reads AMRClaw's native ASCII output (`fort.qNNNN` plus
-//!   `fort.tNNNN`). AMRClaw writes every grid in full, including coarse cells
-//!   that finer grids cover; the reader drops those, so the result holds only
-//!   leaf cells. Its fields are named `q0`, `q1`, … in the order of AMRClaw's
-//!   `meqn` solution components.
-//!
-//! Both readers check sizes against the file's length before allocating, and
-//! report truncated or malformed files as [`IoError::Format`] naming the file
-//! (and, for text, the line).
+//! [`read_amrclaw`] finds the `fort.t` beside the `fort.q` and reads both
+//! files; [`read_amrclaw_from`] takes the `fort.q` text from a reader and
+//! the `fort.t` text as bytes. Both parse with the same code.
 
-use std::ffi::OsString;
-use std::fs::File;
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Read, Seek};
 use std::path::{Path, PathBuf};
 
-use crate::{IoError, checked_product};
+use super::{AmrCellData, MAX_LEVEL};
+use crate::{IoError, checked_product, open_with_len, remaining_len};
 
-/// AMR leaf cells in ExaBricks convention.
-#[derive(Clone, Debug, PartialEq)]
-pub struct AmrCellData {
-    /// (x, y, z, level) per cell: lower corner in finest-cell integer units,
-    /// level 0 = finest, cell width 2^level units.
-    pub cells: Vec<[i32; 4]>,
-    /// Field name and one value per cell, in cell order.
-    pub fields: Vec<(String, Vec<f32>)>,
-    /// World position of integer coordinate (0,0,0).
-    pub origin: [f64; 3],
-    /// World width of one finest cell (one integer unit).
-    pub finest_cell_size: f64,
-    /// Simulation time, when the format records it.
-    pub time: Option<f64>,
-}
+/// Buffer size for `fort.q` text (its rows are long and many).
+const BUFFER: usize = 1 << 16;
 
-impl AmrCellData {
-    /// The values of the field called `name`, if there is one.
-    pub fn field(&self, name: &str) -> Option<&[f32]> {
-        self.fields
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| v.as_slice())
-    }
-}
-
-/// The largest cell level accepted (cells `2^30` finest units wide).
-pub const MAX_LEVEL: i32 = 30;
+/// The longest `fort.t` accepted: a header is a few short lines.
+const MAX_FORT_T: u64 = 1 << 16;
 
 fn read_all(path: &Path) -> Result<Vec<u8>, IoError> {
     std::fs::read(path).map_err(|e| IoError::io(path, e))
 }
 
-/// Reads an ExaBricks `.cells` file and its `.scalars` fields.
-///
-/// Each scalars file becomes one field. Its name is the part of the file name
-/// between the cells file's stem and `.scalars` (`frame3.density.scalars`
-/// next to `frame3.cells` gives `density`); a file not named that way is
-/// named by its stem (`rho.scalars` gives `rho`).
-///
-/// If `<stem>.meta.json` exists next to the cells file (`frame3.meta.json`
-/// for `frame3.cells`), its `origin` (three numbers) and `finest_cell_size`
-/// (a positive number) are used, and its optional `time`; otherwise the
-/// origin is (0, 0, 0), the finest cell size 1 and the time unknown.
-///
-/// Fails if the cells file's size is not a multiple of 16 bytes, a level is
-/// outside `0..=30` (the message gives the cell index), a scalars file's size
-/// is not a multiple of 4 bytes or its value count differs from the cell
-/// count, two fields get the same name, or the meta file is malformed.
-pub fn read_exabricks(cells: &Path, scalars: &[PathBuf]) -> Result<AmrCellData, IoError> {
-    let bytes = read_all(cells)?;
-    if !bytes.len().is_multiple_of(16) {
-        return Err(IoError::format(
-            cells,
-            format!(
-                "size {} bytes is not a multiple of 16 (one cell is four int32: x, y, z, \
-                 level); the file is truncated or not an ExaBricks .cells file",
-                bytes.len()
-            ),
-        ));
-    }
-    let mut cell_list = Vec::with_capacity(bytes.len() / 16);
-    for (index, chunk) in bytes.chunks_exact(16).enumerate() {
-        let word = |k: usize| {
-            i32::from_le_bytes([
-                chunk[4 * k],
-                chunk[4 * k + 1],
-                chunk[4 * k + 2],
-                chunk[4 * k + 3],
-            ])
-        };
-        let cell = [word(0), word(1), word(2), word(3)];
-        if !(0..=MAX_LEVEL).contains(&cell[3]) {
-            return Err(IoError::format(
-                cells,
-                format!(
-                    "cell {index} has level {}; levels must be 0 (finest) to {MAX_LEVEL}",
-                    cell[3]
-                ),
-            ));
-        }
-        cell_list.push(cell);
-    }
-    drop(bytes);
-
-    let stem = cells.file_stem().map(|s| s.to_string_lossy().into_owned());
-    let mut fields: Vec<(String, Vec<f32>)> = Vec::with_capacity(scalars.len());
-    for path in scalars {
-        let values = read_scalars(path, cells, cell_list.len())?;
-        let name = field_name(stem.as_deref(), path);
-        if fields.iter().any(|(n, _)| *n == name) {
-            return Err(IoError::format(
-                path,
-                format!("field name `{name}` is used by an earlier scalars file too"),
-            ));
-        }
-        fields.push((name, values));
-    }
-
-    let mut data = AmrCellData {
-        cells: cell_list,
-        fields,
-        origin: [0.0; 3],
-        finest_cell_size: 1.0,
-        time: None,
-    };
-    if let Some(stem) = cells.file_stem() {
-        let mut name = OsString::from(stem);
-        name.push(".meta.json");
-        let meta = cells.with_file_name(name);
-        if meta.is_file() {
-            read_meta(&meta, &mut data)?;
-        }
-    }
-    Ok(data)
-}
-
-/// One `.scalars` file, which must hold exactly `count` float32 values.
-fn read_scalars(path: &Path, cells: &Path, count: usize) -> Result<Vec<f32>, IoError> {
-    let mismatch = |len: u64| {
-        let message = if !len.is_multiple_of(4) {
-            format!("size {len} bytes is not a multiple of 4 (one float32 per cell)")
-        } else {
-            format!(
-                "holds {} values, but {} holds {count} cells",
-                len / 4,
-                cells.display()
-            )
-        };
-        IoError::format(path, message)
-    };
-    // Check the size before reading so a wrong, huge file is not loaded.
-    let len = std::fs::metadata(path)
-        .map_err(|e| IoError::io(path, e))?
-        .len();
-    if !len.is_multiple_of(4) || len / 4 != count as u64 {
-        return Err(mismatch(len));
-    }
-    let bytes = read_all(path)?;
-    if bytes.len() as u64 != len {
-        return Err(mismatch(bytes.len() as u64));
-    }
-    Ok(bytes
-        .chunks_exact(4)
-        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-        .collect())
-}
-
-/// The field name of a scalars file (see [`read_exabricks`]).
-fn field_name(cells_stem: Option<&str>, scalars: &Path) -> String {
-    let file_name = scalars
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    if let Some(stem) = cells_stem
-        && let Some(rest) = file_name.strip_prefix(stem)
-        && let Some(rest) = rest.strip_prefix('.')
-        && let Some(middle) = rest.strip_suffix(".scalars")
-        && !middle.is_empty()
-    {
-        return middle.to_string();
-    }
-    scalars
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or(file_name)
-}
-
-/// Applies `origin`, `finest_cell_size` and optional `time` from a meta file.
-fn read_meta(path: &Path, data: &mut AmrCellData) -> Result<(), IoError> {
-    let bytes = read_all(path)?;
-    let value: serde_json::Value = serde_json::from_slice(&bytes)
-        .map_err(|e| IoError::format(path, format!("not valid JSON: {e}")))?;
-    let origin = value
-        .get("origin")
-        .and_then(|o| o.as_array())
-        .filter(|a| a.len() == 3)
-        .and_then(|a| {
-            let c: Vec<f64> = a.iter().filter_map(|v| v.as_f64()).collect();
-            (c.len() == 3 && c.iter().all(|v| v.is_finite())).then(|| [c[0], c[1], c[2]])
-        })
-        .ok_or_else(|| {
-            IoError::format(path, "`origin` must be an array of three finite numbers")
-        })?;
-    let size = value
-        .get("finest_cell_size")
-        .and_then(|s| s.as_f64())
-        .filter(|s| s.is_finite() && *s > 0.0)
-        .ok_or_else(|| IoError::format(path, "`finest_cell_size` must be a positive number"))?;
-    let time = match value.get("time") {
-        None | Some(serde_json::Value::Null) => None,
-        Some(t) => Some(
-            t.as_f64()
-                .filter(|t| t.is_finite())
-                .ok_or_else(|| IoError::format(path, "`time` must be a finite number"))?,
-        ),
-    };
-    data.origin = origin;
-    data.finest_cell_size = size;
-    data.time = time;
-    Ok(())
-}
-
-/// A text file read line by line, counting lines (from 1).
-struct Lines {
-    reader: BufReader<File>,
+/// Text read line by line, counting lines (from 1); `path` labels errors.
+struct Lines<R> {
+    reader: R,
     path: PathBuf,
     buf: Vec<u8>,
     /// Number of the line in `buf`.
@@ -244,16 +32,15 @@ struct Lines {
     replay: bool,
 }
 
-impl Lines {
-    fn open(path: &Path) -> Result<Lines, IoError> {
-        let file = File::open(path).map_err(|e| IoError::io(path, e))?;
-        Ok(Lines {
-            reader: BufReader::with_capacity(1 << 16, file),
+impl<R: BufRead> Lines<R> {
+    fn new(reader: R, path: &Path) -> Lines<R> {
+        Lines {
+            reader,
             path: path.to_path_buf(),
             buf: Vec::with_capacity(256),
             line: 0,
             replay: false,
-        })
+        }
     }
 
     /// The next line that is not blank, trimmed; `None` at the end.
@@ -374,19 +161,41 @@ fn fort_t_path(fort_q: &Path) -> Option<PathBuf> {
     Some(fort_q.with_file_name(format!("fort.t{number}")))
 }
 
-/// Reads `fort.tNNNN`: lines `value name` giving time, meqn, ngrids, naux
-/// and ndim (in that order when the names are missing).
+/// The label of the `fort.t` text that goes with `fort_q` in memory: the
+/// name the file would have on disk.
+fn fort_t_label(fort_q: &Path) -> PathBuf {
+    fort_t_path(fort_q).unwrap_or_else(|| fort_q.with_file_name("fort.t"))
+}
+
+/// Error for a `fort.t` of `len` bytes, more than a header can be.
+fn fort_t_too_long(path: &Path, len: u64) -> IoError {
+    IoError::format(
+        path,
+        format!("{len} bytes is far too long for an AMRClaw fort.t header"),
+    )
+}
+
+/// Reads the file `fort.tNNNN` (see [`parse_fort_t`]).
 fn read_fort_t(path: &Path) -> Result<FrameHeader, IoError> {
+    // Check the size before reading so a wrong, huge file is not loaded.
     let len = std::fs::metadata(path)
         .map_err(|e| IoError::io(path, e))?
         .len();
-    if len > 1 << 16 {
-        return Err(IoError::format(
-            path,
-            format!("{len} bytes is far too long for an AMRClaw fort.t header"),
-        ));
+    if len > MAX_FORT_T {
+        return Err(fort_t_too_long(path, len));
     }
-    let text = String::from_utf8(read_all(path)?)
+    parse_fort_t(&read_all(path)?, path)
+}
+
+/// Parses `fort.tNNNN`: lines `value name` giving time, meqn, ngrids, naux
+/// and ndim (in that order when the names are missing). `path` labels
+/// errors.
+fn parse_fort_t(bytes: &[u8], path: &Path) -> Result<FrameHeader, IoError> {
+    let len = bytes.len() as u64;
+    if len > MAX_FORT_T {
+        return Err(fort_t_too_long(path, len));
+    }
+    let text = std::str::from_utf8(bytes)
         .map_err(|_| IoError::format(path, "not text (invalid UTF-8)"))?;
     let entries: Vec<(usize, &str, Option<&str>)> = text
         .lines()
@@ -481,10 +290,41 @@ pub fn read_amrclaw(fort_q: &Path) -> Result<AmrCellData, IoError> {
         Some(t) if t.is_file() => Some(read_fort_t(&t)?),
         _ => None,
     };
-    let file_len = std::fs::metadata(fort_q)
-        .map_err(|e| IoError::io(fort_q, e))?
-        .len();
-    let mut lines = Lines::open(fort_q)?;
+    let (file, len) = open_with_len(fort_q)?;
+    read_grids(BufReader::with_capacity(BUFFER, file), len, fort_q, header)
+}
+
+/// [`read_amrclaw`] from memory: `fort_q` yields the `fort.qNNNN` text
+/// (from its position to its end) and `fort_t` is the `fort.tNNNN` text,
+/// when there is one; without it `meqn` comes from the first data row and
+/// the grids run to the end, as for a `fort.q` without its `fort.t`.
+///
+/// `name` labels errors as the `fort.q` path does for [`read_amrclaw`], and
+/// errors in `fort_t` name the `fort.tNNNN` beside it (`fort.t` when `name`
+/// is not a `fort.qNNNN`). The checks are those of the files: the length of
+/// `fort_q` bounds what a grid header may declare.
+pub fn read_amrclaw_from<R: Read + Seek>(
+    mut fort_q: R,
+    name: &Path,
+    fort_t: Option<&[u8]>,
+) -> Result<AmrCellData, IoError> {
+    let header = match fort_t {
+        Some(bytes) => Some(parse_fort_t(bytes, &fort_t_label(name))?),
+        None => None,
+    };
+    let len = remaining_len(&mut fort_q, name)?;
+    read_grids(BufReader::with_capacity(BUFFER, fort_q), len, name, header)
+}
+
+/// The grids of a `fort.q` (`reader`, `file_len` bytes, labelled `fort_q`)
+/// converted to leaf cells, with the `fort.t` header when there is one.
+fn read_grids(
+    reader: impl BufRead,
+    file_len: u64,
+    fort_q: &Path,
+    header: Option<FrameHeader>,
+) -> Result<AmrCellData, IoError> {
+    let mut lines = Lines::new(reader, fort_q);
     let mut meqn = header.as_ref().map(|h| h.meqn);
     let mut grids: Vec<Grid> = Vec::new();
     loop {
@@ -527,7 +367,11 @@ pub fn read_amrclaw(fort_q: &Path) -> Result<AmrCellData, IoError> {
 }
 
 /// Reads one grid's header and values.
-fn read_grid(lines: &mut Lines, meqn: &mut Option<usize>, file_len: u64) -> Result<Grid, IoError> {
+fn read_grid<R: BufRead>(
+    lines: &mut Lines<R>,
+    meqn: &mut Option<usize>,
+    file_len: u64,
+) -> Result<Grid, IoError> {
     let number: i64 = lines.named("grid_number", "a grid header", "an integer", int)?;
     let line = lines.line;
     let context = format!("the header of grid {number} (line {line})");
@@ -548,7 +392,7 @@ fn read_grid(lines: &mut Lines, meqn: &mut Option<usize>, file_len: u64) -> Resu
             parse_fortran(t).filter(|v| v.is_finite() && *v > 0.0)
         })?;
     }
-    let grid_error = |lines: &Lines, message: String| {
+    let grid_error = |lines: &Lines<R>, message: String| {
         IoError::format(
             &lines.path,
             format!("grid {number} (header at line {line}): {message}"),
