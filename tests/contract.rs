@@ -16,69 +16,8 @@ use voxless_render::testing::assert_thread_independent;
 use voxless_tets::testing::folded_sheet;
 use voxless_transfer::{Colormap, OpacityMap};
 
-fn particles(n: usize, seed: u64) -> ParticleArrays {
-    let mut rng = SmallRng(seed);
-    let positions: Vec<Vec3> = (0..n)
-        .map(|_| {
-            // A lumpy cloud: clustered and sparse parts.
-            let c = if rng.f() < 0.5 { 0.3 } else { 0.7 };
-            Vec3::new(
-                c + 0.2 * (rng.f() - 0.5),
-                rng.f(),
-                c + 0.3 * (rng.f() - 0.5),
-            )
-        })
-        .collect();
-    let attribute = Some(positions.iter().map(|p| p.x + 2.0 * p.y).collect());
-    let species = Some((0..n).map(|i| (i % 2 + 1) as f32).collect());
-    ParticleArrays {
-        positions,
-        attribute,
-        species,
-        ..Default::default()
-    }
-}
-
-/// Two AMR levels: coarse cells (width 2) over [0, 16)³ but a refined
-/// [0, 8)³ corner of fine cells, with smooth fields.
-fn amr_cells() -> AmrArrays {
-    let mut cells = Vec::new();
-    for z in (0..16).step_by(2) {
-        for y in (0..16).step_by(2) {
-            for x in (0..16).step_by(2) {
-                if x < 8 && y < 8 && z < 8 {
-                    for dz in 0..2 {
-                        for dy in 0..2 {
-                            for dx in 0..2 {
-                                cells.push([x + dx, y + dy, z + dz, 0]);
-                            }
-                        }
-                    }
-                } else {
-                    cells.push([x, y, z, 1]);
-                }
-            }
-        }
-    }
-    let centre = |c: &[i32; 4]| {
-        let w = (1 << c[3]) as f32;
-        Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) + Vec3::splat(0.5 * w)
-    };
-    let density = cells
-        .iter()
-        .map(|c| {
-            let p = centre(c) * (1.0 / 16.0);
-            1.0 + (3.0 * p.x).sin() * (2.0 * p.y).cos() + p.z
-        })
-        .collect();
-    let energy = cells.iter().map(|c| centre(c).length() * 0.1).collect();
-    AmrArrays {
-        cells,
-        fields: vec![("density".into(), density), ("energy".into(), energy)],
-        origin: [0.0; 3],
-        cell_size: 0.125,
-    }
-}
+mod fixtures;
+use fixtures::{amr_cells, particles};
 
 fn tf() -> TransferFunction {
     TransferFunction::new(

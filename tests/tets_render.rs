@@ -249,8 +249,8 @@ fn iso_surface_lies_where_the_density_first_crosses_the_value() {
             }
             ev.sort_by(|a, b| a.0.total_cmp(&b.0));
             // The positive pieces along the ray, longer than rounding
-            // slivers (16 ulps of t); neighbours closer than that touch.
-            let ulps = |t: f32| 16.0 * f32::EPSILON * t.abs();
+            // slivers (4 ulps of t); neighbours closer than that touch.
+            let ulps = |t: f32| 4.0 * f32::EPSILON * t.abs();
             let mut pieces: Vec<(f32, f32, f64)> = Vec::new();
             let mut rho = 0.0f64;
             for (k, e) in ev.iter().enumerate() {
@@ -271,12 +271,12 @@ fn iso_surface_lies_where_the_density_first_crosses_the_value() {
                 match k.checked_sub(1).map(|j| pieces[j]) {
                     Some(q) if p.0 - q.1 <= ulps(p.0) => hit |= crosses(q.2, p.2),
                     Some(q) => hit |= crosses(q.2, 0.0) || crosses(0.0, p.2),
-                    None if p.0 > span.lo => hit |= crosses(0.0, p.2),
+                    None if p.0 - span.lo > ulps(p.0) => hit |= crosses(0.0, p.2),
                     None => {}
                 }
             }
             if let Some(last) = pieces.last()
-                && last.1 < span.hi
+                && span.hi - last.1 > ulps(last.1)
             {
                 hit |= crosses(last.2, 0.0);
             }

@@ -42,7 +42,15 @@ pub fn march<V: Volume>(
         scratch,
     );
     let ctx = Ctx::new(tf, settings, volume.classified());
-    march_intervals(volume, ray, scratch, span, rng, &ctx, &mut RayStats::default())
+    march_intervals(
+        volume,
+        ray,
+        scratch,
+        span,
+        rng,
+        &ctx,
+        &mut RayStats::default(),
+    )
 }
 
 /// Emission–absorption along `ray` over its `intervals` (within `span`);
@@ -285,7 +293,13 @@ pub(crate) struct RayState {
     /// The ray's span: a constant interval ending before its end is
     /// followed by (zero) space.
     span: Range1,
+    /// The end of the last constant interval (or the span's start).
+    last_end: f32,
 }
+
+/// Constant pieces and gaps this many ulps of `t` long or shorter are
+/// rounding, not structure, for iso-surfaces.
+const ROUNDING: f32 = 4.0;
 
 impl RayState {
     pub fn new(span: Range1) -> Self {
@@ -295,6 +309,7 @@ impl RayState {
             prev: None,
             last_constant: None,
             span,
+            last_end: span.lo,
         }
     }
 
@@ -312,6 +327,19 @@ impl RayState {
         ctx: &Ctx,
     ) -> bool {
         let settings = ctx.settings;
+        if let Some(v) = iv.constant_value() {
+            if !settings.iso.is_empty() {
+                self.stats.values.extend(v);
+                if self.constant_crossings(volume, ray, iv, v, ctx) {
+                    return true;
+                }
+            }
+            if !settings.volume {
+                return false;
+            }
+            let s = Sample::scalar(v);
+            return self.composite(&s, seg.len, gradient, ctx);
+        }
         if seg.reset {
             // A gap: leaving a constant interval into it is a step to zero.
             if let Some((t_end, v0)) = self.last_constant.take()
@@ -321,32 +349,8 @@ impl RayState {
             }
             self.prev = None;
         }
-        if let Some(v) = iv.constant_value() {
-            // Crossings sit on the boundary: from zero after a gap (not at
-            // the start of the ray's span, where the volume is cut), else
-            // from the previous value.
-            if !settings.iso.is_empty() {
-                self.stats.values.extend(v);
-            }
-            let before = if seg.reset {
-                Some(0.0)
-            } else {
-                self.prev.map(|p| p.1)
-            };
-            if let Some(v0) = before
-                && self.step_crossings(volume, ray, iv.t.lo, v0, v, ctx)
-            {
-                return true;
-            }
-            self.prev = Some((iv.t.hi, v));
-            self.last_constant = Some((iv.t.hi, v));
-            if !settings.volume {
-                return false;
-            }
-            let s = Sample::scalar(v);
-            return self.composite(&s, seg.len, gradient, ctx);
-        }
         self.last_constant = None;
+        self.last_end = iv.t.hi;
         let Some(s) = sample else {
             self.prev = None;
             return false;
@@ -386,6 +390,45 @@ impl RayState {
             return false;
         }
         self.composite(&s, seg.len, gradient, ctx)
+    }
+
+    /// Iso-surfaces at the start of constant interval `iv` (value `v`): a
+    /// step from the previous piece when it touches `iv`, else (a gap, which
+    /// is zero next to constant pieces) a step down from the last piece and
+    /// a step up from zero — but not where the ray's span starts, which cuts
+    /// the volume open. Pieces and gaps within [`ROUNDING`] ulps of `t` are
+    /// rounding (neighbouring pieces' ends computed from different planes),
+    /// not structure, and are passed over.
+    fn constant_crossings<V: Volume>(
+        &mut self,
+        volume: &V,
+        ray: &Ray,
+        iv: &Interval,
+        v: f32,
+        ctx: &Ctx,
+    ) -> bool {
+        let tiny = |t: f32| ROUNDING * f32::EPSILON * t.abs();
+        if iv.t.span() <= tiny(iv.t.hi) {
+            return false;
+        }
+        let touching = iv.t.lo - self.last_end <= tiny(iv.t.lo);
+        self.last_end = iv.t.hi;
+        let before = if touching {
+            self.prev.map(|p| p.1)
+        } else {
+            if let Some((t_end, v0)) = self.last_constant
+                && self.step_crossings(volume, ray, t_end, v0, 0.0, ctx)
+            {
+                return true;
+            }
+            Some(0.0)
+        };
+        self.prev = Some((iv.t.hi, v));
+        self.last_constant = Some((iv.t.hi, v));
+        match before {
+            Some(v0) => self.step_crossings(volume, ray, iv.t.lo, v0, v, ctx),
+            None => false,
+        }
     }
 
     /// A segment of length `len` of sample `s`, opacity-corrected for its
@@ -439,7 +482,7 @@ impl RayState {
     /// the span steps down to zero there.
     pub fn finish<V: Volume>(&mut self, volume: &V, ray: &Ray, ctx: &Ctx) {
         if let Some((t_end, v0)) = self.last_constant.take()
-            && t_end < self.span.hi
+            && self.span.hi - t_end > ROUNDING * f32::EPSILON * t_end.abs()
         {
             self.step_crossings(volume, ray, t_end, v0, 0.0, ctx);
         }

@@ -34,31 +34,20 @@ const RESIDUE: f64 = 1e-9;
 /// density). Returns the last event's t (NaN without events).
 ///
 /// Neighbouring tets share faces, but their crossings are computed from
-/// different planes in f32 and can differ by an ulp of `t`: the exit of one
-/// and the entry of the next leave a sliver where both count (double the
-/// density) or neither does (a gap). Slivers up to [`SLIVER`] ulps of `t`
-/// are dropped and the pieces around them joined, so iso-surfaces do not
-/// flicker on every shared face; the integral changes by less than a
-/// sliver's length times its density.
+/// different planes in f32 and can differ by an ulp of `t`, leaving a sliver
+/// where both count or neither does. The pieces stay exact here (a sliver's
+/// integral is its length times its density); integrators ignore slivers
+/// and rounding gaps when they look for iso-surfaces.
 pub(crate) fn sweep(events: &[(f32, f32)], out: &mut Vec<Interval>) -> f32 {
     let mut rho = 0.0f64;
     // The largest single contribution seen on this ray sets the residue scale.
     let mut peak = 0.0f64;
     let mut t_prev = f32::NAN;
-    // The end of the last piece pushed by this sweep.
-    let mut last_end = f32::NAN;
     for &(t, d) in events {
-        if t > t_prev && t - t_prev > sliver(t) {
+        if t > t_prev {
             let r = if rho.abs() < RESIDUE * peak { 0.0 } else { rho };
             if r as f32 > 0.0 {
-                // Close a gap of a sliver to the previous piece.
-                let lo = if t_prev - last_end <= sliver(t_prev) {
-                    last_end
-                } else {
-                    t_prev
-                };
-                out.push(Interval::constant(Range1::new(lo, t), r as f32));
-                last_end = t;
+                out.push(Interval::constant(Range1::new(t_prev, t), r as f32));
             }
         }
         rho += d as f64;
@@ -66,14 +55,6 @@ pub(crate) fn sweep(events: &[(f32, f32)], out: &mut Vec<Interval>) -> f32 {
         t_prev = t;
     }
     t_prev
-}
-
-/// Pieces this many ulps of `t` long or shorter are rounding, not data.
-const SLIVER: f32 = 16.0;
-
-#[inline]
-fn sliver(t: f32) -> f32 {
-    SLIVER * f32::EPSILON * t.abs()
 }
 
 /// Depth-layer edges: `n` log-spaced layers over `[a, b]`, finer near the
