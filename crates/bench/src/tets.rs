@@ -1,4 +1,4 @@
-//! `voxless bench tets`: the phase-space tessellation numbers quoted in
+//! `voxless-bench tets`: the phase-space tessellation numbers quoted in
 //! `docs/benchmarks.md`.
 //!
 //! Data sets: the 64³ JaxPM run in `--data` (`positions.npy`, N³ × 3 in
@@ -11,54 +11,47 @@
 //! the tets with the same folds and overlaps, which is what the renderer's
 //! cost depends on.
 //!
-//! - **Main** (per data set): tessellation time (`TetMesh::new`, and the
-//!   CLI's `TetVolume::new` with 0 and with 3 levels of detail, which adds
-//!   the tet BVH and macrocells), tet, block and image counts; a `--size`²
-//!   column-density projection (`render::project`, orthographic
-//!   `Camera::axis_projection` down z over the box; mass conservation is
-//!   checked) and an exact render (`render::render`, `TetMode::Exact`,
-//!   `Camera::framing` and the render settings `voxless render` uses for
-//!   tets: log10 scale over `TetVolume::value_range`, opacity scale
-//!   100/diagonal, viridis with linear opacity). The 128³ targets on two
-//!   cores: projection ≤ 3 s, exact render ≤ 30 s. Work counters explain the
-//!   times: tet visits (a tet of a block binned to a tile, once per such
-//!   tile), pixel tests (a ray clipped against a tet's planes) and crossings
-//!   (tests that hit; two events each in exact mode).
-//! - **Culling**: per view, the blocks binned to tiles against every block in
-//!   every tile, and the exact render with the library's culled bins against
-//!   the same render with every block put in every tile (the frame's bins
-//!   are public; the render loop is repeated here, see [`exact_with`], and
-//!   checked against `render::render`). Views: the framing view, a 4× zoom
-//!   (same eye, field of view 7.5°), and a camera inside the box.
-//! - **k-buffer**: `TetMode::KBuffer { k, layers: 64 }` for k = 4 … 64 against
-//!   the exact render (time ratio, max and mean abs RGBA difference, share of
-//!   covered pixels with at least k events, where the k-buffer is inexact).
-//! - **LOD**: `TetOptions::lod_pixels` thresholds on the mesh with 3 coarser
-//!   levels, against the same mesh without LOD (exact mode).
+//! Camera, transfer function and render settings are the ones
+//! `voxless render` uses for a tessellation: `voxless::resolve` of a scene
+//! that sets only the image size (`Camera::framing`, viridis with linear
+//! opacity, log10 scale over `TetVolume::value_range`, opacity scale
+//! 100/diagonal). Renders go through the shared integrator
+//! (`voxless_render::render` of the `TetVolume`: exact constant intervals
+//! per tile from its tile view), projections through
+//! `voxless_render::project` (the volume's whole-image projection).
+//!
+//! - **Main** (per data set): tessellation time (`TetMesh::new`, and
+//!   `TetVolume::new` with 0 and with 3 levels of detail, as the library's
+//!   loader builds it), tet, block and image counts; a `--size`²
+//!   column-density projection (orthographic `Camera::axis_projection` down
+//!   z over the box; mass conservation is checked) and an exact render. The
+//!   128³ targets on two cores: projection ≤ 3 s, exact render ≤ 30 s. Work
+//!   counters ([`work`]) explain the times.
+//! - **Effects** ([`effects`]): block culling against every block in every
+//!   tile, the k-buffer (`RenderSettings::event_budget`) against exact mode,
+//!   and level of detail (`TetVolume::with_lod_pixels`) against none.
 //!
 //! `--export-subblock DIR` (hidden) writes a 32³-cell sub-block (196,608
 //! tets) and its view for `tools/vtk_tets.py`, and times our exact render of
-//! it; see docs/benchmarks.md.
+//! it ([`subblock`]); see docs/benchmarks.md.
+
+mod effects;
+mod subblock;
+mod unculled;
+mod work;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
-use voxless::core::{Aabb, Camera, Image, Projection, Range1, Vec3, Volume};
-use voxless::render::RenderSettings;
-use voxless_tets::mesh::KUHN;
-use voxless_tets::raster::{Frame, TILE, box_spans, for_each_crossing};
-use voxless_tets::render::{project, render};
-use voxless_tets::{
-    BLOCK, Block, LagrangianGrid, Tet, TetMesh, TetMode, TetOptions, TetSettings, TetVolume,
-};
-use voxless::transfer::TransferFunction;
+use voxless::{AnyVolume, ImageDesc, Resolved, SceneDesc};
+use voxless_core::{Camera, Control, Image, Vec3, Volume};
+use voxless_tets::{LagrangianGrid, TetMesh, TetSettings, TetVolume};
 
-use crate::bench::{bench, image_diff, print_header, save_png};
-
-mod subblock;
+use crate::common::{bench, print_header, save_png, verdict};
 use subblock::export_subblock;
+use work::work;
 
 #[derive(clap::Args)]
 pub struct TetsArgs {
@@ -136,7 +129,7 @@ pub fn run(o: TetsArgs) -> Result<()> {
             _ => false,
         };
         if effects {
-            bench_effects(label, &vol, &exact, &o)?;
+            effects::bench_effects(label, vol, &exact, &o)?;
         }
     }
     println!(
@@ -144,7 +137,9 @@ pub fn run(o: TetsArgs) -> Result<()> {
         o.size
     );
     println!(
-        "| data | particles | tets | images | blocks | point masses | `TetMesh::new` s | `TetVolume::new` s | … with 3 LOD levels s | LOD tets (levels 1–3) | project s | exact s | exact / project | project mass error |"
+        "| data | particles | tets | images | blocks | point masses | `TetMesh::new` s \
+         | `TetVolume::new` s | … with 3 LOD levels s | LOD tets (levels 1–3) | project s \
+         | exact s | exact / project | project mass error |"
     );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|");
     for r in &mains {
@@ -163,7 +158,6 @@ pub fn run(o: TetsArgs) -> Result<()> {
         }
     }
     if let Some(r) = mains.iter().find(|r| r.n == 128) {
-        let verdict = |ok: bool| if ok { "met" } else { "not met" };
         println!(
             "\nTargets (128³, {0}×{0}, 2 cores): project ≤ 3 s: {1:.2} s ({2}); exact render ≤ 30 s: {3:.2} s ({4}).\n",
             o.size,
@@ -180,9 +174,9 @@ pub fn run(o: TetsArgs) -> Result<()> {
 
 // ---------------------------------------------------------------- data
 
-fn read_grid(dir: &Path, box_size: f32) -> Result<LagrangianGrid> {
+pub(crate) fn read_grid(dir: &Path, box_size: f32) -> Result<LagrangianGrid> {
     let path = dir.join("positions.npy");
-    let a = voxless::io::read_npy(&path)?;
+    let a = voxless_io::read_npy(&path)?;
     if a.shape.len() != 2 || a.shape[1] != 3 {
         bail!("{}: expected N³×3, found {:?}", path.display(), a.shape);
     }
@@ -222,7 +216,7 @@ fn into_box(p: Vec3, l: f32) -> Vec3 {
 /// 1, 2, 4 or 8 coarse neighbours, unwrapped to the periodic image nearest
 /// the first), wrapped into the box. With q = i·L/N this is the same as
 /// interpolating the displacements x − q.
-pub fn refine(grid: &LagrangianGrid) -> LagrangianGrid {
+pub(crate) fn refine(grid: &LagrangianGrid) -> LagrangianGrid {
     let (n, l) = (grid.n, grid.box_size);
     let m = 2 * n;
     let at = |i: usize, j: usize, k: usize| grid.positions[((i % n) * n + (j % n)) * n + (k % n)];
@@ -252,18 +246,23 @@ pub fn refine(grid: &LagrangianGrid) -> LagrangianGrid {
     }
 }
 
-/// The render settings `voxless render` uses for a tessellation (see
-/// `voxless_scene::resolve`): log10 scale over the volume's value range,
-/// opacity scale 100 / diagonal.
-fn cli_settings(vol: &TetVolume, size: u32) -> RenderSettings {
-    let mut s = RenderSettings::for_volume(vol, size, size);
-    s.opacity_scale = 100.0 / vol.bounds().diagonal().max(1e-12);
-    s.log_scale = true;
-    let vr = s.value_range;
-    let hi = vr.hi.max(f32::MIN_POSITIVE).log10();
-    let lo = if vr.lo > 0.0 { vr.lo.log10() } else { hi - 3.0 };
-    s.value_range = Range1::new(lo, hi);
-    s
+/// The camera, transfer function and render settings `voxless render`
+/// resolves for `vol` in a `size`² image (a scene that sets nothing else).
+fn resolved(vol: TetVolume, size: u32) -> Result<(TetVolume, Resolved)> {
+    let any = AnyVolume::Tets(Box::new(vol));
+    let desc = SceneDesc {
+        image: ImageDesc {
+            width: Some(size),
+            height: Some(size),
+            spp: None,
+        },
+        ..Default::default()
+    };
+    let view = voxless::resolve(&any, &desc, Path::new("."))?;
+    let AnyVolume::Tets(vol) = any else {
+        unreachable!("built as a tessellation")
+    };
+    Ok((*vol, view))
 }
 
 // ---------------------------------------------------------------- main
@@ -276,11 +275,10 @@ struct MainRow {
     t_exact: f64,
 }
 
-/// The exact render of the framing view: its time, image and per-pixel
-/// crossing counts (the baseline of the effects tables).
+/// The exact render of the framing view: its view, time, image and
+/// per-pixel crossing counts (the baseline of the effects tables).
 struct Exact {
-    camera: Camera,
-    settings: RenderSettings,
+    view: Resolved,
     time: f64,
     image: Image,
     crossings: Vec<u32>,
@@ -305,7 +303,7 @@ fn bench_main(
     drop(v?);
     eprintln!("tets/{label}: TetVolume::new, 3 levels");
     let (t_vol3, vol) = bench(r, || (), |_| TetVolume::new(grid, &s, 3));
-    let vol = vol?;
+    let (vol, view) = resolved(vol?, o.size)?;
     let mesh = &vol.mesh;
     let lod_tets: Vec<String> = mesh.lod.iter().map(|m| m.tets.len().to_string()).collect();
     // Degenerate tets are point masses; images are the extra copies of tets
@@ -318,43 +316,40 @@ fn bench_main(
     let (t_project, col) = bench(
         r,
         || (),
-        |_| project(mesh, &ortho, size, size, TetOptions::default(), &|_, _| {}),
+        |_| voxless_render::project(&vol, &ortho, size, size, &Control::new()),
     );
+    let col = col?;
     let px = (mesh.box_size as f64 / size as f64).powi(2);
     let mass: f64 = col.iter().map(|&v| v as f64).sum::<f64>() * px;
     let mass_err = (mass - mesh.total_mass()).abs() / mesh.total_mass();
 
-    let camera = Camera::framing(&vol.bounds(), 1.0);
-    let settings = cli_settings(&vol, size);
-    let tf = TransferFunction::default_for_density();
     eprintln!("tets/{label}: exact render");
     let (t_exact, image) = bench(
         r,
         || (),
         |_| {
-            render(
-                mesh,
-                &camera,
-                &tf,
-                &settings,
-                TetMode::Exact,
-                TetOptions::default(),
-                &|_, _| {},
+            voxless_render::render(
+                &vol,
+                &view.camera,
+                &view.tf,
+                &view.settings,
+                &Control::new(),
             )
         },
     );
+    let image = image?;
     eprintln!("tets/{label}: project {t_project:.2} s, exact {t_exact:.2} s; counting work");
     let stem = label.replace(['³', ' '], "");
     if let Some(dir) = &o.save {
         save_png(&dir.join(format!("{stem}-exact.png")), &image)?;
-        voxless::io::write_npy_f32(
+        voxless_io::write_npy_f32(
             &dir.join(format!("{stem}-project.npy")),
             &[size as usize, size as usize],
             &col,
         )?;
     }
     let (w_ortho, _) = work(mesh, &ortho, size, None);
-    let (w_persp, crossings) = work(mesh, &camera, size, None);
+    let (w_persp, crossings) = work(mesh, &view.camera, size, None);
     let work_rows = vec![
         w_ortho.row(label, "project (ortho, z)"),
         w_persp.row(label, "exact (framing)"),
@@ -375,8 +370,7 @@ fn bench_main(
         },
         vol,
         Exact {
-            camera,
-            settings,
+            view,
             time: t_exact,
             image,
             crossings,
@@ -384,409 +378,33 @@ fn bench_main(
     ))
 }
 
-struct Work {
-    visits: u64,
-    tests: u64,
-    /// `None` when the pixel tests exceed the limit given to [`work`].
-    crossings: Option<u64>,
-    covered: u64,
-    max: u32,
-}
+#[cfg(test)]
+mod tests {
+    use super::refine;
+    use voxless_core::Vec3;
+    use voxless_tets::LagrangianGrid;
 
-impl Work {
-    fn row(&self, label: &str, view: &str) -> String {
-        let (crossings, per_pixel, ratio) = match self.crossings {
-            Some(c) => (
-                sci(c as f64),
-                format!("{:.1}, {}", c as f64 / self.covered.max(1) as f64, self.max),
-                format!("{:.3}", c as f64 / self.tests.max(1) as f64),
-            ),
-            None => ("—".into(), "—".into(), "—".into()),
-        };
-        format!(
-            "| {label} | {view} | {} | {} | {crossings} | {per_pixel} | {ratio} |",
-            sci(self.visits as f64),
-            sci(self.tests as f64),
-        )
-    }
-}
-
-fn sci(v: f64) -> String {
-    format!("{v:.2e}")
-}
-
-/// Inclusive pixel rectangle `(x0, x1, y0, y1)`, as `Screen::pixel_rect`.
-type PixelRect = (u32, u32, u32, u32);
-
-/// Pixel tests beyond which [`work`] does not count crossings (and a view is
-/// not timed): a frame that size would take hours.
-const TEST_LIMIT: u64 = 20_000_000_000;
-
-/// Counts the renderer's work for one frame (same tiles, bins and pixel
-/// rects as `render`) and, unless the pixel tests exceed [`TEST_LIMIT`], the
-/// crossings per pixel (row-major).
-fn work(mesh: &TetMesh, camera: &Camera, size: u32, lod: Option<f32>) -> (Work, Vec<u32>) {
-    let frame = Frame::new(mesh, camera, size, size, lod);
-    let levels: Vec<&TetMesh> = std::iter::once(mesh).chain(mesh.lod.iter()).collect();
-    let rects: Vec<Vec<Option<PixelRect>>> = levels
-        .iter()
-        .map(|m| {
-            m.tets
-                .par_iter()
-                .map(|t| frame.screen.pixel_rect(&t.v))
-                .collect()
-        })
-        .collect();
-    let (visits, tests) = (0..frame.tiles_x * frame.tiles_y)
-        .into_par_iter()
-        .map(|i| {
-            let (x0, y0, w, h) = frame.tile(i);
-            let (mut visits, mut tests) = (0u64, 0u64);
-            for &e in &frame.bins[i as usize] {
-                let level = (e >> 28) as usize;
-                let b = &levels[level].blocks[(e & ((1 << 28) - 1)) as usize];
-                let range = b.tets.start as usize..b.tets.end as usize;
-                visits += range.len() as u64;
-                for r in rects[level][range].iter().flatten() {
-                    let (ax, bx) = (r.0.max(x0), r.1.min(x0 + w - 1));
-                    let (ay, by) = (r.2.max(y0), r.3.min(y0 + h - 1));
-                    if ax <= bx && ay <= by {
-                        tests += ((bx - ax + 1) * (by - ay + 1)) as u64;
-                    }
-                }
-            }
-            (visits, tests)
-        })
-        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-    drop(rects);
-    let mut counts = vec![0u32; (size * size) as usize];
-    let mut crossings = None;
-    if tests <= TEST_LIMIT {
-        let per_tile: Vec<(u32, Vec<u32>)> = (0..frame.tiles_x * frame.tiles_y)
-            .into_par_iter()
-            .map(|i| {
-                let rays = frame.rays(i);
-                let spans = box_spans(mesh, &rays);
-                let mut hits = vec![0u32; rays.len()];
-                for_each_crossing(mesh, &frame, i, &rays, &spans, |p, _, _, _| hits[p] += 1);
-                (i, hits)
+    /// Refining a uniform grid gives the uniform grid of twice the resolution.
+    #[test]
+    fn refine_uniform() {
+        let (n, l) = (4usize, 8.0f32);
+        let s = l / n as f32;
+        let positions = (0..n * n * n)
+            .map(|c| {
+                let (i, j, k) = (c / (n * n), (c / n) % n, c % n);
+                Vec3::new(i as f32, j as f32, k as f32) * s
             })
             .collect();
-        for (i, hits) in per_tile {
-            let (x0, y0, w, _) = frame.tile(i);
-            for (k, c) in hits.into_iter().enumerate() {
-                counts[((y0 + k as u32 / w) * size + x0 + k as u32 % w) as usize] = c;
-            }
-        }
-        crossings = Some(counts.iter().map(|&c| c as u64).sum());
-    }
-    let covered = counts.iter().filter(|&&c| c > 0).count() as u64;
-    let max = counts.iter().copied().max().unwrap_or(0);
-    (
-        Work {
-            visits,
-            tests,
-            crossings,
-            covered,
-            max,
-        },
-        counts,
-    )
-}
-
-// ---------------------------------------------------------------- effects
-
-fn bench_effects(label: &str, vol: &TetVolume, exact: &Exact, o: &TetsArgs) -> Result<()> {
-    let mesh = &vol.mesh;
-    let size = o.size;
-    let tf = TransferFunction::default_for_density();
-    let settings = &exact.settings;
-    let stem = label.replace(['³', ' '], "");
-
-    // ---- culling
-    let b = vol.bounds();
-    let c = b.center();
-    let framing = exact.camera;
-    let zoom = Camera::look_at(
-        framing.eye,
-        c,
-        Vec3::new(0.0, 1.0, 0.0),
-        Projection::Perspective { fov_y_deg: 7.5 },
-    )?;
-    let inside = Camera::look_at(
-        c,
-        c + Vec3::new(1.0, 0.3, 0.2),
-        Vec3::new(0.0, 1.0, 0.0),
-        Projection::Perspective { fov_y_deg: 60.0 },
-    )?;
-    println!("### Phase-space tessellation effects: {label}, {size}×{size}\n");
-    println!(
-        "Block culling. \"binned\" counts (block, tile) pairs; \"all\" is every block in every tile. \
-         Times: exact mode, the library's bins vs every block in every tile (same render loop).\n"
-    );
-    println!(
-        "| view | blocks | blocks on screen | binned / all | pixel tests | crossings | culled s | unculled s | speedup | max abs diff vs `render` |"
-    );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
-    let tiles = (size.div_ceil(TILE) * size.div_ceil(TILE)) as u64;
-    for (name, cam) in [
-        ("framing (whole box)", framing),
-        ("zoom 4× (fov 7.5°)", zoom),
-        ("inside (eye at centre, fov 60°)", inside),
-    ] {
-        let frame = Frame::new(mesh, &cam, size, size, None);
-        let binned: u64 = frame.bins.iter().map(|b| b.len() as u64).sum();
-        let all = mesh.blocks.len() as u64 * tiles;
-        let (w, _) = work(mesh, &cam, size, None);
-        // A camera inside the box puts blocks behind the eye in every tile
-        // with full-screen pixel rects: far too slow to time.
-        let feasible = w.crossings.is_some();
-        let (culled, unculled, diff) = if feasible {
-            eprintln!("tets/{label}: culling, {name}");
-            let (tc, img) = bench(
-                o.repeats,
-                || (),
-                |_| {
-                    let f = Frame::new(mesh, &cam, size, size, None);
-                    exact_with(mesh, &f, &tf, settings)
-                },
-            );
-            let reference = render(
-                mesh,
-                &cam,
-                &tf,
-                settings,
-                TetMode::Exact,
-                TetOptions::default(),
-                &|_, _| {},
-            );
-            let diff = image_diff(&img, &reference).0;
-            if let Some(dir) = &o.save {
-                let v = name.split(' ').next().unwrap_or("view");
-                save_png(&dir.join(format!("{stem}-view-{v}.png")), &reference)?;
-            }
-            let tu = if o.unculled {
-                let everything: Vec<u32> = (0..mesh.blocks.len() as u32).collect();
-                let (tu, img_u) = bench(
-                    o.repeats,
-                    || (),
-                    |_| {
-                        let mut f = Frame::new(mesh, &cam, size, size, None);
-                        f.bins = vec![everything.clone(); f.bins.len()];
-                        exact_with(mesh, &f, &tf, settings)
-                    },
-                );
-                let d = image_diff(&img_u, &img).0;
-                if d > 0.0 {
-                    eprintln!("warning: unculled image differs by {d:e}");
-                }
-                Some(tu)
-            } else {
-                None
-            };
-            (format!("{tc:.2}"), tu, format!("{diff:.1e}"))
-        } else {
-            ("not timed".into(), None, "—".into())
-        };
-        let (un, speed) = match (unculled, culled.parse::<f64>().ok()) {
-            (Some(tu), Some(tc)) => (format!("{tu:.2}"), format!("{:.1}", tu / tc)),
-            _ => ("—".into(), "—".into()),
-        };
-        println!(
-            "| {name} | {} | {} | {:.3} | {} | {} | {culled} | {un} | {speed} | {diff} |",
-            mesh.blocks.len(),
-            frame.blocks_per_level[0],
-            binned as f64 / all as f64,
-            sci(w.tests as f64),
-            w.crossings.map_or("—".into(), |c| sci(c as f64)),
-        );
-    }
-    println!();
-
-    // ---- k-buffer
-    println!(
-        "k-buffer (`TetMode::KBuffer {{ k, layers: 64 }}`) against exact mode, framing view. \
-         Inexact pixels: covered pixels with ≥ k events (2 per crossing).\n"
-    );
-    println!("| mode | s | time / exact | max abs diff | mean abs diff | inexact pixels |");
-    println!("|---|---:|---:|---:|---:|---:|");
-    println!("| exact | {:.2} | 1.00 | 0 | 0 | 0 % |", exact.time);
-    let covered = exact.crossings.iter().filter(|&&c| c > 0).count().max(1);
-    for k in [4usize, 8, 16, 32, 64] {
-        eprintln!("tets/{label}: k-buffer k = {k}");
-        let (t, img) = bench(
-            o.repeats,
-            || (),
-            |_| {
-                render(
-                    mesh,
-                    &exact.camera,
-                    &tf,
-                    settings,
-                    TetMode::KBuffer { k, layers: 64 },
-                    TetOptions::default(),
-                    &|_, _| {},
-                )
-            },
-        );
-        let (max, mean) = image_diff(&img, &exact.image);
-        let inexact = exact
-            .crossings
-            .iter()
-            .filter(|&&c| 2 * c as usize >= k)
-            .count();
-        println!(
-            "| k = {k} | {t:.2} | {:.2} | {max:.3} | {mean:.2e} | {:.1} % |",
-            t / exact.time,
-            100.0 * inexact as f64 / covered as f64
-        );
-        if let Some(dir) = &o.save {
-            save_png(&dir.join(format!("{stem}-kbuffer{k}.png")), &img)?;
+        let fine = refine(&LagrangianGrid {
+            n,
+            box_size: l,
+            positions,
+        });
+        assert_eq!(fine.n, 8);
+        for (c, p) in fine.positions.iter().enumerate() {
+            let (i, j, k) = (c / 64, (c / 8) % 8, c % 8);
+            let want = Vec3::new(i as f32, j as f32, k as f32) * (s / 2.0);
+            assert!((*p - want).length() < 1e-5, "{c}: {p:?} vs {want:?}");
         }
     }
-    println!();
-
-    // ---- LOD
-    println!(
-        "Level of detail: blocks whose screen box is below the threshold use coarser levels \
-         (one per halving; {} levels built). Exact mode, framing view, against the same mesh without LOD.\n",
-        mesh.lod.len()
-    );
-    println!(
-        "| lod_pixels | blocks per level (0/1/2/3) | pixel tests | s | time / no LOD | max abs diff | mean abs diff |"
-    );
-    println!("|---|---|---:|---:|---:|---:|---:|");
-    let (w0, _) = work(mesh, &exact.camera, size, None);
-    println!(
-        "| none | {} | {} | {:.2} | 1.00 | 0 | 0 |",
-        mesh.blocks.len(),
-        sci(w0.tests as f64),
-        exact.time
-    );
-    for p in [8.0f32, 16.0, 32.0, 64.0, 128.0] {
-        eprintln!("tets/{label}: LOD {p} px");
-        let opts = TetOptions {
-            lod_pixels: Some(p),
-
-            ..Default::default()
-        };
-        let frame = Frame::new(mesh, &exact.camera, size, size, Some(p));
-        let per_level: Vec<String> = frame
-            .blocks_per_level
-            .iter()
-            .map(|b| b.to_string())
-            .collect();
-        let (w, _) = work(mesh, &exact.camera, size, Some(p));
-        let (t, img) = bench(
-            o.repeats,
-            || (),
-            |_| {
-                render(
-                    mesh,
-                    &exact.camera,
-                    &tf,
-                    settings,
-                    TetMode::Exact,
-                    opts,
-                    &|_, _| {},
-                )
-            },
-        );
-        let (max, mean) = image_diff(&img, &exact.image);
-        println!(
-            "| {p} | {} | {} | {t:.2} | {:.2} | {max:.3} | {mean:.2e} |",
-            per_level.join(" / "),
-            sci(w.tests as f64),
-            t / exact.time
-        );
-        if let Some(dir) = &o.save {
-            save_png(&dir.join(format!("{stem}-lod{p}.png")), &img)?;
-        }
-    }
-    println!();
-    Ok(())
-}
-
-/// Exact mode through a given frame: the loop of `render::render` (tiles in
-/// parallel, every event of a pixel sorted, constant-density segments
-/// composited in closed form), so that the frame's bins can be changed.
-fn exact_with(
-    mesh: &TetMesh,
-    frame: &Frame,
-    tf: &TransferFunction,
-    settings: &RenderSettings,
-) -> Image {
-    let scale = mesh
-        .tets
-        .iter()
-        .map(|t| t.density as f64)
-        .fold(0.0, f64::max);
-    let tiles: Vec<(u32, Vec<[f32; 4]>)> = (0..frame.tiles_x * frame.tiles_y)
-        .into_par_iter()
-        .map(|i| {
-            let rays = frame.rays(i);
-            let spans = box_spans(mesh, &rays);
-            let mut events: Vec<Vec<(f32, f32)>> = vec![Vec::new(); rays.len()];
-            for_each_crossing(mesh, frame, i, &rays, &spans, |p, t0, t1, rho| {
-                events[p].push((t0, rho));
-                events[p].push((t1, -rho));
-            });
-            let px = events
-                .iter_mut()
-                .map(|ev| {
-                    ev.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-                    composite(ev, tf, settings, scale)
-                })
-                .collect();
-            (i, px)
-        })
-        .collect();
-    let (w, h) = (frame.screen.width(), frame.screen.height());
-    let mut pixels = vec![[0.0f32; 4]; (w * h) as usize];
-    for (i, px) in tiles {
-        let (x0, y0, tw, _) = frame.tile(i);
-        for (k, p) in px.into_iter().enumerate() {
-            pixels[((y0 + k as u32 / tw) * w + x0 + k as u32 % tw) as usize] = p;
-        }
-    }
-    Image {
-        width: w,
-        height: h,
-        pixels,
-    }
-}
-
-/// Front-to-back emission–absorption over sorted `(t, Δρ)` events, as the
-/// library's exact sweep (running densities below 1e-9 of the largest tet
-/// density are cancellation residue).
-fn composite(
-    events: &[(f32, f32)],
-    tf: &TransferFunction,
-    s: &RenderSettings,
-    scale: f64,
-) -> [f32; 4] {
-    let (mut color, mut alpha) = (Vec3::ZERO, 0.0f32);
-    let mut rho = 0.0f64;
-    let mut t_prev = f32::NAN;
-    for &(t, d) in events {
-        if t_prev.is_finite() {
-            let r = if rho.abs() < 1e-9 * scale { 0.0 } else { rho };
-            let len = t - t_prev;
-            if r > 0.0 && len > 0.0 {
-                let x = s.normalize(r as f32);
-                let op = tf.opacity(x);
-                if op > 0.0 {
-                    let a = 1.0 - (-op * s.opacity_scale * len).exp();
-                    color += tf.color(x) * ((1.0 - alpha) * a);
-                    alpha += (1.0 - alpha) * a;
-                    if alpha >= s.early_termination {
-                        break;
-                    }
-                }
-            }
-        }
-        rho += d as f64;
-        t_prev = t;
-    }
-    [color.x, color.y, color.z, alpha]
 }
