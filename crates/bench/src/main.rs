@@ -70,8 +70,32 @@ enum Which {
     Tets(tets::TetsArgs),
 }
 
-fn main() -> Result<()> {
-    match Cli::parse().which {
+fn main() {
+    if let Err(e) = run(Cli::parse().which) {
+        eprintln!("error: {}", describe(&e));
+        std::process::exit(1);
+    }
+}
+
+/// The error and its causes on one line (no backtrace), skipping a cause
+/// whose text the message above it already contains (library errors often
+/// embed their source).
+fn describe(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let c = cause.to_string();
+        if !text.contains(&c) {
+            if !text.is_empty() {
+                text.push_str(": ");
+            }
+            text.push_str(&c);
+        }
+    }
+    text
+}
+
+fn run(which: Which) -> Result<()> {
+    match which {
         Which::Bvh(o) => bvh::run(o),
         Which::Packets(o) => packets::run(o),
         Which::Frame(o) => frame::run(o),
