@@ -96,7 +96,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     0.8 / k * (k * q.z).sin() * (k * q.x).cos(),
                 );
                 let p = q + d;
-                grid.push(Vec3::new(p.x.rem_euclid(l), p.y.rem_euclid(l), p.z.rem_euclid(l)));
+                grid.push(Vec3::new(
+                    p.x.rem_euclid(l),
+                    p.y.rem_euclid(l),
+                    p.z.rem_euclid(l),
+                ));
             }
         }
     }
@@ -106,7 +110,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 }
 
 /// Renders `volume` with every default and writes it as a PNG.
-fn render(volume: AnyVolume, notes: &[String], path: &Path) -> Result<(), Box<dyn std::error::Error>> {
+fn render(
+    volume: AnyVolume,
+    notes: &[String],
+    path: &Path,
+) -> Result<(), Box<dyn std::error::Error>> {
     let kind = volume.kind();
     let scene = Scene::with_volume(volume, &SceneDesc::default(), Path::new("."))?;
     for n in notes.iter().chain(&scene.notes) {

@@ -70,7 +70,9 @@ impl Scene {
     /// (see [`Scene::check_iso`]).
     pub fn render_film(&self, control: &Control) -> Result<Film, Cancelled> {
         self.volume
-            .render_passes(&self.camera, &self.tf, &self.settings, control, &mut |_| true)
+            .render_passes(&self.camera, &self.tf, &self.settings, control, &mut |_| {
+                true
+            })
     }
 
     /// An error naming the iso-values when iso-surfaces were asked for but
@@ -82,9 +84,19 @@ impl Scene {
         if st.iso.is_empty() || film.stats().iso_hits > 0 {
             return Ok(());
         }
-        let unit = |v: f32| if st.log_scale { v.max(f32::MIN_POSITIVE).log10() } else { v };
+        let unit = |v: f32| {
+            if st.log_scale {
+                v.max(f32::MIN_POSITIVE).log10()
+            } else {
+                v
+            }
+        };
         let asked: Vec<String> = st.iso.iter().map(|&v| format!("{}", unit(v))).collect();
-        let scale = if st.log_scale { "log10 of the field" } else { "the field" };
+        let scale = if st.log_scale {
+            "log10 of the field"
+        } else {
+            "the field"
+        };
         let seen = film.stats().values;
         let what = if seen.is_empty() {
             "the rays meet no data".to_string()

@@ -42,7 +42,15 @@ pub fn march<V: Volume>(
         scratch,
     );
     let ctx = Ctx::new(tf, settings, volume.classified());
-    march_intervals(volume, ray, scratch, span, rng, &ctx, &mut RayStats::default())
+    march_intervals(
+        volume,
+        ray,
+        scratch,
+        span,
+        rng,
+        &ctx,
+        &mut RayStats::default(),
+    )
 }
 
 /// Emission–absorption along `ray` over its `intervals` (within `span`);
