@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
 """Render the phase-space tessellation sub-block exported by
-`voxless bench tets --export-subblock DIR` with VTK's unstructured-grid volume
+`voxless-bench tets --export-subblock DIR` with VTK's unstructured-grid volume
 mappers, for the side-by-side comparison in docs/benchmarks.md.
 
 Run manually (not in CI):
 
     pip install vtk numpy
-    cargo run --release -- bench tets --export-subblock target/tets-sub
+    cargo run --release -p voxless-bench -- tets --export-subblock target/tets-sub
     python3 tools/vtk_tets.py target/tets-sub --out docs/tets-vtk.png
 
 Inputs in DIR: vertices.npy (N×12 f32, four xyz per tet), density.npy (N),
@@ -162,7 +162,7 @@ def write_png(path, rgb8):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("dir", help="directory written by `voxless bench tets --export-subblock`")
+    ap.add_argument("dir", help="directory written by `voxless-bench tets --export-subblock`")
     ap.add_argument("--out", default="docs/tets-vtk.png",
                     help="PNG for the ray-cast image; other mappers get -<mapper> appended")
     ap.add_argument("--mappers", default="raycast,pt", help="comma list of raycast, pt, zsweep")

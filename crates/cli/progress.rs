@@ -55,7 +55,7 @@ impl Progress {
 
     /// Unit `unit` is `done / total` done (a renderer's report).
     pub fn set_fraction(&self, unit: u64, done: u64, total: u64) {
-        let part = if total == 0 { 0 } else { done * SUB / total };
+        let part = (done * SUB).checked_div(total).unwrap_or(0);
         self.set_position(unit * SUB + part.min(SUB));
     }
 

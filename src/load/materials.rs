@@ -27,6 +27,11 @@ pub(crate) fn load_materials(
     })
 }
 
+/// Builds one material's particles from its particle description (adding
+/// notes).
+pub(crate) type VolumeOf<'a> =
+    dyn FnMut(&ParticlesDesc, &mut Vec<String>) -> Result<ParticleVolume, SceneError> + 'a;
+
 /// The materials of `p`, each material's particles built by `volume_of`
 /// from the material's particle description (the species to keep, its
 /// radius).
@@ -34,10 +39,7 @@ pub(crate) fn build_materials(
     p: &ParticlesDesc,
     mats: &[MaterialDesc],
     notes: &mut Vec<String>,
-    volume_of: &mut dyn FnMut(
-        &ParticlesDesc,
-        &mut Vec<String>,
-    ) -> Result<ParticleVolume, SceneError>,
+    volume_of: &mut VolumeOf,
 ) -> Result<MaterialVolume, SceneError> {
     if p.species.is_some() {
         return Err(SceneError::setting(

@@ -412,7 +412,7 @@ pub fn project<V: Volume>(
     if let Some(image) = volume.project_image(camera, width, height, control) {
         return image;
     }
-    Ok(project_per_pixel(volume, camera, width, height, control)?)
+    project_per_pixel(volume, camera, width, height, control)
 }
 
 /// [`project`] without the volume's whole-image path: one line integral per

@@ -31,14 +31,16 @@ const RESIDUE: f64 = 1e-9;
 
 /// Appends the constant pieces of sorted `(t, Δρ)` events to `out`: every
 /// piece of positive density (invisible ones too, so that a gap means zero
-/// density). Returns the last event's t (NaN without events).
+/// density). Returns the last event's t (NaN without events). Public for
+/// tile views built on [`crate::raster`] outside this crate (the
+/// benchmarks' no-culling baseline).
 ///
 /// Neighbouring tets share faces, but their crossings are computed from
 /// different planes in f32 and can differ by an ulp of `t`, leaving a sliver
 /// where both count or neither does. The pieces stay exact here (a sliver's
 /// integral is its length times its density); integrators ignore slivers
 /// and rounding gaps when they look for iso-surfaces.
-pub(crate) fn sweep(events: &[(f32, f32)], out: &mut Vec<Interval>) -> f32 {
+pub fn sweep(events: &[(f32, f32)], out: &mut Vec<Interval>) -> f32 {
     let mut rho = 0.0f64;
     // The largest single contribution seen on this ray sets the residue scale.
     let mut peak = 0.0f64;

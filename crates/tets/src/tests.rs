@@ -5,7 +5,7 @@
 use super::*;
 use crate::testing::{folded_sheet, grid, jitter};
 use voxless_core::SmallRng as Lcg;
-use voxless_core::{Aabb, Camera, Control, Ray, Vec3};
+use voxless_core::{Aabb, Camera, Control, Ray, Vec3, Volume};
 
 #[test]
 fn bad_input_is_a_clear_error() {
@@ -56,6 +56,19 @@ fn uniform_grid_has_mean_density_and_one_stream() {
         assert_eq!(streams, 1, "at {p:?}");
         assert!((rho - mean).abs() < 1e-5 * mean, "{rho}");
     }
+}
+
+#[test]
+fn a_volume_from_a_mesh_is_the_volume_of_its_grid() {
+    let g = folded_sheet(6, 11);
+    let s = TetSettings::default();
+    let a = TetVolume::new(&g, &s, 0).unwrap();
+    let b = TetVolume::from_mesh(TetMesh::new(&g, &s).unwrap());
+    assert_eq!(a.bounds(), b.bounds());
+    assert_eq!(a.value_range(), b.value_range());
+    assert_eq!(a.mesh.tets.len(), b.mesh.tets.len());
+    let p = Vec3::new(0.3, 0.6, 0.2);
+    assert_eq!(a.density_and_streams(p), b.density_and_streams(p));
 }
 
 fn axis_camera(l: f32) -> Camera {

@@ -42,6 +42,13 @@ impl TetVolume {
         if lod_levels > 0 {
             mesh = mesh.with_lod(grid, lod_levels, settings);
         }
+        Ok(TetVolume::from_mesh(mesh))
+    }
+
+    /// A volume over a mesh built elsewhere (a sub-block cut out of a run,
+    /// a mesh assembled tet by tet): its bounds are the mesh's box
+    /// `[0, box_size)³`, which must hold every tet.
+    pub fn from_mesh(mesh: TetMesh) -> TetVolume {
         // The periodic box: image tets fill it exactly, and outside it they
         // would double what the originals show.
         let bounds = Aabb::new(Vec3::ZERO, Vec3::splat(mesh.box_size));
@@ -61,13 +68,13 @@ impl TetVolume {
             *d.select_nth_unstable_by(at, f32::total_cmp).1
         };
         let value_range = Range1::new(mean as f32, high.max(mean as f32 * 10.0));
-        Ok(TetVolume {
+        TetVolume {
             mesh,
             bvh: OnceLock::new(),
             bounds,
             value_range,
             lod_pixels: None,
-        })
+        }
     }
 
     /// Draws blocks smaller than `pixels` on screen from the coarser levels

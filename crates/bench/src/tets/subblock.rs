@@ -1,9 +1,24 @@
 //! The VTK side-by-side: export a sub-block of the tessellation for
 //! `tools/vtk_tets.py` and time our exact render of the same tets.
+//!
+//! The sub-block is built tet by tet as a `TetMesh` (not as a periodic
+//! Lagrangian grid, see below) and rendered as `TetVolume::from_mesh` by
+//! the shared integrator, with the settings `voxless render` resolves for
+//! the whole run (log10 value range) and an opacity scale of 100 over the
+//! sub-block's diagonal.
 
-use super::*;
+use std::path::Path;
+use std::time::Instant;
 
-// ---------------------------------------------------------------- sub-block
+use anyhow::{Context, Result, bail};
+use rayon::prelude::*;
+use voxless_core::{Aabb, Camera, Control, Projection, Vec3};
+use voxless_tets::mesh::KUHN;
+use voxless_tets::raster::{Frame, box_spans, for_each_crossing};
+use voxless_tets::{BLOCK, Block, LagrangianGrid, Tet, TetMesh, TetSettings, TetVolume};
+
+use super::{resolved, wrap};
+use crate::common::{bench, print_header, save_png};
 
 /// Cells per axis of the exported sub-block, and its first Lagrangian cell.
 const SUB: usize = 32;
@@ -127,39 +142,21 @@ pub(super) fn export_subblock(
 
     // Render settings as the CLI's, over the sub-block: value range of the
     // whole 64³ volume (log10), opacity scale 100 / the sub-block's diagonal.
-    let full = TetVolume::new(grid, &TetSettings::default(), 0)?;
-    let mut settings = cli_settings(&full, size);
+    let (full, view) = resolved(TetVolume::new(grid, &TetSettings::default(), 0)?, size)?;
     drop(full);
+    let tf = view.tf;
+    let mut settings = view.settings;
     settings.opacity_scale = 100.0 / bounds.diagonal();
     let camera = Camera::framing(&bounds, 1.0);
-    let tf = TransferFunction::default_for_density();
+    let mesh = TetVolume::from_mesh(mesh);
+    let render = || voxless_render::render(&mesh, &camera, &tf, &settings, &Control::new());
     let t0 = Instant::now();
-    let first = render(
-        &mesh,
-        &camera,
-        &tf,
-        &settings,
-        TetMode::Exact,
-        TetOptions::default(),
-        &|_, _| {},
-    );
+    let first = render()?;
     let t_first = t0.elapsed().as_secs_f64();
-    let (t, img) = bench(
-        repeats,
-        || (),
-        |_| {
-            render(
-                &mesh,
-                &camera,
-                &tf,
-                &settings,
-                TetMode::Exact,
-                TetOptions::default(),
-                &|_, _| {},
-            )
-        },
-    );
+    let (t, img) = bench(repeats, || (), |_| render());
+    let img = img?;
     debug_assert_eq!(first.pixels.len(), img.pixels.len());
+    let mesh = &mesh.mesh;
     save_png(&dir.join("tets-voxless.png"), &img)?;
     voxless_io::write_npy_f32(
         &dir.join("voxless-rgba.npy"),
@@ -167,7 +164,7 @@ pub(super) fn export_subblock(
         &img.to_rgba_f32(),
     )?;
     // Streams along each ray: the most tets covering one point of it.
-    let streams = max_streams(&mesh, &camera, size);
+    let streams = max_streams(mesh, &camera, size);
     let streams_f: Vec<f32> = streams.iter().map(|&s| s as f32).collect();
     voxless_io::write_npy_f32(
         &dir.join("streams.npy"),
@@ -279,33 +276,4 @@ fn max_streams(mesh: &TetMesh, camera: &Camera, size: u32) -> Vec<u32> {
         }
     }
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Refining a uniform grid gives the uniform grid of twice the resolution.
-    #[test]
-    fn refine_uniform() {
-        let (n, l) = (4usize, 8.0f32);
-        let s = l / n as f32;
-        let positions = (0..n * n * n)
-            .map(|c| {
-                let (i, j, k) = (c / (n * n), (c / n) % n, c % n);
-                Vec3::new(i as f32, j as f32, k as f32) * s
-            })
-            .collect();
-        let fine = refine(&LagrangianGrid {
-            n,
-            box_size: l,
-            positions,
-        });
-        assert_eq!(fine.n, 8);
-        for (c, p) in fine.positions.iter().enumerate() {
-            let (i, j, k) = (c / 64, (c / 8) % 8, c % 8);
-            let want = Vec3::new(i as f32, j as f32, k as f32) * (s / 2.0);
-            assert!((*p - want).length() < 1e-5, "{c}: {p:?} vs {want:?}");
-        }
-    }
 }

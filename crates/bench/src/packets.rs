@@ -1,14 +1,18 @@
-//! `voxless bench packets`: what the packet path (CPU RBF paper §4) buys.
+//! `voxless-bench packets`: what the packet path (CPU RBF paper §4) buys.
+//!
+//! Every frame goes through `voxless_render::render` with `Camera::framing`,
+//! `RenderSettings::for_volume` and the default transfer function.
 //!
 //! - **Packets vs per-sample**: one 1 spp frame (default 1024²) rendered by
 //!   the packet path and by the per-sample point-query path with identical
 //!   settings (`RenderSettings::packets` on/off), on the SPH dam-break frame
 //!   (`--dam-break DIR`; cubic spline, radius h, weight m, speed as the
 //!   attribute) and on the synthetic galaxy (gaussian3, 2.5 × mean spacing).
-//!   Reported: the per-sample time, the packet time with the portable SIMD
-//!   path and with the run-time dispatched one (AVX2 where the CPU has it),
-//!   the speedup of the latter, and the max channel difference of either
-//!   packet image from the per-sample one (the correctness check: ≤ 1/255).
+//!   Reported: the per-sample time, the packet time (SIMD backend as the
+//!   library dispatches it: AVX2 where the CPU has it), the speedup, and the
+//!   max channel difference of the packet image from the per-sample one (the
+//!   correctness check: ≤ 1/255). The portable-SIMD column of earlier runs
+//!   is gone with the process-wide switch that forced it.
 //! - **Radius sweep** (the paper's Fig. 9): frame time against the radius
 //!   (× 0.5 … × 2 of the default) for cluster sizes 8 and 1, packets on; a
 //!   radius change is a refit (`set_radius`), timed too.
@@ -20,12 +24,28 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use voxless::core::{Camera, Vec3, Volume};
+use voxless_core::{Camera, Control, Image, Vec3, Volume};
 use voxless_particles::{Kernel, ParticleData, ParticleSettings, ParticleVolume};
-use voxless::render::{FreeFlight, LightSource, Noise, RenderSettings, Scatter, render};
-use voxless::transfer::TransferFunction;
+use voxless_render::{FreeFlight, LightSource, Noise, RenderSettings, Scatter};
+use voxless_transfer::{ControlPoints, TransferFunction};
 
-use crate::bench::{bench, count, image_diff, print_header, read_dam_break, synthetic};
+use crate::common::{bench, count, image_diff, print_header, read_dam_break, synthetic};
+
+/// One frame through the shared integrator.
+fn render(
+    vol: &ParticleVolume,
+    camera: &Camera,
+    tf: &TransferFunction,
+    rs: &RenderSettings,
+) -> Result<Image> {
+    Ok(voxless_render::render(
+        vol,
+        camera,
+        tf,
+        rs,
+        &Control::new(),
+    )?)
+}
 
 #[derive(clap::Args)]
 pub struct PacketArgs {
@@ -71,10 +91,8 @@ pub fn run(o: PacketArgs) -> Result<()> {
         "### Packets vs per-sample point queries: {0}×{0}, 1 spp, median of {1}\n",
         o.size, o.repeats
     );
-    println!(
-        "| data | kernel | per-sample s | packets, portable SIMD s | packets s | speedup | max abs diff |"
-    );
-    println!("|---|---|---:|---:|---:|---:|---:|");
+    println!("| data | kernel | per-sample s | packets s | speedup | max abs diff |");
+    println!("|---|---|---:|---:|---:|---:|");
     for (label, data, kernel, radius) in &sets {
         let vol = volume(data, *kernel, *radius, 8)?;
         let camera = Camera::framing(&vol.bounds(), 1.0);
@@ -82,24 +100,16 @@ pub fn run(o: PacketArgs) -> Result<()> {
         let mut time = |packets: bool| {
             rs.packets = packets;
             eprintln!("packets/{label}: packets {packets}");
-            bench(
-                o.repeats,
-                || (),
-                |_| render(&vol, &camera, &tf, &rs, &|_, _| {}),
-            )
+            bench(o.repeats, || (), |_| render(&vol, &camera, &tf, &rs))
         };
         let (t_slow, slow) = time(false);
-        voxless_particles::force_portable_simd(true);
-        let (t_portable, portable) = time(true);
-        voxless_particles::force_portable_simd(false);
+        // Portable SIMD vs AVX2 dropped: it needed the process-wide force_portable_simd (backends become a value).
         let (t_fast, fast) = time(true);
-        let (max, _) = image_diff(&slow, &fast);
-        let (max_p, _) = image_diff(&slow, &portable);
+        let (max, _) = image_diff(&slow?, &fast?);
         println!(
-            "| {label} | {} | {t_slow:.2} | {t_portable:.2} | {t_fast:.2} | {:.2} | {:.2e} |",
+            "| {label} | {} | {t_slow:.2} | {t_fast:.2} | {:.2} | {max:.2e} |",
             kernel.name(),
             t_slow / t_fast,
-            max.max(max_p)
         );
     }
     println!();
@@ -123,16 +133,13 @@ pub fn run(o: PacketArgs) -> Result<()> {
             let (t_refit, res) = bench(1, || map.clone(), |m| v8.set_radius(r, m));
             res?;
             v1.set_radius(r, map)?;
-            let frame = |v: &ParticleVolume| {
-                bench(
-                    o.repeats,
-                    || (),
-                    |_| render(v, &camera, &tf, &rs, &|_, _| {}),
-                )
-                .0
+            let frame = |v: &ParticleVolume| -> Result<f64> {
+                let (t, img) = bench(o.repeats, || (), |_| render(v, &camera, &tf, &rs));
+                img?;
+                Ok(t)
             };
             eprintln!("packets/{label}: radius × {scale}");
-            let (t8, t1) = (frame(&v8), frame(&v1));
+            let (t8, t1) = (frame(&v8)?, frame(&v1)?);
             println!(
                 "| {label} | {scale} | {:.1} | {t8:.2} | {t1:.2} | {:.2} |",
                 t_refit * 1e3,
@@ -149,7 +156,7 @@ pub fn run(o: PacketArgs) -> Result<()> {
     println!("| data | blue s | white s | white / blue |");
     println!("|---|---:|---:|---:|");
     // Build the mask before timing.
-    let _ = voxless::render::bluenoise::mask();
+    let _ = voxless_render::bluenoise::mask();
     for (label, data, kernel, radius) in &sets {
         let vol = volume(data, *kernel, *radius, 8)?;
         let camera = Camera::framing(&vol.bounds(), 1.0);
@@ -163,14 +170,10 @@ pub fn run(o: PacketArgs) -> Result<()> {
                 noise,
             });
             eprintln!("packets/{label}: shadows, {noise:?} noise");
-            bench(
-                o.repeats,
-                || (),
-                |_| render(&vol, &camera, &tf, &rs, &|_, _| {}),
-            )
-            .0
+            let (t, img) = bench(o.repeats, || (), |_| render(&vol, &camera, &tf, &rs));
+            img.map(|_| t)
         };
-        let (blue, white) = (time(Noise::Blue), time(Noise::White));
+        let (blue, white) = (time(Noise::Blue)?, time(Noise::White)?);
         println!("| {label} | {blue:.2} | {white:.2} | {:.2} |", white / blue);
     }
     println!();
@@ -197,14 +200,9 @@ fn volume(
 /// The global radius and radius map that scale every particle's radius by
 /// `scale`: per-particle radii need a (constant) map, since the global radius
 /// does not touch them.
-fn scaled(
-    data: &ParticleData,
-    radius: f32,
-    scale: f32,
-) -> (f32, Option<voxless::transfer::ControlPoints>) {
+fn scaled(data: &ParticleData, radius: f32, scale: f32) -> (f32, Option<ControlPoints>) {
     if data.radii.is_some() && data.attribute.is_some() {
-        let map =
-            voxless::transfer::ControlPoints::new("radius map", &[(0.0, scale), (1.0, scale)]).ok();
+        let map = ControlPoints::new("radius map", &[(0.0, scale), (1.0, scale)]).ok();
         (radius, map)
     } else {
         (radius * scale, None)
