@@ -6,12 +6,11 @@
 //! their prepared contexts both pass.
 
 use voxless::{
-    AmrArrays, AmrDesc, AnyVolume, Camera, ClassificationName, KernelName, MaterialDesc,
-    ParticleArrays, ParticlesDesc, Range1, ReconstructionName, RenderSettings, Species, TetsDesc,
-    TransferFunction, Vec3,
+    AmrDesc, AnyVolume, Camera, ClassificationName, KernelName, MaterialDesc, ParticlesDesc,
+    Range1, ReconstructionName, RenderSettings, Species, TetsDesc, TransferFunction, Vec3,
 };
 use voxless_core::testing::{Contract, assert_contract};
-use voxless_core::{Prepare, PrepareQuery, SmallRng};
+use voxless_core::{Prepare, PrepareQuery};
 use voxless_render::testing::assert_thread_independent;
 use voxless_tets::testing::folded_sheet;
 use voxless_transfer::{Colormap, OpacityMap};
@@ -39,7 +38,6 @@ fn check_kind<P: Prepare + voxless_core::Volume>(name: &str, v: &P, contract: &C
         is_visible: &visible,
         attribute_color: &color,
         event_budget: None,
-        lod_pixels: None,
     });
     // A prepared context hands out fewer intervals, never different samples
     // (and its intervals leave out what its transfer function hides, so its

@@ -34,9 +34,6 @@ pub struct PrepareQuery<'a> {
     pub attribute_color: &'a (dyn Fn(f32) -> Vec3 + Sync),
     /// Tessellations: the k-buffer instead of exact event sorting.
     pub event_budget: Option<EventBudget>,
-    /// Level of detail: pieces whose screen size is below this many pixels
-    /// may be drawn from a coarser level (tessellations with LOD levels).
-    pub lod_pixels: Option<f32>,
 }
 
 impl PrepareQuery<'static> {
@@ -46,7 +43,6 @@ impl PrepareQuery<'static> {
             is_visible: &|_| true,
             attribute_color: &|_| Vec3::ZERO,
             event_budget: None,
-            lod_pixels: None,
         }
     }
 }

@@ -110,9 +110,6 @@ pub struct RenderSettings {
     /// Tessellations: the k-buffer (first `k` events exact, the rest in
     /// depth layers) instead of sorting every event.
     pub event_budget: Option<EventBudget>,
-    /// Level of detail: pieces smaller than this many pixels on screen may
-    /// be drawn coarser (tessellations with LOD levels).
-    pub lod_pixels: Option<f32>,
 }
 
 impl RenderSettings {
@@ -141,7 +138,6 @@ impl RenderSettings {
             scatter: None,
             frame: 0,
             event_budget: None,
-            lod_pixels: None,
         }
     }
 
@@ -185,7 +181,6 @@ pub fn prepare<'a, P: Prepare>(
         is_visible: &is_visible,
         attribute_color: &attribute_color,
         event_budget: settings.event_budget,
-        lod_pixels: settings.lod_pixels,
     })
 }
 

@@ -84,6 +84,11 @@ impl TetVolume {
         self
     }
 
+    /// The level-of-detail threshold in pixels, if on.
+    pub fn lod_pixels(&self) -> Option<f32> {
+        self.lod_pixels
+    }
+
     /// The BVH over every tet's bounds, built on first use.
     fn bvh(&self) -> &Bvh {
         self.bvh.get_or_init(|| {
