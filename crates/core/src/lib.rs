@@ -1,6 +1,8 @@
 //! Plain data shared by every voxless crate: vectors, boxes, rays, value
 //! ranges, cameras, images, and the [`Volume`] trait — the one seam between
-//! data kinds (particles, AMR, tetrahedra) and integrators.
+//! data kinds (particles, AMR, tetrahedra) and integrators; and [`simd`], the
+//! eight-lane abstraction that data kinds write their SIMD kernels against
+//! once, with the backend ([`Simd`]) chosen by value.
 //!
 //! Conventions: `f32` world coordinates; rays have unit directions so the ray
 //! parameter `t` is a distance; images are row-major with row 0 at the top and
@@ -11,6 +13,7 @@ pub mod image;
 pub mod macrogrid;
 pub mod math;
 pub mod rng;
+pub mod simd;
 pub mod volume;
 
 pub use camera::{Camera, CameraError, Projection};
@@ -18,6 +21,7 @@ pub use image::{Image, linear_to_srgb, srgb_to_linear};
 pub use macrogrid::MacroGrid;
 pub use math::{Aabb, Range1, Ray, Vec3};
 pub use rng::SmallRng;
+pub use simd::{Lanes, Simd};
 pub use volume::{
     Attribute, Interval, IntervalQuery, Sample, SampleBatch, Volume, quadrature_line_integral,
     simpson,

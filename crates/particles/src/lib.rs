@@ -43,10 +43,9 @@ mod volume;
 pub use error::ParticleError;
 pub use kernel::{KERNEL_NAMES, Kernel};
 pub use materials::{Material, MaterialClass, MaterialVolume};
-pub use volume::{
-    Classification, FieldSample, ParticleData, ParticleSettings, ParticleVolume,
-    force_portable_simd,
-};
+pub use volume::{Classification, FieldSample, ParticleData, ParticleSettings, ParticleVolume};
 
+#[cfg(test)]
+mod packet_tests;
 #[cfg(test)]
 mod tests;

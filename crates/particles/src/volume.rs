@@ -4,7 +4,7 @@ use rayon::prelude::*;
 use voxless_bvh::{Bvh, order};
 use voxless_core::{
     Aabb, Attribute, Interval, IntervalQuery, MacroGrid, Range1, Ray, Sample, SampleBatch, Vec3,
-    Volume,
+    Volume, simd::Simd,
 };
 use voxless_transfer::{ControlPoints, TransferFunction};
 
@@ -12,7 +12,6 @@ use crate::error::ParticleError;
 use crate::kernel::{CubicFamily, Family, GaussianFamily, Kernel};
 
 mod packet;
-pub use packet::force_portable_simd;
 
 /// Particle arrays as read from a file, in file order.
 #[derive(Clone, Debug, Default)]
@@ -586,6 +585,13 @@ impl ParticleVolume {
         }
     }
 
+    /// The pre-classified colour per particle, volume order (empty unless
+    /// classified `Pre`).
+    #[cfg(test)]
+    pub(crate) fn colors(&self) -> &[Vec3] {
+        &self.colors
+    }
+
     pub fn settings(&self) -> &ParticleSettings {
         &self.settings
     }
@@ -698,12 +704,7 @@ impl Volume for ParticleVolume {
         gradient: bool,
         out: &mut Vec<(Option<Sample>, Vec3)>,
     ) {
-        match (self.settings.kernel, gradient) {
-            (Kernel::CubicSpline, false) => self.batch::<CubicFamily, false>(batch, out),
-            (Kernel::CubicSpline, true) => self.batch::<CubicFamily, true>(batch, out),
-            (_, false) => self.batch::<GaussianFamily, false>(batch, out),
-            (_, true) => self.batch::<GaussianFamily, true>(batch, out),
-        }
+        self.sample_batch_with(&self.colors, Simd::Auto, batch, gradient, out);
     }
 
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {

@@ -13,7 +13,7 @@
 //! bounded and it equals exact mode once k holds all events.
 
 use rayon::prelude::*;
-use voxless_core::{Camera, Image, Ray, Vec3};
+use voxless_core::{Camera, Image, Ray, Simd, Vec3};
 use voxless_render::RenderSettings;
 use voxless_transfer::TransferFunction;
 
@@ -295,7 +295,7 @@ pub fn project(
         camera,
         (width, height),
         options,
-        Kernel::best(),
+        Kernel::Lanes(Simd::Auto),
         progress,
     )
 }
