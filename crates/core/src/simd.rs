@@ -182,64 +182,51 @@ pub trait Lanes:
     /// `e^x`, Cephes-style: `x = n·ln2 + r` with `|r| ≤ ln2/2`, a degree-5
     /// polynomial for `(e^r − 1 − r)/r²`, and `2^n` written into the exponent
     /// bits. Within 2 ulp of `wide`'s `f32x8::exp` and of the correctly
-    /// rounded value over `[−103, 88.3]` (tested; 1 ulp at most on a dense
-    /// sweep), subnormal results included; 0 below −104 and for −∞, +∞
-    /// above 88.38 (where the true value is finite up to 88.72), NaN for
+    /// rounded value wherever the result is a normal float, `x` in
+    /// `[ln 2^−126, 88.3]` (tested; 1 ulp at most on a dense sweep). Below
+    /// `ln 2^−126 ≈ −87.34` it flushes to 0 where `wide` returns subnormals
+    /// (< 1.2e-38; the particle kernels only go there for a Gaussian
+    /// truncated beyond 13 standard deviations): handling them cost the
+    /// Gaussian packet pass 4–8 % (measured, docs/benchmarks.md). +∞ above
+    /// 88.38 (where the true value is finite up to 88.72), 0 for −∞, NaN for
     /// NaN. The same bits on every backend: written once, here.
     #[inline(always)]
     fn exp(self) -> Self {
         let s = Self::splat;
-        // Clamp so that n stays in −150..=128. `max`/`min` return their
+        let flush = self.lt(s(EXP_MIN));
+        // Clamp so that n stays in −126..=128. `max`/`min` return their
         // second operand on NaN, so NaN passes through.
-        let x = s(89.0).min(s(-104.0).max(self));
-        // Lanes whose 2^n is subnormal (n < −126) need a detour; the
-        // kernels never get there, so the test is one branch.
-        let tiny = x.lt(s(-87.0));
-        if tiny.any() {
-            exp_clamped::<Self, true>(x, tiny)
-        } else {
-            exp_clamped::<Self, false>(x, tiny)
-        }
+        let x = s(89.0).min(s(EXP_MIN).max(self));
+        let y = x * s(std::f32::consts::LOG2_E);
+        // In [2^23, 2^24) floats are the integers: adding 2^23 + 127 rounds
+        // y to n (ties to even) and leaves n + 127, the biased exponent, in
+        // the low mantissa bits.
+        let t = y + s(EXP_MAGIC);
+        let n = t - s(EXP_MAGIC);
+        // r = x − n·ln2 in two steps (Cody–Waite): n·C1 is exact.
+        let r = (x - n * s(0.693_359_4)) - n * s(-2.121_944_4e-4);
+        let mut p = s(1.987_569_1e-4);
+        p = p * r + s(1.398_199_9e-3);
+        p = p * r + s(8.333_452e-3);
+        p = p * r + s(4.166_579_6e-2);
+        p = p * r + s(0.166_666_66);
+        p = p * r + s(0.5);
+        let e = (p * r * r + r) + s(1.0);
+        // 2^n from the exponent bits; at n = −126, r ≥ 0, so e·2^n stays
+        // normal.
+        (e * t.shl23()).and_not(flush)
     }
 }
 
-/// [`Lanes::exp`] of `x` in [−104, 89]. `TINY`: lanes of the mask `tiny`
-/// build 2^(n + 64) and multiply by 2^−64 at the end, so that the bit trick
-/// stays in the normal range (without `TINY`, `tiny` is unused).
-#[inline(always)]
-fn exp_clamped<L: Lanes, const TINY: bool>(x: L, tiny: L) -> L {
-    let s = L::splat;
-    let y = x * s(std::f32::consts::LOG2_E);
-    let y = if TINY { y + (tiny & s(64.0)) } else { y };
-    // In [2^23, 2^24) floats are the integers: adding 2^23 + 127 rounds y
-    // to n (ties to even) and leaves n + 127, the biased exponent, in the
-    // low mantissa bits.
-    let t = y + s(EXP_MAGIC);
-    let n = t - s(EXP_MAGIC);
-    let n = if TINY { n - (tiny & s(64.0)) } else { n };
-    // r = x − n·ln2 in two steps (Cody–Waite): n·C1 is exact.
-    let r = (x - n * s(0.693_359_4)) - n * s(-2.121_944_4e-4);
-    let mut p = s(1.987_569_1e-4);
-    p = p * r + s(1.398_199_9e-3);
-    p = p * r + s(8.333_452e-3);
-    p = p * r + s(4.166_579_6e-2);
-    p = p * r + s(0.166_666_66);
-    p = p * r + s(0.5);
-    let e = (p * r * r + r) + s(1.0);
-    // 2^n from the exponent bits.
-    let v = e * t.shl23();
-    if TINY {
-        v * tiny.select(s(f32::from_bits(0x1F80_0000)), s(1.0))
-    } else {
-        v
-    }
-}
+/// The float just above `ln 2^−126`: below it `e^x` is subnormal, and
+/// [`Lanes::exp`] flushes.
+const EXP_MIN: f32 = -87.336_54;
 
 /// `2^23 + 127`: see [`Lanes::exp`].
 const EXP_MAGIC: f32 = 8_388_735.0;
 
 /// `FIRST_LANES[n]`: the first `n` lanes set (all bits).
-static FIRST_LANES: [[u32; LANES]; LANES + 1] = {
+const FIRST_LANES: [[u32; LANES]; LANES + 1] = {
     let mut m = [[0u32; LANES]; LANES + 1];
     let mut n = 0;
     while n <= LANES {
