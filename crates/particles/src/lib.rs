@@ -25,6 +25,12 @@
 //! whose box contains the point and then testing each member's support. A
 //! radius change refits the tree instead of rebuilding it.
 //!
+//! **Packets** (paper §4.1): [`ParticleVolume::sample_batch_with`] fills a
+//! whole packet's sample buffer in one BVH pass, with the SIMD backend given
+//! as a value ([`voxless_core::Simd`]; every backend gives the same bits) and
+//! the pre-classified colours passed in; it sums the same terms in the same
+//! order as the per-sample path, within a few ulp.
+//!
 //! **Intervals** come from a macrocell grid whose cells store `[0, Σ peak φᵢ]`
 //! over the particles touching the cell, a conservative range of `Φ`.
 //!
