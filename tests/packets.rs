@@ -21,8 +21,7 @@ fn max_diff(a: &Image, b: &Image) -> f32 {
         .fold(0.0, f32::max)
 }
 
-/// Renders with and without packets and checks the difference; returns the
-/// packet image for further checks.
+/// Renders with and without packets and checks the difference.
 fn assert_same(vol: &ParticleVolume, tf: &TransferFunction, settings: &RenderSettings, what: &str) {
     let camera = Camera::framing(&vol.bounds(), 1.2);
     let mut slow = settings.clone();
@@ -30,16 +29,9 @@ fn assert_same(vol: &ParticleVolume, tf: &TransferFunction, settings: &RenderSet
     let mut fast = settings.clone();
     fast.packets = true;
     let a = render(vol, &camera, tf, &slow, &voxless::Control::new()).unwrap();
+    // The best SIMD backend this CPU has; the backends are compared with
+    // each other, by value, in the particle crate's tests.
     let b = render(vol, &camera, tf, &fast, &voxless::Control::new()).unwrap();
-    // The portable SIMD path too (the AVX2 one is used where the CPU has it).
-    voxless_particles::force_portable_simd(true);
-    let c = render(vol, &camera, tf, &fast, &voxless::Control::new()).unwrap();
-    voxless_particles::force_portable_simd(false);
-    let d = max_diff(&a, &c);
-    assert!(
-        d <= TOLERANCE,
-        "{what}: portable packet path differs by {d}"
-    );
     let lit = a.pixels.iter().filter(|p| p[3] > 0.05).count();
     assert!(
         lit > a.pixels.len() / 20,
@@ -80,7 +72,7 @@ fn every_kernel_and_mode_matches_the_per_sample_path() {
     );
     for (kernel, radius) in kernels {
         for classification in [Classification::Post, Classification::Pre] {
-            let mut vol = ParticleVolume::new(
+            let vol = ParticleVolume::new(
                 galaxy(6000),
                 ParticleSettings {
                     kernel,
@@ -90,7 +82,6 @@ fn every_kernel_and_mode_matches_the_per_sample_path() {
                 },
             )
             .unwrap();
-            vol.classify(&tf);
             let mut s = RenderSettings::for_volume(&vol, 64, 48);
             s.spp = 2;
             s.opacity_scale *= 3.0;

@@ -8,11 +8,11 @@
 //!   settings (`RenderSettings::packets` on/off), on the SPH dam-break frame
 //!   (`--dam-break DIR`; cubic spline, radius h, weight m, speed as the
 //!   attribute) and on the synthetic galaxy (gaussian3, 2.5 × mean spacing).
-//!   Reported: the per-sample time, the packet time (SIMD backend as the
-//!   library dispatches it: AVX2 where the CPU has it), the speedup, and the
-//!   max channel difference of the packet image from the per-sample one (the
-//!   correctness check: ≤ 1/255). The portable-SIMD column of earlier runs
-//!   is gone with the process-wide switch that forced it.
+//!   Reported: the per-sample time, the packet time with the portable SIMD
+//!   backend and with `Simd::Auto` (AVX2 where the CPU has it) — chosen by
+//!   value through `RenderSettings::simd` — the speedup of the latter, and
+//!   the max channel difference of either packet image from the per-sample
+//!   one (the correctness check: ≤ 1/255).
 //! - **Radius sweep** (the paper's Fig. 9): frame time against the radius
 //!   (× 0.5 … × 2 of the default) for cluster sizes 8 and 1, packets on; a
 //!   radius change is a refit (`set_radius`), timed too.
@@ -24,7 +24,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use voxless_core::{Camera, Control, Image, Vec3, Volume};
+use voxless_core::{Camera, Control, Image, Simd, Vec3, Volume};
 use voxless_particles::{Kernel, ParticleData, ParticleSettings, ParticleVolume};
 use voxless_render::{FreeFlight, LightSource, Noise, RenderSettings, Scatter};
 use voxless_transfer::{ControlPoints, TransferFunction};
@@ -91,23 +91,29 @@ pub fn run(o: PacketArgs) -> Result<()> {
         "### Packets vs per-sample point queries: {0}×{0}, 1 spp, median of {1}\n",
         o.size, o.repeats
     );
-    println!("| data | kernel | per-sample s | packets s | speedup | max abs diff |");
-    println!("|---|---|---:|---:|---:|---:|");
+    println!(
+        "| data | kernel | per-sample s | packets s, portable SIMD | packets s, auto | speedup (auto) | max abs diff (portable / auto) |"
+    );
+    println!("|---|---|---:|---:|---:|---:|---:|");
     for (label, data, kernel, radius) in &sets {
         let vol = volume(data, *kernel, *radius, 8)?;
         let camera = Camera::framing(&vol.bounds(), 1.0);
         let mut rs = RenderSettings::for_volume(&vol, o.size, o.size);
-        let mut time = |packets: bool| {
+        // The SIMD backend is a render setting, chosen by value.
+        let mut time = |packets: bool, simd: Simd| {
             rs.packets = packets;
-            eprintln!("packets/{label}: packets {packets}");
+            rs.simd = simd;
+            eprintln!("packets/{label}: packets {packets}, {} SIMD", simd.name());
             bench(o.repeats, || (), |_| render(&vol, &camera, &tf, &rs))
         };
-        let (t_slow, slow) = time(false);
-        // Portable SIMD vs AVX2 dropped: it needed the process-wide force_portable_simd (backends become a value).
-        let (t_fast, fast) = time(true);
-        let (max, _) = image_diff(&slow?, &fast?);
+        let (t_slow, slow) = time(false, Simd::Auto);
+        let (t_portable, portable) = time(true, Simd::Portable);
+        let (t_fast, fast) = time(true, Simd::Auto);
+        let slow = slow?;
+        let (max, _) = image_diff(&slow, &fast?);
+        let (max_p, _) = image_diff(&slow, &portable?);
         println!(
-            "| {label} | {} | {t_slow:.2} | {t_fast:.2} | {:.2} | {max:.2e} |",
+            "| {label} | {} | {t_slow:.2} | {t_portable:.2} | {t_fast:.2} | {:.2} | {max_p:.2e} / {max:.2e} |",
             kernel.name(),
             t_slow / t_fast,
         );

@@ -2,7 +2,9 @@
 //! ranges, cameras, images, and the [`Volume`] trait — the one seam between
 //! data kinds (particles, AMR, tetrahedra) and integrators — with its
 //! per-render [`Prepare`] step, its per-tile hook ([`TileIntervals`]) and
-//! render [`Control`] (progress and cancellation).
+//! render [`Control`] (progress and cancellation); and [`simd`], the
+//! eight-lane abstraction that data kinds write their SIMD kernels against
+//! once, with the backend ([`Simd`]) chosen by value.
 //!
 //! Conventions: `f32` world coordinates; rays have unit directions so the ray
 //! parameter `t` is a distance; images are row-major with row 0 at the top and
@@ -15,6 +17,7 @@ pub mod macrogrid;
 pub mod math;
 pub mod prepare;
 pub mod rng;
+pub mod simd;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 pub mod tiles;
@@ -27,6 +30,7 @@ pub use macrogrid::MacroGrid;
 pub use math::{Aabb, Range1, Ray, Vec3};
 pub use prepare::{EventBudget, Prepare, PrepareQuery};
 pub use rng::SmallRng;
+pub use simd::{Lanes, Simd};
 pub use tiles::{IntervalLists, TileIntervals, TileRays, View};
 pub use volume::{
     Attribute, Interval, IntervalKind, IntervalQuery, Sample, SampleBatch, Volume,

@@ -13,6 +13,7 @@
 //! attributes unclassified); preparing only adds what depends on the query.
 
 use crate::math::{Range1, Vec3};
+use crate::simd::Simd;
 use crate::volume::Volume;
 
 /// Tessellations: keep only the first `k` crossing events of each pixel
@@ -34,6 +35,9 @@ pub struct PrepareQuery<'a> {
     pub attribute_color: &'a (dyn Fn(f32) -> Vec3 + Sync),
     /// Tessellations: the k-buffer instead of exact event sorting.
     pub event_budget: Option<EventBudget>,
+    /// The SIMD backend of packet paths ([`Simd::Auto`]: the best the CPU
+    /// has).
+    pub simd: Simd,
 }
 
 impl PrepareQuery<'static> {
@@ -43,6 +47,7 @@ impl PrepareQuery<'static> {
             is_visible: &|_| true,
             attribute_color: &|_| Vec3::ZERO,
             event_budget: None,
+            simd: Simd::Auto,
         }
     }
 }

@@ -22,15 +22,8 @@
 //! `−φ·(x − c)/s²` with `s` the standard deviation (the CPU paper's eq. 4
 //! drops the `1/s²` factor; we keep the exact form).
 
-#[cfg(target_arch = "x86_64")]
-use std::arch::x86_64::*;
 use voxless_core::Vec3;
-/// The SIMD type the packet path evaluates kernels on. Four lanes: a ray's
-/// run of samples inside one particle is short (≈ 8 at the default step), so
-/// narrower chunks waste fewer masked lanes (measured in docs/benchmarks.md).
-pub type Lanes = wide::f32x4;
-/// Lanes in [`Lanes`].
-pub const LANES: usize = 4;
+use voxless_core::simd::Lanes;
 
 /// The kernel family and its global parameters.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -95,23 +88,12 @@ pub trait Family: Copy + Send + Sync {
     fn value(d: Vec3, d2: f32, shape: f32, amp: f32) -> f32;
     /// `(φ, g)` with `∇φ = g·d`.
     fn value_and_gradient_factor(d: Vec3, d2: f32, shape: f32, amp: f32) -> (f32, f32);
-    /// [`Family::value`] for [`LANES`] squared distances at once, in f32 (the
-    /// packet path; within a few ulp of the scalar form).
-    fn value_simd(d2: Lanes, shape: f32, amp: f32) -> Lanes;
-    /// [`Family::value_and_gradient_factor`] for [`LANES`] points at once.
-    fn value_and_gradient_factor_simd(d2: Lanes, shape: f32, amp: f32) -> (Lanes, Lanes);
-    /// [`Family::value_simd`] on eight lanes of AVX.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2; call only from code compiled with it.
-    #[cfg(target_arch = "x86_64")]
-    unsafe fn value_avx(d2: __m256, shape: f32, amp: f32) -> __m256;
-    /// [`Family::value_and_gradient_factor_simd`] on eight lanes of AVX.
-    ///
-    /// # Safety
-    /// As [`Family::value_avx`].
-    #[cfg(target_arch = "x86_64")]
-    unsafe fn value_and_gradient_factor_avx(d2: __m256, shape: f32, amp: f32) -> (__m256, __m256);
+    /// [`Family::value`] for eight squared distances at once, in f32 (the
+    /// packet path; within a few ulp of the scalar form, and the same bits
+    /// on every lane type: written once over [`Lanes`]).
+    fn value_simd<L: Lanes>(d2: L, shape: f32, amp: f32) -> L;
+    /// [`Family::value_and_gradient_factor`] for eight points at once.
+    fn value_and_gradient_factor_simd<L: Lanes>(d2: L, shape: f32, amp: f32) -> (L, L);
 }
 
 #[derive(Clone, Copy)]
@@ -130,74 +112,14 @@ impl Family for GaussianFamily {
         (v, -2.0 * shape * v)
     }
     #[inline(always)]
-    fn value_simd(d2: Lanes, shape: f32, amp: f32) -> Lanes {
-        Lanes::splat(amp) * (Lanes::splat(-shape) * d2).exp()
+    fn value_simd<L: Lanes>(d2: L, shape: f32, amp: f32) -> L {
+        // The polynomial `exp` of `Lanes`, the same on every backend.
+        L::splat(amp) * (L::splat(-shape) * d2).exp()
     }
     #[inline(always)]
-    fn value_and_gradient_factor_simd(d2: Lanes, shape: f32, amp: f32) -> (Lanes, Lanes) {
+    fn value_and_gradient_factor_simd<L: Lanes>(d2: L, shape: f32, amp: f32) -> (L, L) {
         let v = Self::value_simd(d2, shape, amp);
-        (v, Lanes::splat(-2.0 * shape) * v)
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn value_avx(d2: __m256, shape: f32, amp: f32) -> __m256 {
-        unsafe {
-            _mm256_mul_ps(
-                _mm256_set1_ps(amp),
-                exp_avx(_mm256_mul_ps(_mm256_set1_ps(-shape), d2)),
-            )
-        }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn value_and_gradient_factor_avx(d2: __m256, shape: f32, amp: f32) -> (__m256, __m256) {
-        unsafe {
-            let v = Self::value_avx(d2, shape, amp);
-            (v, _mm256_mul_ps(_mm256_set1_ps(-2.0 * shape), v))
-        }
-    }
-}
-
-/// `e^x` on eight lanes, Cephes-style: `x = n·ln2 + r`, a degree-6
-/// polynomial for `e^r`, `2^n` in the exponent bits; ≤ 2 ulp over the
-/// normal range, 0 below −87.3.
-///
-/// # Safety
-/// The CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-pub unsafe fn exp_avx(x: __m256) -> __m256 {
-    unsafe {
-        let s = _mm256_set1_ps;
-        let under = _mm256_cmp_ps::<_CMP_LT_OQ>(x, s(-87.3));
-        let x = _mm256_min_ps(_mm256_max_ps(x, s(-87.3)), s(88.7));
-        let n = _mm256_round_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(
-            _mm256_mul_ps(x, s(std::f32::consts::LOG2_E)),
-        );
-        let r = _mm256_sub_ps(
-            _mm256_sub_ps(x, _mm256_mul_ps(n, s(0.693_359_4))),
-            _mm256_mul_ps(n, s(-2.121_944_4e-4)),
-        );
-        let mut p = s(1.987_569_1e-4);
-        for c in [
-            1.398_199_9e-3,
-            8.333_452e-3,
-            4.166_579_6e-2,
-            0.166_666_66,
-            0.5,
-        ] {
-            p = _mm256_add_ps(_mm256_mul_ps(p, r), s(c));
-        }
-        let e = _mm256_add_ps(
-            _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(p, r), r), r),
-            s(1.0),
-        );
-        let bits = _mm256_slli_epi32::<23>(_mm256_add_epi32(
-            _mm256_cvtps_epi32(n),
-            _mm256_set1_epi32(127),
-        ));
-        let v = _mm256_mul_ps(e, _mm256_castsi256_ps(bits));
-        _mm256_andnot_ps(under, v)
+        (v, L::splat(-2.0 * shape) * v)
     }
 }
 
@@ -229,99 +151,39 @@ impl Family for CubicFamily {
         (v as f32, g as f32)
     }
     #[inline(always)]
-    fn value_simd(d2: Lanes, inv_h: f32, amp: f32) -> Lanes {
-        let q = d2.sqrt() * Lanes::splat(inv_h);
-        let one = Lanes::ONE;
-        let inner = one + q * q * (Lanes::splat(0.75) * q - Lanes::splat(1.5));
-        let t = Lanes::splat(2.0) - q;
-        let outer = Lanes::splat(0.25) * t * t * t;
-        let m4 = q.simd_lt(one).select(
-            inner,
-            q.simd_lt(Lanes::splat(2.0)).select(outer, Lanes::ZERO),
-        );
-        Lanes::splat(amp) * m4
+    fn value_simd<L: Lanes>(d2: L, inv_h: f32, amp: f32) -> L {
+        let q = d2.sqrt() * L::splat(inv_h);
+        let (inner, outer, lt1, lt2) = cubic_parts(q);
+        L::splat(amp) * lt1.select(inner, outer & lt2)
     }
     #[inline(always)]
-    fn value_and_gradient_factor_simd(d2: Lanes, inv_h: f32, amp: f32) -> (Lanes, Lanes) {
+    fn value_and_gradient_factor_simd<L: Lanes>(d2: L, inv_h: f32, amp: f32) -> (L, L) {
+        let s = L::splat;
         let dist = d2.sqrt();
-        let q = dist * Lanes::splat(inv_h);
-        let one = Lanes::ONE;
-        let inner = one + q * q * (Lanes::splat(0.75) * q - Lanes::splat(1.5));
-        let t = Lanes::splat(2.0) - q;
-        let outer = Lanes::splat(0.25) * t * t * t;
-        let lt1 = q.simd_lt(one);
-        let lt2 = q.simd_lt(Lanes::splat(2.0));
-        let a = Lanes::splat(amp);
-        let v = a * lt1.select(inner, lt2.select(outer, Lanes::ZERO));
+        let q = dist * s(inv_h);
+        let (inner, outer, lt1, lt2) = cubic_parts(q);
+        let a = s(amp);
+        let v = a * lt1.select(inner, outer & lt2);
         // ∇φ = g·d. Inside q < 1, M4'(q)/q = −3 + 2.25q (no division, exact
         // at d = 0); outside, M4'(q) = −0.75(2 − q)² and |d| ≥ h.
-        let ih = Lanes::splat(inv_h);
-        let g_in = a * ih * ih * (Lanes::splat(2.25) * q - Lanes::splat(3.0));
-        let g_out =
-            a * ih * (Lanes::splat(-0.75) * t * t) / dist.max(Lanes::splat(f32::MIN_POSITIVE));
-        let g = lt1.select(g_in, lt2.select(g_out, Lanes::ZERO));
+        let ih = s(inv_h);
+        let g_in = a * ih * ih * (s(2.25) * q - s(3.0));
+        let t = s(2.0) - q;
+        let g_out = a * ih * (s(-0.75) * t * t) / dist.max(s(f32::MIN_POSITIVE));
+        let g = lt1.select(g_in, g_out & lt2);
         (v, g)
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn value_avx(d2: __m256, inv_h: f32, amp: f32) -> __m256 {
-        unsafe {
-            let s = _mm256_set1_ps;
-            let q = _mm256_mul_ps(_mm256_sqrt_ps(d2), s(inv_h));
-            let (inner, outer, lt1, lt2) = cubic_parts_avx(q);
-            let m4 = _mm256_blendv_ps(_mm256_and_ps(outer, lt2), inner, lt1);
-            _mm256_mul_ps(s(amp), m4)
-        }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn value_and_gradient_factor_avx(d2: __m256, inv_h: f32, amp: f32) -> (__m256, __m256) {
-        unsafe {
-            let s = _mm256_set1_ps;
-            let dist = _mm256_sqrt_ps(d2);
-            let q = _mm256_mul_ps(dist, s(inv_h));
-            let (inner, outer, lt1, lt2) = cubic_parts_avx(q);
-            let a = s(amp);
-            let v = _mm256_mul_ps(a, _mm256_blendv_ps(_mm256_and_ps(outer, lt2), inner, lt1));
-            let ih = s(inv_h);
-            let g_in = _mm256_mul_ps(
-                _mm256_mul_ps(_mm256_mul_ps(a, ih), ih),
-                _mm256_sub_ps(_mm256_mul_ps(s(2.25), q), s(3.0)),
-            );
-            let t = _mm256_sub_ps(s(2.0), q);
-            let g_out = _mm256_div_ps(
-                _mm256_mul_ps(
-                    _mm256_mul_ps(a, ih),
-                    _mm256_mul_ps(_mm256_mul_ps(s(-0.75), t), t),
-                ),
-                _mm256_max_ps(dist, s(f32::MIN_POSITIVE)),
-            );
-            let g = _mm256_blendv_ps(_mm256_and_ps(g_out, lt2), g_in, lt1);
-            (v, g)
-        }
     }
 }
 
 /// The M4 pieces on eight lanes: (inner polynomial, outer polynomial,
-/// q < 1, q < 2), with the same operation order as the `wide` path.
-#[cfg(target_arch = "x86_64")]
+/// q < 1, q < 2); zero beyond q = 2 comes from masking `outer` with `q < 2`.
 #[inline(always)]
-unsafe fn cubic_parts_avx(q: __m256) -> (__m256, __m256, __m256, __m256) {
-    unsafe {
-        let s = _mm256_set1_ps;
-        let inner = _mm256_add_ps(
-            s(1.0),
-            _mm256_mul_ps(
-                _mm256_mul_ps(q, q),
-                _mm256_sub_ps(_mm256_mul_ps(s(0.75), q), s(1.5)),
-            ),
-        );
-        let t = _mm256_sub_ps(s(2.0), q);
-        let outer = _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(s(0.25), t), t), t);
-        let lt1 = _mm256_cmp_ps::<_CMP_LT_OQ>(q, s(1.0));
-        let lt2 = _mm256_cmp_ps::<_CMP_LT_OQ>(q, s(2.0));
-        (inner, outer, lt1, lt2)
-    }
+fn cubic_parts<L: Lanes>(q: L) -> (L, L, L, L) {
+    let s = L::splat;
+    let inner = s(1.0) + q * q * (s(0.75) * q - s(1.5));
+    let t = s(2.0) - q;
+    let outer = s(0.25) * t * t * t;
+    (inner, outer, q.lt(s(1.0)), q.lt(s(2.0)))
 }
 
 /// The M4 cubic spline shape (without the 1/(πh³) normalisation).

@@ -25,6 +25,12 @@
 //! whose box contains the point and then testing each member's support. A
 //! radius change refits the tree instead of rebuilding it.
 //!
+//! **Packets** (paper §4.1): [`ParticleVolume::sample_batch_with`] fills a
+//! whole packet's sample buffer in one BVH pass, with the SIMD backend given
+//! as a value ([`voxless_core::Simd`]; every backend gives the same bits) and
+//! the pre-classified colours passed in; it sums the same terms in the same
+//! order as the per-sample path, within a few ulp.
+//!
 //! **Intervals** come from a macrocell grid whose cells store `[0, Σ peak φᵢ]`
 //! over the particles touching the cell, a conservative range of `Φ`.
 //!
@@ -35,18 +41,19 @@
 //! on construction, with the offending particle named); hidden particles have
 //! radius 0 and are skipped by every query.
 
+mod context;
 mod error;
 pub mod kernel;
 mod materials;
 mod volume;
 
+pub use context::{MaterialContext, ParticleContext};
 pub use error::ParticleError;
 pub use kernel::{KERNEL_NAMES, Kernel};
 pub use materials::{Material, MaterialClass, MaterialVolume};
-pub use volume::{
-    Classification, FieldSample, ParticleData, ParticleSettings, ParticleVolume,
-    force_portable_simd,
-};
+pub use volume::{Classification, FieldSample, ParticleData, ParticleSettings, ParticleVolume};
 
+#[cfg(test)]
+mod packet_tests;
 #[cfg(test)]
 mod tests;

@@ -18,7 +18,7 @@
 //! space its own transfer function hides), with a conservative opacity range.
 
 use voxless_core::{
-    Aabb, Attribute, Interval, IntervalQuery, Range1, Ray, Sample, SampleBatch, Vec3, Volume,
+    Aabb, Attribute, Interval, IntervalQuery, Range1, Ray, Sample, SampleBatch, Simd, Vec3, Volume,
 };
 use voxless_transfer::TransferFunction;
 
@@ -80,6 +80,30 @@ impl MaterialVolume {
 
     pub fn materials(&self) -> &[Material] {
         &self.materials
+    }
+
+    /// [`Volume::sample_batch`] with each material's packet path on `simd`.
+    pub(crate) fn sample_batch_on(
+        &self,
+        simd: Simd,
+        batch: &SampleBatch,
+        gradient: bool,
+        out: &mut Vec<(Option<Sample>, Vec3)>,
+    ) {
+        let parts: Vec<Vec<(Option<Sample>, Vec3)>> = self
+            .materials
+            .iter()
+            .map(|m| {
+                let mut v = Vec::with_capacity(batch.t.len());
+                m.volume
+                    .sample_batch_with(&[], simd, batch, gradient, &mut v);
+                v
+            })
+            .collect();
+        out.extend(
+            (0..batch.t.len())
+                .map(|j| self.blend(parts.iter().enumerate().map(|(m, p)| (m, p[j].0, p[j].1)))),
+        );
     }
 
     /// Blends per-material densities (and gradients) into one classified
@@ -167,19 +191,7 @@ impl Volume for MaterialVolume {
         gradient: bool,
         out: &mut Vec<(Option<Sample>, Vec3)>,
     ) {
-        let parts: Vec<Vec<(Option<Sample>, Vec3)>> = self
-            .materials
-            .iter()
-            .map(|m| {
-                let mut v = Vec::with_capacity(batch.t.len());
-                m.volume.sample_batch(batch, gradient, &mut v);
-                v
-            })
-            .collect();
-        out.extend(
-            (0..batch.t.len())
-                .map(|j| self.blend(parts.iter().enumerate().map(|(m, p)| (m, p[j].0, p[j].1)))),
-        );
+        self.sample_batch_on(Simd::Auto, batch, gradient, out)
     }
 
     fn intervals(&self, ray: &Ray, t: Range1, _: &IntervalQuery, out: &mut Vec<Interval>) {
@@ -229,5 +241,3 @@ impl Volume for MaterialVolume {
             .sum()
     }
 }
-
-voxless_core::prepare_as_self!(MaterialVolume);

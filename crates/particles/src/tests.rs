@@ -267,7 +267,7 @@ fn pre_classification_averages_colours() {
         attribute: Some(vec![0.0, 1.0]),
         weights: None,
     };
-    let mut vol = ParticleVolume::new(
+    let vol = ParticleVolume::new(
         data,
         ParticleSettings {
             radius: 1.0,
@@ -280,12 +280,12 @@ fn pre_classification_averages_colours() {
         Colormap::preset("cool-warm").unwrap(),
         OpacityMap::preset("linear").unwrap(),
     );
-    vol.classify(&tf);
+    let colors = vol.preclassify_with(&tf);
     let p = Vec3::new(0.1, 0.0, 0.0);
     let w0 = (-4.5f32 * 0.01).exp();
     let w1 = (-4.5f32 * 0.16).exp();
     let want = (tf.color(0.0) * w0 + tf.color(1.0) * w1) / (w0 + w1);
-    let got = vol.field(p, false).color.unwrap();
+    let got = vol.field_with(&colors, p, false).color.unwrap();
     assert!((got - want).length() < 1e-5, "{got:?} vs {want:?}");
     // Post-classification would colour-map Θ instead: a different colour.
     let theta = vol.field(p, false).attribute;

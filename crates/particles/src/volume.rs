@@ -4,7 +4,7 @@ use rayon::prelude::*;
 use voxless_bvh::{Bvh, order};
 use voxless_core::{
     Aabb, Attribute, Interval, IntervalQuery, MacroGrid, Range1, Ray, Sample, SampleBatch, Vec3,
-    Volume,
+    Volume, simd::Simd,
 };
 use voxless_transfer::{ControlPoints, TransferFunction};
 
@@ -12,7 +12,6 @@ use crate::error::ParticleError;
 use crate::kernel::{CubicFamily, Family, GaussianFamily, Kernel};
 
 mod packet;
-pub use packet::force_portable_simd;
 
 /// Particle arrays as read from a file, in file order.
 #[derive(Clone, Debug, Default)]
@@ -115,7 +114,6 @@ pub struct ParticleVolume {
     radius: Vec<f32>,
     weight: Vec<f32>,
     packed: Vec<Packed>,
-    colors: Vec<Vec3>,
     bvh: Bvh,
     grid: MacroGrid,
     value_range: Range1,
@@ -176,11 +174,7 @@ impl ParticleVolume {
                 // Keep the caller's own settings (an attribute range that was
                 // only inherited for this frame is not written back).
                 next.settings.attribute_range = self.settings.attribute_range;
-                let colors_wanted = !self.colors.is_empty();
                 *self = next;
-                if colors_wanted {
-                    self.colors.clear(); // re-classified by the caller (`classify`)
-                }
                 Ok(())
             }
             Err(e) => {
@@ -303,7 +297,6 @@ impl ParticleVolume {
             radius: Vec::new(),
             weight: Vec::new(),
             packed: Vec::new(),
-            colors: Vec::new(),
             bvh,
             grid: MacroGrid::with_cell_size(Aabb::EMPTY, 1.0, 1),
             value_range: Range1::new(0.0, 0.0),
@@ -352,16 +345,22 @@ impl ParticleVolume {
         Ok(())
     }
 
-    /// For pre-classification: colour-maps every particle's attribute with
-    /// `tf`'s colormap. Does nothing without an attribute or in post mode.
-    pub fn classify(&mut self, tf: &TransferFunction) {
-        self.colors.clear();
-        if self.settings.classification != Classification::Pre {
-            return;
+    /// For pre-classification: every particle's attribute through `color`
+    /// (a raw attribute value → linear RGB), in volume order; empty in post
+    /// mode or without an attribute. A render's prepared context holds
+    /// these, so the volume serves every transfer function at once.
+    pub fn preclassify(&self, color: &(dyn Fn(f32) -> Vec3 + Sync)) -> Vec<Vec3> {
+        match (&self.attribute, self.settings.classification) {
+            (Some(a), Classification::Pre) => a.par_iter().map(|&s| color(s)).collect(),
+            _ => Vec::new(),
         }
-        if let (Some(a), Some(range)) = (&self.attribute, self.attribute_range) {
-            self.colors = a.iter().map(|&s| tf.color(range.normalize(s))).collect();
-        }
+    }
+
+    /// [`ParticleVolume::preclassify`] through `tf`'s colormap over the
+    /// volume's attribute range.
+    pub fn preclassify_with(&self, tf: &TransferFunction) -> Vec<Vec3> {
+        let range = self.attribute_range.unwrap_or(Range1::new(0.0, 1.0));
+        self.preclassify(&|s| tf.color(range.normalize(s)))
     }
 
     fn derive_radii_and_weights(&mut self) {
@@ -525,19 +524,32 @@ impl ParticleVolume {
         self.field(p, false).density
     }
 
-    /// Φ, Θ, the pre-classified colour and (if `gradient`) ∇Φ at `p`.
+    /// Φ, Θ and (if `gradient`) ∇Φ at `p`.
     pub fn field(&self, p: Vec3, gradient: bool) -> FieldSample {
+        self.field_with(&[], p, gradient)
+    }
+
+    /// [`ParticleVolume::field`] with pre-classified colours, one per
+    /// particle in volume order (see [`ParticleVolume::preclassify`]; empty:
+    /// none): the sample's colour is their kernel-weighted average.
+    pub fn field_with(&self, colors: &[Vec3], p: Vec3, gradient: bool) -> FieldSample {
+        // Colours of the wrong length count as none (a stale classification).
+        let colors = if colors.len() == self.len() {
+            colors
+        } else {
+            &[]
+        };
         // Dispatch on the kernel family once; the loop below is monomorphised.
         match (self.settings.kernel, gradient) {
-            (Kernel::CubicSpline, false) => self.eval::<CubicFamily, false>(p),
-            (Kernel::CubicSpline, true) => self.eval::<CubicFamily, true>(p),
-            (_, false) => self.eval::<GaussianFamily, false>(p),
-            (_, true) => self.eval::<GaussianFamily, true>(p),
+            (Kernel::CubicSpline, false) => self.eval::<CubicFamily, false>(colors, p),
+            (Kernel::CubicSpline, true) => self.eval::<CubicFamily, true>(colors, p),
+            (_, false) => self.eval::<GaussianFamily, false>(colors, p),
+            (_, true) => self.eval::<GaussianFamily, true>(colors, p),
         }
     }
 
     #[inline]
-    fn eval<F: Family, const GRAD: bool>(&self, p: Vec3) -> FieldSample {
+    fn eval<F: Family, const GRAD: bool>(&self, colors: &[Vec3], p: Vec3) -> FieldSample {
         let n = self.settings.cluster_size;
         let mut density = 0.0f32;
         let mut attr_sum = 0.0f32;
@@ -545,7 +557,7 @@ impl ParticleVolume {
         let mut grad = Vec3::ZERO;
         let mut covered = false;
         let attr = self.attribute.as_deref();
-        let pre = !self.colors.is_empty();
+        let pre = !colors.is_empty();
         self.bvh.point_query(p, |c| {
             let start = c as usize * n;
             let end = (start + n).min(self.packed.len());
@@ -569,7 +581,7 @@ impl ParticleVolume {
                     attr_sum += v * a[i];
                 }
                 if pre {
-                    color += self.colors[i] * v;
+                    color += colors[i] * v;
                 }
             }
         });
@@ -698,12 +710,7 @@ impl Volume for ParticleVolume {
         gradient: bool,
         out: &mut Vec<(Option<Sample>, Vec3)>,
     ) {
-        match (self.settings.kernel, gradient) {
-            (Kernel::CubicSpline, false) => self.batch::<CubicFamily, false>(batch, out),
-            (Kernel::CubicSpline, true) => self.batch::<CubicFamily, true>(batch, out),
-            (_, false) => self.batch::<GaussianFamily, false>(batch, out),
-            (_, true) => self.batch::<GaussianFamily, true>(batch, out),
-        }
+        self.sample_batch_with(&[], Simd::Auto, batch, gradient, out);
     }
 
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
@@ -743,7 +750,7 @@ impl Volume for ParticleVolume {
     }
 }
 
-fn to_sample(f: &FieldSample) -> Sample {
+pub(crate) fn to_sample(f: &FieldSample) -> Sample {
     Sample {
         value: f.density,
         attribute: match f.color {
@@ -753,6 +760,3 @@ fn to_sample(f: &FieldSample) -> Sample {
         },
     }
 }
-
-// TEMPORARY: replaced by a context holding the pre-classified colours.
-voxless_core::prepare_as_self!(ParticleVolume);

@@ -52,7 +52,7 @@ pub use scatter::{FreeFlight, LightSource, Noise, Scatter};
 
 use rayon::prelude::*;
 use voxless_core::{
-    Aabb, Camera, Cancelled, Control, EventBudget, Image, Prepare, PrepareQuery, Range1,
+    Aabb, Camera, Cancelled, Control, EventBudget, Image, Prepare, PrepareQuery, Range1, Simd,
     TileIntervals, Vec3, View, Volume,
 };
 use voxless_transfer::TransferFunction;
@@ -110,6 +110,9 @@ pub struct RenderSettings {
     /// Tessellations: the k-buffer (first `k` events exact, the rest in
     /// depth layers) instead of sorting every event.
     pub event_budget: Option<EventBudget>,
+    /// The SIMD backend of the volume's packet path (`Auto`: the best the
+    /// CPU has); every backend gives the same image.
+    pub simd: Simd,
 }
 
 impl RenderSettings {
@@ -138,6 +141,7 @@ impl RenderSettings {
             scatter: None,
             frame: 0,
             event_budget: None,
+            simd: Simd::Auto,
         }
     }
 
@@ -181,6 +185,7 @@ pub fn prepare<'a, P: Prepare>(
         is_visible: &is_visible,
         attribute_color: &attribute_color,
         event_budget: settings.event_budget,
+        simd: settings.simd,
     })
 }
 

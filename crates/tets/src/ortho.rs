@@ -23,8 +23,9 @@
 //!
 //! Three kernels evaluate the same operations in the same order (no fused
 //! multiply-add), so they find the same crossings bit for bit: a scalar
-//! reference (f64 sums per crossing), portable `wide` lanes and, chosen at
-//! run time, AVX2. Tets with a face parallel to the rays (exactly, or too
+//! reference (f64 sums per crossing) and one row kernel written once over
+//! [`voxless_core::simd::Lanes`], compiled for portable `wide` lanes and for
+//! AVX2; a [`Simd`] value picks one (`Auto`: AVX2 where the CPU has it). Tets with a face parallel to the rays (exactly, or too
 //! close for finite coefficients) go through a scalar loop with an inside
 //! test for that face, the same in every kernel.
 //!
@@ -35,14 +36,13 @@
 //! of [`crate::render::TetOptions::clip_only`] rounds its ray origins there,
 //! this path only its vertex differences.
 
+use voxless_core::simd::{LANES, Lanes, PortableLanes, Simd, WithLanes, dispatch};
 use voxless_core::{Camera, Projection, Vec3};
-use wide::{f32x4, f32x8};
+use wide::f32x4;
 
 use crate::mesh::{Tet, TetMesh};
 use crate::raster::Frame;
 
-/// Lanes per chunk of a row.
-const LANES: usize = 8;
 /// Tets accumulated in f32 before the tile's f64 sums take them over.
 const FLUSH: usize = 256;
 
@@ -53,22 +53,9 @@ pub(crate) enum Kernel {
     /// against.
     #[cfg_attr(not(test), allow(dead_code))]
     Scalar,
-    /// Eight pixels at a time with portable `wide` lanes.
-    Portable,
-    /// Eight pixels at a time on AVX2 (only where the CPU has it).
-    #[cfg(target_arch = "x86_64")]
-    Avx2,
-}
-
-impl Kernel {
-    /// AVX2 where the CPU has it, else the portable lanes.
-    pub(crate) fn best() -> Kernel {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            return Kernel::Avx2;
-        }
-        Kernel::Portable
-    }
+    /// Eight pixels at a time on the lanes the value resolves to
+    /// ([`Simd::resolve`]).
+    Lanes(Simd),
 }
 
 /// Three f64 components.
@@ -321,28 +308,17 @@ impl TileJob<'_> {
     /// with `kernel`.
     pub(crate) fn run(&self, kernel: Kernel) -> Vec<f64> {
         match kernel {
-            Kernel::Scalar => self.run_in::<0>(),
-            Kernel::Portable => self.run_in::<1>(),
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => {
-                assert!(std::arch::is_x86_feature_detected!("avx2"));
-                // SAFETY: the CPU has AVX2 (asserted just above).
-                unsafe { self.run_avx2() }
-            }
+            Kernel::Scalar => self.run_in::<PortableLanes, true>(),
+            Kernel::Lanes(simd) => dispatch(simd, RunTile(self)),
         }
     }
 
-    /// [`TileJob::run_in`] compiled for AVX2, its rows on AVX lanes.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn run_avx2(&self) -> Vec<f64> {
-        self.run_in::<2>()
-    }
-
-    /// `K`: 0 scalar, 1 portable lanes, 2 AVX2 (only from `run_avx2`). No
-    /// closures here: the AVX2 copy must contain the whole loop.
+    /// The tile on lanes `V` (`SCALAR`: the scalar reference instead; `V`
+    /// unused). Called through [`dispatch`] so that the AVX2 instantiation
+    /// is compiled inside its AVX2 entry. No closures here: the AVX2 copy
+    /// must contain the whole loop.
     #[inline(always)]
-    fn run_in<const K: u8>(&self) -> Vec<f64> {
+    fn run_in<V: Lanes, const SCALAR: bool>(&self) -> Vec<f64> {
         let (tx0, ty0, w, h) = self.frame.tile(self.tile);
         let (tx1, ty1) = (tx0 + w - 1, ty0 + h - 1);
         let (w, h) = (w as usize, h as usize);
@@ -387,7 +363,7 @@ impl TileJob<'_> {
                 let margin = 1e-5 * (local.t_ref.abs() + (t_hi - t_lo) as f64);
                 let clamp = !(local.t_ref + (t_lo as f64) - margin >= buf.common.0 as f64
                     && local.t_ref + (t_hi as f64) + margin <= buf.common.1 as f64);
-                if K == 0 {
+                if SCALAR {
                     scalar(&f, tet.density, r, clamp, &buf, &mut sum, w);
                     continue;
                 }
@@ -398,13 +374,7 @@ impl TileJob<'_> {
                     d.2.min(r.x),
                     d.3.max(r.x + r.nx),
                 );
-                match K {
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: K == 2 only inside `run_avx2`, which has AVX2.
-                    2 => unsafe { rows_for::<Avx>(&f, tet.density, r, clamp, &mut buf) },
-                    // SAFETY: `wide` lanes need no CPU feature.
-                    _ => unsafe { rows_for::<f32x8>(&f, tet.density, r, clamp, &mut buf) },
-                }
+                rows_for::<V>(&f, tet.density, r, clamp, &mut buf);
                 pending += 1;
                 if pending == FLUSH {
                     flush(&mut buf, &mut sum, w);
@@ -414,6 +384,17 @@ impl TileJob<'_> {
         }
         flush(&mut buf, &mut sum, w);
         sum
+    }
+}
+
+/// [`TileJob::run_in`] as a [`dispatch`] job.
+struct RunTile<'a, 'b>(&'a TileJob<'b>);
+
+impl WithLanes for RunTile<'_, '_> {
+    type Output = Vec<f64>;
+    #[inline(always)]
+    fn run<L: Lanes>(self) -> Vec<f64> {
+        self.0.run_in::<L, false>()
     }
 }
 
@@ -523,220 +504,81 @@ fn general(t: &Local, rho: f32, r: Rect, buf: &Buffers, sum: &mut [f64], w: usiz
     }
 }
 
-/// Eight f32 lanes: what the row kernel needs. Masks are all-ones lanes.
-///
-/// # Safety
-/// The operations may need CPU features ([`Avx`]: AVX); callers make sure
-/// the CPU has them.
-trait Lanes: Copy {
-    unsafe fn splat(x: f32) -> Self;
-    unsafe fn iota() -> Self;
-    /// `v[at..at + 8]`.
-    unsafe fn load(v: &[f32], at: usize) -> Self;
-    unsafe fn store(self, v: &mut [f32], at: usize);
-    unsafe fn add(self, o: Self) -> Self;
-    unsafe fn sub(self, o: Self) -> Self;
-    unsafe fn mul(self, o: Self) -> Self;
-    unsafe fn min(self, o: Self) -> Self;
-    unsafe fn max(self, o: Self) -> Self;
-    /// Mask of `self < o`.
-    unsafe fn lt(self, o: Self) -> Self;
-    unsafe fn and(self, o: Self) -> Self;
-}
-
-impl Lanes for f32x8 {
-    #[inline(always)]
-    unsafe fn splat(x: f32) -> Self {
-        f32x8::splat(x)
-    }
-    #[inline(always)]
-    unsafe fn iota() -> Self {
-        f32x8::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0])
-    }
-    #[inline(always)]
-    unsafe fn load(v: &[f32], at: usize) -> Self {
-        f32x8::new(v[at..at + LANES].try_into().expect("padded buffer"))
-    }
-    #[inline(always)]
-    unsafe fn store(self, v: &mut [f32], at: usize) {
-        v[at..at + LANES].copy_from_slice(&self.to_array());
-    }
-    #[inline(always)]
-    unsafe fn add(self, o: Self) -> Self {
-        self + o
-    }
-    #[inline(always)]
-    unsafe fn sub(self, o: Self) -> Self {
-        self - o
-    }
-    #[inline(always)]
-    unsafe fn mul(self, o: Self) -> Self {
-        self * o
-    }
-    #[inline(always)]
-    unsafe fn min(self, o: Self) -> Self {
-        self.fast_min(o)
-    }
-    #[inline(always)]
-    unsafe fn max(self, o: Self) -> Self {
-        self.fast_max(o)
-    }
-    #[inline(always)]
-    unsafe fn lt(self, o: Self) -> Self {
-        self.simd_lt(o)
-    }
-    #[inline(always)]
-    unsafe fn and(self, o: Self) -> Self {
-        self & o
-    }
-}
-
-/// Eight AVX lanes.
-#[cfg(target_arch = "x86_64")]
-#[derive(Clone, Copy)]
-struct Avx(std::arch::x86_64::__m256);
-
-#[cfg(target_arch = "x86_64")]
-impl Lanes for Avx {
-    #[inline(always)]
-    unsafe fn splat(x: f32) -> Self {
-        unsafe { Avx(std::arch::x86_64::_mm256_set1_ps(x)) }
-    }
-    #[inline(always)]
-    unsafe fn iota() -> Self {
-        unsafe {
-            Avx(std::arch::x86_64::_mm256_setr_ps(
-                0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0,
-            ))
-        }
-    }
-    #[inline(always)]
-    unsafe fn load(v: &[f32], at: usize) -> Self {
-        unsafe {
-            Avx(std::arch::x86_64::_mm256_loadu_ps(
-                v[at..at + LANES].as_ptr(),
-            ))
-        }
-    }
-    #[inline(always)]
-    unsafe fn store(self, v: &mut [f32], at: usize) {
-        unsafe { std::arch::x86_64::_mm256_storeu_ps(v[at..at + LANES].as_mut_ptr(), self.0) }
-    }
-    #[inline(always)]
-    unsafe fn add(self, o: Self) -> Self {
-        unsafe { Avx(std::arch::x86_64::_mm256_add_ps(self.0, o.0)) }
-    }
-    #[inline(always)]
-    unsafe fn sub(self, o: Self) -> Self {
-        unsafe { Avx(std::arch::x86_64::_mm256_sub_ps(self.0, o.0)) }
-    }
-    #[inline(always)]
-    unsafe fn mul(self, o: Self) -> Self {
-        unsafe { Avx(std::arch::x86_64::_mm256_mul_ps(self.0, o.0)) }
-    }
-    #[inline(always)]
-    unsafe fn min(self, o: Self) -> Self {
-        unsafe { Avx(std::arch::x86_64::_mm256_min_ps(self.0, o.0)) }
-    }
-    #[inline(always)]
-    unsafe fn max(self, o: Self) -> Self {
-        unsafe { Avx(std::arch::x86_64::_mm256_max_ps(self.0, o.0)) }
-    }
-    #[inline(always)]
-    unsafe fn lt(self, o: Self) -> Self {
-        use std::arch::x86_64::*;
-        unsafe { Avx(_mm256_cmp_ps::<_CMP_LT_OQ>(self.0, o.0)) }
-    }
-    #[inline(always)]
-    unsafe fn and(self, o: Self) -> Self {
-        unsafe { Avx(std::arch::x86_64::_mm256_and_ps(self.0, o.0)) }
-    }
-}
-
 /// [`rows`] for the tet's count of entering faces and box clip.
-///
-/// # Safety
-/// `V`'s operations must be supported by the CPU.
 #[inline(always)]
-unsafe fn rows_for<V: Lanes>(f: &Faces, rho: f32, r: Rect, clamp: bool, buf: &mut Buffers) {
-    unsafe {
-        match (clamp, f.entering) {
-            (false, 1) => rows::<V, false, 1>(f, rho, r, buf),
-            (false, 2) => rows::<V, false, 2>(f, rho, r, buf),
-            (false, _) => rows::<V, false, 3>(f, rho, r, buf),
-            (true, 1) => rows::<V, true, 1>(f, rho, r, buf),
-            (true, 2) => rows::<V, true, 2>(f, rho, r, buf),
-            (true, _) => rows::<V, true, 3>(f, rho, r, buf),
-        }
+fn rows_for<V: Lanes>(f: &Faces, rho: f32, r: Rect, clamp: bool, buf: &mut Buffers) {
+    match (clamp, f.entering) {
+        (false, 1) => rows::<V, false, 1>(f, rho, r, buf),
+        (false, 2) => rows::<V, false, 2>(f, rho, r, buf),
+        (false, _) => rows::<V, false, 3>(f, rho, r, buf),
+        (true, 1) => rows::<V, true, 1>(f, rho, r, buf),
+        (true, 2) => rows::<V, true, 2>(f, rho, r, buf),
+        (true, _) => rows::<V, true, 3>(f, rho, r, buf),
     }
 }
 
 /// A tet's rows, eight pixels at a time: lanes whose ray crosses the tet
 /// add `ρ·chord` to the accumulator. `E` faces enter; `CLAMP`: clip to the
 /// pixels' box spans. No closures: their bodies would not get the AVX2
-/// features of `run_avx2`, and the intrinsics would become calls.
-///
-/// # Safety
-/// `V`'s operations must be supported by the CPU.
+/// features of the dispatch entry, and the intrinsics would become calls.
 #[inline(always)]
-unsafe fn rows<V: Lanes, const CLAMP: bool, const E: usize>(
+fn rows<V: Lanes, const CLAMP: bool, const E: usize>(
     f: &Faces,
     rho: f32,
     r: Rect,
     buf: &mut Buffers,
 ) {
-    unsafe {
-        let s = V::splat;
-        let iota = V::iota();
-        let b = [s(f.b[0]), s(f.b[1]), s(f.b[2]), s(f.b[3])];
-        let (rho_v, t_ref, zero) = (s(rho), s(f.t_ref), s(0.0));
-        // Lanes of the row's last chunk inside the tet's rectangle.
-        let last = (r.nx - 1) & !(LANES - 1);
-        let tail = iota.lt(s((r.nx - last) as f32));
-        let all = zero.lt(s(1.0));
-        for j in 0..r.ny {
-            let jf = j as f32;
-            let row = [
-                s(f.a[0] + f.c[0] * jf),
-                s(f.a[1] + f.c[1] * jf),
-                s(f.a[2] + f.c[2] * jf),
-                s(f.a[3] + f.c[3] * jf),
+    let s = V::splat;
+    let iota = V::iota();
+    let b = [s(f.b[0]), s(f.b[1]), s(f.b[2]), s(f.b[3])];
+    let (rho_v, t_ref, zero) = (s(rho), s(f.t_ref), s(0.0));
+    // Lanes of the row's last chunk inside the tet's rectangle.
+    let last = (r.nx - 1) & !(LANES - 1);
+    let tail = V::first(r.nx - last);
+    let all = V::first(LANES);
+    for j in 0..r.ny {
+        let jf = j as f32;
+        let row = [
+            s(f.a[0] + f.c[0] * jf),
+            s(f.a[1] + f.c[1] * jf),
+            s(f.a[2] + f.c[2] * jf),
+            s(f.a[3] + f.c[3] * jf),
+        ];
+        let base = (r.y + j) * buf.stride + r.x;
+        let mut i = 0;
+        while i < r.nx {
+            // The faces' ray parameters at pixels i..i + 8, as in `face_at`.
+            let x = iota + s(i as f32);
+            let v = [
+                row[0] + b[0] * x,
+                row[1] + b[1] * x,
+                row[2] + b[2] * x,
+                row[3] + b[3] * x,
             ];
-            let base = (r.y + j) * buf.stride + r.x;
-            let mut i = 0;
-            while i < r.nx {
-                let x = iota.add(s(i as f32));
-                let v = [
-                    row[0].add(b[0].mul(x)),
-                    row[1].add(b[1].mul(x)),
-                    row[2].add(b[2].mul(x)),
-                    row[3].add(b[3].mul(x)),
-                ];
-                let t0 = match E {
-                    1 => v[0],
-                    2 => v[0].max(v[1]),
-                    _ => v[0].max(v[1]).max(v[2]),
-                };
-                let t1 = match E {
-                    1 => v[1].min(v[2]).min(v[3]),
-                    2 => v[2].min(v[3]),
-                    _ => v[3],
-                };
-                let (t0, t1) = if CLAMP {
-                    (
-                        t0.max(V::load(&buf.s0, base + i).sub(t_ref)),
-                        t1.min(V::load(&buf.s1, base + i).sub(t_ref)),
-                    )
-                } else {
-                    (t0, t1)
-                };
-                let ch = t1.sub(t0);
-                let valid = if i == last { tail } else { all };
-                let hit = zero.lt(ch).and(valid);
-                let acc = V::load(&buf.acc, base + i).add(hit.and(ch.mul(rho_v)));
-                acc.store(&mut buf.acc, base + i);
-                i += LANES;
-            }
+            let t0 = match E {
+                1 => v[0],
+                2 => v[0].max(v[1]),
+                _ => v[0].max(v[1]).max(v[2]),
+            };
+            let t1 = match E {
+                1 => v[1].min(v[2]).min(v[3]),
+                2 => v[2].min(v[3]),
+                _ => v[3],
+            };
+            let (t0, t1) = if CLAMP {
+                (
+                    t0.max(V::load(&buf.s0, base + i) - t_ref),
+                    t1.min(V::load(&buf.s1, base + i) - t_ref),
+                )
+            } else {
+                (t0, t1)
+            };
+            let ch = t1 - t0;
+            let valid = if i == last { tail } else { all };
+            let hit = zero.lt(ch) & valid;
+            let acc = V::load(&buf.acc, base + i) + (hit & (ch * rho_v));
+            acc.store(&mut buf.acc, base + i);
+            i += LANES;
         }
     }
 }

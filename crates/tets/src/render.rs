@@ -6,7 +6,7 @@
 //! tile view of [`crate::events`]).
 
 use rayon::prelude::*;
-use voxless_core::{Camera, Cancelled, Control, Ray};
+use voxless_core::{Camera, Cancelled, Control, Ray, Simd};
 
 use crate::mesh::TetMesh;
 use crate::ortho::{Kernel, OrthoMap, TileJob};
@@ -75,7 +75,7 @@ pub fn project(
         camera,
         (width, height),
         options,
-        Kernel::best(),
+        Kernel::Lanes(Simd::Auto),
         control,
     )
 }

@@ -3,14 +3,16 @@
 
 use super::*;
 
-/// Every orthographic kernel this CPU can run.
+/// Every orthographic kernel this CPU can run as itself, the scalar
+/// reference first (a notice when AVX2 is missing).
 fn kernels() -> Vec<crate::ortho::Kernel> {
     use crate::ortho::Kernel;
-    #[allow(unused_mut)]
-    let mut k = vec![Kernel::Scalar, Kernel::Portable];
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        k.push(Kernel::Avx2);
+    use voxless_core::simd::Simd;
+    let mut k = vec![Kernel::Scalar, Kernel::Lanes(Simd::Portable)];
+    if Simd::Avx2.available() {
+        k.push(Kernel::Lanes(Simd::Avx2));
+    } else {
+        eprintln!("notice: no AVX2 on this CPU; the portable lanes only");
     }
     k
 }
