@@ -11,7 +11,9 @@
 //! 3. [`RayState::feed`]: one segment composited front to back, with the
 //!    segment-length opacity correction and iso-surface crossings.
 
-use voxless_core::{Aabb, Attribute, Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume};
+use voxless_core::{
+    Aabb, Attribute, Interval, IntervalKind, IntervalQuery, Range1, Ray, Sample, Vec3, Volume,
+};
 use voxless_transfer::TransferFunction;
 
 use crate::sampling::PixelRng;
@@ -66,6 +68,23 @@ pub(crate) fn march_intervals<V: Volume>(
 ) -> [f32; 4] {
     let gradient = ctx.needs_gradient();
     let mut state = RayState::new(span);
+    // Only constant pieces and no iso-surfaces (a tessellation's usual
+    // ray): each piece composited whole, without cursor or iso bookkeeping —
+    // the same arithmetic as `feed`, in a tight loop.
+    if ctx.settings.iso.is_empty() && intervals.iter().all(|iv| iv.kind == IntervalKind::Constant)
+    {
+        if ctx.settings.volume {
+            for iv in intervals {
+                let len = iv.t.hi - iv.t.lo;
+                if len > 0.0
+                    && state.composite(&Sample::scalar(iv.value_range.lo), len, Vec3::ZERO, ctx)
+                {
+                    break;
+                }
+            }
+        }
+        return state.rgba();
+    }
     let mut cursor = Cursor::new(span.lo);
     while let Some(seg) = cursor.next(intervals, ctx.settings, rng) {
         let iv = &intervals[seg.interval as usize];
