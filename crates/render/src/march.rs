@@ -169,6 +169,7 @@ impl Cursor {
         self.dt
     }
 
+    #[inline]
     pub fn next(
         &mut self,
         intervals: &[Interval],
@@ -335,6 +336,7 @@ impl RayState {
     /// Composites the sample of `seg` (in interval `iv`); returns true once
     /// the ray is opaque enough to stop.
     #[allow(clippy::too_many_arguments)]
+    #[inline]
     pub fn feed<V: Volume>(
         &mut self,
         volume: &V,
@@ -452,7 +454,7 @@ impl RayState {
 
     /// A segment of length `len` of sample `s`, opacity-corrected for its
     /// length (exact when the field is constant over it).
-    #[inline]
+    #[inline(always)]
     fn composite(&mut self, s: &Sample, len: f32, gradient: Vec3, ctx: &Ctx) -> bool {
         let settings = ctx.settings;
         let x = settings.normalize(s.value);
