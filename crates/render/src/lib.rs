@@ -46,7 +46,7 @@ pub mod scatter;
 pub mod testing;
 mod tile;
 
-pub use march::{RayStats, march};
+pub use march::{RayStats, march, own_range};
 pub use packet::{PACKET, WINDOW_STEPS};
 pub use scatter::{FreeFlight, LightSource, Noise, Scatter};
 
@@ -113,6 +113,38 @@ pub struct RenderSettings {
     /// The SIMD backend of the volume's packet path (`Auto`: the best the
     /// CPU has); every backend gives the same image.
     pub simd: Simd,
+    /// A render of one box of a domain decomposition: only the samples in
+    /// the box are composited (see [`Domain`]).
+    pub domain: Option<Domain>,
+}
+
+/// One box of a domain decomposition, for a render that composites only
+/// the samples inside it; the boxes' images composited front to back give
+/// the one-process image.
+///
+/// A ray's samples sit on a lattice fixed by the pixel, the sample index
+/// and the step (module `march`), and a box owns the samples whose
+/// midpoints lie in it, so each sample of the one-process render is taken
+/// by exactly one box and evaluated there with the same data (the box's
+/// volume holds everything that reaches into it). Constant pieces are cut
+/// at the box's faces, which their closed form allows exactly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Domain {
+    /// The box whose samples this render owns, half-open `[min, max)`.
+    pub owned: Aabb,
+    /// The bounds of the whole data set: lattice cells are cut where they
+    /// leave it (and the clip box), as in a one-process render, rather than
+    /// at the bounds of the box's own part of the data.
+    pub bounds: Aabb,
+}
+
+/// A pixel to render again from a known opacity: the opacity the boxes in
+/// front of this one composited (see [`Job::render_pixels`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelRequest {
+    pub x: u32,
+    pub y: u32,
+    pub alpha: f32,
 }
 
 impl RenderSettings {
@@ -142,6 +174,7 @@ impl RenderSettings {
             frame: 0,
             event_budget: None,
             simd: Simd::Auto,
+            domain: None,
         }
     }
 
@@ -215,6 +248,7 @@ pub struct Job<'a, V: Volume> {
     tf: &'a TransferFunction,
     settings: &'a RenderSettings,
     tiles: Vec<Tile>,
+    tile_size: u32,
 }
 
 impl<'a, V: Volume> Job<'a, V> {
@@ -239,6 +273,7 @@ impl<'a, V: Volume> Job<'a, V> {
             tf,
             settings,
             tiles: tiles(settings.width, settings.height, size),
+            tile_size: size,
         }
     }
 
@@ -273,6 +308,25 @@ impl<'a, V: Volume> Job<'a, V> {
             film.width == self.settings.width && film.height == self.settings.height,
             "film size differs from the render settings"
         );
+        let (pixels, stats) = self.pass_pixels(sample, control)?;
+        film.stats.merge(&stats);
+        for (s, p) in film.sum.iter_mut().zip(pixels) {
+            for c in 0..4 {
+                s[c] += p[c];
+            }
+        }
+        film.passes += 1;
+        Ok(())
+    }
+
+    /// Sample index `sample` of every pixel on its own (row-major
+    /// premultiplied RGBA), and what the rays saw: one pass, for a caller
+    /// that composites passes itself (a box of a domain decomposition).
+    pub fn pass_pixels(
+        &self,
+        sample: u32,
+        control: &Control,
+    ) -> Result<(Vec<[f32; 4]>, RayStats), Cancelled> {
         control.check()?;
         let total = self.tiles.len() as u64;
         let done = std::sync::atomic::AtomicU64::new(0);
@@ -283,7 +337,7 @@ impl<'a, V: Volume> Job<'a, V> {
                 if control.is_cancelled() {
                     return None;
                 }
-                let pixels = tile::render_tile(self, tile, sample);
+                let pixels = tile::render_tile(self, tile, sample, None);
                 let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                 control.report(d, total);
                 Some(pixels)
@@ -292,22 +346,61 @@ impl<'a, V: Volume> Job<'a, V> {
         if control.is_cancelled() || results.iter().any(Option::is_none) {
             return Err(Cancelled);
         }
-        let w = film.width;
-        for (tile, (pixels, stats)) in self.tiles.iter().zip(results.into_iter().flatten()) {
-            film.stats.merge(&stats);
+        let w = self.settings.width;
+        let mut image = vec![[0.0f32; 4]; w as usize * self.settings.height as usize];
+        let mut stats = RayStats::default();
+        for (tile, (pixels, st)) in self.tiles.iter().zip(results.into_iter().flatten()) {
+            stats.merge(&st);
             let mut it = pixels.into_iter();
             for y in tile.y..tile.y + tile.h {
                 for x in tile.x..tile.x + tile.w {
-                    let p = it.next().unwrap_or_default();
-                    let s = &mut film.sum[(y * w + x) as usize];
-                    for c in 0..4 {
-                        s[c] += p[c];
-                    }
+                    image[(y * w + x) as usize] = it.next().unwrap_or_default();
                 }
             }
         }
-        film.passes += 1;
-        Ok(())
+        Ok((image, stats))
+    }
+
+    /// Sample index `sample` of the requested pixels, each rendered from
+    /// the requested opacity onwards (the colour starts at zero): what a
+    /// box of a decomposition adds behind the opacity its front boxes
+    /// composited, with early termination where the whole ray would stop.
+    /// One RGBA per request, in order (alpha is the total opacity).
+    pub fn render_pixels(&self, sample: u32, requests: &[PixelRequest]) -> Vec<[f32; 4]> {
+        let size = self.tile_size.max(1);
+        let per_row = self.settings.width.div_ceil(size) as usize;
+        // Requests by tile (tiles are laid out row by row).
+        let mut by_tile: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
+        for (i, r) in requests.iter().enumerate() {
+            if r.x < self.settings.width && r.y < self.settings.height {
+                let t = (r.y / size) as usize * per_row + (r.x / size) as usize;
+                by_tile.entry(t).or_default().push(i);
+            }
+        }
+        let work: Vec<(usize, Vec<usize>)> = by_tile.into_iter().collect();
+        let results: Vec<Vec<(usize, [f32; 4])>> = work
+            .par_iter()
+            .map(|(t, reqs)| {
+                let tile = self.tiles[*t];
+                let mut alpha = vec![f32::NAN; (tile.w * tile.h) as usize];
+                for &i in reqs {
+                    let r = &requests[i];
+                    alpha[((r.y - tile.y) * tile.w + (r.x - tile.x)) as usize] = r.alpha;
+                }
+                let (pixels, _) = tile::render_tile(self, tile, sample, Some(&alpha));
+                reqs.iter()
+                    .map(|&i| {
+                        let r = &requests[i];
+                        (i, pixels[((r.y - tile.y) * tile.w + (r.x - tile.x)) as usize])
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut out = vec![[0.0f32; 4]; requests.len()];
+        for (i, p) in results.into_iter().flatten() {
+            out[i] = p;
+        }
+        out
     }
 }
 
@@ -424,6 +517,20 @@ pub fn project_per_pixel<V: Volume>(
     height: u32,
     control: &Control,
 ) -> Result<Vec<f32>, Cancelled> {
+    project_in(volume, camera, width, height, None, control)
+}
+
+/// [`project_per_pixel`] restricted to the half-open box `domain` (see
+/// [`own_range`]): the part of each line integral inside it, so the
+/// projections of the boxes of a decomposition add up to the whole one.
+pub fn project_in<V: Volume>(
+    volume: &V,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    domain: Option<&Aabb>,
+    control: &Control,
+) -> Result<Vec<f32>, Cancelled> {
     let done = std::sync::atomic::AtomicU64::new(0);
     let bounds = volume.bounds();
     let rows: Vec<Option<Vec<f32>>> = (0..height)
@@ -435,7 +542,7 @@ pub fn project_per_pixel<V: Volume>(
             let row: Vec<f32> = (0..width)
                 .map(|x| {
                     let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5, width, height);
-                    let t = bounds.clip_ray(&ray, Range1::new(f32::NEG_INFINITY, f32::INFINITY));
+                    let t = bounds.clip_ray(&ray, own_range(domain, &ray));
                     if t.is_empty() {
                         0.0
                     } else {

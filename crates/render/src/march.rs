@@ -4,10 +4,10 @@
 //!
 //! 1. the ray's span inside the volume (and clip box) and the volume's
 //!    visible intervals along it ([`crate::tile`] gets them per tile);
-//! 2. [`Cursor`]: the sample segments inside those intervals, in order — per
-//!    sampled interval a random first boundary (jitter), then steps of `dt`,
-//!    each segment sampled at its midpoint; a constant interval is one
-//!    segment, whole;
+//! 2. [`Cursor`]: the sample segments inside those intervals, in order — the
+//!    cells of a lattice of step `dt` fixed on the ray (offset by one random
+//!    number per pixel sample: jitter), each sampled at its midpoint; a
+//!    constant interval is one segment, whole;
 //! 3. [`RayState::feed`]: one segment composited front to back, with the
 //!    segment-length opacity correction and iso-surface crossings.
 
@@ -30,14 +30,14 @@ pub fn march<V: Volume>(
     scratch: &mut Vec<Interval>,
 ) -> [f32; 4] {
     scratch.clear();
-    let span = ray_span(volume, ray, settings, f32::INFINITY);
-    if span.is_empty() {
+    let spans = RaySpans::new(&region(volume, settings), settings, ray, f32::INFINITY);
+    if spans.is_empty() {
         return [0.0; 4];
     }
     let visible = |r: Range1| settings.is_visible(tf, r);
     volume.intervals(
         ray,
-        span,
+        spans.span,
         &IntervalQuery {
             is_visible: &visible,
         },
@@ -48,33 +48,39 @@ pub fn march<V: Volume>(
         volume,
         ray,
         scratch,
-        span,
+        &spans,
+        0.0,
         rng,
         &ctx,
         &mut RayStats::default(),
     )
 }
 
-/// Emission–absorption along `ray` over its `intervals` (within `span`);
-/// what the ray saw is added to `stats`.
+/// Emission–absorption along `ray` over its `intervals` (within
+/// `spans.span`), starting from opacity `alpha0` (0 for a whole ray; a
+/// render of one box of a decomposition continues what the boxes in front
+/// of it composited); what the ray saw is added to `stats`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn march_intervals<V: Volume>(
     volume: &V,
     ray: &Ray,
     intervals: &[Interval],
-    span: Range1,
+    spans: &RaySpans,
+    alpha0: f32,
     rng: &PixelRng,
     ctx: &Ctx,
     stats: &mut RayStats,
 ) -> [f32; 4] {
     let gradient = ctx.needs_gradient();
-    let mut state = RayState::new(span);
+    let mut state = RayState::new(spans.cells, alpha0);
     // Only constant pieces and no iso-surfaces (a tessellation's usual
-    // ray): each piece composited whole, without cursor or iso bookkeeping —
-    // the same arithmetic as `feed`, in a tight loop.
+    // ray): each piece (the part owned) composited whole, without cursor or
+    // iso bookkeeping — the same arithmetic as `feed`, in a tight loop.
     if ctx.settings.iso.is_empty() && intervals.iter().all(|iv| iv.kind == IntervalKind::Constant) {
         if ctx.settings.volume {
+            let own = spans.own;
             for iv in intervals {
-                let len = iv.t.hi - iv.t.lo;
+                let len = iv.t.hi.min(own.hi) - iv.t.lo.max(own.lo);
                 if len > 0.0
                     && state.composite(&Sample::scalar(iv.value_range.lo), len, Vec3::ZERO, ctx)
                 {
@@ -84,8 +90,8 @@ pub(crate) fn march_intervals<V: Volume>(
         }
         return state.rgba();
     }
-    let mut cursor = Cursor::new(span.lo);
-    while let Some(seg) = cursor.next(intervals, ctx.settings, rng) {
+    let mut cursor = spans.cursor(rng);
+    while let Some(seg) = cursor.next(intervals, ctx.settings) {
         let iv = &intervals[seg.interval as usize];
         let p = ray.at(seg.t);
         let (sample, g) = if let Some(v) = iv.constant_value() {
@@ -108,25 +114,72 @@ pub(crate) fn march_intervals<V: Volume>(
     state.rgba()
 }
 
-/// The part `t ∈ [0, t_max]` of `ray` inside the volume's bounds and the
-/// clip box (empty when it misses).
-pub(crate) fn ray_span<V: Volume>(
-    volume: &V,
-    ray: &Ray,
-    settings: &RenderSettings,
-    t_max: f32,
-) -> Range1 {
-    let mut region = volume.bounds();
-    if let Some(clip) = settings.clip {
-        region = Aabb::new(region.min.max(clip.min), region.max.min(clip.max));
+/// The part of the world a render integrates: the volume's bounds, cut by
+/// the clip box.
+pub(crate) fn region<V: Volume>(volume: &V, settings: &RenderSettings) -> Aabb {
+    clipped(volume.bounds(), settings.clip)
+}
+
+fn clipped(b: Aabb, clip: Option<Aabb>) -> Aabb {
+    match clip {
+        Some(c) => Aabb::new(b.min.max(c.min), b.max.min(c.max)),
+        None => b,
     }
-    region.clip_ray(ray, Range1::new(0.0, t_max))
+}
+
+/// Where one ray's samples lie.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RaySpans {
+    /// The part `t ∈ [0, t_max]` inside the volume's bounds and the clip
+    /// box, where its intervals are asked for.
+    pub span: Range1,
+    /// Where lattice cells are cut: `span`, or under a decomposition the
+    /// ray inside the whole data's bounds and the clip box — the same for
+    /// every box, as in a one-process render.
+    pub cells: Range1,
+    /// The samples this render owns (see [`own_range`]).
+    pub own: Range1,
+}
+
+impl RaySpans {
+    /// The spans of `ray` for a volume whose integrated region (bounds and
+    /// clip box) is `region`.
+    pub fn new(region: &Aabb, settings: &RenderSettings, ray: &Ray, t_max: f32) -> RaySpans {
+        let t = Range1::new(0.0, t_max);
+        let span = region.clip_ray(ray, t);
+        match &settings.domain {
+            None => RaySpans {
+                span,
+                cells: span,
+                own: Range1::new(f32::NEG_INFINITY, f32::INFINITY),
+            },
+            Some(d) => {
+                let own = own_range(Some(&d.owned), ray);
+                RaySpans {
+                    span: if own.is_empty() { Range1::EMPTY } else { span },
+                    cells: clipped(d.bounds, settings.clip).clip_ray(ray, t),
+                    own,
+                }
+            }
+        }
+    }
+
+    /// Whether the ray has nothing to integrate.
+    pub fn is_empty(&self) -> bool {
+        self.span.is_empty()
+    }
+
+    /// A cursor over this ray's segments.
+    pub fn cursor(&self, rng: &PixelRng) -> Cursor {
+        Cursor::new(self.cells, self.own, rng)
+    }
 }
 
 /// One sample: the midpoint `t` of a segment of length `len` in interval
-/// `interval` of the ray's list; `reset` when the segment is the first of an
-/// interval that follows a gap (the previous sample no longer brackets
-/// iso-surface crossings; next to a constant interval the gap is zero).
+/// `interval` of the ray's list; `reset` when the segment does not start
+/// where the previous one ended (a gap: the previous sample no longer
+/// brackets iso-surface crossings; next to a constant interval the gap is
+/// zero).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Segment {
     pub t: f32,
@@ -137,29 +190,57 @@ pub(crate) struct Segment {
 
 /// Walks the segments of a ray's intervals in order; resumable, so the
 /// packet path can take them a window at a time.
+///
+/// **The sample lattice.** Sampled intervals are cut into the cells of a
+/// lattice fixed on the ray: boundaries at `t = (n + ξ)·dt` for integers
+/// `n`, with `ξ` one random number per pixel sample and `dt` the interval's
+/// step. A cell is sampled at its midpoint, with its length as the segment
+/// length, when that midpoint lies in one of the intervals. Cells are cut
+/// only where the lattice must end: at the ray's span (the volume's bounds
+/// and the clip box), where the step changes, and next to constant
+/// intervals — never at the seams between intervals of one step (macrocell
+/// or region boundaries) nor at the edges of skipped space, which depend on
+/// how the data is organised rather than on the field. So the samples of a
+/// ray depend on the field, the camera, the pixel and the sample index only,
+/// and a domain decomposition that renders the samples whose midpoints lie
+/// in its box ([`own_range`]) takes exactly the samples of the one-process
+/// render.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Cursor {
+    /// The interval the next segment is looked for in.
     k: usize,
-    start: f32,
-    end: f32,
+    /// Lattice index of the next cell.
+    n: i64,
     dt: f32,
-    prev_end: f32,
-    reset: bool,
+    /// The lattice offset in steps, in `[0, 1)`.
+    xi: f64,
+    /// Cells are cut to this span (the ray inside the bounds and clip box).
+    span: Range1,
+    /// Only segments whose midpoints lie in `[own.lo, own.hi)` are returned.
+    own: Range1,
+    /// Lower cut of the current run of same-step intervals.
+    run_lo: f32,
+    /// Whether `dt`, `n` and `run_lo` belong to interval `k`'s run.
     open: bool,
+    /// Where the last returned segment ended.
+    prev_end: f32,
 }
 
 impl Cursor {
-    /// A cursor at the start of a ray whose span starts at `t0`: an
-    /// interval starting later follows a gap.
-    pub fn new(t0: f32) -> Self {
+    /// A cursor for a ray whose part inside the volume is `span`, returning
+    /// the segments whose midpoints lie in `own` (half-open; everything for
+    /// a one-process render), with the lattice offset drawn from `rng`.
+    pub fn new(span: Range1, own: Range1, rng: &PixelRng) -> Self {
         Cursor {
             k: 0,
-            start: 0.0,
-            end: 0.0,
+            n: 0,
             dt: 0.0,
-            prev_end: t0,
-            reset: false,
+            xi: rng.uniform(2) as f64,
+            span,
+            own,
+            run_lo: span.lo,
             open: false,
+            prev_end: span.lo,
         }
     }
 
@@ -168,64 +249,156 @@ impl Cursor {
         self.dt
     }
 
+    /// Boundary `n` of the lattice (computed from `n`, never accumulated, so
+    /// it does not depend on where the walk started).
     #[inline]
-    pub fn next(
-        &mut self,
-        intervals: &[Interval],
-        settings: &RenderSettings,
-        rng: &PixelRng,
-    ) -> Option<Segment> {
+    fn boundary(&self, n: i64) -> f32 {
+        ((n as f64 + self.xi) * self.dt as f64) as f32
+    }
+
+    /// The first lattice cell that can hold a midpoint at or after `t`.
+    #[inline]
+    fn cell_before(&self, t: f32) -> i64 {
+        ((t as f64 / self.dt as f64 - self.xi).floor() as i64).saturating_sub(1)
+    }
+
+    /// The step of sampled interval `iv`: the fixed step or the interval's
+    /// nominal one over the sampling rate. The floor keeps the lattice
+    /// representable in `f32` at this `t` (at most about 10⁶ cells per
+    /// interval), so a tiny step can never hang a render.
+    #[inline]
+    fn step_of(iv: &Interval, settings: &RenderSettings) -> f32 {
+        settings
+            .step
+            .unwrap_or(iv.nominal_dt / settings.sampling_rate)
+            .max(16.0 * f32::EPSILON * iv.t.lo.abs().max(iv.t.hi.abs()))
+            .max(f32::MIN_POSITIVE)
+    }
+
+    #[inline]
+    pub fn next(&mut self, intervals: &[Interval], settings: &RenderSettings) -> Option<Segment> {
         loop {
             let iv = intervals.get(self.k)?;
-            if !self.open {
-                // A gap before this interval breaks iso-surface bracketing.
-                if iv.t.lo != self.prev_end {
-                    self.reset = true;
-                }
-                self.prev_end = iv.t.hi;
-                if iv.constant_value().is_some() {
-                    // Constant: one segment, the whole interval, no jitter.
-                    self.k += 1;
-                    let len = iv.t.hi - iv.t.lo;
-                    if len <= 0.0 {
-                        continue;
-                    }
-                    return Some(Segment {
-                        t: iv.t.lo + 0.5 * len,
-                        len,
-                        interval: (self.k - 1) as u32,
-                        reset: std::mem::take(&mut self.reset),
-                    });
-                }
-                self.dt = settings
-                    .step
-                    .unwrap_or(iv.nominal_dt / settings.sampling_rate)
-                    .max(iv.t.span() * 1e-6)
-                    .max(f32::MIN_POSITIVE);
-                // Segment boundaries start at a random offset inside the first step.
-                let xi = rng.uniform(2 + self.k as u32);
-                self.start = iv.t.lo;
-                self.end = iv.t.lo + xi * self.dt;
-                self.open = true;
+            if iv.t.lo >= self.own.hi {
+                // Every later midpoint lies beyond what this render owns.
+                return None;
             }
-            while self.start < iv.t.hi {
-                let end = self.end.min(iv.t.hi);
-                let len = end - self.start;
-                self.start = end;
-                self.end = end + self.dt;
-                if len <= 0.0 {
+            if iv.constant_value().is_some() {
+                // Constant: one segment, the whole interval (the part owned),
+                // no jitter.
+                self.k += 1;
+                self.open = false;
+                let lo = iv.t.lo.max(self.own.lo);
+                let hi = iv.t.hi.min(self.own.hi);
+                if hi <= lo {
                     continue;
                 }
+                return Some(self.emit(lo, hi, self.k - 1));
+            }
+            if !self.open {
+                self.dt = Self::step_of(iv, settings);
+                // A new run starts at the span for the first interval, else
+                // where this interval starts (the step changed, or a
+                // constant interval ended).
+                self.run_lo = if self.k == 0 {
+                    self.span.lo
+                } else {
+                    iv.t.lo
+                };
+                self.n = self.cell_before(self.run_lo);
+                self.open = true;
+            }
+            // The run goes on past this interval when the next one is sampled
+            // with the same step; else its cells end here (or at the span).
+            let continues = intervals.get(self.k + 1).is_some_and(|nx| {
+                nx.constant_value().is_none()
+                    && Self::step_of(nx, settings).to_bits() == self.dt.to_bits()
+            });
+            let last = self.k + 1 == intervals.len();
+            let run_hi = if continues || last {
+                self.span.hi
+            } else {
+                iv.t.hi.min(self.span.hi)
+            };
+            // Skip the cells before this interval and before what is owned
+            // without walking them (a gap of skipped space can be long).
+            self.n = self
+                .n
+                .max(self.cell_before(iv.t.lo.max(self.own.lo).max(self.run_lo)));
+            loop {
+                let b0 = self.boundary(self.n).max(self.run_lo);
+                let b1 = self.boundary(self.n + 1).min(run_hi);
+                if b0 >= run_hi {
+                    break;
+                }
+                if b1 <= b0 {
+                    self.n += 1;
+                    continue;
+                }
+                let m = b0 + 0.5 * (b1 - b0);
+                if m >= iv.t.hi {
+                    break;
+                }
+                self.n += 1;
+                if m < iv.t.lo || m < self.own.lo {
+                    continue;
+                }
+                if m >= self.own.hi {
+                    return None;
+                }
                 return Some(Segment {
-                    t: end - 0.5 * len,
-                    len,
-                    interval: self.k as u32,
-                    reset: std::mem::take(&mut self.reset),
+                    t: m,
+                    ..self.emit(b0, b1, self.k)
                 });
             }
-            self.open = false;
+            // This interval is done; a run that goes on keeps its lattice.
+            self.open = continues;
             self.k += 1;
         }
+    }
+
+    /// The segment `[lo, hi)` of interval `k`, sampled at its midpoint.
+    #[inline]
+    fn emit(&mut self, lo: f32, hi: f32, k: usize) -> Segment {
+        let reset = lo != self.prev_end;
+        self.prev_end = hi;
+        Segment {
+            t: lo + 0.5 * (hi - lo),
+            len: hi - lo,
+            interval: k as u32,
+            reset,
+        }
+    }
+}
+
+/// The part `[lo, hi)` of `ray` whose samples a render restricted to the
+/// half-open box `domain` owns (everything without one). Boxes that tile
+/// space split every ray's samples exactly: a shared face gives both boxes
+/// the same `t`, and a ray lying in a face belongs to the box on its upper
+/// side only.
+pub fn own_range(domain: Option<&Aabb>, ray: &Ray) -> Range1 {
+    let Some(d) = domain else {
+        return Range1::new(f32::NEG_INFINITY, f32::INFINITY);
+    };
+    let (mut lo, mut hi) = (f32::NEG_INFINITY, f32::INFINITY);
+    for a in 0..3 {
+        let (o, dir) = (ray.origin[a], ray.dir[a]);
+        if dir == 0.0 {
+            if !(d.min[a] <= o && o < d.max[a]) {
+                return Range1::EMPTY;
+            }
+            continue;
+        }
+        let inv = 1.0 / dir;
+        let t0 = (d.min[a] - o) * inv;
+        let t1 = (d.max[a] - o) * inv;
+        lo = lo.max(t0.min(t1));
+        hi = hi.min(t0.max(t1));
+    }
+    if hi > lo {
+        Range1::new(lo, hi)
+    } else {
+        Range1::EMPTY
     }
 }
 
@@ -321,9 +494,14 @@ pub(crate) struct RayState {
 const ROUNDING: f32 = 4.0;
 
 impl RayState {
-    pub fn new(span: Range1) -> Self {
+    /// The state at the start of a ray whose samples are cut to `span`,
+    /// with opacity `alpha0` already in front of it (and no colour).
+    pub fn new(span: Range1, alpha0: f32) -> Self {
         RayState {
-            acc: Accumulator::default(),
+            acc: Accumulator {
+                color: Vec3::ZERO,
+                alpha: alpha0,
+            },
             stats: RayStats::default(),
             prev: None,
             last_constant: None,

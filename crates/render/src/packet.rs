@@ -10,10 +10,10 @@
 //! [`RayState::feed`] as [`crate::march`], so the packet path draws the same
 //! image; only the sums inside the volume may run in another order.
 
-use voxless_core::{IntervalLists, Range1, Ray, Sample, SampleBatch, Vec3, Volume};
+use voxless_core::{IntervalLists, Ray, Sample, SampleBatch, Vec3, Volume};
 
 use crate::Tile;
-use crate::march::{Ctx, Cursor, RayState, RayStats, Segment};
+use crate::march::{Ctx, Cursor, RaySpans, RayState, RayStats, Segment};
 use crate::sampling::PixelRng;
 
 /// Side of a packet in pixels.
@@ -25,11 +25,13 @@ const MAX_PER_RAY: usize = 256;
 /// Marks a segment of a constant interval: it takes no slot in the batch.
 const CONSTANT: u32 = u32::MAX;
 
-/// A tile's rays, their random streams, spans and intervals (row-major).
+/// A tile's rays, their random streams, spans, starting opacities and
+/// intervals (row-major).
 pub(crate) struct TileInput<'a> {
     pub rays: &'a [Ray],
     pub rngs: &'a [PixelRng],
-    pub spans: &'a [Range1],
+    pub spans: &'a [RaySpans],
+    pub alpha0: &'a [f32],
     pub lists: &'a IntervalLists,
 }
 
@@ -78,18 +80,16 @@ pub(crate) fn render_tile<V: Volume>(
             for y in py..py + ph {
                 for x in px..px + pw {
                     let r = (y * tile.w + x) as usize;
-                    let span = input.spans[r];
+                    let spans = &input.spans[r];
                     let mut p = PacketRay {
                         r,
-                        cursor: Cursor::new(span.lo),
+                        cursor: spans.cursor(&input.rngs[r]),
                         next: None,
-                        state: RayState::new(span),
-                        done: span.is_empty(),
+                        state: RayState::new(spans.cells, input.alpha0[r]),
+                        done: spans.is_empty(),
                     };
                     if !p.done {
-                        p.next = p
-                            .cursor
-                            .next(input.lists.of(r), ctx.settings, &input.rngs[r]);
+                        p.next = p.cursor.next(input.lists.of(r), ctx.settings);
                         p.done = p.next.is_none();
                     }
                     scratch.rays.push(p);
@@ -147,7 +147,7 @@ fn run_packet<V: Volume>(volume: &V, ctx: &Ctx, input: &TileInput, s: &mut Packe
                     s.segs.push((seg, s.t.len() as u32));
                     s.t.push(seg.t);
                 }
-                p.next = p.cursor.next(ivs, settings, &input.rngs[p.r]);
+                p.next = p.cursor.next(ivs, settings);
             }
             if s.t.len() > first_t {
                 s.batch_rays.push(input.rays[p.r]);

@@ -28,7 +28,7 @@
 use voxless_core::{Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume};
 
 use crate::bluenoise;
-use crate::march::{Ctx, Cursor, ray_span};
+use crate::march::{Ctx, Cursor, region};
 use crate::sampling::PixelRng;
 
 /// Where the light comes from.
@@ -67,9 +67,9 @@ pub struct Scatter {
     pub noise: Noise,
 }
 
-/// Random-number dimensions: the cursor's jitter uses 2 + interval index, so
-/// delta tracking draws from far above it, and the shadow ray from its own
-/// stream.
+/// Random-number dimensions: the pixel jitter uses 0 and 1 and the sample
+/// lattice 2, so delta tracking draws from far above them, and the shadow
+/// ray from its own stream.
 const DELTA_DIMS: u32 = 1 << 20;
 const SHADOW_SALT: u64 = 0x5ad0_5ad0_5ad0_5ad0;
 
@@ -110,7 +110,7 @@ pub(crate) fn path<V: Volume>(
     let shadow = Ray::new(p, dir);
     let srng = PixelRng::new(settings.seed ^ SHADOW_SALT, pixel, sample);
     scratch.clear();
-    let shadow_span = ray_span(volume, &shadow, settings, t_max);
+    let shadow_span = region(volume, settings).clip_ray(&shadow, Range1::new(0.0, t_max));
     let blocked = !shadow_span.is_empty() && {
         let visible = |r: Range1| settings.is_visible(ctx.tf, r);
         volume.intervals(
@@ -171,8 +171,9 @@ fn free_flight<V: Volume>(
     match method {
         FreeFlight::Marching => {
             let mut tau = 0.0f32;
-            let mut cursor = Cursor::new(t0);
-            while let Some(seg) = cursor.next(intervals, ctx.settings, rng) {
+            let all = Range1::new(f32::NEG_INFINITY, f32::INFINITY);
+            let mut cursor = Cursor::new(Range1::new(t0, f32::INFINITY), all, rng);
+            while let Some(seg) = cursor.next(intervals, ctx.settings) {
                 let iv = &intervals[seg.interval as usize];
                 let Some(s) = sample_at(volume, ray, iv, seg.t) else {
                     continue;

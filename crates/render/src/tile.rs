@@ -3,9 +3,9 @@
 //! three integrators over those intervals — packets, per-sample marching,
 //! or single scattering.
 
-use voxless_core::{Aabb, IntervalLists, IntervalQuery, Range1, Ray, TileRays, Volume};
+use voxless_core::{IntervalLists, IntervalQuery, Range1, Ray, TileRays, Volume};
 
-use crate::march::{Ctx, RayStats, march_intervals};
+use crate::march::{Ctx, RayStats, RaySpans, march_intervals, region};
 use crate::packet::{self, PacketScratch};
 use crate::sampling::PixelRng;
 use crate::{Job, Tile, pixel_ray, scatter};
@@ -16,6 +16,8 @@ struct Scratch {
     rays: Vec<Ray>,
     rngs: Vec<PixelRng>,
     spans: Vec<Range1>,
+    ray_spans: Vec<RaySpans>,
+    alpha0: Vec<f32>,
     lists: IntervalLists,
     shadow: Vec<voxless_core::Interval>,
     packet: PacketScratch,
@@ -25,28 +27,21 @@ thread_local! {
     static SCRATCH: std::cell::Cell<Option<Box<Scratch>>> = const { std::cell::Cell::new(None) };
 }
 
-/// The part of the world a render integrates: the volume's bounds, cut by
-/// the clip box.
-pub(crate) fn region<V: Volume>(volume: &V, clip: Option<Aabb>) -> Aabb {
-    let b = volume.bounds();
-    match clip {
-        Some(c) => Aabb::new(b.min.max(c.min), b.max.min(c.max)),
-        None => b,
-    }
-}
-
 /// Renders sample index `sample` of `tile`; pixels row-major, and what the
-/// tile's rays saw.
+/// tile's rays saw. With `alpha0` (one value per pixel of the tile), only
+/// the pixels with a finite value are rendered, each starting from that
+/// opacity (the others are left transparent).
 pub(crate) fn render_tile<V: Volume>(
     job: &Job<V>,
     tile: Tile,
     sample: u32,
+    alpha0: Option<&[f32]>,
 ) -> (Vec<[f32; 4]>, RayStats) {
     // Taken out of the thread-local (not borrowed), so a volume that runs
     // rayon inside a call cannot re-enter a borrowed buffer.
     let mut s = SCRATCH.take().unwrap_or_default();
     let mut stats = RayStats::default();
-    let out = render_with(job, tile, sample, &mut s, &mut stats);
+    let out = render_with(job, tile, sample, alpha0, &mut s, &mut stats);
     SCRATCH.set(Some(s));
     (out, stats)
 }
@@ -55,20 +50,33 @@ fn render_with<V: Volume>(
     job: &Job<V>,
     tile: Tile,
     sample: u32,
+    alpha0: Option<&[f32]>,
     s: &mut Scratch,
     stats: &mut RayStats,
 ) -> Vec<[f32; 4]> {
     let (volume, settings, tf) = (job.volume, job.settings, job.tf);
-    let region = region(volume, settings.clip);
-    // 1. The tile's rays and the part of each inside the (clipped) volume.
+    let region = region(volume, settings);
+    // 1. The tile's rays, the part of each inside the (clipped) volume, and
+    // where its samples lie.
     s.rays.clear();
     s.rngs.clear();
     s.spans.clear();
+    s.ray_spans.clear();
+    s.alpha0.clear();
     for y in tile.y..tile.y + tile.h {
         for x in tile.x..tile.x + tile.w {
             let (rng, ray) = pixel_ray(job.camera, settings, x, y, sample);
-            s.spans
-                .push(region.clip_ray(&ray, Range1::new(0.0, f32::INFINITY)));
+            let mut spans = RaySpans::new(&region, settings, &ray, f32::INFINITY);
+            let a0 = match alpha0 {
+                Some(a) => a[s.rays.len()],
+                None => 0.0,
+            };
+            if !a0.is_finite() {
+                spans.span = Range1::EMPTY;
+            }
+            s.spans.push(spans.span);
+            s.ray_spans.push(spans);
+            s.alpha0.push(a0.max(0.0));
             s.rays.push(ray);
             s.rngs.push(rng);
         }
@@ -133,7 +141,8 @@ fn render_with<V: Volume>(
             packet::TileInput {
                 rays: &s.rays,
                 rngs: &s.rngs,
-                spans: &s.spans,
+                spans: &s.ray_spans,
+                alpha0: &s.alpha0,
                 lists: &s.lists,
             },
             &mut s.packet,
@@ -146,7 +155,8 @@ fn render_with<V: Volume>(
                 volume,
                 &s.rays[r],
                 s.lists.of(r),
-                s.spans[r],
+                &s.ray_spans[r],
+                s.alpha0[r],
                 &s.rngs[r],
                 &ctx,
                 stats,
