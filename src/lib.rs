@@ -52,6 +52,7 @@ mod error;
 mod frame;
 pub mod load;
 mod memory;
+pub mod parallel;
 mod resolve;
 mod scene;
 mod volume;
@@ -61,7 +62,10 @@ pub use frame::WorldFrame;
 pub use load::AmrArrays;
 pub use load::{Loaded, frame_count, load, read_points, read_scene};
 pub use memory::ParticleArrays;
-pub use resolve::{Resolved, resolve, resolve_in, transfer_function, transfer_function_at};
+pub use resolve::{
+    Resolved, VolumeKind, VolumeSummary, resolve, resolve_in, resolve_summary, transfer_function,
+    transfer_function_at,
+};
 pub use scene::Scene;
 pub use volume::AnyVolume;
 

@@ -32,6 +32,26 @@ pub struct Resolved {
     pub notes: Vec<String>,
 }
 
+/// The data kinds, for what depends on the kind alone.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VolumeKind {
+    Particles,
+    Amr,
+    Tets,
+    Materials,
+}
+
+/// What resolving needs to know of a volume: its kind, bounds and ranges.
+/// For a volume decomposed over ranks these are the whole data's, so every
+/// rank resolves the view a one-process run would.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VolumeSummary {
+    pub kind: VolumeKind,
+    pub bounds: Aabb,
+    pub value_range: Range1,
+    pub attribute_range: Option<Range1>,
+}
+
 /// Fills every default of `desc` for `volume`, whose coordinates are the
 /// world's. Colormap files are read relative to `base` (the scene file's
 /// directory).
@@ -45,6 +65,29 @@ pub fn resolve(volume: &AnyVolume, desc: &SceneDesc, base: &Path) -> Result<Reso
 /// are in it.
 pub fn resolve_in(
     volume: &AnyVolume,
+    frame: &WorldFrame,
+    desc: &SceneDesc,
+    base: &Path,
+) -> Result<Resolved, SceneError> {
+    let mut resolved = resolve_summary(&volume.summary(), frame, desc, base)?;
+    if let AnyVolume::Amr(v) = volume {
+        let (settings, tf) = (&resolved.settings, &resolved.tf);
+        let visible = v.visible_region_count(&|r: Range1| settings.is_visible(tf, r));
+        resolved.notes.push(format!(
+            "{} cells in {} bricks and {} regions; {} regions visible under the transfer function",
+            v.stats().cells,
+            v.stats().bricks,
+            v.stats().regions,
+            visible,
+        ));
+    }
+    Ok(resolved)
+}
+
+/// [`resolve_in`] from a volume's [`VolumeSummary`] (the whole data's for a
+/// decomposed volume).
+pub fn resolve_summary(
+    volume: &VolumeSummary,
     frame: &WorldFrame,
     desc: &SceneDesc,
     base: &Path,
@@ -68,12 +111,19 @@ pub fn resolve_in(
     }
     let camera = camera(
         &desc.camera,
-        &volume.bounds(),
+        &volume.bounds,
         width as f32 / height as f32,
         frame,
     )?;
+    let tets = volume.kind == VolumeKind::Tets;
 
-    let mut settings = volume.default_settings(width, height);
+    let mut settings = RenderSettings::for_data(
+        volume.bounds,
+        volume.value_range,
+        volume.attribute_range,
+        width,
+        height,
+    );
     settings.spp = spp;
     let r = &desc.render;
     if let Some(step) = r.step {
@@ -93,17 +143,17 @@ pub fn resolve_in(
         }
         settings.early_termination = et;
     }
-    if let AnyVolume::Tets(..) = volume {
+    if tets {
         // Dark-matter sheets are thin: filaments a fraction of a Lagrangian
         // spacing across need a denser medium to show.
-        settings.opacity_scale = 100.0 / volume.bounds().diagonal().max(1e-12);
+        settings.opacity_scale = 100.0 / volume.bounds.diagonal().max(1e-12);
     }
     if let Some(s) = r.opacity_scale {
         positive("render.opacity_scale", s)?;
         settings.opacity_scale = s;
     }
     settings.packets = r.packets.unwrap_or(true);
-    settings.log_scale = r.log_scale.unwrap_or(matches!(volume, AnyVolume::Tets(..)));
+    settings.log_scale = r.log_scale.unwrap_or(tets);
     if settings.log_scale {
         // Log-scale transfer functions take their range in log10 units; the
         // data range's non-positive floor becomes 3 decades below its top.
@@ -150,18 +200,7 @@ pub fn resolve_in(
         }
         settings.clip = Some(b);
     }
-    if let AnyVolume::Amr(v) = volume {
-        let visible = v.visible_region_count(&|r: Range1| settings.is_visible(&tf, r));
-        notes.push(format!(
-            "{} cells in {} bricks and {} regions; {} regions visible under the transfer function",
-            v.stats().cells,
-            v.stats().bricks,
-            v.stats().regions,
-            visible,
-        ));
-    }
-    if let AnyVolume::Tets(_) = volume
-        && let Some(t) = &desc.tets
+    if tets && let Some(t) = &desc.tets
         && t.mode == Some(TetModeName::Kbuffer)
     {
         settings.event_budget = Some(EventBudget {
@@ -201,7 +240,7 @@ pub fn resolve_in(
             }
         }
     }
-    refuse_what_the_kind_cannot_honour(volume, &settings)?;
+    refuse_what_the_kind_cannot_honour(volume.kind, &settings)?;
     let background = r.background.unwrap_or([0.0; 3]);
     Ok(Resolved {
         camera,
@@ -353,10 +392,10 @@ pub(crate) fn camera(
 
 /// Settings the volume's kind cannot honour are errors naming them.
 fn refuse_what_the_kind_cannot_honour(
-    volume: &AnyVolume,
+    kind: VolumeKind,
     settings: &RenderSettings,
 ) -> Result<(), SceneError> {
-    if let AnyVolume::Tets(_) = volume
+    if kind == VolumeKind::Tets
         && settings.light.is_some()
         && settings.scatter.is_none()
         && settings.volume

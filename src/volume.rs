@@ -57,6 +57,21 @@ impl AnyVolume {
     pub fn attribute_range(&self) -> Option<Range1> {
         with_volume!(self, v => v.attribute_range())
     }
+    /// The kind, bounds and ranges resolving a view needs.
+    pub fn summary(&self) -> crate::VolumeSummary {
+        crate::VolumeSummary {
+            kind: match self {
+                AnyVolume::Particles(_) => crate::VolumeKind::Particles,
+                AnyVolume::Amr(_) => crate::VolumeKind::Amr,
+                AnyVolume::Tets(_) => crate::VolumeKind::Tets,
+                AnyVolume::Materials(_) => crate::VolumeKind::Materials,
+            },
+            bounds: self.bounds(),
+            value_range: self.value_range(),
+            attribute_range: self.attribute_range(),
+        }
+    }
+
     pub fn kind(&self) -> &'static str {
         match self {
             AnyVolume::Particles(_) => "particles",
@@ -124,6 +139,39 @@ impl AnyVolume {
         with_volume!(self, v => voxless_render::project(v, camera, width, height, control))
     }
 
+    /// This rank's passes of a decomposed render, composited with the other
+    /// ranks' for the tiles it owns (see [`crate::parallel`]).
+    pub(crate) fn render_part(
+        &self,
+        comm: &dyn voxless_parallel::Comm,
+        s: &crate::parallel::DistributedScene,
+        grid: &voxless_parallel::TileGrid,
+        order: &[usize],
+        control: &Control,
+    ) -> Result<voxless_parallel::composite::OwnedTiles, crate::parallel::ParallelError> {
+        with_volume!(self, v => crate::parallel::render_part(v, comm, s, grid, order, control))
+    }
+
+    /// This rank's share of a decomposed projection: the part of each
+    /// pixel's line integral inside the half-open box `owned`; a
+    /// tessellation (which holds each tet in one box only) projects its
+    /// tets whole.
+    pub(crate) fn project_part(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        owned: &Aabb,
+        control: &Control,
+    ) -> Result<Vec<f32>, Cancelled> {
+        match self {
+            AnyVolume::Tets(_) => self.project(camera, width, height, control),
+            _ => with_volume!(self, v => {
+                voxless_render::project_in(v, camera, width, height, Some(owned), control)
+            }),
+        }
+    }
+
     /// The integral of the field over all space, when the data kind knows it
     /// exactly (what a projection over the full bounds must conserve).
     pub fn total_mass(&self) -> Option<f64> {
@@ -169,13 +217,15 @@ impl AnyVolume {
         }
     }
 
-    /// The fields at every point, row-major `points.len() × columns`.
+    /// The fields at every point, row-major `points.len() × columns`. Each
+    /// value's bits depend only on the data reaching the point (terms are
+    /// added in a canonical order), so a decomposed volume samples the same.
     pub fn sample_points(&self, points: &[Vec3], gradient: bool) -> Vec<f32> {
         match self {
             AnyVolume::Particles(v) => points
                 .par_iter()
                 .flat_map_iter(|&p| {
-                    let f = v.field(p, gradient);
+                    let f = v.field_exact(p, gradient);
                     let mut row = vec![f.density];
                     if v.has_attribute() {
                         row.push(f.attribute);
@@ -191,7 +241,7 @@ impl AnyVolume {
                 .flat_map_iter(|&p| {
                     v.materials()
                         .iter()
-                        .map(|m| m.volume.density(p))
+                        .map(|m| m.volume.density_exact(p))
                         .collect::<Vec<_>>()
                 })
                 .collect(),

@@ -72,6 +72,33 @@ pub(crate) fn build_amr(
     source: &Path,
 ) -> Result<(AmrVolume, WorldFrame), SceneError> {
     let names: Vec<&str> = data.fields.iter().map(|f| f.0.as_str()).collect();
+    let (settings, frame, cell_size) =
+        amr_settings(&names, data.origin, data.cell_size, a, source)?;
+    let cells = AmrCells {
+        cells: data.cells,
+        fields: data.fields,
+        origin: Vec3::ZERO,
+        cell_size,
+    };
+    AmrVolume::new(cells, settings)
+        .map(|v| (v, frame))
+        .map_err(|source_err| SceneError::Amr {
+            path: source.to_path_buf(),
+            source: source_err,
+        })
+}
+
+/// The AMR settings `a` describes for cells with fields `names` (the
+/// opacity and colour fields, the reconstruction), the world frame (cell
+/// coordinate 0 at the arrays' or the description's origin) and the finest
+/// cell width; errors name `source`.
+pub(crate) fn amr_settings(
+    names: &[&str],
+    origin: [f64; 3],
+    cell_size: f32,
+    a: &AmrDesc,
+    source: &Path,
+) -> Result<(AmrSettings, WorldFrame, f32), SceneError> {
     let index = |what: &str, name: &str| {
         names.iter().position(|n| *n == name).ok_or_else(|| {
             SceneError::data(
@@ -99,25 +126,12 @@ pub(crate) fn build_amr(
         ReconstructionName::Nearest => Reconstruction::Nearest,
     };
     let frame = WorldFrame {
-        origin: a.origin.unwrap_or(data.origin),
+        origin: a.origin.unwrap_or(origin),
     };
-    let cells = AmrCells {
-        cells: data.cells,
-        fields: data.fields,
-        origin: Vec3::ZERO,
-        cell_size: a.cell_size.unwrap_or(data.cell_size),
+    let settings = AmrSettings {
+        field,
+        color_field,
+        reconstruction,
     };
-    AmrVolume::new(
-        cells,
-        AmrSettings {
-            field,
-            color_field,
-            reconstruction,
-        },
-    )
-    .map(|v| (v, frame))
-    .map_err(|source_err| SceneError::Amr {
-        path: source.to_path_buf(),
-        source: source_err,
-    })
+    Ok((settings, frame, a.cell_size.unwrap_or(cell_size)))
 }

@@ -27,6 +27,19 @@ pub(crate) fn load_materials(
     })
 }
 
+/// Each material's particle description: the particle file's settings
+/// with the material's species and radius.
+pub(crate) fn material_descs(p: &ParticlesDesc, mats: &[MaterialDesc]) -> Vec<ParticlesDesc> {
+    mats.iter()
+        .map(|m| ParticlesDesc {
+            species: Some(m.species.clone()),
+            radius: m.radius.or(p.radius),
+            materials: None,
+            ..p.clone()
+        })
+        .collect()
+}
+
 /// Builds one material's particles from its particle description (adding
 /// notes).
 pub(crate) type VolumeOf<'a> =
@@ -48,14 +61,8 @@ pub(crate) fn build_materials(
         ));
     }
     let mut out = Vec::with_capacity(mats.len());
-    for (k, m) in mats.iter().enumerate() {
+    for (k, (m, desc)) in mats.iter().zip(material_descs(p, mats)).enumerate() {
         let field = |key: &str| format!("particles.materials[{k}].{key}");
-        let desc = ParticlesDesc {
-            species: Some(m.species.clone()),
-            radius: m.radius.or(p.radius),
-            materials: None,
-            ..p.clone()
-        };
         let volume = volume_of(&desc, notes)?;
         let colormap = Colormap::preset(m.colormap.as_deref().unwrap_or("viridis"))?;
         let opacity = match &m.opacity_points {

@@ -8,7 +8,7 @@
 mod amr;
 pub mod formats;
 pub mod frames;
-mod jaxpm;
+pub(crate) mod jaxpm;
 pub(crate) mod materials;
 pub(crate) mod particles;
 pub(crate) mod table;
@@ -21,7 +21,7 @@ use voxless_io::IoError;
 use voxless_scene::SceneDesc;
 
 pub use amr::AmrArrays;
-pub(crate) use amr::build_amr;
+pub(crate) use amr::{amr_settings, build_amr};
 pub use particles::{default_radius, frame_count};
 pub(crate) use particles::{positive, range};
 

@@ -74,7 +74,7 @@ pub(crate) struct FrameData {
 
 /// The file of `spec` for frame `frame`: the `frame`-th of a sequence, or the
 /// file itself (the same for every frame).
-fn frame_file(spec: &str, base: &Path, frame: usize) -> Result<PathBuf, SceneError> {
+pub(crate) fn frame_file(spec: &str, base: &Path, frame: usize) -> Result<PathBuf, SceneError> {
     let files = frames::expand(spec, base)?;
     if files.len() == 1 && !frames::is_sequence(spec, base) {
         return Ok(files[0].clone());
@@ -94,7 +94,7 @@ fn frame_file(spec: &str, base: &Path, frame: usize) -> Result<PathBuf, SceneErr
 /// The particle file of frame `frame` and the frame to read in it: the
 /// `frame`-th file (its first frame) of a sequence, else frame `frame` of
 /// the file itself (single-frame formats have the same data every frame).
-fn locate(spec: &str, base: &Path, frame: usize) -> Result<(PathBuf, usize), SceneError> {
+pub(crate) fn locate(spec: &str, base: &Path, frame: usize) -> Result<(PathBuf, usize), SceneError> {
     if frames::is_sequence(spec, base) {
         Ok((frame_file(spec, base, frame)?, 0))
     } else {
@@ -268,16 +268,37 @@ pub(crate) fn build_particles(
     sph_defaults: bool,
     notes: &mut Vec<String>,
 ) -> Result<ParticleVolume, BuildError> {
+    let settings = particle_settings(
+        p,
+        sph_defaults,
+        data.radii.is_some(),
+        &mut |kernel| default_radius(&data.positions, kernel),
+        notes,
+    )?;
+    ParticleVolume::new(data, settings).map_err(BuildError::Data)
+}
+
+/// The particle settings `p` describes, with the data's defaults: the SPH
+/// cubic spline when `sph_defaults`, and when neither a radius nor radii
+/// (`has_radii`) are given, the radius `default_radius(kernel)` (said in
+/// `notes`).
+pub(crate) fn particle_settings(
+    p: &ParticlesDesc,
+    sph_defaults: bool,
+    has_radii: bool,
+    default_radius: &mut dyn FnMut(Kernel) -> f32,
+    notes: &mut Vec<String>,
+) -> Result<ParticleSettings, SceneError> {
     let kernel = if sph_defaults {
         Kernel::CubicSpline
     } else {
         kernel_of(p, p.kernel.unwrap_or(KernelName::Gaussian3))
     };
-    let radius = match (p.radius, &data.radii) {
+    let radius = match (p.radius, has_radii) {
         (Some(r), _) => r,
-        (None, Some(_)) => 1.0,
-        (None, None) => {
-            let r = default_radius(&data.positions, kernel);
+        (None, true) => 1.0,
+        (None, false) => {
+            let r = default_radius(kernel);
             notes.push(format!(
                 "no radius given: using {r:.4} ({} kernel, support = 2.5 × mean particle spacing)",
                 kernel.name()
@@ -293,7 +314,7 @@ pub(crate) fn build_particles(
         .attribute_range
         .map(|[a, b]| range("particles.attribute_range", a, b))
         .transpose()?;
-    let settings = ParticleSettings {
+    Ok(ParticleSettings {
         kernel,
         radius,
         radius_map: control_points("radius map", &p.radius_map)?,
@@ -301,8 +322,7 @@ pub(crate) fn build_particles(
         cluster_size: p.cluster.unwrap_or(8),
         attribute_range,
         classification,
-    };
-    ParticleVolume::new(data, settings).map_err(BuildError::Data)
+    })
 }
 
 /// Number of frames the scene's data source names: the files of a sequence
@@ -334,24 +354,64 @@ pub fn default_radius(positions: &[Vec3], kernel: Kernel) -> f32 {
     for p in positions {
         b.grow(*p);
     }
-    let n = positions.len();
-    let longest = b.extent().max_elem().max(1e-12);
-    let res = ((n as f32 / 4.0).cbrt().round() as usize).clamp(1, 128);
-    let cell = longest / res as f32;
-    let dims = b.extent().mul_elem(Vec3::splat(1.0 / cell));
-    let dim = |a: f32| (a.ceil() as usize).clamp(1, res);
-    let (nx, ny, nz) = (dim(dims.x), dim(dims.y), dim(dims.z));
-    let mut occupied = vec![false; nx * ny * nz];
+    let mut grid = OccupancyGrid::new(b, positions.len());
     for p in positions {
-        let q = (*p - b.min) * (1.0 / cell);
+        grid.mark(*p);
+    }
+    grid.radius(grid.occupied(), kernel)
+}
+
+/// The coarse grid [`default_radius`] counts occupied cells on: over the
+/// positions' bounds `b`, for `n` particles. A decomposed set marks its
+/// parts' positions on grids over the whole set's bounds and counts the
+/// union (the cells any part marked).
+pub(crate) struct OccupancyGrid {
+    b: Aabb,
+    n: usize,
+    cell: f32,
+    dims: [usize; 3],
+    pub occupied: Vec<bool>,
+}
+
+impl OccupancyGrid {
+    pub fn new(b: Aabb, n: usize) -> OccupancyGrid {
+        let longest = b.extent().max_elem().max(1e-12);
+        let res = ((n as f32 / 4.0).cbrt().round() as usize).clamp(1, 128);
+        let cell = longest / res as f32;
+        let dims = b.extent().mul_elem(Vec3::splat(1.0 / cell));
+        let dim = |a: f32| (a.ceil() as usize).clamp(1, res);
+        let dims = [dim(dims.x), dim(dims.y), dim(dims.z)];
+        OccupancyGrid {
+            b,
+            n,
+            cell,
+            dims,
+            occupied: vec![false; dims[0] * dims[1] * dims[2]],
+        }
+    }
+
+    pub fn mark(&mut self, p: Vec3) {
+        let [nx, ny, nz] = self.dims;
+        let q = (p - self.b.min) * (1.0 / self.cell);
         let (i, j, k) = (
             (q.x as usize).min(nx - 1),
             (q.y as usize).min(ny - 1),
             (q.z as usize).min(nz - 1),
         );
-        occupied[(k * ny + j) * nx + i] = true;
+        self.occupied[(k * ny + j) * nx + i] = true;
     }
-    let count = occupied.iter().filter(|&&o| o).count().max(1);
-    let spacing = (count as f32 * cell * cell * cell / n as f32).cbrt();
-    2.5 * spacing / kernel.support_factor()
+
+    /// How many cells are marked.
+    pub fn occupied(&self) -> usize {
+        self.occupied.iter().filter(|&&o| o).count()
+    }
+
+    /// Support 2.5× the mean spacing with `count` occupied cells, as the
+    /// kernel's radius parameter.
+    pub fn radius(&self, count: usize, kernel: Kernel) -> f32 {
+        let count = count.max(1);
+        let cell = self.cell;
+        let spacing = (count as f32 * cell * cell * cell / self.n as f32).cbrt();
+        2.5 * spacing / kernel.support_factor()
+    }
 }

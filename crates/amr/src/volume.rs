@@ -321,6 +321,33 @@ impl AmrVolume {
     /// Basis (or nearest) values of `field` and the colour field at `p`
     /// (world) using only region `region`'s bricks.
     fn reconstruct(&self, p: Vec3, region: usize, field: usize, gradient: bool) -> Option<Recon> {
+        let mut sums = BasisSums::default();
+        self.reconstruct_into(p, region, field, gradient, &mut sums)
+    }
+
+    /// [`AmrVolume::reconstruct`] with the cells' terms added in an order
+    /// fixed by the terms themselves rather than by the bricks, so any set
+    /// of cells holding every cell whose basis reaches `p` gives the same
+    /// bits (a part of a decomposed volume, for `sample`).
+    fn reconstruct_exact(
+        &self,
+        p: Vec3,
+        region: usize,
+        field: usize,
+        gradient: bool,
+    ) -> Option<Recon> {
+        let mut terms = SortedTerms::default();
+        self.reconstruct_into(p, region, field, gradient, &mut terms)
+    }
+
+    fn reconstruct_into<S: BasisSink>(
+        &self,
+        p: Vec3,
+        region: usize,
+        field: usize,
+        gradient: bool,
+        sink: &mut S,
+    ) -> Option<Recon> {
         let pu = self.to_units(p);
         let color_field = self.settings.color_field.unwrap_or(field);
         if self.settings.reconstruction == Reconstruction::Nearest {
@@ -329,8 +356,6 @@ impl AmrVolume {
         let (v0, v1) = (&self.values[field], &self.values[color_field]);
         // Without a separate colour field its sum is the value's: skip it.
         let two_fields = color_field != field;
-        let (mut sw, mut sv, mut sc) = (0.0f64, 0.0f64, 0.0f64);
-        let (mut sdw, mut sdv) = ([0.0f64; 3], [0.0f64; 3]);
         for &b in self.regions.bricks_of(region) {
             let b = &self.bricks[b as usize];
             let w = b.width() as f32;
@@ -378,27 +403,28 @@ impl AmrVolume {
                         }
                         let local = (idx[2][kz] * b.size[1] + idx[1][ky]) * b.size[0] + idx[0][kx];
                         let cell = b.offset as usize + local as usize;
-                        let v = v0[cell] as f64;
-                        sw += h as f64;
-                        sv += h as f64 * v;
-                        if two_fields {
-                            sc += h as f64 * v1[cell] as f64;
-                        }
-                        if gradient {
-                            let d = [
+                        let d = if gradient {
+                            [
                                 dwt[0][kx] * wt[1][ky] * wt[2][kz],
                                 wt[0][kx] * dwt[1][ky] * wt[2][kz],
                                 wt[0][kx] * wt[1][ky] * dwt[2][kz],
-                            ];
-                            for a in 0..3 {
-                                sdw[a] += d[a] as f64;
-                                sdv[a] += d[a] as f64 * v;
-                            }
-                        }
+                            ]
+                        } else {
+                            [0.0; 3]
+                        };
+                        let c = if two_fields { v1[cell] } else { 0.0 };
+                        sink.add(h, v0[cell], c, d, gradient);
                     }
                 }
             }
         }
+        let BasisSums {
+            sw,
+            sv,
+            sc,
+            sdw,
+            sdv,
+        } = sink.sums(gradient);
         if sw <= 0.0 {
             return None;
         }
@@ -450,12 +476,15 @@ impl AmrVolume {
     }
 
     /// All fields at `p` (world): values, and gradients when asked, using the
-    /// volume's reconstruction. `None` outside the data.
+    /// volume's reconstruction. `None` outside the data. The cells' terms are
+    /// added in an order fixed by the terms, so the bits do not depend on
+    /// how the cells were grouped into bricks and regions (the same for a
+    /// whole volume and a part of it holding every cell that reaches `p`).
     pub fn fields_at(&self, p: Vec3, gradient: bool) -> Option<Vec<(f32, Vec3)>> {
         let r = self.locate(p)?;
         (0..self.values.len())
             .map(|f| {
-                self.reconstruct(p, r, f, gradient)
+                self.reconstruct_exact(p, r, f, gradient)
                     .map(|x| (x.value, x.gradient))
             })
             .collect()
@@ -662,5 +691,60 @@ impl AmrVolume {
                 })
                 .sum(),
         )
+    }
+}
+
+/// The sums of the basis reconstruction: Σ weight, Σ weight × value (and
+/// colour), and their derivatives.
+#[derive(Clone, Copy, Debug, Default)]
+struct BasisSums {
+    sw: f64,
+    sv: f64,
+    sc: f64,
+    sdw: [f64; 3],
+    sdv: [f64; 3],
+}
+
+/// Where [`AmrVolume::reconstruct_into`] puts each cell's term: weight `h`,
+/// value `v`, colour value `c` and the weight's derivatives `d`.
+trait BasisSink {
+    fn add(&mut self, h: f32, v: f32, c: f32, d: [f32; 3], gradient: bool);
+    fn sums(&mut self, gradient: bool) -> BasisSums;
+}
+
+impl BasisSink for BasisSums {
+    #[inline(always)]
+    fn add(&mut self, h: f32, v: f32, c: f32, d: [f32; 3], gradient: bool) {
+        let v = v as f64;
+        self.sw += h as f64;
+        self.sv += h as f64 * v;
+        self.sc += h as f64 * c as f64;
+        if gradient {
+            for a in 0..3 {
+                self.sdw[a] += d[a] as f64;
+                self.sdv[a] += d[a] as f64 * v;
+            }
+        }
+    }
+    fn sums(&mut self, _: bool) -> BasisSums {
+        *self
+    }
+}
+
+/// Collects the terms, then adds them sorted by their bits.
+#[derive(Default)]
+struct SortedTerms(Vec<[f32; 6]>);
+
+impl BasisSink for SortedTerms {
+    fn add(&mut self, h: f32, v: f32, c: f32, d: [f32; 3], _: bool) {
+        self.0.push([h, v, c, d[0], d[1], d[2]]);
+    }
+    fn sums(&mut self, gradient: bool) -> BasisSums {
+        self.0.sort_unstable_by_key(|t| t.map(f32::to_bits));
+        let mut s = BasisSums::default();
+        for t in &self.0 {
+            s.add(t[0], t[1], t[2], [t[3], t[4], t[5]], gradient);
+        }
+        s
     }
 }

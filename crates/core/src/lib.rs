@@ -42,6 +42,22 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_ray_in_a_shared_face_belongs_to_exactly_one_box() {
+        let lower = Aabb::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 1.0));
+        let upper = Aabb::new(Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 1.0, 2.0));
+        let all = Range1::new(f32::NEG_INFINITY, f32::INFINITY);
+        // Along x, in the plane z = 1 both boxes share.
+        let ray = Ray::new(Vec3::new(-1.0, 0.5, 1.0), Vec3::new(1.0, 0.0, 0.0));
+        assert!(lower.clip_ray(&ray, all).is_empty());
+        assert_eq!(upper.clip_ray(&ray, all), Range1::new(1.0, 2.0));
+        // On the outer lower face it is inside, off the box it is not.
+        let ray = Ray::new(Vec3::new(-1.0, 0.5, 0.0), Vec3::new(1.0, 0.0, 0.0));
+        assert_eq!(lower.clip_ray(&ray, all), Range1::new(1.0, 2.0));
+        let ray = Ray::new(Vec3::new(-1.0, 0.5, -0.1), Vec3::new(1.0, 0.0, 0.0));
+        assert!(lower.clip_ray(&ray, all).is_empty());
+    }
+
+    #[test]
     fn macrogrid_intervals_cover_nonempty_cells_only() {
         let b = Aabb::new(Vec3::ZERO, Vec3::splat(4.0));
         let mut g = MacroGrid::with_cell_size(b, 1.0, 64);

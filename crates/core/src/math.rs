@@ -226,18 +226,27 @@ impl Aabb {
         }
     }
     /// The parametric range where `ray` is inside this box, clipped to `t`;
-    /// empty when the ray misses. Uses the slab method; a zero direction
-    /// component yields ±inf, which the min/max chain handles.
+    /// empty when the ray misses. Uses the slab method. Along an axis the
+    /// ray runs parallel to, the box is half-open, `[min, max)`: a ray lying
+    /// in the face two boxes share (two AMR regions, two ranks' boxes)
+    /// belongs to exactly one of them — the slab formula would give
+    /// `0·∞ = NaN` there and lose the ray to both.
     pub fn clip_ray(&self, ray: &Ray, t: Range1) -> Range1 {
-        let inv = ray.inv_dir();
-        let t0 = (self.min - ray.origin).mul_elem(inv);
-        let t1 = (self.max - ray.origin).mul_elem(inv);
-        let near = t0.min(t1);
-        let far = t0.max(t1);
-        // NaN (0 * inf when the origin lies on a slab plane) is dropped by
-        // max/min, which keeps the test conservative.
-        let lo = t.lo.max(near.x).max(near.y).max(near.z);
-        let hi = t.hi.min(far.x).min(far.y).min(far.z);
+        let (mut lo, mut hi) = (t.lo, t.hi);
+        for a in 0..3 {
+            let (o, d) = (ray.origin[a], ray.dir[a]);
+            if d == 0.0 {
+                if !(self.min[a] <= o && o < self.max[a]) {
+                    return Range1::EMPTY;
+                }
+                continue;
+            }
+            let inv = 1.0 / d;
+            let t0 = (self.min[a] - o) * inv;
+            let t1 = (self.max[a] - o) * inv;
+            lo = lo.max(t0.min(t1));
+            hi = hi.min(t0.max(t1));
+        }
         Range1::new(lo, hi)
     }
 }

@@ -99,7 +99,10 @@ pub mod table;
 pub mod vtk;
 pub mod xyz;
 
-pub use amr::{AmrCellData, read_amrclaw, read_amrclaw_from, read_exabricks, read_exabricks_bytes};
+pub use amr::{
+    AmrCellData, read_amrclaw, read_amrclaw_from, read_exabricks, read_exabricks_bytes,
+    read_exabricks_rows,
+};
 pub use csv::{CsvTable, read_csv, read_csv_from};
 pub use format::{ParticleFormat, TableOptions};
 #[cfg(feature = "hdf5")]
@@ -112,7 +115,7 @@ pub use image::{
     write_exr_gray_to, write_exr_rgba, write_exr_rgba_to, write_png_rgb8, write_png_rgb8_to,
 };
 pub use lammps::{lammps_frames, lammps_frames_from, read_lammps, read_lammps_from};
-pub use npy::{NpyArray, read_npy, read_npy_from, write_npy_f32, write_npy_f32_to};
+pub use npy::{NpyArray, read_npy, read_npy_from, read_npy_rows, write_npy_f32, write_npy_f32_to};
 pub use particles_fmt::{
     particles_frames, particles_frames_from, read_particles_file, read_particles_from,
     read_particles_timestep_from,

@@ -27,6 +27,9 @@ use std::path::Path;
 
 use crate::{IoError, checked_product, open_with_len, remaining_len};
 
+mod rows;
+pub use rows::read_npy_rows;
+
 /// Magic bytes at the start of every `.npy` file.
 const MAGIC: &[u8; 6] = b"\x93NUMPY";
 
@@ -68,13 +71,17 @@ pub fn read_npy_from<R: Read + Seek>(mut reader: R, name: &Path) -> Result<NpyAr
     read_npy_sized(reader, len, name)
 }
 
-/// The reader behind [`read_npy`] and [`read_npy_from`]: `reader` holds
-/// `file_len` bytes, and `path` labels errors.
-fn read_npy_sized(reader: impl Read, file_len: u64, path: &Path) -> Result<NpyArray, IoError> {
-    let mut reader = BufReader::new(reader);
+/// Reads the prefix and header of a `.npy` of `file_len` bytes and checks
+/// that the data fills the rest of the file exactly: the header, the
+/// dtype, and the data's offset from the start of the file.
+pub(crate) fn read_header(
+    reader: &mut impl Read,
+    file_len: u64,
+    path: &Path,
+) -> Result<(Header, Dtype, u64), IoError> {
     let fmt = |message: String| IoError::format(path, message);
     // Reads exactly `buf.len()` bytes; running out of file is a format error.
-    let read_exact = |reader: &mut BufReader<_>, buf: &mut [u8], what: &str| {
+    let read_exact = |reader: &mut dyn Read, buf: &mut [u8], what: &str| {
         reader.read_exact(buf).map_err(|e| match e.kind() {
             ErrorKind::UnexpectedEof => fmt(format!("file ends inside the {what}")),
             _ => IoError::io(path, e),
@@ -88,7 +95,7 @@ fn read_npy_sized(reader: impl Read, file_len: u64, path: &Path) -> Result<NpyAr
             "not a .npy file: only {file_len} bytes long, too short for the \\x93NUMPY header"
         )));
     }
-    read_exact(&mut reader, &mut prefix, "file prefix")?;
+    read_exact(reader, &mut prefix, "file prefix")?;
     if &prefix[..6] != MAGIC {
         return Err(fmt(
             "not a .npy file: it does not start with the magic string \\x93NUMPY".to_string(),
@@ -100,12 +107,12 @@ fn read_npy_sized(reader: impl Read, file_len: u64, path: &Path) -> Result<NpyAr
     let (header_len, prefix_len) = match (major, minor) {
         (1, 0) => {
             let mut len = [0u8; 2];
-            read_exact(&mut reader, &mut len, "header length")?;
+            read_exact(reader, &mut len, "header length")?;
             (u64::from(u16::from_le_bytes(len)), 10u64)
         }
         (2, 0) | (3, 0) => {
             let mut len = [0u8; 4];
-            read_exact(&mut reader, &mut len, "header length")?;
+            read_exact(reader, &mut len, "header length")?;
             (u64::from(u32::from_le_bytes(len)), 12u64)
         }
         _ => {
@@ -122,7 +129,7 @@ fn read_npy_sized(reader: impl Read, file_len: u64, path: &Path) -> Result<NpyAr
         )));
     }
     let mut header_bytes = vec![0u8; header_len as usize];
-    read_exact(&mut reader, &mut header_bytes, "header")?;
+    read_exact(reader, &mut header_bytes, "header")?;
     // Versions 1.0 and 2.0 use latin-1, 3.0 uses UTF-8; a valid numeric header
     // is plain ASCII either way, so a lossy conversion only affects messages.
     let header_text = String::from_utf8_lossy(&header_bytes);
@@ -157,6 +164,16 @@ fn read_npy_sized(reader: impl Read, file_len: u64, path: &Path) -> Result<NpyAr
         return Err(fmt(message));
     }
 
+    Ok((header, dtype, prefix_len + header_len))
+}
+
+/// The reader behind [`read_npy`] and [`read_npy_from`]: `reader` holds
+/// `file_len` bytes, and `path` labels errors.
+fn read_npy_sized(reader: impl Read, file_len: u64, path: &Path) -> Result<NpyArray, IoError> {
+    let mut reader = BufReader::new(reader);
+    let (header, dtype, _) = read_header(&mut reader, file_len, path)?;
+    let count = checked_product(&header.shape).unwrap_or(0);
+    let fmt = |message: String| IoError::format(path, message);
     let mut data = read_values(&mut reader, &dtype, count).map_err(|e| match e.kind() {
         ErrorKind::UnexpectedEof => fmt("file ends inside the array data".to_string()),
         _ => IoError::io(path, e),
@@ -286,7 +303,7 @@ enum Kind {
 
 /// A parsed numeric dtype: kind, item size in bytes and byte order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct Dtype {
+pub(crate) struct Dtype {
     kind: Kind,
     size: usize,
     big_endian: bool,
@@ -294,7 +311,7 @@ struct Dtype {
 
 impl Dtype {
     /// Parses a simple descr such as `<f4`, `>i8`, `|u1`, `|b1` or `=f8`.
-    fn parse(descr: &str) -> Result<Dtype, String> {
+    pub(crate) fn parse(descr: &str) -> Result<Dtype, String> {
         let unsupported = || {
             format!("unsupported dtype '{descr}' (expected float32, float64 or an integer type)")
         };
@@ -350,7 +367,11 @@ impl Dtype {
 
 /// Reads `count` values of type `dtype` and converts them to `f64`.
 /// The caller has checked that the file holds exactly these bytes.
-fn read_values(reader: &mut impl Read, dtype: &Dtype, count: usize) -> std::io::Result<Vec<f64>> {
+pub(crate) fn read_values(
+    reader: &mut impl Read,
+    dtype: &Dtype,
+    count: usize,
+) -> std::io::Result<Vec<f64>> {
     const BLOCK_ITEMS: usize = 8192;
     let mut data = Vec::with_capacity(count);
     let mut block = vec![0u8; BLOCK_ITEMS * dtype.size];
@@ -461,10 +482,10 @@ fn fortran_to_c(data: &[f64], shape: &[usize]) -> Vec<f64> {
 
 /// The three entries of a `.npy` header dict.
 #[derive(Debug)]
-struct Header {
-    descr: String,
-    fortran_order: bool,
-    shape: Vec<usize>,
+pub(crate) struct Header {
+    pub descr: String,
+    pub fortran_order: bool,
+    pub shape: Vec<usize>,
 }
 
 /// A Python literal as it may appear in a `.npy` header.
@@ -702,110 +723,4 @@ impl Parser<'_> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn header_matches_numpy_layout() {
-        let h = npy_header("<f4", &[10, 3]);
-        assert_eq!(h.len() % ALIGN, 0);
-        assert_eq!(&h[..8], b"\x93NUMPY\x01\x00");
-        let text = std::str::from_utf8(&h[10..]).unwrap();
-        assert!(text.starts_with("{'descr': '<f4', 'fortran_order': False, 'shape': (10, 3), }"));
-        assert!(text.ends_with(" \n"));
-        assert_eq!(usize::from(u16::from_le_bytes([h[8], h[9]])), h.len() - 10);
-    }
-
-    #[test]
-    fn shape_repr() {
-        assert_eq!(shape_text(&[]), "()");
-        assert_eq!(shape_text(&[7]), "(7,)");
-        assert_eq!(shape_text(&[2, 3, 4]), "(2, 3, 4)");
-    }
-
-    #[test]
-    fn parses_header_variants() {
-        let h =
-            parse_header("{\"shape\": (4,3,), 'fortran_order':True,'descr':'>f8',}  \n").unwrap();
-        assert_eq!(h.shape, vec![4, 3]);
-        assert!(h.fortran_order);
-        assert_eq!(h.descr, ">f8");
-        let h = parse_header("{'descr': '<i4', 'fortran_order': False, 'shape': (), }").unwrap();
-        assert!(h.shape.is_empty());
-        let h =
-            parse_header("{'descr': '<i8', 'fortran_order': False, 'shape': (5L, 2L)}").unwrap();
-        assert_eq!(h.shape, vec![5, 2]);
-    }
-
-    #[test]
-    fn rejects_bad_headers() {
-        let bad = [
-            "{'descr': '<f4', 'shape': (3,), }",
-            "{'descr': '<f4', 'fortran_order': False, 'shape': (3,), 'x': 1}",
-            "{'descr': '<f4', 'fortran_order': False, 'shape': (-3,), }",
-            "{'descr': '<f4', 'fortran_order': 0, 'shape': (3,), }",
-            "{'descr': '<f4', 'fortran_order': False, 'shape': (3,) ",
-            "{'descr': '<f4', 'fortran_order': False, 'shape': ((((((((((((((((((((3,)))))))))))))))))))), }",
-            "{'descr: '<f4'}",
-            "",
-        ];
-        for text in bad {
-            assert!(parse_header(text).is_err(), "accepted {text:?}");
-        }
-    }
-
-    #[test]
-    fn structured_dtype_is_named() {
-        let err = parse_header(
-            "{'descr': [('x', '<f4'), ('y', '<f4')], 'fortran_order': False, 'shape': (3,), }",
-        )
-        .unwrap_err();
-        assert!(err.contains("[('x', '<f4'), ('y', '<f4')]"), "{err}");
-    }
-
-    #[test]
-    fn dtype_parsing() {
-        assert_eq!(
-            Dtype::parse(">f8").unwrap(),
-            Dtype {
-                kind: Kind::Float,
-                size: 8,
-                big_endian: true
-            }
-        );
-        assert_eq!(Dtype::parse("|b1").unwrap().kind, Kind::Bool);
-        assert_eq!(Dtype::parse("<u2").unwrap().name(), "uint16");
-        for bad in [
-            "<c8", "|O", "<U10", "|S3", "<f16", "<i3", "", "<", "|V8", "<M8[ns]",
-        ] {
-            let err = Dtype::parse(bad).unwrap_err();
-            assert!(err.contains(&format!("'{bad}'")), "{err}");
-        }
-    }
-
-    #[test]
-    fn half_floats() {
-        assert_eq!(f16_to_f64(0x3c00), 1.0);
-        assert_eq!(f16_to_f64(0xc000), -2.0);
-        assert_eq!(f16_to_f64(0x7bff), 65504.0);
-        assert_eq!(f16_to_f64(0x0001), 2f64.powi(-24));
-        assert_eq!(f16_to_f64(0x7c00), f64::INFINITY);
-        assert!(f16_to_f64(0x7e00).is_nan());
-    }
-
-    #[test]
-    fn fortran_reorder_3d() {
-        // C-order values 0..24 of shape (2, 3, 4), laid out in Fortran order.
-        let shape = [2, 3, 4];
-        let mut fortran = vec![0.0; 24];
-        for i in 0..2 {
-            for j in 0..3 {
-                for k in 0..4 {
-                    fortran[i + 2 * j + 6 * k] = (i * 12 + j * 4 + k) as f64;
-                }
-            }
-        }
-        let c = fortran_to_c(&fortran, &shape);
-        assert_eq!(c, (0..24).map(|v| v as f64).collect::<Vec<_>>());
-    }
-}
+mod tests;

@@ -58,7 +58,10 @@ pub use context::{MaterialContext, ParticleContext};
 pub use error::ParticleError;
 pub use kernel::{KERNEL_NAMES, Kernel};
 pub use materials::{Material, MaterialClass, MaterialVolume};
-pub use volume::{Classification, FieldSample, ParticleData, ParticleSettings, ParticleVolume};
+pub use volume::{
+    Classification, FieldSample, FieldStatistics, ParticleData, ParticleSettings, ParticleVolume,
+    RANGE_PROBES, check_data, median, probe_stride, support_box,
+};
 
 #[cfg(test)]
 mod packet_tests;

@@ -15,7 +15,11 @@
 //! The volume reports classified samples ([`Volume::classified`]): `value` is
 //! the blended opacity and the attribute the blended colour. Intervals are
 //! the union of the materials' visible intervals (each material skips the
-//! space its own transfer function hides), with a conservative opacity range.
+//! space its own transfer function hides), with a conservative opacity range
+//! and the finest step of all materials everywhere — a step that depends on
+//! the field alone, not on which materials' intervals happen to join up
+//! along a ray (which would differ between a whole set and its parts in a
+//! decomposition).
 
 use voxless_core::{
     Aabb, Attribute, Interval, IntervalQuery, Range1, Ray, Sample, SampleBatch, Simd, Vec3, Volume,
@@ -56,6 +60,8 @@ pub struct MaterialVolume {
     bounds: Aabb,
     /// Σ of every material's maximum opacity: the blended opacity's bound.
     max_opacity: f32,
+    /// The finest nominal step of the materials.
+    nominal_dt: f32,
 }
 
 impl MaterialVolume {
@@ -66,7 +72,9 @@ impl MaterialVolume {
         }
         let mut bounds = Aabb::EMPTY;
         let mut max_opacity = 0.0;
+        let mut nominal_dt = f32::INFINITY;
         for m in &materials {
+            nominal_dt = nominal_dt.min(m.volume.statistics().median_support / 8.0);
             let b = m.volume.bounds();
             bounds = Aabb::new(bounds.min.min(b.min), bounds.max.max(b.max));
             max_opacity += m.class.tf.max_opacity(0.0, 1.0);
@@ -75,6 +83,7 @@ impl MaterialVolume {
             materials,
             bounds,
             max_opacity,
+            nominal_dt,
         })
     }
 
@@ -214,7 +223,7 @@ impl Volume for MaterialVolume {
                 out,
             );
         }
-        // The union, in increasing t, with the finest step of its parts.
+        // The union, in increasing t, with the finest step of all materials.
         let mut parts: Vec<Interval> = out.drain(start..).collect();
         parts.sort_by(|a, b| a.t.lo.total_cmp(&b.t.lo));
         for iv in parts {
@@ -222,12 +231,11 @@ impl Volume for MaterialVolume {
             match out.last_mut() {
                 Some(last) if mine && iv.t.lo <= last.t.hi => {
                     last.t.hi = last.t.hi.max(iv.t.hi);
-                    last.nominal_dt = last.nominal_dt.min(iv.nominal_dt);
                 }
                 _ => out.push(Interval::sampled(
                     iv.t,
                     Range1::new(0.0, self.max_opacity),
-                    iv.nominal_dt,
+                    self.nominal_dt,
                 )),
             }
         }

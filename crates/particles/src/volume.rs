@@ -11,7 +11,11 @@ use voxless_transfer::{ControlPoints, TransferFunction};
 use crate::error::ParticleError;
 use crate::kernel::{CubicFamily, Family, GaussianFamily, Kernel};
 
+mod exact;
 mod packet;
+mod part;
+
+pub use part::{FieldStatistics, RANGE_PROBES, check_data, median, probe_stride, support_box};
 
 /// Particle arrays as read from a file, in file order.
 #[derive(Clone, Debug, Default)]
@@ -95,10 +99,6 @@ pub struct FieldSample {
 
 /// At most this many particles per volume (indices are `u32`).
 const MAX_PARTICLES: usize = (u32::MAX / 2) as usize;
-/// Particle centres sampled to estimate max Φ (and the median support).
-/// The estimate only normalises the transfer function, and it dominated the
-/// cost of a radius change at 65,536 probes (docs/benchmarks.md).
-const RANGE_PROBES: usize = 16_384;
 
 pub struct ParticleVolume {
     settings: ParticleSettings,
@@ -119,17 +119,6 @@ pub struct ParticleVolume {
     value_range: Range1,
     attribute_range: Option<Range1>,
     nominal_dt: f32,
-}
-
-fn check_len(what: &'static str, n: usize, v: &Option<Vec<f32>>) -> Result<(), ParticleError> {
-    match v {
-        Some(v) if v.len() != n => Err(ParticleError::LengthMismatch {
-            what,
-            expected: n,
-            got: v.len(),
-        }),
-        _ => Ok(()),
-    }
 }
 
 fn check_settings(s: &ParticleSettings) -> Result<(), ParticleError> {
@@ -155,7 +144,7 @@ impl ParticleVolume {
     /// Validates `data`, sorts it along a Hilbert curve, and builds the
     /// clusters, BVH and macrocells.
     pub fn new(data: ParticleData, settings: ParticleSettings) -> Result<Self, ParticleError> {
-        Self::build(data, settings, Bvh::default())
+        Self::build(data, settings, Bvh::default(), None)
     }
 
     /// Replaces the particles with the next frame of a time series: the
@@ -169,7 +158,7 @@ impl ParticleVolume {
             settings.attribute_range = self.attribute_range;
         }
         let bvh = std::mem::take(&mut self.bvh);
-        match Self::build(data, settings, bvh) {
+        match Self::build(data, settings, bvh, None) {
             Ok(mut next) => {
                 // Keep the caller's own settings (an attribute range that was
                 // only inherited for this frame is not written back).
@@ -185,14 +174,18 @@ impl ParticleVolume {
         }
     }
 
+    /// Validates and builds; a part of a decomposed set (`part`: the
+    /// statistics of the whole set) may be empty and is not checked for
+    /// supports larger than its own extent.
     fn build(
         data: ParticleData,
         settings: ParticleSettings,
         bvh: Bvh,
+        part: Option<FieldStatistics>,
     ) -> Result<Self, ParticleError> {
         check_settings(&settings)?;
         let n = data.positions.len();
-        if n == 0 {
+        if n == 0 && part.is_none() {
             return Err(ParticleError::Empty);
         }
         if n > MAX_PARTICLES {
@@ -201,43 +194,7 @@ impl ParticleVolume {
                 max: MAX_PARTICLES,
             });
         }
-        check_len("radii", n, &data.radii)?;
-        check_len("attribute", n, &data.attribute)?;
-        check_len("weights", n, &data.weights)?;
-        if let Some(i) = data.positions.iter().position(|p| !p.is_finite()) {
-            let p = data.positions[i];
-            return Err(ParticleError::NonFinitePosition {
-                index: i,
-                x: p.x,
-                y: p.y,
-                z: p.z,
-            });
-        }
-        if let Some(r) = &data.radii
-            && let Some(i) = r.iter().position(|r| !(r.is_finite() && *r > 0.0))
-        {
-            return Err(ParticleError::BadRadius {
-                index: i,
-                value: r[i],
-            });
-        }
-        if let Some(a) = &data.attribute
-            && let Some(i) = a.iter().position(|a| !a.is_finite())
-        {
-            return Err(ParticleError::NonFiniteValue {
-                index: i,
-                what: "attribute",
-                value: a[i],
-            });
-        }
-        if let Some(w) = &data.weights
-            && let Some(i) = w.iter().position(|w| !(w.is_finite() && *w >= 0.0))
-        {
-            return Err(ParticleError::BadWeight {
-                index: i,
-                value: w[i],
-            });
-        }
+        check_data(&data, 0)?;
         if data.attribute.is_none() {
             for (what, present) in [
                 ("radius map", settings.radius_map.is_some()),
@@ -304,10 +261,12 @@ impl ParticleVolume {
             nominal_dt: 1.0,
         };
         vol.derive_radii_and_weights();
-        vol.check_support()?;
+        if part.is_none() {
+            vol.check_support()?;
+        }
         let boxes = vol.cluster_bounds();
         vol.bvh.rebuild(&boxes);
-        vol.derive_acceleration();
+        vol.derive_acceleration(part);
         Ok(vol)
     }
 
@@ -341,7 +300,7 @@ impl ParticleVolume {
             return Err(e);
         }
         self.bvh.refit(&self.cluster_bounds());
-        self.derive_acceleration();
+        self.derive_acceleration(None);
         Ok(())
     }
 
@@ -366,16 +325,13 @@ impl ParticleVolume {
     fn derive_radii_and_weights(&mut self) {
         let s = &self.settings;
         let range = self.attribute_range.unwrap_or(Range1::new(0.0, 1.0));
-        let map = |m: &Option<ControlPoints>, i: usize| match (m, &self.attribute) {
-            (Some(m), Some(a)) => m.eval(range.normalize(a[i])).max(0.0),
-            _ => 1.0,
-        };
+        let attr = |i: usize| self.attribute.as_ref().map(|a| a[i]);
         let n = self.positions.len();
         self.radius = (0..n)
-            .map(|i| self.base_radius[i] * map(&s.radius_map, i))
+            .map(|i| self.base_radius[i] * part::map_factor(&s.radius_map, attr(i), range))
             .collect();
         self.weight = (0..n)
-            .map(|i| self.base_weight[i] * map(&s.weight_map, i))
+            .map(|i| self.base_weight[i] * part::map_factor(&s.weight_map, attr(i), range))
             .collect();
         let factor = s.kernel.support_factor();
         self.packed = (0..n)
@@ -411,15 +367,8 @@ impl ParticleVolume {
             b.grow(*p);
         }
         let factor = self.settings.kernel.support_factor();
-        let stride = (self.len() / RANGE_PROBES).max(1);
-        let mut supports: Vec<f32> = self
-            .radius
-            .iter()
-            .step_by(stride)
-            .map(|r| r * factor)
-            .collect();
-        let mid = supports.len() / 2;
-        let support = *supports.select_nth_unstable_by(mid, f32::total_cmp).1;
+        let mut supports: Vec<f32> = self.probes().map(|j| self.radius[j] * factor).collect();
+        let support = median(&mut supports);
         let extent = b.diagonal();
         if support > extent {
             return Err(ParticleError::HugeRadius {
@@ -444,21 +393,32 @@ impl ParticleVolume {
             .collect()
     }
 
-    /// Macrocells, value range and nominal step, from the current radii.
-    fn derive_acceleration(&mut self) {
-        let visible: Vec<f32> = self
-            .packed
-            .iter()
-            .step_by((self.packed.len() / RANGE_PROBES).max(1))
-            .filter(|p| p.support2 >= 0.0)
-            .map(|p| p.support2.sqrt())
-            .collect();
-        let median_support = if visible.is_empty() {
-            self.bounds().diagonal().max(1e-6)
-        } else {
-            let mut v = visible;
-            let mid = v.len() / 2;
-            *v.select_nth_unstable_by(mid, f32::total_cmp).1
+    /// The probes: every [`probe_stride`]-th particle in input order (so a
+    /// decomposed set finds the same ones by their row numbers), by index in
+    /// volume order.
+    fn probes(&self) -> impl Iterator<Item = usize> + '_ {
+        let stride = probe_stride(self.len()) as u32;
+        (0..self.len()).filter(move |&j| self.original_index[j] % stride == 0)
+    }
+
+    /// Macrocells, value range and nominal step, from the current radii —
+    /// or, for a part of a decomposed set, from the whole set's statistics.
+    fn derive_acceleration(&mut self, whole: Option<FieldStatistics>) {
+        let median_support = match whole {
+            Some(w) => w.median_support,
+            None => {
+                let mut visible: Vec<f32> = self
+                    .probes()
+                    .map(|j| self.packed[j].support2)
+                    .filter(|&s2| s2 >= 0.0)
+                    .map(f32::sqrt)
+                    .collect();
+                if visible.is_empty() {
+                    self.bounds().diagonal().max(1e-6)
+                } else {
+                    median(&mut visible)
+                }
+            }
         };
         self.nominal_dt = median_support / 8.0;
 
@@ -509,14 +469,18 @@ impl ParticleVolume {
         }
         self.grid = grid;
 
-        // Φ's range for normalisation: max over (a sample of) particle centres.
-        let stride = (self.packed.len() / RANGE_PROBES).max(1);
-        let max = (0..self.packed.len())
-            .into_par_iter()
-            .step_by(stride)
-            .map(|i| self.density(self.positions[i]))
-            .reduce(|| 0.0, f32::max);
-        self.value_range = Range1::new(0.0, max);
+        // Φ's range for normalisation: max over the probes' centres.
+        self.value_range = match whole {
+            Some(w) => w.value_range,
+            None => {
+                let probes: Vec<usize> = self.probes().collect();
+                let max = probes
+                    .par_iter()
+                    .map(|&j| self.density_exact(self.positions[j]))
+                    .reduce(|| 0.0, f32::max);
+                Range1::new(0.0, max)
+            }
+        };
     }
 
     /// Φ alone.

@@ -152,6 +152,24 @@ impl RenderSettings {
     /// value and attribute ranges, and an opacity scale giving optical depth
     /// 8 across the bounds' diagonal at opacity 1.
     pub fn for_volume<V: Volume>(volume: &V, width: u32, height: u32) -> Self {
+        Self::for_data(
+            volume.bounds(),
+            volume.value_range(),
+            volume.attribute_range(),
+            width,
+            height,
+        )
+    }
+
+    /// [`RenderSettings::for_volume`] for data with these bounds and ranges
+    /// (a decomposed volume: the whole data's, not a part's).
+    pub fn for_data(
+        bounds: Aabb,
+        value_range: Range1,
+        attribute_range: Option<Range1>,
+        width: u32,
+        height: u32,
+    ) -> Self {
         RenderSettings {
             width,
             height,
@@ -159,9 +177,9 @@ impl RenderSettings {
             step: None,
             sampling_rate: 1.0,
             early_termination: 0.99,
-            opacity_scale: 8.0 / volume.bounds().diagonal().max(1e-12),
-            value_range: volume.value_range(),
-            attribute_range: volume.attribute_range(),
+            opacity_scale: 8.0 / bounds.diagonal().max(1e-12),
+            value_range,
+            attribute_range,
             light: None,
             seed: 0,
             clip: None,

@@ -218,8 +218,9 @@ pub(crate) struct Cursor {
     span: Range1,
     /// Only segments whose midpoints lie in `[own.lo, own.hi)` are returned.
     own: Range1,
-    /// Lower cut of the current run of same-step intervals.
+    /// Cuts of the current run of same-step intervals.
     run_lo: f32,
+    run_hi: f32,
     /// Whether `dt`, `n` and `run_lo` belong to interval `k`'s run.
     open: bool,
     /// Where the last returned segment ended.
@@ -239,6 +240,7 @@ impl Cursor {
             span,
             own,
             run_lo: span.lo,
+            run_hi: span.hi,
             open: false,
             prev_end: span.lo,
         }
@@ -260,6 +262,12 @@ impl Cursor {
     #[inline]
     fn cell_before(&self, t: f32) -> i64 {
         ((t as f64 / self.dt as f64 - self.xi).floor() as i64).saturating_sub(1)
+    }
+
+    /// Whether interval `nx` goes on with the current run's lattice.
+    #[inline]
+    fn continues(&self, nx: &Interval, settings: &RenderSettings) -> bool {
+        nx.constant_value().is_none() && Self::step_of(nx, settings).to_bits() == self.dt.to_bits()
     }
 
     /// The step of sampled interval `iv`: the fixed step or the interval's
@@ -306,20 +314,24 @@ impl Cursor {
                     iv.t.lo
                 };
                 self.n = self.cell_before(self.run_lo);
+                // The run goes on while the next intervals are sampled with
+                // the same step; its cells end with the last of them (at the
+                // span when that is the ray's last interval).
+                let mut last = self.k;
+                while intervals.get(last + 1).is_some_and(|nx| self.continues(nx, settings)) {
+                    last += 1;
+                }
+                self.run_hi = if last + 1 == intervals.len() {
+                    self.span.hi
+                } else {
+                    intervals[last].t.hi.min(self.span.hi)
+                };
                 self.open = true;
             }
-            // The run goes on past this interval when the next one is sampled
-            // with the same step; else its cells end here (or at the span).
-            let continues = intervals.get(self.k + 1).is_some_and(|nx| {
-                nx.constant_value().is_none()
-                    && Self::step_of(nx, settings).to_bits() == self.dt.to_bits()
-            });
-            let last = self.k + 1 == intervals.len();
-            let run_hi = if continues || last {
-                self.span.hi
-            } else {
-                iv.t.hi.min(self.span.hi)
-            };
+            let continues = intervals
+                .get(self.k + 1)
+                .is_some_and(|nx| self.continues(nx, settings));
+            let run_hi = self.run_hi;
             // Skip the cells before this interval and before what is owned
             // without walking them (a gap of skipped space can be long).
             self.n = self

@@ -42,9 +42,9 @@ pub mod testing;
 mod volume;
 
 pub use events::TetTileView;
-pub use mesh::{BLOCK, Block, LagrangianGrid, Tet, TetMesh, TetSettings};
+pub use mesh::{BLOCK, Block, LagrangianGrid, LagrangianSlab, Tet, TetMesh, TetSettings};
 pub use render::TetOptions;
-pub use volume::{TetContext, TetVolume};
+pub use volume::{TetContext, TetVolume, canonical_point, density_range, density_stride};
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum TetError {

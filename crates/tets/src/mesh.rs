@@ -15,6 +15,22 @@ pub struct LagrangianGrid {
     pub positions: Vec<Vec3>,
 }
 
+/// Lagrangian planes `first_plane..first_plane + planes` (periodically, so
+/// the last slab's extra plane is plane 0) of an N³ run: what one rank reads
+/// to tessellate the block rows `rows`. Block row `r` needs planes
+/// `r·BLOCK ..= min((r + 1)·BLOCK, N)`, so a slab of rows `a..b` starts at
+/// plane `a·BLOCK` and holds `min(b·BLOCK, N) − a·BLOCK + 1` planes.
+#[derive(Clone, Debug)]
+pub struct LagrangianSlab {
+    pub n: usize,
+    pub box_size: f32,
+    pub rows: std::ops::Range<usize>,
+    pub first_plane: usize,
+    pub planes: usize,
+    /// Positions of the planes in Lagrangian order within each plane.
+    pub positions: Vec<Vec3>,
+}
+
 #[derive(Clone, Debug)]
 pub struct TetSettings {
     /// Mass per particle (per Lagrangian cell); default: total mass 1.
@@ -157,6 +173,54 @@ impl TetMesh {
         ))
     }
 
+    /// The tets of the Lagrangian blocks whose first index lies in
+    /// `slab.rows` (block rows of [`BLOCK`] cells along i), exactly as
+    /// [`TetMesh::new`] makes them for the whole grid and in the same order:
+    /// the whole mesh's tets are the slabs' tets, slab after slab. So ranks
+    /// that each read a slab of a run tessellate it together (see
+    /// [`LagrangianSlab`]).
+    pub fn from_slab(slab: &LagrangianSlab, settings: &TetSettings) -> Result<TetMesh, TetError> {
+        let (n, l) = (slab.n, slab.box_size);
+        if !(l.is_finite() && l > 0.0) {
+            return Err(TetError::BadBox { box_size: l });
+        }
+        if n < 2 || n.checked_mul(n).and_then(|nn| nn.checked_mul(slab.planes)) != Some(slab.positions.len()) {
+            return Err(TetError::NotCubic {
+                count: slab.positions.len(),
+            });
+        }
+        if let Some(i) = slab.positions.iter().position(|p| !p.is_finite()) {
+            return Err(TetError::NonFinite {
+                index: slab.first_plane * n * n + i,
+            });
+        }
+        let particle_mass = settings.particle_mass.unwrap_or(1.0 / (n * n * n) as f64);
+        if !(particle_mass.is_finite() && particle_mass > 0.0) {
+            return Err(TetError::BadMass {
+                mass: particle_mass,
+            });
+        }
+        let rows = slab.rows.start.min(n.div_ceil(BLOCK))..slab.rows.end.min(n.div_ceil(BLOCK));
+        let needed = (rows.end * BLOCK).min(n) + 1 - (rows.start * BLOCK).min(n);
+        if !rows.is_empty() && (slab.first_plane != rows.start * BLOCK || slab.planes < needed) {
+            return Err(TetError::NotCubic {
+                count: slab.positions.len(),
+            });
+        }
+        let at = |a: usize, b: usize, c: usize| {
+            let plane = (a % n + n - slab.first_plane % n) % n;
+            slab.positions[(plane * n + b % n) * n + c % n]
+        };
+        Ok(TetMesh::build_rows(
+            (n, l),
+            &at,
+            particle_mass,
+            settings.degenerate_fraction,
+            BLOCK,
+            rows,
+        ))
+    }
+
     /// Adds up to `levels` coarser levels of detail (each halving N; stops
     /// when N is odd or the blocks would hold less than one cell).
     pub fn with_lod(
@@ -200,13 +264,35 @@ impl TetMesh {
         degenerate_fraction: f64,
         block: usize,
     ) -> TetMesh {
-        let (n, l) = (grid.n, grid.box_size);
+        let n = grid.n;
+        let at = |a: usize, b: usize, c: usize| grid.positions[((a % n) * n + (b % n)) * n + (c % n)];
+        TetMesh::build_rows(
+            (n, grid.box_size),
+            &at,
+            particle_mass,
+            degenerate_fraction,
+            block,
+            0..n.div_ceil(block),
+        )
+    }
+
+    /// Tessellates the blocks of block rows `rows` of a grid of N³ particles
+    /// in a box of size L (`(n, l)`) whose position `(i, j, k)` is `at(i, j,
+    /// k)` (indices may exceed N by one: the periodic neighbour).
+    fn build_rows(
+        (n, l): (usize, f32),
+        at: &(dyn Fn(usize, usize, usize) -> Vec3 + Sync),
+        particle_mass: f64,
+        degenerate_fraction: f64,
+        block: usize,
+        rows: std::ops::Range<usize>,
+    ) -> TetMesh {
         let tet_mass = particle_mass / 6.0;
         let mean_volume = (l as f64 / n as f64).powi(3) / 6.0;
         let floor = degenerate_fraction * mean_volume;
         let nb = n.div_ceil(block);
         // Per block, in parallel: its tets grouped by image shift.
-        let per_block: Vec<BlockTets> = (0..nb * nb * nb)
+        let per_block: Vec<BlockTets> = (rows.start * nb * nb..rows.end * nb * nb)
             .into_par_iter()
             .map(|b| {
                 let (bi, bj, bk) = (b / (nb * nb), (b / nb) % nb, b % nb);
@@ -215,7 +301,7 @@ impl TetMesh {
                 for i in bi * block..((bi + 1) * block).min(n) {
                     for j in bj * block..((bj + 1) * block).min(n) {
                         for k in bk * block..((bk + 1) * block).min(n) {
-                            let corners = cell_corners(grid, i, j, k);
+                            let corners = cell_corners(at, l, i, j, k);
                             for t in KUHN {
                                 let v = t.map(|c| corners[c]);
                                 let vol = Tet::signed_volume(&v).abs();
@@ -258,7 +344,8 @@ impl TetMesh {
         let mut tets = Vec::new();
         let mut blocks = Vec::new();
         let mut point_masses = Vec::new();
-        for (b, (groups, points)) in per_block.into_iter().enumerate() {
+        let first = rows.start * nb * nb;
+        for (b, (groups, points)) in (first..).zip(per_block) {
             for (ts, bounds) in groups {
                 let start = tets.len() as u32;
                 tets.extend(ts);
@@ -293,10 +380,13 @@ impl TetMesh {
 
 /// The 8 corners of cell (i, j, k), unwrapped to the periodic image nearest
 /// corner 0 (corner index = 4·di + 2·dj + dk).
-fn cell_corners(grid: &LagrangianGrid, i: usize, j: usize, k: usize) -> [Vec3; 8] {
-    let n = grid.n;
-    let l = grid.box_size;
-    let at = |a: usize, b: usize, c: usize| grid.positions[((a % n) * n + (b % n)) * n + (c % n)];
+fn cell_corners(
+    at: &(dyn Fn(usize, usize, usize) -> Vec3 + Sync),
+    l: f32,
+    i: usize,
+    j: usize,
+    k: usize,
+) -> [Vec3; 8] {
     let anchor = at(i, j, k);
     let mut out = [anchor; 8];
     for (c, slot) in out.iter_mut().enumerate() {

@@ -51,23 +51,17 @@ impl TetVolume {
     pub fn from_mesh(mesh: TetMesh) -> TetVolume {
         // The periodic box: image tets fill it exactly, and outside it they
         // would double what the originals show.
+        let stride = density_stride(mesh.tets.len());
+        let mut d: Vec<f32> = mesh.tets.iter().step_by(stride).map(|t| t.density).collect();
+        let value_range = density_range(&mesh, &mut d);
+        TetVolume::from_parts(mesh, value_range)
+    }
+
+    /// A volume over part of a decomposed run (the tets reaching into one
+    /// box) with the whole run's density range; its bounds are the whole
+    /// box `[0, box_size)³` like the whole run's.
+    pub fn from_parts(mesh: TetMesh, value_range: Range1) -> TetVolume {
         let bounds = Aabb::new(Vec3::ZERO, Vec3::splat(mesh.box_size));
-        // Density range for the transfer function (log10 by default): from the
-        // mean density (voids stay transparent) to the 99.9th-percentile tet density.
-        let mean = mesh.total_mass() / (mesh.box_size as f64).powi(3);
-        let mut d: Vec<f32> = mesh
-            .tets
-            .iter()
-            .step_by((mesh.tets.len() / 100_000).max(1))
-            .map(|t| t.density)
-            .collect();
-        let at = ((d.len() as f64 * 0.999) as usize).min(d.len().saturating_sub(1));
-        let high = if d.is_empty() {
-            mean as f32
-        } else {
-            *d.select_nth_unstable_by(at, f32::total_cmp).1
-        };
-        let value_range = Range1::new(mean as f32, high.max(mean as f32 * 10.0));
         TetVolume {
             mesh,
             bvh: OnceLock::new(),
@@ -111,20 +105,29 @@ impl TetVolume {
     /// 1e-4 of the Lagrangian spacing (at least a few ulps) along a fixed
     /// direction that no tessellation face contains; the density is
     /// discontinuous only across faces, so this changes nothing elsewhere.
+    ///
+    /// The densities are added in increasing order, so the sum's bits do not
+    /// depend on how the tets are stored: a part of a decomposed run that
+    /// holds every tet covering the point gives the same value.
     pub fn density_and_streams(&self, p: Vec3) -> (f64, u32) {
-        let l = self.mesh.box_size;
-        let nudge = (1e-4 * l / self.mesh.n as f32).max(8.0 * l * f32::EPSILON);
-        let p = p + Vec3::new(0.812_403_8, 0.445_259_4, 0.376_556_9) * nudge;
-        let p = Vec3::new(p.x.rem_euclid(l), p.y.rem_euclid(l), p.z.rem_euclid(l));
-        let (mut rho, mut streams) = (0.0f64, 0u32);
+        let p = self.canonical_point(p);
+        let mut covering: Vec<f32> = Vec::new();
         self.bvh().point_query(p, |i| {
             let t = &self.mesh.tets[i as usize];
             if t.contains(p) {
-                rho += t.density as f64;
-                streams += 1;
+                covering.push(t.density);
             }
         });
-        (rho, streams)
+        covering.sort_unstable_by(f32::total_cmp);
+        let rho = covering.iter().map(|&d| d as f64).sum();
+        (rho, covering.len() as u32)
+    }
+
+    /// Where [`TetVolume::density_and_streams`] evaluates a query at `p`:
+    /// nudged off the tessellation's faces and wrapped into the box (a
+    /// decomposition routes the query to the box holding this point).
+    pub fn canonical_point(&self, p: Vec3) -> Vec3 {
+        canonical_point(self.mesh.box_size, self.mesh.n, p)
     }
 }
 
@@ -274,4 +277,32 @@ impl Volume for TetContext<'_> {
     ) -> Option<Result<Vec<f32>, Cancelled>> {
         self.volume.project_image(camera, width, height, control)
     }
+}
+
+/// [`TetVolume::canonical_point`] for a run of N³ particles in a box of
+/// size `l`.
+pub fn canonical_point(l: f32, n: usize, p: Vec3) -> Vec3 {
+    let nudge = (1e-4 * l / n as f32).max(8.0 * l * f32::EPSILON);
+    let p = p + Vec3::new(0.812_403_8, 0.445_259_4, 0.376_556_9) * nudge;
+    Vec3::new(p.x.rem_euclid(l), p.y.rem_euclid(l), p.z.rem_euclid(l))
+}
+
+/// The default density range takes every this-many-th tet of a mesh of
+/// `tets` tets (in mesh order).
+pub fn density_stride(tets: usize) -> usize {
+    (tets / 100_000).max(1)
+}
+
+/// The default density range of a run (log10 by default): from the mean
+/// density (voids stay transparent) to the 99.9th percentile of `sample`,
+/// the densities of every [`density_stride`]-th tet in mesh order.
+pub fn density_range(mesh: &TetMesh, sample: &mut [f32]) -> Range1 {
+    let mean = mesh.total_mass() / (mesh.box_size as f64).powi(3);
+    let at = ((sample.len() as f64 * 0.999) as usize).min(sample.len().saturating_sub(1));
+    let high = if sample.is_empty() {
+        mean as f32
+    } else {
+        *sample.select_nth_unstable_by(at, f32::total_cmp).1
+    };
+    Range1::new(mean as f32, high.max(mean as f32 * 10.0))
 }

@@ -119,8 +119,8 @@ fn assemble(
     // A cells file's raw bytes are dropped once decoded, before the fields
     // are loaded, so they never share memory with them.
     let cell_list = match cells_part {
-        Part::File(path) => decode_cells(&read_all(path)?, cells)?,
-        Part::Bytes(bytes) => decode_cells(bytes, cells)?,
+        Part::File(path) => decode_cells(&read_all(path)?, cells, 0)?,
+        Part::Bytes(bytes) => decode_cells(bytes, cells, 0)?,
     };
     let mut fields: Vec<(String, Vec<f32>)> = Vec::with_capacity(scalars.len());
     for field in scalars {
@@ -151,8 +151,8 @@ fn assemble(
 }
 
 /// The cells of a `.cells` file: four little-endian `int32` per cell, with
-/// levels checked.
-fn decode_cells(bytes: &[u8], cells: &Path) -> Result<Vec<[i32; 4]>, IoError> {
+/// levels checked; the first is cell `first` of the file (errors name it).
+fn decode_cells(bytes: &[u8], cells: &Path, first: usize) -> Result<Vec<[i32; 4]>, IoError> {
     if !bytes.len().is_multiple_of(CELL_BYTES) {
         return Err(IoError::format(
             cells,
@@ -178,7 +178,8 @@ fn decode_cells(bytes: &[u8], cells: &Path) -> Result<Vec<[i32; 4]>, IoError> {
             return Err(IoError::format(
                 cells,
                 format!(
-                    "cell {index} has level {}; levels must be 0 (finest) to {MAX_LEVEL}",
+                    "cell {} has level {}; levels must be 0 (finest) to {MAX_LEVEL}",
+                    first + index,
                     cell[3]
                 ),
             ));
@@ -229,6 +230,83 @@ fn read_scalars(field: &Field, cells: &Path, count: usize) -> Result<Vec<f32>, I
         .chunks_exact(4)
         .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect())
+}
+
+/// Cells `rows` of an ExaBricks `.cells` file and the same rows of its
+/// `.scalars` fields, with the file's total cell count: what one rank of a
+/// parallel run reads (by offset, never the whole file). Names, meta file
+/// and checks are those of [`read_exabricks`]; every scalars file must hold
+/// one value per cell of the whole file. Rows are clamped to the file.
+pub fn read_exabricks_rows(
+    cells: &Path,
+    scalars: &[PathBuf],
+    rows: std::ops::Range<usize>,
+) -> Result<(AmrCellData, usize), IoError> {
+    let len = std::fs::metadata(cells)
+        .map_err(|e| IoError::io(cells, e))?
+        .len();
+    if !len.is_multiple_of(CELL_BYTES as u64) {
+        // The whole-file reader's message for a truncated file.
+        decode_cells(&vec![0u8; (len % CELL_BYTES as u64) as usize], cells, 0)?;
+    }
+    let total = (len / CELL_BYTES as u64) as usize;
+    let (a, b) = (rows.start.min(total), rows.end.min(total).max(rows.start.min(total)));
+    let cell_list = decode_cells(&read_range(cells, CELL_BYTES, a, b)?, cells, a)?;
+    let stem = cells.file_stem().map(|s| s.to_string_lossy().into_owned());
+    let mut fields: Vec<(String, Vec<f32>)> = Vec::with_capacity(scalars.len());
+    for path in scalars {
+        let name = field_name(stem.as_deref(), path);
+        let flen = std::fs::metadata(path)
+            .map_err(|e| IoError::io(path, e))?
+            .len();
+        if flen != 4 * total as u64 {
+            let message = if !flen.is_multiple_of(4) {
+                format!("size {flen} bytes is not a multiple of 4 (one float32 per cell)")
+            } else {
+                format!(
+                    "holds {} values, but {} holds {total} cells",
+                    flen / 4,
+                    cells.display()
+                )
+            };
+            return Err(IoError::format(path, message));
+        }
+        if fields.iter().any(|(n, _)| *n == name) {
+            return Err(IoError::format(
+                path,
+                format!("field name `{name}` is used by an earlier scalars file too"),
+            ));
+        }
+        let bytes = read_range(path, 4, a, b)?;
+        let values = bytes
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        fields.push((name, values));
+    }
+    let mut data = AmrCellData {
+        cells: cell_list,
+        fields,
+        origin: [0.0; 3],
+        finest_cell_size: 1.0,
+        time: None,
+    };
+    if let Some(meta) = meta_path(cells).filter(|m| m.is_file()) {
+        read_meta(&meta, Part::File(&meta), &mut data)?;
+    }
+    Ok((data, total))
+}
+
+/// Records `a..b` of `size` bytes each from `path`.
+fn read_range(path: &Path, size: usize, a: usize, b: usize) -> Result<Vec<u8>, IoError> {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
+    file.seek(SeekFrom::Start((a * size) as u64))
+        .map_err(|e| IoError::io(path, e))?;
+    let mut buf = vec![0u8; (b - a) * size];
+    file.read_exact(&mut buf)
+        .map_err(|e| IoError::io(path, e))?;
+    Ok(buf)
 }
 
 /// The field name of a scalars file (see [`read_exabricks`]).

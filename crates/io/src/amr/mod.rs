@@ -34,7 +34,7 @@ mod amrclaw;
 mod exabricks;
 
 pub use amrclaw::{read_amrclaw, read_amrclaw_from};
-pub use exabricks::{read_exabricks, read_exabricks_bytes};
+pub use exabricks::{read_exabricks, read_exabricks_bytes, read_exabricks_rows};
 
 /// AMR leaf cells in ExaBricks convention.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,0 +1,219 @@
+//! AMR cells over the ranks: each rank reads a run of cells (by offset from
+//! ExaBricks files; AMRClaw output is read whole and cut), the ranks agree
+//! on the fields' ranges and the bounds (the union of the cells' basis
+//! supports, computed as the volume computes its regions), decompose a
+//! sample of cell centres, and send every cell to each box its basis
+//! support overlaps. Each rank then builds an ordinary AMR volume from its
+//! cells: inside its box every cell whose tent reaches a point is there, so
+//! the reconstruction is the whole volume's.
+
+use std::path::{Path, PathBuf};
+
+use voxless_amr::{AmrCells, AmrError, AmrVolume};
+use voxless_core::{Aabb, Range1, Vec3};
+use voxless_parallel::{Comm, CommExt, Reader};
+use voxless_scene::AmrDesc;
+
+use super::share::{agree, decompose, exchange, outboxes, root_box, share, union_bounds};
+use super::{Columns, ParallelError, Part, PartCounts};
+use crate::load::amr_settings;
+use crate::{AnyVolume, SceneError, VolumeKind, VolumeSummary};
+
+/// Cells sampled for the decomposition, about.
+const SAMPLE: usize = 16_384;
+
+/// This rank's run of cells: the cells, their fields, the run's first
+/// index and the file's cell count, and the data's geometry.
+struct Run {
+    data: voxless_io::AmrCellData,
+    offset: usize,
+    total: usize,
+    source: PathBuf,
+}
+
+fn read_run(a: &AmrDesc, base: &Path, rank: usize, ranks: usize) -> Result<Run, SceneError> {
+    match (&a.cells, &a.amrclaw) {
+        (Some(cells), None) => {
+            let scalars: Vec<PathBuf> = a.scalars.iter().flatten().map(|s| base.join(s)).collect();
+            if scalars.is_empty() {
+                return Err(SceneError::setting(
+                    "amr.scalars",
+                    "ExaBricks cells need at least one .scalars file (--scalars FILE)",
+                ));
+            }
+            let path = base.join(cells);
+            let len = std::fs::metadata(&path)
+                .map_err(|source| voxless_io::IoError::Io {
+                    path: path.clone(),
+                    source,
+                })?
+                .len();
+            let rows = share((len / 16) as usize, rank, ranks);
+            let (data, total) = voxless_io::read_exabricks_rows(&path, &scalars, rows.clone())?;
+            Ok(Run {
+                data,
+                offset: rows.start,
+                total,
+                source: path,
+            })
+        }
+        (None, Some(q)) => {
+            let path = base.join(q);
+            let mut data = voxless_io::read_amrclaw(&path)?;
+            let total = data.cells.len();
+            let rows = share(total, rank, ranks);
+            data.cells = data.cells[rows.clone()].to_vec();
+            for f in &mut data.fields {
+                f.1 = f.1[rows.clone()].to_vec();
+            }
+            Ok(Run {
+                data,
+                offset: rows.start,
+                total,
+                source: path,
+            })
+        }
+        (Some(_), Some(_)) => Err(SceneError::setting(
+            "amr",
+            "give either cells (ExaBricks) or amrclaw, not both",
+        )),
+        (None, None) => Err(SceneError::setting(
+            "amr",
+            "no cells: give cells + scalars (ExaBricks) or amrclaw (fort.qNNNN)",
+        )),
+    }
+}
+
+/// The box of a cell's basis support (its tent reaches half a cell beyond
+/// it), computed as the volume computes its regions' boxes.
+fn support_box(c: &[i32; 4], h: f32) -> Aabb {
+    let w = 1i64 << c[3];
+    let at = |a: usize, d: i64| (((2 * c[a] as i64 + d) as f64 * 0.5) as f32) * h;
+    Aabb::new(
+        Vec3::new(at(0, -w), at(1, -w), at(2, -w)),
+        Vec3::new(at(0, 3 * w), at(1, 3 * w), at(2, 3 * w)),
+    )
+}
+
+pub(crate) fn open(comm: &dyn Comm, a: &AmrDesc, base: &Path) -> Result<Part, ParallelError> {
+    let run = agree(comm, read_run(a, base, comm.rank(), comm.size()))?;
+    let names: Vec<String> = run.data.fields.iter().map(|f| f.0.clone()).collect();
+    let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
+    let (settings, frame, h) = amr_settings(
+        &name_refs,
+        run.data.origin,
+        run.data.finest_cell_size as f32,
+        a,
+        &run.source,
+    )?;
+    // The fields' ranges and the bounds over all cells.
+    let nf = names.len();
+    let mut lo = vec![f64::INFINITY; nf];
+    let mut hi = vec![f64::NEG_INFINITY; nf];
+    for (f, (_, v)) in run.data.fields.iter().enumerate() {
+        for &x in v {
+            lo[f] = lo[f].min(x as f64);
+            hi[f] = hi[f].max(x as f64);
+        }
+    }
+    let lo = comm.all_min(&lo)?;
+    let hi = comm.all_max(&hi)?;
+    let range = |f: usize| {
+        if lo[f] <= hi[f] {
+            Range1::new(lo[f] as f32, hi[f] as f32)
+        } else {
+            Range1::EMPTY
+        }
+    };
+    let own = run
+        .data
+        .cells
+        .iter()
+        .fold(Aabb::EMPTY, |b, c| b.union(support_box(c, h)));
+    let bounds = union_bounds(comm, own)?;
+    let stride = (run.total / SAMPLE).max(1);
+    let sample: Vec<Vec3> = run
+        .data
+        .cells
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| (run.offset + i) % stride == 0)
+        .map(|(_, c)| support_box(c, h).center())
+        .collect();
+    let decomposition = decompose(comm, root_box(bounds), &sample)?;
+    // Every cell to each box its support overlaps, with its index.
+    let mut out = outboxes(comm);
+    let mut dst = Vec::new();
+    for (i, c) in run.data.cells.iter().enumerate() {
+        decomposition.overlapping(&support_box(c, h), &mut dst);
+        for &r in &dst {
+            let w = &mut out[r];
+            w.u64((run.offset + i) as u64);
+            for v in c {
+                w.u32(*v as u32);
+            }
+            for (_, f) in &run.data.fields {
+                w.f32(f[i]);
+            }
+        }
+    }
+    let read = run.data.cells.len() as u64;
+    drop(run.data);
+    let mut got: Vec<(u64, [i32; 4], Vec<f32>)> = Vec::new();
+    for msg in exchange(comm, out)? {
+        let mut r = Reader::new(&msg);
+        while !r.is_done() {
+            let i = r.u64()?;
+            let c = [
+                r.u32()? as i32,
+                r.u32()? as i32,
+                r.u32()? as i32,
+                r.u32()? as i32,
+            ];
+            let v = (0..nf).map(|_| r.f32()).collect::<Result<Vec<_>, _>>()?;
+            got.push((i, c, v));
+        }
+    }
+    got.sort_unstable_by_key(|g| g.0);
+    let held = got.len() as u64;
+    let cells = AmrCells {
+        cells: got.iter().map(|g| g.1).collect(),
+        fields: names
+            .iter()
+            .enumerate()
+            .map(|(f, n)| (n.clone(), got.iter().map(|g| g.2[f]).collect()))
+            .collect(),
+        origin: Vec3::ZERO,
+        cell_size: h,
+    };
+    drop(got);
+    let volume = match AmrVolume::new(cells, settings.clone()) {
+        Ok(v) => Ok(Some(AnyVolume::Amr(Box::new(v)))),
+        Err(AmrError::Empty) => Ok(None),
+        Err(e) => Err(SceneError::Amr {
+            path: run.source.clone(),
+            source: e,
+        }),
+    };
+    let volume = agree(comm, volume)?;
+    let colour_name = a
+        .color_field
+        .clone()
+        .or_else(|| a.field.clone())
+        .or_else(|| names.first().cloned());
+    Ok(Part {
+        volume,
+        frame,
+        summary: VolumeSummary {
+            kind: VolumeKind::Amr,
+            bounds,
+            value_range: range(settings.field),
+            attribute_range: settings.color_field.map(range),
+        },
+        decomposition,
+        columns: Columns::Amr(names),
+        colour_name,
+        counts: PartCounts { read, held },
+        notes: Vec::new(),
+    })
+}

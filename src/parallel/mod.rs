@@ -1,0 +1,342 @@
+//! Data-parallel rendering: one scene decomposed over the ranks of a
+//! communicator (MPI with the `mpi` feature, or K threads of one process),
+//! rendering, projecting and sampling exactly what one process would.
+//!
+//! **Model.** Each rank reads a share of the data (rows of a `.npy`, cells
+//! of an ExaBricks file, Lagrangian slabs of a tessellation), and the ranks
+//! agree on the whole data's statistics — bounds, value ranges, the default
+//! radius, the sampling step — from mergeable pieces (minima, maxima, probe
+//! samples chosen by row number). A k-d tree over a sample of the data
+//! ([`Decomposition`]) gives each rank one box of about equal work; every
+//! rank sends each item to the boxes it reaches into — particles whose
+//! kernel support overlaps a box, AMR cells whose basis support does, tets
+//! whose bounds do — so each rank ends up holding exactly what reconstructs
+//! its box, and never the whole data set. The view (camera, transfer
+//! function, settings) is resolved from the whole data's summary, so it is
+//! the one-process view.
+//!
+//! - **Render**: each rank renders the samples whose positions lie in its
+//!   box ([`voxless_render::Domain`]: the sample lattice is fixed per ray,
+//!   so the boxes split the one-process samples between them), pass by
+//!   pass; the passes composite "over" in the camera's visibility order by
+//!   direct send, with early termination reproduced exactly
+//!   ([`voxless_parallel::composite`]).
+//! - **Project**: each rank integrates the part of every pixel's line inside
+//!   its box (tessellations: the tets whose centroids lie in it, whole), and
+//!   the images add up.
+//! - **Sample**: each point goes to the rank whose box holds it, which
+//!   evaluates it with canonical sums — the same bits as one process.
+//!
+//! What a box cannot reproduce alone is refused by name under more than one
+//! rank: iso-surfaces (a crossing between two samples in different boxes),
+//! single scattering (shadow rays cross boxes), the tessellation's level of
+//! detail and k-buffer (both approximate per box, not per ray).
+
+mod amr;
+mod particles;
+mod render;
+mod share;
+mod tets;
+
+pub(crate) use render::render_part;
+
+use std::path::Path;
+
+use voxless_core::{Aabb, Camera, Control, Image, Vec3};
+use voxless_render::{Domain, RenderSettings};
+use voxless_scene::SceneDesc;
+use voxless_transfer::TransferFunction;
+
+pub use voxless_parallel::memory::peak_rss_bytes;
+pub use voxless_parallel::{
+    Comm, CommError, CommExt, Decomposition, LocalComm, SingleComm, run_local,
+};
+
+use crate::{AnyVolume, SceneError, VolumeSummary, WorldFrame, resolve_summary};
+
+/// Why a decomposed scene failed: the scene (the same error one process
+/// gives), or the ranks' communication.
+#[derive(Debug, thiserror::Error)]
+pub enum ParallelError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Comm(#[from] CommError),
+    #[error("cancelled")]
+    Cancelled,
+}
+
+impl From<voxless_parallel::WireError> for ParallelError {
+    fn from(e: voxless_parallel::WireError) -> Self {
+        ParallelError::Comm(e.into())
+    }
+}
+
+impl From<voxless_core::Cancelled> for ParallelError {
+    fn from(_: voxless_core::Cancelled) -> Self {
+        ParallelError::Cancelled
+    }
+}
+
+/// What a decomposed scene is opened for; it decides what each box keeps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Purpose {
+    /// Everything reaching into the box (renders and point samples).
+    Render,
+    /// Column densities: tessellations keep each tet in one box only (the
+    /// box holding its centroid), so the boxes' projections add up; the
+    /// other kinds keep what reaches into the box and integrate inside it.
+    Project,
+}
+
+/// The names and the empty row of the sampled columns.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum Columns {
+    Particles { attribute: bool },
+    Materials(Vec<String>),
+    Tets { box_size: f32, n: usize },
+    Amr(Vec<String>),
+}
+
+/// How many items a rank read and holds, for memory reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PartCounts {
+    /// Items (particles, cells, Lagrangian particles) read from files.
+    pub read: u64,
+    /// Items (particles, cells, tets) held for the rank's box, ghosts
+    /// included.
+    pub held: u64,
+}
+
+/// One rank's part of the data, before the view is resolved.
+pub(crate) struct Part {
+    pub volume: Option<AnyVolume>,
+    pub frame: WorldFrame,
+    pub summary: VolumeSummary,
+    pub decomposition: Decomposition,
+    pub columns: Columns,
+    pub colour_name: Option<String>,
+    pub counts: PartCounts,
+    pub notes: Vec<String>,
+}
+
+/// A scene decomposed over the ranks of a communicator: this rank's part
+/// of the volume and the view every rank shares.
+pub struct DistributedScene {
+    /// What this rank holds (`None`: no data reaches its box).
+    pub part: Option<AnyVolume>,
+    /// Where the volume's coordinates sit in the world.
+    pub frame: WorldFrame,
+    pub camera: Camera,
+    pub tf: TransferFunction,
+    /// The view's settings, restricted to this rank's box.
+    pub settings: RenderSettings,
+    pub background: [f32; 3],
+    pub notes: Vec<String>,
+    /// The boxes of all ranks.
+    pub decomposition: Decomposition,
+    /// The whole data's kind, bounds and ranges.
+    pub summary: VolumeSummary,
+    pub counts: PartCounts,
+    pub(crate) columns: Columns,
+    pub(crate) colour_name: Option<String>,
+}
+
+impl DistributedScene {
+    /// Opens frame `frame` of the data `desc` names (paths relative to
+    /// `base`) on every rank of `comm`: each reads its share, the ranks
+    /// decompose the data and exchange it, and each resolves the view from
+    /// the whole data's summary. Every rank must call this with the same
+    /// arguments; an error on any rank is an error on all.
+    pub fn open(
+        comm: &dyn Comm,
+        desc: &SceneDesc,
+        base: &Path,
+        frame: usize,
+        purpose: Purpose,
+    ) -> Result<DistributedScene, ParallelError> {
+        if comm.size() > 1 {
+            refuse_what_boxes_cannot_do(desc)?;
+        }
+        let sources = [
+            desc.particles.is_some(),
+            desc.amr.is_some(),
+            desc.tets.is_some(),
+        ];
+        if sources.iter().filter(|&&s| s).count() > 1 {
+            return Err(SceneError::setting(
+                "scene",
+                "more than one data source ([particles], [amr], [tets]) is given; pick one",
+            )
+            .into());
+        }
+        let part = match (&desc.particles, &desc.amr, &desc.tets) {
+            (Some(p), _, _) => particles::open(comm, p, base, frame)?,
+            (_, Some(a), _) => amr::open(comm, a, base)?,
+            (_, _, Some(t)) => tets::open(comm, t, base, purpose)?,
+            (None, None, None) => {
+                return Err(SceneError::setting(
+                    "scene",
+                    "no data source: add a [particles], [amr] or [tets] table to the scene, or \
+                     pass --particles FILE (with --lagrangian N --box L for a phase-space \
+                     tessellation), --cells FILE --scalars FILE, or --amrclaw FILE",
+                )
+                .into());
+            }
+        };
+        let resolved = resolve_summary(&part.summary, &part.frame, desc, base)?;
+        let mut settings = resolved.settings;
+        settings.domain = Some(Domain {
+            owned: part.decomposition.box_of(comm.rank()),
+            bounds: part.summary.bounds,
+        });
+        let mut notes = part.notes;
+        notes.extend(resolved.notes);
+        Ok(DistributedScene {
+            part: part.volume,
+            frame: part.frame,
+            camera: resolved.camera,
+            tf: resolved.tf,
+            settings,
+            background: resolved.background,
+            notes,
+            decomposition: part.decomposition,
+            summary: part.summary,
+            counts: part.counts,
+            columns: part.columns,
+            colour_name: part.colour_name,
+        })
+    }
+
+    /// This rank's box, half-open.
+    pub fn owned_box(&self, comm: &dyn Comm) -> Aabb {
+        self.decomposition.box_of(comm.rank())
+    }
+
+    /// Renders all `spp` passes: on rank 0 the image (the one-process
+    /// image), `None` on the others. Progress is this rank's own share.
+    pub fn render(
+        &self,
+        comm: &dyn Comm,
+        control: &Control,
+    ) -> Result<Option<Image>, ParallelError> {
+        render::render(self, comm, control)
+    }
+
+    /// Column densities `∫ value dt` per pixel centre of `camera` (an axis
+    /// projection, typically over [`DistributedScene::summary`]'s bounds):
+    /// on rank 0 the image, `None` on the others.
+    pub fn project(
+        &self,
+        comm: &dyn Comm,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        control: &Control,
+    ) -> Result<Option<Vec<f32>>, ParallelError> {
+        render::project(self, comm, camera, width, height, control)
+    }
+
+    /// The fields at `points` (the volume's coordinates; rank 0's are used,
+    /// the others may pass none): on rank 0, row-major `points × columns`
+    /// as [`AnyVolume::sample_points`] gives them, `None` on the others.
+    pub fn sample(
+        &self,
+        comm: &dyn Comm,
+        points: &[Vec3],
+        gradient: bool,
+    ) -> Result<Option<Vec<f32>>, ParallelError> {
+        render::sample(self, comm, points, gradient)
+    }
+
+    /// Names of the columns [`DistributedScene::sample`] writes.
+    pub fn sample_columns(&self, gradient: bool) -> Vec<String> {
+        let grad = |name: &str| ["x", "y", "z"].map(|a| format!("d{name}/d{a}"));
+        match &self.columns {
+            Columns::Particles { attribute } => {
+                let mut c = vec!["density".to_string()];
+                if *attribute {
+                    c.push("attribute".into());
+                }
+                if gradient {
+                    c.extend(grad("density"));
+                }
+                c
+            }
+            Columns::Tets { .. } => vec!["density".into(), "streams".into()],
+            Columns::Materials(names) => names.iter().map(|n| format!("density ({n})")).collect(),
+            Columns::Amr(names) => {
+                let mut c = names.clone();
+                if gradient {
+                    for n in names {
+                        c.extend(grad(n));
+                    }
+                }
+                c
+            }
+        }
+    }
+
+    /// The volume's bounds in world coordinates (lower, upper corner).
+    pub fn world_bounds(&self) -> ([f64; 3], [f64; 3]) {
+        let b = self.summary.bounds;
+        (self.frame.to_world(b.min), self.frame.to_world(b.max))
+    }
+
+    /// What a colour bar for this scene shows (as [`crate::Scene::colorbar`]).
+    pub fn colorbar(&self) -> voxless_render::colorbar::ColorbarSpec {
+        let st = &self.settings;
+        let (range, log10) = match st.attribute_range {
+            Some(r) => (r, false),
+            None => (st.value_range, st.log_scale),
+        };
+        voxless_render::colorbar::ColorbarSpec {
+            lo: range.lo,
+            hi: range.hi,
+            log10,
+            label: self.colour_name.clone(),
+        }
+    }
+}
+
+/// Settings whose result one box cannot compute alone.
+fn refuse_what_boxes_cannot_do(desc: &SceneDesc) -> Result<(), SceneError> {
+    let why = "under MPI each rank renders only its own box";
+    if desc.render.iso.as_ref().is_some_and(|v| !v.is_empty()) {
+        return Err(SceneError::setting(
+            "render.iso (--iso)",
+            format!(
+                "iso-surfaces are not rendered on more than one rank yet: {why}, and a crossing \
+                 between two samples in different boxes is seen by neither; render them with one \
+                 rank"
+            ),
+        ));
+    }
+    if desc.light.as_ref().is_some_and(|l| l.shadows == Some(true)) {
+        return Err(SceneError::setting(
+            "light.shadows (--shadows)",
+            format!(
+                "single scattering is not rendered on more than one rank: {why}, and shadow rays \
+                 cross boxes"
+            ),
+        ));
+    }
+    if let Some(t) = &desc.tets {
+        if t.lod_pixels.is_some() {
+            return Err(SceneError::setting(
+                "tets.lod_pixels (--lod)",
+                format!("the level of detail is not used on more than one rank: {why}"),
+            ));
+        }
+        if t.mode == Some(voxless_scene::TetModeName::Kbuffer) {
+            return Err(SceneError::setting(
+                "tets.mode (--tet-mode kbuffer)",
+                format!(
+                    "the k-buffer keeps the first k events of each box's part of a ray, not of \
+                     the ray ({why}); use the exact mode"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,292 @@
+//! Phase-space tessellations over the ranks.
+//!
+//! Each rank reads a slab of Lagrangian planes — the block rows
+//! `nb·r/K .. nb·(r+1)/K` of 8-cell blocks, plus the next plane, which the
+//! cells of the last row reach into — and tessellates it exactly as one
+//! process would ([`TetMesh::from_slab`]): the whole mesh is the slabs'
+//! meshes in rank order. So the default density range (a percentile of
+//! every k-th tet in mesh order) is found exactly: the ranks count their
+//! tets, each knows its tets' mesh indices, and the chosen densities are
+//! gathered. Tets then go to the boxes their bounds overlap (renders and
+//! samples), or to the one box holding their centroid (projections, whose
+//! columns add up), degenerate tets' point masses with them.
+
+use std::path::Path;
+
+use voxless_core::{Aabb, Vec3};
+use voxless_parallel::{Comm, CommExt, Reader, Writer};
+use voxless_scene::TetsDesc;
+use voxless_tets::{
+    BLOCK, Block, LagrangianSlab, Tet, TetError, TetMesh, TetSettings, TetVolume, density_range,
+    density_stride,
+};
+
+use super::share::{agree, exchange, outboxes, root_box, share};
+use super::{Columns, ParallelError, Part, PartCounts, Purpose};
+use crate::load::formats::ParticleFormat;
+use crate::{AnyVolume, SceneError, VolumeKind, VolumeSummary, WorldFrame};
+
+/// This rank's slab of the run `t` names.
+fn read_slab(
+    t: &TetsDesc,
+    base: &Path,
+    rank: usize,
+    ranks: usize,
+    notes: &mut Vec<String>,
+) -> Result<(LagrangianSlab, std::path::PathBuf), SceneError> {
+    let file = t.file.as_ref().ok_or_else(|| {
+        SceneError::setting(
+            "tets.file",
+            "no positions file given (--particles FILE.npy with --lagrangian N --box L, or a \
+             JaxPM FILE.h5)",
+        )
+    })?;
+    let path = base.join(file);
+    let planes_of = |n: usize| {
+        let rows = share(n.div_ceil(BLOCK), rank, ranks);
+        let first = (rows.start * BLOCK).min(n);
+        let last = (rows.end * BLOCK).min(n);
+        let planes = if rows.is_empty() { 0 } else { last - first + 1 };
+        (rows, first, last, planes)
+    };
+    let cut = |positions: &[Vec3], n: usize, box_size: f32| {
+        let (rows, first, last, planes) = planes_of(n);
+        let nn = n * n;
+        let mut slab = Vec::with_capacity(planes * nn);
+        if planes > 0 {
+            slab.extend_from_slice(&positions[first * nn..last * nn]);
+            let extra = last % n;
+            slab.extend_from_slice(&positions[extra * nn..(extra + 1) * nn]);
+        }
+        LagrangianSlab {
+            n,
+            box_size,
+            rows,
+            first_plane: first,
+            planes,
+            positions: slab,
+        }
+    };
+    if ParticleFormat::detect(&path)? == Some(ParticleFormat::Hdf5) {
+        // A JaxPM run: read whole (N and L come from the file), then cut.
+        let grid = crate::load::jaxpm::grid(t, &path, notes)?;
+        return Ok((cut(&grid.positions, grid.n, grid.box_size), path));
+    }
+    let grid_of = |positions: Vec<Vec3>| crate::load::tets::grid_of(positions, t);
+    let is_npy = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
+    let shape = if is_npy {
+        Some(voxless_io::read_npy_rows(&path, 0..0)?.1)
+    } else {
+        None
+    };
+    let n = t.lagrangian;
+    match (shape, n) {
+        (Some(shape), Some(n)) if shape.len() == 2 && shape[1] == 3 => {
+            let grid = grid_of(Vec::new())?;
+            if n < 2 || n.checked_pow(3) != Some(shape[0]) {
+                return Err(SceneError::Tets {
+                    path,
+                    source: TetError::NotCubic { count: shape[0] },
+                });
+            }
+            let (rows, first, last, planes) = planes_of(n);
+            let nn = n * n;
+            let mut positions = Vec::with_capacity(planes * nn);
+            if planes > 0 {
+                let read = |a: usize, b: usize| -> Result<Vec<Vec3>, SceneError> {
+                    let (arr, _) = voxless_io::read_npy_rows(&path, a * nn..b * nn)?;
+                    Ok(arr
+                        .data
+                        .chunks_exact(3)
+                        .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
+                        .collect())
+                };
+                positions.extend(read(first, last)?);
+                positions.extend(read(last % n, last % n + 1)?);
+            }
+            let slab = LagrangianSlab {
+                n,
+                box_size: grid.box_size,
+                rows,
+                first_plane: first,
+                planes,
+                positions,
+            };
+            Ok((slab, path))
+        }
+        _ => {
+            // Any other file: read whole (the general reader words errors).
+            let (positions, _) = crate::load::table::read_positions(&path)?;
+            let grid = grid_of(positions)?;
+            if grid.n < 2 || grid.n.checked_pow(3) != Some(grid.positions.len()) {
+                return Err(SceneError::Tets {
+                    path,
+                    source: TetError::NotCubic {
+                        count: grid.positions.len(),
+                    },
+                });
+            }
+            Ok((cut(&grid.positions, grid.n, grid.box_size), path))
+        }
+    }
+}
+
+pub(crate) fn open(
+    comm: &dyn Comm,
+    t: &TetsDesc,
+    base: &Path,
+    purpose: Purpose,
+) -> Result<Part, ParallelError> {
+    let mut notes = Vec::new();
+    let (slab, path) = agree(comm, read_slab(t, base, comm.rank(), comm.size(), &mut notes))?;
+    let settings = TetSettings {
+        particle_mass: t.particle_mass,
+        ..Default::default()
+    };
+    let read = slab.positions.len() as u64;
+    let mesh = agree(
+        comm,
+        TetMesh::from_slab(&slab, &settings).map_err(|e| SceneError::Tets {
+            path: path.clone(),
+            source: e,
+        }),
+    )?;
+    drop(slab);
+    // The mesh index of this rank's first tet, and the sampled tets.
+    let counts = comm.all_gather_f64(&[mesh.tets.len() as f64])?;
+    let before: usize = counts[..comm.rank()].iter().map(|c| c[0] as usize).sum();
+    let total: usize = counts.iter().map(|c| c[0] as usize).sum();
+    let stride = density_stride(total);
+    let mut w = Writer::new();
+    for (i, tet) in mesh.tets.iter().enumerate() {
+        if (before + i) % stride == 0 {
+            w.f32(tet.density);
+            w.vec3(centroid(tet));
+        }
+    }
+    let (mut densities, mut centroids) = (Vec::new(), Vec::new());
+    for msg in comm.all_gather(&w.into_bytes())? {
+        let mut r = Reader::new(&msg);
+        while !r.is_done() {
+            densities.push(r.f32()?);
+            centroids.push((r.vec3()?, 1.0));
+        }
+    }
+    let value_range = density_range(&mesh, &mut densities);
+    let l = mesh.box_size;
+    let bounds = Aabb::new(Vec3::ZERO, Vec3::splat(l));
+    let decomposition = voxless_parallel::Decomposition::build(root_box(bounds), &centroids, comm.size());
+    // Tets to boxes, block by block.
+    let mut out = outboxes(comm);
+    let mut dst = Vec::new();
+    let mut per: Vec<Vec<u32>> = vec![Vec::new(); comm.size()];
+    for b in &mesh.blocks {
+        for list in &mut per {
+            list.clear();
+        }
+        for i in b.tets.clone() {
+            let tet = &mesh.tets[i as usize];
+            match purpose {
+                Purpose::Render => decomposition.overlapping(&tet.bounds(), &mut dst),
+                Purpose::Project => {
+                    dst.clear();
+                    dst.push(decomposition.owner(centroid(tet)));
+                }
+            }
+            for &r in &dst {
+                per[r].push(i);
+            }
+        }
+        for (r, list) in per.iter().enumerate() {
+            if list.is_empty() {
+                continue;
+            }
+            let w = &mut out[r];
+            w.u8(0);
+            w.u32(b.lagrangian);
+            w.u64(list.len() as u64);
+            for &i in list {
+                let tet = &mesh.tets[i as usize];
+                for v in tet.v {
+                    w.vec3(v);
+                }
+                w.f32(tet.density);
+            }
+        }
+    }
+    for &(p, m) in &mesh.point_masses {
+        let w = &mut out[decomposition.owner(p)];
+        w.u8(1);
+        w.vec3(p);
+        w.f64(m);
+    }
+    let (n, tet_mass, mean_volume) = (mesh.n, mesh.tet_mass, mesh.mean_volume);
+    drop(mesh);
+    let mut blocks: Vec<(u32, usize, Vec<Tet>)> = Vec::new();
+    let mut point_masses = Vec::new();
+    for (src, msg) in exchange(comm, out)?.iter().enumerate() {
+        let mut r = Reader::new(msg);
+        while !r.is_done() {
+            if r.u8()? == 1 {
+                point_masses.push((r.vec3()?, r.f64()?));
+                continue;
+            }
+            let lagrangian = r.u32()?;
+            let count = r.u64()? as usize;
+            let mut tets = Vec::with_capacity(count.min(1 << 20));
+            for _ in 0..count {
+                let v = [r.vec3()?, r.vec3()?, r.vec3()?, r.vec3()?];
+                tets.push(Tet {
+                    v,
+                    density: r.f32()?,
+                });
+            }
+            blocks.push((lagrangian, src, tets));
+        }
+    }
+    // In Lagrangian block order, whoever sent them.
+    blocks.sort_by_key(|b| (b.0, b.1));
+    let mut local = TetMesh {
+        n,
+        box_size: l,
+        tet_mass,
+        tets: Vec::new(),
+        blocks: Vec::new(),
+        point_masses,
+        mean_volume,
+        lod: Vec::new(),
+    };
+    for (lagrangian, _, tets) in blocks {
+        let start = local.tets.len() as u32;
+        let bounds = tets.iter().fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+        local.tets.extend(tets);
+        local.blocks.push(Block {
+            tets: start..local.tets.len() as u32,
+            bounds,
+            lagrangian,
+        });
+    }
+    let held = local.tets.len() as u64;
+    let volume = TetVolume::from_parts(local, value_range);
+    Ok(Part {
+        volume: Some(AnyVolume::Tets(Box::new(volume))),
+        frame: WorldFrame::default(),
+        summary: VolumeSummary {
+            kind: VolumeKind::Tets,
+            bounds,
+            value_range,
+            attribute_range: None,
+        },
+        decomposition,
+        columns: Columns::Tets { box_size: l, n },
+        colour_name: Some("density".into()),
+        counts: PartCounts { read, held },
+        notes,
+    })
+}
+
+fn centroid(t: &Tet) -> Vec3 {
+    (t.v[0] + t.v[1] + t.v[2] + t.v[3]) * 0.25
+}
