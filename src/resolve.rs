@@ -200,7 +200,8 @@ pub fn resolve_summary(
         }
         settings.clip = Some(b);
     }
-    if tets && let Some(t) = &desc.tets
+    if tets
+        && let Some(t) = &desc.tets
         && t.mode == Some(TetModeName::Kbuffer)
     {
         settings.event_budget = Some(EventBudget {

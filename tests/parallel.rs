@@ -12,9 +12,7 @@ use std::path::Path;
 
 use common::{Lcg, Scratch, write_values};
 use voxless::parallel::{Comm, DistributedScene, Purpose, run_local};
-use voxless::{
-    AmrDesc, Camera, Control, Image, ParticlesDesc, Scene, SceneDesc, TetsDesc, Vec3,
-};
+use voxless::{AmrDesc, Camera, Control, Image, ParticlesDesc, Scene, SceneDesc, TetsDesc, Vec3};
 
 /// Renders `desc` with one process and with `ranks` simulated ranks; the
 /// largest per-channel difference of the linear RGBA images.
@@ -156,7 +154,10 @@ fn early_termination_in_a_back_box_is_exact() {
     let one = Scene::open(&desc, &dir.0, 0).unwrap();
     let img = one.render(&Control::new()).unwrap();
     let opaque = img.pixels.iter().filter(|p| p[3] >= 0.99).count();
-    assert!(opaque > img.pixels.len() / 10, "only {opaque} opaque pixels");
+    assert!(
+        opaque > img.pixels.len() / 10,
+        "only {opaque} opaque pixels"
+    );
     for ranks in [2, 3, 4] {
         let d = render_difference(&desc, &dir.0, ranks);
         assert!(d <= 1.0 / 255.0, "{ranks} ranks: render differs by {d}");
@@ -174,7 +175,9 @@ fn a_camera_looking_along_a_rank_boundary_sees_no_seam() {
         (s.decomposition.box_of(0), s.decomposition.box_of(1))
     });
     let (a, b) = planes[0];
-    let axis = (0..3).find(|&k| a.max[k] == b.min[k] || b.max[k] == a.min[k]).unwrap();
+    let axis = (0..3)
+        .find(|&k| a.max[k] == b.min[k] || b.max[k] == a.min[k])
+        .unwrap();
     let at = if a.max[axis] == b.min[axis] {
         a.max[axis]
     } else {
@@ -213,7 +216,11 @@ fn a_particle_whose_support_spans_three_ranks_is_held_by_each() {
     let mut pos = Vec::new();
     let mut h = Vec::new();
     for _ in 0..n {
-        pos.extend([rng.f(), 0.5 + 0.05 * rng.normal(), 0.5 + 0.05 * rng.normal()]);
+        pos.extend([
+            rng.f(),
+            0.5 + 0.05 * rng.normal(),
+            0.5 + 0.05 * rng.normal(),
+        ]);
         h.push(0.01);
     }
     pos.extend([0.5, 0.5, 0.5]);
@@ -385,7 +392,11 @@ fn tets_files(dir: &Scratch) -> SceneDesc {
             for k in 0..n {
                 let q = [i, j, k].map(|v| (v as f32 + 0.5) * l / n as f32);
                 let s = |a: f32| 1.6 * (2.0 * std::f32::consts::PI * a / l).sin();
-                let p = [q[0] + s(q[0]), q[1] + 0.5 * s(q[1] + q[0]), q[2] + 0.3 * s(q[2])];
+                let p = [
+                    q[0] + s(q[0]),
+                    q[1] + 0.5 * s(q[1] + q[0]),
+                    q[2] + 0.3 * s(q[2]),
+                ];
                 pos.extend(p.map(|v| v.rem_euclid(l)));
             }
         }
@@ -436,9 +447,11 @@ fn settings_one_box_cannot_honour_are_refused_by_name() {
         assert!(e.contains("--iso"), "{e}");
     }
     // One rank renders them as one process does.
-    assert!(run_local(1, |comm| {
-        DistributedScene::open(comm, &desc, &dir.0, 0, Purpose::Render).is_ok()
-    })[0]);
+    assert!(
+        run_local(1, |comm| {
+            DistributedScene::open(comm, &desc, &dir.0, 0, Purpose::Render).is_ok()
+        })[0]
+    );
 }
 
 #[test]

@@ -5,6 +5,8 @@
 
 mod args;
 mod info;
+#[cfg(feature = "mpi")]
+mod mpi;
 mod progress;
 mod view;
 
@@ -119,6 +121,11 @@ enum Axis {
 
 fn main() {
     let cli = Cli::parse();
+    // Under an MPI launcher, every rank runs the command together.
+    #[cfg(feature = "mpi")]
+    if voxless::parallel::MpiComm::launched() {
+        mpi::main(cli);
+    }
     if let Err(e) = run(cli) {
         eprintln!("error: {}", describe(&e));
         std::process::exit(1);

@@ -94,7 +94,11 @@ pub(crate) fn frame_file(spec: &str, base: &Path, frame: usize) -> Result<PathBu
 /// The particle file of frame `frame` and the frame to read in it: the
 /// `frame`-th file (its first frame) of a sequence, else frame `frame` of
 /// the file itself (single-frame formats have the same data every frame).
-pub(crate) fn locate(spec: &str, base: &Path, frame: usize) -> Result<(PathBuf, usize), SceneError> {
+pub(crate) fn locate(
+    spec: &str,
+    base: &Path,
+    frame: usize,
+) -> Result<(PathBuf, usize), SceneError> {
     if frames::is_sequence(spec, base) {
         Ok((frame_file(spec, base, frame)?, 0))
     } else {

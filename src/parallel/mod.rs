@@ -33,6 +33,8 @@
 //! detail and k-buffer (both approximate per box, not per ray).
 
 mod amr;
+#[cfg(feature = "mpi")]
+mod mpi_comm;
 mod particles;
 mod render;
 mod share;
@@ -47,7 +49,9 @@ use voxless_render::{Domain, RenderSettings};
 use voxless_scene::SceneDesc;
 use voxless_transfer::TransferFunction;
 
-pub use voxless_parallel::memory::peak_rss_bytes;
+#[cfg(feature = "mpi")]
+pub use mpi_comm::MpiComm;
+pub use voxless_parallel::memory::{available_bytes, peak_rss_bytes, ranks_on_this_node};
 pub use voxless_parallel::{
     Comm, CommError, CommExt, Decomposition, LocalComm, SingleComm, run_local,
 };
@@ -296,6 +300,64 @@ impl DistributedScene {
             log10,
             label: self.colour_name.clone(),
         }
+    }
+}
+
+impl DistributedScene {
+    /// Points the camera as `desc.camera` says (a turntable frame), keeping
+    /// the data and settings, as [`crate::Scene::reaim`] does; a default
+    /// light follows the camera.
+    pub fn reaim(&mut self, desc: &SceneDesc) -> Result<(), SceneError> {
+        let aspect = self.settings.width as f32 / self.settings.height as f32;
+        self.camera =
+            crate::resolve::camera(&desc.camera, &self.summary.bounds, aspect, &self.frame)?;
+        let follows = desc.light.as_ref().is_some_and(|l| l.direction.is_none());
+        if let Some(light) = &mut self.settings.light
+            && follows
+        {
+            light.direction = crate::camera::default_light_direction(&self.camera);
+        }
+        Ok(())
+    }
+
+    /// Keeps the view of `first`, an earlier frame of the same time series
+    /// (camera, light, value and attribute ranges), so a sequence does not
+    /// flicker — as one process keeps its first frame's view.
+    pub fn keep_view_of(&mut self, first: &DistributedScene) {
+        self.camera = first.camera;
+        self.settings.light = first.settings.light;
+        self.settings.value_range = first.settings.value_range;
+        self.settings.attribute_range = first.settings.attribute_range;
+    }
+}
+
+/// How the ranks share the frames of a time series.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FramePlan {
+    /// Each rank renders whole frames, one process each (frame `A + r`,
+    /// `A + r + K`, … on rank `r`).
+    ByFrame,
+    /// The ranks render every frame together, decomposed.
+    BySpace,
+}
+
+/// Whole frames per rank when there are at least as many frames as ranks
+/// and one frame fits a rank comfortably (`frame_bytes`, the data of one
+/// frame, at most a quarter of `memory_per_rank`): every rank then works
+/// all the time, nothing is exchanged or composited, and each frame costs
+/// what one process takes — the fastest way through a movie. Otherwise
+/// (fewer frames than ranks, or frames too big for one rank) each frame is
+/// decomposed over all ranks in turn.
+pub fn frame_plan(
+    frames: usize,
+    ranks: usize,
+    frame_bytes: u64,
+    memory_per_rank: u64,
+) -> FramePlan {
+    if ranks > 1 && frames >= ranks && frame_bytes.saturating_mul(4) <= memory_per_rank {
+        FramePlan::ByFrame
+    } else {
+        FramePlan::BySpace
     }
 }
 

@@ -90,7 +90,10 @@ pub(crate) fn open(
         .flat_map(|s| s.probes.iter().map(|&(c, _)| (c, 1.0)))
         .collect();
     let decomposition = Decomposition::build(root_box(bounds), &points, comm.size());
-    let read = sets.iter().map(|s| s.rows.data.positions.len() as u64).sum();
+    let read = sets
+        .iter()
+        .map(|s| s.rows.data.positions.len() as u64)
+        .sum();
     let mut volumes = Vec::with_capacity(sets.len());
     for s in sets {
         volumes.push(s.into_part(comm, &decomposition)?);
@@ -183,7 +186,11 @@ impl Set {
             let bits: Vec<u8> = grid
                 .occupied
                 .chunks(8)
-                .map(|c| c.iter().enumerate().fold(0u8, |b, (i, &o)| b | (o as u8) << i))
+                .map(|c| {
+                    c.iter()
+                        .enumerate()
+                        .fold(0u8, |b, (i, &o)| b | (o as u8) << i)
+                })
                 .collect();
             w.bytes(&bits);
             let mut union = vec![0u8; bits.len()];
@@ -466,7 +473,9 @@ fn npy_rows(
     let total = shape[0];
     let rows = share(total, rank, ranks);
     let mut files = Vec::new();
-    let mut per = |spec: &Option<String>, what: &'static str| -> Result<Option<Option<Vec<f32>>>, SceneError> {
+    let mut per = |spec: &Option<String>,
+                   what: &'static str|
+     -> Result<Option<Option<Vec<f32>>>, SceneError> {
         let Some(s) = spec else {
             return Ok(Some(None));
         };

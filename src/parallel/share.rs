@@ -52,7 +52,9 @@ pub(crate) fn root_box(bounds: Aabb) -> Aabb {
     if bounds.is_empty() {
         return Aabb::new(Vec3::ZERO, Vec3::ONE);
     }
-    let far = (0..3).fold(0.0f32, |m, a| m.max(bounds.min[a].abs()).max(bounds.max[a].abs()));
+    let far = (0..3).fold(0.0f32, |m, a| {
+        m.max(bounds.min[a].abs()).max(bounds.max[a].abs())
+    });
     let pad = bounds.diagonal() * 1e-3 + far * 1e-6;
     let pad = Vec3::splat(pad.max(f32::MIN_POSITIVE));
     Aabb::new(bounds.min - pad, bounds.max + pad)

@@ -140,7 +140,10 @@ pub(crate) fn open(
     purpose: Purpose,
 ) -> Result<Part, ParallelError> {
     let mut notes = Vec::new();
-    let (slab, path) = agree(comm, read_slab(t, base, comm.rank(), comm.size(), &mut notes))?;
+    let (slab, path) = agree(
+        comm,
+        read_slab(t, base, comm.rank(), comm.size(), &mut notes),
+    )?;
     let settings = TetSettings {
         particle_mass: t.particle_mass,
         ..Default::default()
@@ -177,7 +180,8 @@ pub(crate) fn open(
     let value_range = density_range(&mesh, &mut densities);
     let l = mesh.box_size;
     let bounds = Aabb::new(Vec3::ZERO, Vec3::splat(l));
-    let decomposition = voxless_parallel::Decomposition::build(root_box(bounds), &centroids, comm.size());
+    let decomposition =
+        voxless_parallel::Decomposition::build(root_box(bounds), &centroids, comm.size());
     // Tets to boxes, block by block.
     let mut out = outboxes(comm);
     let mut dst = Vec::new();

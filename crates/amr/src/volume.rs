@@ -3,14 +3,13 @@
 use std::time::{Duration, Instant};
 
 use voxless_bvh::Bvh;
-use voxless_core::{
-    Aabb, Attribute, Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume,
-    quadrature_line_integral,
-};
+use voxless_core::{Aabb, Attribute, Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume};
 
 use crate::AmrError;
 use crate::bricks::{self, Brick};
 use crate::regions::{self, Region, Regions};
+
+mod line;
 
 /// Cells and fields as read from a file.
 #[derive(Clone, Debug, Default)]
@@ -611,7 +610,7 @@ impl Volume for AmrVolume {
     fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
         match self.settings.reconstruction {
             Reconstruction::Nearest => self.nearest_line_integral(ray, t),
-            Reconstruction::Basis => quadrature_line_integral(self, ray, t),
+            Reconstruction::Basis => self.basis_line_integral(ray, t),
         }
     }
 }

@@ -285,7 +285,10 @@ mod tests {
             }
             let ideal = pts.len() as f64 / parts as f64;
             for c in count {
-                assert!((c as f64 - ideal).abs() <= 0.2 * ideal + 256.0, "{parts}: {c}");
+                assert!(
+                    (c as f64 - ideal).abs() <= 0.2 * ideal + 256.0,
+                    "{parts}: {c}"
+                );
             }
         }
     }
@@ -330,7 +333,11 @@ mod tests {
         let xs: Vec<f32> = order.iter().map(|&i| d.box_of(i).min.x).collect();
         assert!(xs.windows(2).all(|w| w[0] > w[1]), "{xs:?}");
         // From inside the second box: it comes first.
-        let inside = Vec3::new(d.box_of(d.owner(Vec3::new(1.5, 0.5, 0.5))).center().x, 0.5, 3.0);
+        let inside = Vec3::new(
+            d.box_of(d.owner(Vec3::new(1.5, 0.5, 0.5))).center().x,
+            0.5,
+            3.0,
+        );
         let order = d.front_to_back(&persp(inside));
         assert_eq!(order[0], d.owner(Vec3::new(inside.x, 0.5, 0.5)));
     }

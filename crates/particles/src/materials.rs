@@ -16,7 +16,7 @@
 //! the blended opacity and the attribute the blended colour. Intervals are
 //! the union of the materials' visible intervals (each material skips the
 //! space its own transfer function hides), with a conservative opacity range
-//! and the finest step of all materials everywhere — a step that depends on
+//! and the finest step of all visible materials everywhere — a step that depends on
 //! the field alone, not on which materials' intervals happen to join up
 //! along a ray (which would differ between a whole set and its parts in a
 //! decomposition).
@@ -60,7 +60,7 @@ pub struct MaterialVolume {
     bounds: Aabb,
     /// Σ of every material's maximum opacity: the blended opacity's bound.
     max_opacity: f32,
-    /// The finest nominal step of the materials.
+    /// The finest nominal step of the materials that can be seen.
     nominal_dt: f32,
 }
 
@@ -74,7 +74,10 @@ impl MaterialVolume {
         let mut max_opacity = 0.0;
         let mut nominal_dt = f32::INFINITY;
         for m in &materials {
-            nominal_dt = nominal_dt.min(m.volume.statistics().median_support / 8.0);
+            // A material its transfer function hides never takes a sample.
+            if m.class.tf.max_opacity(0.0, 1.0) > 0.0 {
+                nominal_dt = nominal_dt.min(m.volume.statistics().median_support / 8.0);
+            }
             let b = m.volume.bounds();
             bounds = Aabb::new(bounds.min.min(b.min), bounds.max.max(b.max));
             max_opacity += m.class.tf.max_opacity(0.0, 1.0);

@@ -409,7 +409,10 @@ impl<'a, V: Volume> Job<'a, V> {
                 reqs.iter()
                     .map(|&i| {
                         let r = &requests[i];
-                        (i, pixels[((r.y - tile.y) * tile.w + (r.x - tile.x)) as usize])
+                        (
+                            i,
+                            pixels[((r.y - tile.y) * tile.w + (r.x - tile.x)) as usize],
+                        )
                     })
                     .collect()
             })

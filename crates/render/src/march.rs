@@ -308,17 +308,16 @@ impl Cursor {
                 // A new run starts at the span for the first interval, else
                 // where this interval starts (the step changed, or a
                 // constant interval ended).
-                self.run_lo = if self.k == 0 {
-                    self.span.lo
-                } else {
-                    iv.t.lo
-                };
+                self.run_lo = if self.k == 0 { self.span.lo } else { iv.t.lo };
                 self.n = self.cell_before(self.run_lo);
                 // The run goes on while the next intervals are sampled with
                 // the same step; its cells end with the last of them (at the
                 // span when that is the ray's last interval).
                 let mut last = self.k;
-                while intervals.get(last + 1).is_some_and(|nx| self.continues(nx, settings)) {
+                while intervals
+                    .get(last + 1)
+                    .is_some_and(|nx| self.continues(nx, settings))
+                {
                     last += 1;
                 }
                 self.run_hi = if last + 1 == intervals.len() {

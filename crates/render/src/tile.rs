@@ -5,7 +5,7 @@
 
 use voxless_core::{IntervalLists, IntervalQuery, Range1, Ray, TileRays, Volume};
 
-use crate::march::{Ctx, RayStats, RaySpans, march_intervals, region};
+use crate::march::{Ctx, RaySpans, RayStats, march_intervals, region};
 use crate::packet::{self, PacketScratch};
 use crate::sampling::PixelRng;
 use crate::{Job, Tile, pixel_ray, scatter};

@@ -184,7 +184,10 @@ impl TetMesh {
         if !(l.is_finite() && l > 0.0) {
             return Err(TetError::BadBox { box_size: l });
         }
-        if n < 2 || n.checked_mul(n).and_then(|nn| nn.checked_mul(slab.planes)) != Some(slab.positions.len()) {
+        if n < 2
+            || n.checked_mul(n).and_then(|nn| nn.checked_mul(slab.planes))
+                != Some(slab.positions.len())
+        {
             return Err(TetError::NotCubic {
                 count: slab.positions.len(),
             });
@@ -265,7 +268,8 @@ impl TetMesh {
         block: usize,
     ) -> TetMesh {
         let n = grid.n;
-        let at = |a: usize, b: usize, c: usize| grid.positions[((a % n) * n + (b % n)) * n + (c % n)];
+        let at =
+            |a: usize, b: usize, c: usize| grid.positions[((a % n) * n + (b % n)) * n + (c % n)];
         TetMesh::build_rows(
             (n, grid.box_size),
             &at,

@@ -52,7 +52,12 @@ impl TetVolume {
         // The periodic box: image tets fill it exactly, and outside it they
         // would double what the originals show.
         let stride = density_stride(mesh.tets.len());
-        let mut d: Vec<f32> = mesh.tets.iter().step_by(stride).map(|t| t.density).collect();
+        let mut d: Vec<f32> = mesh
+            .tets
+            .iter()
+            .step_by(stride)
+            .map(|t| t.density)
+            .collect();
         let value_range = density_range(&mesh, &mut d);
         TetVolume::from_parts(mesh, value_range)
     }

@@ -250,7 +250,10 @@ pub fn read_exabricks_rows(
         decode_cells(&vec![0u8; (len % CELL_BYTES as u64) as usize], cells, 0)?;
     }
     let total = (len / CELL_BYTES as u64) as usize;
-    let (a, b) = (rows.start.min(total), rows.end.min(total).max(rows.start.min(total)));
+    let (a, b) = (
+        rows.start.min(total),
+        rows.end.min(total).max(rows.start.min(total)),
+    );
     let cell_list = decode_cells(&read_range(cells, CELL_BYTES, a, b)?, cells, a)?;
     let stem = cells.file_stem().map(|s| s.to_string_lossy().into_owned());
     let mut fields: Vec<(String, Vec<f32>)> = Vec::with_capacity(scalars.len());

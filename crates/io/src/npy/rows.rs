@@ -27,7 +27,10 @@ pub fn read_npy_rows(
         ));
     };
     let per_row = checked_product(&header.shape[1..]).unwrap_or(0);
-    let (a, b) = (rows.start.min(total), rows.end.min(total).max(rows.start.min(total)));
+    let (a, b) = (
+        rows.start.min(total),
+        rows.end.min(total).max(rows.start.min(total)),
+    );
     let mut shape = header.shape.clone();
     shape[0] = b - a;
     let read_err = |e: std::io::Error| match e.kind() {

@@ -20,15 +20,13 @@ fn shape_repr() {
 
 #[test]
 fn parses_header_variants() {
-    let h =
-        parse_header("{\"shape\": (4,3,), 'fortran_order':True,'descr':'>f8',}  \n").unwrap();
+    let h = parse_header("{\"shape\": (4,3,), 'fortran_order':True,'descr':'>f8',}  \n").unwrap();
     assert_eq!(h.shape, vec![4, 3]);
     assert!(h.fortran_order);
     assert_eq!(h.descr, ">f8");
     let h = parse_header("{'descr': '<i4', 'fortran_order': False, 'shape': (), }").unwrap();
     assert!(h.shape.is_empty());
-    let h =
-        parse_header("{'descr': '<i8', 'fortran_order': False, 'shape': (5L, 2L)}").unwrap();
+    let h = parse_header("{'descr': '<i8', 'fortran_order': False, 'shape': (5L, 2L)}").unwrap();
     assert_eq!(h.shape, vec![5, 2]);
 }
 

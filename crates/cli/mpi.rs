@@ -1,0 +1,528 @@
+//! `mpirun -n K voxless render|project|sample …` (the `mpi` feature): the
+//! same flags as one process, translated onto the library's decomposed
+//! scenes ([`voxless::parallel`]). Rank 0 prints and writes; every rank
+//! renders its box. Other commands run on rank 0 alone.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use voxless::parallel::{
+    Comm, CommExt, DistributedScene, FramePlan, MpiComm, Purpose, available_bytes, frame_plan,
+    peak_rss_bytes, ranks_on_this_node,
+};
+use voxless::{Camera, Control, Image, Scene, SceneDesc};
+
+use crate::progress::Progress;
+use crate::{Cli, Command};
+
+/// Runs `cli` on every rank of the MPI job this process belongs to, then
+/// exits: 0 when every rank succeeded, 1 otherwise (rank 0 says why).
+pub fn main(cli: Cli) -> ! {
+    let Some(comm) = MpiComm::init() else {
+        eprintln!("error: MPI could not be initialised");
+        std::process::exit(1);
+    };
+    let root = comm.is_root();
+    let result = match cli.command {
+        Command::Render {
+            output,
+            frames,
+            frame,
+            turntable,
+            colorbar,
+            scene,
+        } => scene.scene().and_then(|(desc, base)| {
+            let f = frame.unwrap_or(0);
+            match (frames, turntable) {
+                (_, Some(n)) => turntable_frames(&comm, &desc, &base, f, n, &output, colorbar),
+                (Some(range), None) => sequence(&comm, &desc, &base, &range, &output, colorbar),
+                (None, None) => render(&comm, &desc, &base, f, &output, colorbar),
+            }
+        }),
+        Command::Project {
+            axis,
+            bounds,
+            output,
+            scene,
+        } => scene
+            .scene()
+            .and_then(|(desc, base)| project(&comm, &desc, &base, axis as usize, bounds, &output)),
+        Command::Sample {
+            points,
+            output,
+            gradient,
+            scene,
+        } => scene
+            .scene()
+            .and_then(|(desc, base)| sample(&comm, &desc, &base, &points, &output, gradient)),
+        other => {
+            // Commands without data to share run once.
+            if root {
+                crate::run(Cli { command: other })
+            } else {
+                Ok(())
+            }
+        }
+    };
+    let code = match &result {
+        Ok(()) => 0,
+        Err(e) => {
+            if root {
+                eprintln!("error: {}", crate::describe(e));
+            }
+            1
+        }
+    };
+    drop(comm);
+    std::process::exit(code)
+}
+
+/// Every rank's outcome of a step only some ranks take (rank 0 writing a
+/// file): an error anywhere is an error everywhere.
+fn agree(comm: &MpiComm, local: Result<()>) -> Result<()> {
+    let local = local.map_err(|e| crate::describe(&e));
+    comm.agree(local)?.map_err(anyhow::Error::msg)
+}
+
+fn open(
+    comm: &MpiComm,
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+    purpose: Purpose,
+) -> Result<DistributedScene> {
+    let t = Instant::now();
+    let s = DistributedScene::open(comm, desc, base, frame, purpose)?;
+    if comm.is_root() {
+        for n in &s.notes {
+            eprintln!("note: {n}");
+        }
+        let (lo, hi) = s.world_bounds();
+        eprintln!(
+            "loaded {} on {} ranks in {:.2}s: bounds [{:.3}, {:.3}, {:.3}]..[{:.3}, {:.3}, {:.3}], \
+             value range [{:.4e}, {:.4e}]",
+            kind_name(&s),
+            comm.size(),
+            t.elapsed().as_secs_f64(),
+            lo[0],
+            lo[1],
+            lo[2],
+            hi[0],
+            hi[1],
+            hi[2],
+            s.settings.value_range.lo,
+            s.settings.value_range.hi,
+        );
+    }
+    Ok(s)
+}
+
+fn kind_name(s: &DistributedScene) -> &'static str {
+    match s.summary.kind {
+        voxless::VolumeKind::Particles => "particles",
+        voxless::VolumeKind::Amr => "AMR cells",
+        voxless::VolumeKind::Tets => "phase-space tessellation",
+        voxless::VolumeKind::Materials => "multi-material particles",
+    }
+}
+
+/// Each rank's peak memory and what it held, printed by rank 0.
+fn report_memory(comm: &MpiComm, s: Option<&DistributedScene>) -> Result<()> {
+    let (read, held) = s.map_or((0, 0), |s| (s.counts.read, s.counts.held));
+    let peak = peak_rss_bytes().unwrap_or(0);
+    let all = comm.all_gather_f64(&[peak as f64, read as f64, held as f64])?;
+    if comm.is_root() {
+        let mib = |b: f64| b / (1u64 << 20) as f64;
+        let list: Vec<String> = all
+            .iter()
+            .enumerate()
+            .map(|(r, v)| {
+                format!(
+                    "rank {r}: {:.0} MiB (read {}, held {})",
+                    mib(v[0]),
+                    v[1],
+                    v[2]
+                )
+            })
+            .collect();
+        eprintln!("peak memory per rank: {}", list.join("; "));
+    }
+    Ok(())
+}
+
+/// A render of the scene, with rank 0's share as progress.
+fn render_image(comm: &MpiComm, s: &DistributedScene, what: &str) -> Result<Option<Image>> {
+    let progress = comm.is_root().then(|| Progress::new(what, 1));
+    let report = |d: u64, total: u64| {
+        if let Some(p) = &progress {
+            p.set_fraction(0, d, total);
+        }
+    };
+    let image = s.render(comm, &Control::new().with_progress(&report))?;
+    if let Some(p) = &progress {
+        p.finish();
+    }
+    Ok(image)
+}
+
+fn decorate(image: &mut Image, s: &DistributedScene, colorbar: bool) {
+    if colorbar && voxless::render::colorbar::draw_colorbar(image, &s.tf, &s.colorbar()).is_none() {
+        eprintln!(
+            "note: a {}×{} image is too small for a colour bar",
+            image.width, image.height
+        );
+    }
+}
+
+fn render(
+    comm: &MpiComm,
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+    output: &Path,
+    colorbar: bool,
+) -> Result<()> {
+    let s = open(comm, desc, base, frame, Purpose::Render)?;
+    let t = Instant::now();
+    let image = render_image(comm, &s, "rendering")?;
+    let secs = t.elapsed().as_secs_f64();
+    agree(
+        comm,
+        image.map_or(Ok(()), |mut image| {
+            decorate(&mut image, &s, colorbar);
+            crate::write_image(output, &image, s.background)
+        }),
+    )?;
+    report_memory(comm, Some(&s))?;
+    if comm.is_root() {
+        let st = &s.settings;
+        eprintln!(
+            "rendered {}×{} at {} spp on {} ranks in {secs:.2}s → {}",
+            st.width,
+            st.height,
+            st.spp,
+            comm.size(),
+            output.display()
+        );
+    }
+    Ok(())
+}
+
+fn turntable_frames(
+    comm: &MpiComm,
+    desc: &SceneDesc,
+    base: &Path,
+    data_frame: usize,
+    frames: u32,
+    output: &Path,
+    colorbar: bool,
+) -> Result<()> {
+    let mut s = open(comm, desc, base, data_frame, Purpose::Render)?;
+    let start = desc.camera.orbit.unwrap_or(0.0);
+    let mut view = desc.clone();
+    let t = Instant::now();
+    for k in 0..frames {
+        view.camera.orbit = Some(start + 360.0 * k as f32 / frames as f32);
+        s.reaim(&view)?;
+        s.settings.frame = k;
+        let image = render_image(comm, &s, &format!("turntable frame {k}"))?;
+        agree(
+            comm,
+            image.map_or(Ok(()), |mut image| {
+                decorate(&mut image, &s, colorbar);
+                crate::write_image(&crate::frame_path(output, k as usize), &image, s.background)
+            }),
+        )?;
+    }
+    report_memory(comm, Some(&s))?;
+    if comm.is_root() {
+        eprintln!(
+            "rendered a {frames}-frame turntable on {} ranks in {:.2}s",
+            comm.size(),
+            t.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+/// Bytes of one frame's files (positions and per-particle arrays).
+fn frame_bytes(desc: &SceneDesc, base: &Path, frame: usize) -> u64 {
+    let Some(p) = &desc.particles else {
+        return u64::MAX;
+    };
+    let files = [&p.file, &p.attribute, &p.radii, &p.weights];
+    files
+        .into_iter()
+        .flatten()
+        .map(|spec| {
+            let path = match voxless::frames::expand(spec, base) {
+                Ok(list) if list.len() > 1 => list.get(frame).cloned(),
+                Ok(list) => list.first().cloned(),
+                Err(_) => None,
+            };
+            path.and_then(|p| std::fs::metadata(p).ok())
+                .map_or(0, |m| m.len())
+        })
+        .sum()
+}
+
+fn sequence(
+    comm: &MpiComm,
+    desc: &SceneDesc,
+    base: &Path,
+    range: &str,
+    output: &Path,
+    colorbar: bool,
+) -> Result<()> {
+    let range = voxless::frames::parse_range(range)?;
+    let count = voxless::frame_count(desc, base)?;
+    if *range.end() >= count {
+        bail!(
+            "--frames {}..{}: the data has {count} frame(s), 0..{}",
+            range.start(),
+            range.end(),
+            count - 1
+        );
+    }
+    let frames: Vec<usize> = range.clone().collect();
+    let k = comm.size();
+    let per_rank =
+        available_bytes().map_or(0, |a| a / ranks_on_this_node().unwrap_or(k).max(1) as u64);
+    // Every rank reads its own memory: agree on the smallest.
+    let per_rank = comm.all_min(&[per_rank as f64])?[0] as u64;
+    let plan = frame_plan(
+        frames.len(),
+        k,
+        frame_bytes(desc, base, frames[0]),
+        per_rank,
+    );
+    let t = Instant::now();
+    match plan {
+        FramePlan::ByFrame => by_frame(comm, desc, base, &frames, output, colorbar)?,
+        FramePlan::BySpace => by_space(comm, desc, base, &frames, output, colorbar)?,
+    }
+    if comm.is_root() {
+        let how = match plan {
+            FramePlan::ByFrame => "whole frames per rank",
+            FramePlan::BySpace => "each frame decomposed over all ranks",
+        };
+        eprintln!(
+            "rendered {} frames on {k} ranks ({how}) in {:.2}s → {}",
+            frames.len(),
+            t.elapsed().as_secs_f64(),
+            crate::frame_path(output, frames[0]).display()
+        );
+    }
+    Ok(())
+}
+
+/// Frames `r, r + K, …` of the list on rank `r`, one process each; the
+/// images go to rank 0, which writes them.
+fn by_frame(
+    comm: &MpiComm,
+    desc: &SceneDesc,
+    base: &Path,
+    frames: &[usize],
+    output: &Path,
+    colorbar: bool,
+) -> Result<()> {
+    let k = comm.size();
+    // Every rank resolves the first frame's view, as one process does.
+    let first = Scene::open(desc, base, frames[0]).map_err(anyhow::Error::from);
+    let mut scene = match comm.agree(first.map_err(|e| crate::describe(&e)))? {
+        Ok(s) => s,
+        Err(e) => bail!(e),
+    };
+    let bar = crate::view::colorbar(&scene, desc, colorbar);
+    let progress = comm
+        .is_root()
+        .then(|| Progress::new("rendering frames", frames.len() as u64));
+    for (round, chunk) in frames.chunks(k).enumerate() {
+        let mine = chunk.get(comm.rank()).copied();
+        let rendered: Result<Option<Image>> = match mine {
+            Some(f) => (|| {
+                if f != frames[0] {
+                    scene.load_frame(desc, base, f)?;
+                }
+                scene.settings.frame = f as u32;
+                let mut image = scene.render(&Control::new())?;
+                crate::view::decorate(&mut image, &scene, bar.as_ref());
+                Ok(Some(image))
+            })(),
+            None => Ok(None),
+        };
+        let rendered = match comm.agree(rendered.map_err(|e| crate::describe(&e)))? {
+            Ok(r) => r,
+            Err(e) => bail!(e),
+        };
+        // Every image to rank 0.
+        let mut send = vec![Vec::new(); k];
+        if let Some(img) = &rendered {
+            send[0] = img
+                .pixels
+                .iter()
+                .flatten()
+                .flat_map(|v| v.to_le_bytes())
+                .collect();
+        }
+        let got = comm.exchange(send)?;
+        let written: Result<()> = if comm.is_root() {
+            (|| {
+                for (r, bytes) in got.iter().enumerate() {
+                    let Some(&f) = chunk.get(r) else { continue };
+                    let v: Vec<f32> = bytes
+                        .chunks_exact(4)
+                        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                        .collect();
+                    let image = Image {
+                        width: scene.settings.width,
+                        height: scene.settings.height,
+                        pixels: v
+                            .chunks_exact(4)
+                            .map(|c| [c[0], c[1], c[2], c[3]])
+                            .collect(),
+                    };
+                    crate::write_image(&crate::frame_path(output, f), &image, scene.background)?;
+                }
+                if let Some(p) = &progress {
+                    p.set((round * k + chunk.len()) as u64);
+                }
+                Ok(())
+            })()
+        } else {
+            Ok(())
+        };
+        agree(comm, written)?;
+    }
+    if let Some(p) = &progress {
+        p.finish();
+    }
+    report_memory(comm, None)
+}
+
+/// Each frame in turn, decomposed over all ranks, with the first frame's
+/// view.
+fn by_space(
+    comm: &MpiComm,
+    desc: &SceneDesc,
+    base: &Path,
+    frames: &[usize],
+    output: &Path,
+    colorbar: bool,
+) -> Result<()> {
+    let mut first = open(comm, desc, base, frames[0], Purpose::Render)?;
+    // Later frames map their attributes over the first frame's range.
+    let mut later = desc.clone();
+    if let (Some(p), Some(r)) = (&mut later.particles, first.summary.attribute_range)
+        && p.attribute_range.is_none()
+    {
+        p.attribute_range = Some([r.lo, r.hi]);
+    }
+    for &f in frames {
+        let mut next = None;
+        if f != frames[0] {
+            let mut s = DistributedScene::open(comm, &later, base, f, Purpose::Render)?;
+            s.keep_view_of(&first);
+            next = Some(s);
+        }
+        let s = next.as_mut().unwrap_or(&mut first);
+        // Blue noise advances with the frame, as for one process.
+        s.settings.frame = f as u32;
+        let image = render_image(comm, s, &format!("frame {f}"))?;
+        agree(
+            comm,
+            image.map_or(Ok(()), |mut image| {
+                decorate(&mut image, s, colorbar);
+                crate::write_image(&crate::frame_path(output, f), &image, s.background)
+            }),
+        )?;
+    }
+    report_memory(comm, Some(&first))
+}
+
+fn project(
+    comm: &MpiComm,
+    desc: &SceneDesc,
+    base: &Path,
+    axis: usize,
+    bounds: Option<Vec<f64>>,
+    output: &Path,
+) -> Result<()> {
+    let s = open(comm, desc, base, 0, Purpose::Project)?;
+    let b = match bounds {
+        Some(v) => s.frame.box_to_local([v[0], v[1], v[2], v[3], v[4], v[5]]),
+        None => s.summary.bounds,
+    };
+    let camera = Camera::axis_projection(&b, axis).context("--bounds")?;
+    let (w, h) = (s.settings.width, s.settings.height);
+    let progress = comm.is_root().then(|| Progress::new("projecting", 1));
+    let report = |d: u64, total: u64| {
+        if let Some(p) = &progress {
+            p.set_fraction(0, d, total);
+        }
+    };
+    let t = Instant::now();
+    let column = s.project(comm, &camera, w, h, &Control::new().with_progress(&report))?;
+    if let Some(p) = &progress {
+        p.finish();
+    }
+    let secs = t.elapsed().as_secs_f64();
+    agree(
+        comm,
+        column.map_or(Ok(()), |c| {
+            crate::write_gray(output, w, h, &c)?;
+            eprintln!(
+                "projected {w}×{h} on {} ranks in {secs:.2}s → {}",
+                comm.size(),
+                output.display()
+            );
+            Ok(())
+        }),
+    )?;
+    report_memory(comm, Some(&s))
+}
+
+fn sample(
+    comm: &MpiComm,
+    desc: &SceneDesc,
+    base: &Path,
+    points: &PathBuf,
+    output: &Path,
+    gradient: bool,
+) -> Result<()> {
+    let s = open(comm, desc, base, 0, Purpose::Render)?;
+    // Rank 0 reads the points; the library hands them out.
+    let read = if comm.is_root() {
+        voxless::read_points(points).map_err(anyhow::Error::from)
+    } else {
+        Ok(Vec::new())
+    };
+    let pts = match comm.agree(read.map_err(|e| crate::describe(&e)))? {
+        Ok(p) => p,
+        Err(e) => bail!(e),
+    };
+    let local: Vec<voxless::Vec3> = pts
+        .iter()
+        .map(|p| s.frame.to_local([p.x as f64, p.y as f64, p.z as f64]))
+        .collect();
+    let cols = s.sample_columns(gradient);
+    let t = Instant::now();
+    let values = s.sample(comm, &local, gradient)?;
+    agree(
+        comm,
+        values.map_or(Ok(()), |v| {
+            voxless::io::write_npy_f32(output, &[pts.len(), cols.len()], &v)?;
+            eprintln!(
+                "sampled {} points on {} ranks in {:.2}s → {} (columns: {})",
+                pts.len(),
+                comm.size(),
+                t.elapsed().as_secs_f64(),
+                output.display(),
+                cols.join(", ")
+            );
+            Ok(())
+        }),
+    )?;
+    report_memory(comm, Some(&s))
+}

@@ -1,0 +1,339 @@
+//! `mpirun -n K voxless …` end to end (the `mpi` feature): for K = 1…4,
+//! render, project and sample give the one-process results — renders
+//! within 1/255 per channel, projections within 1e-5 of the image's
+//! maximum, samples bit for bit — for particles, materials, AMR cells and
+//! tessellations, time series by whole frames and by space, and an error
+//! on one rank ends every rank with the error said once. Skipped with a
+//! notice where `mpirun` is not installed.
+#![cfg(feature = "mpi")]
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+use common::{Lcg, Scratch, write_values};
+
+const BIN: &str = env!("CARGO_BIN_EXE_voxless");
+
+fn have_mpirun() -> bool {
+    let ok = Command::new("mpirun")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        eprintln!("notice: no mpirun on this machine; skipping the MPI tests");
+    }
+    ok
+}
+
+/// `voxless args` on one process (no MPI launcher in its environment).
+fn one(args: &[&str]) {
+    let out = Command::new(BIN).args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "voxless {args:?}:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// `mpirun -n ranks voxless args`; its stderr.
+fn mpi(ranks: usize, args: &[&str]) -> (bool, String) {
+    let out = Command::new("mpirun")
+        .args(["--allow-run-as-root", "--oversubscribe", "-n"])
+        .arg(ranks.to_string())
+        .arg(BIN)
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn mpi_ok(ranks: usize, args: &[&str]) -> String {
+    let (ok, err) = mpi(ranks, args);
+    assert!(ok, "mpirun -n {ranks} voxless {args:?}:\n{err}");
+    err
+}
+
+fn png(path: &Path) -> Vec<u8> {
+    voxless::io::read_png_rgb8(path).unwrap().2
+}
+
+fn npy(path: &Path) -> Vec<f64> {
+    voxless::io::read_npy(path).unwrap().data
+}
+
+fn png_difference(a: &Path, b: &Path) -> u8 {
+    let (a, b) = (png(a), png(b));
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(&b)
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0)
+}
+
+fn relative_difference(a: &Path, b: &Path) -> f64 {
+    let (a, b) = (npy(a), npy(b));
+    assert_eq!(a.len(), b.len());
+    let top = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(top > 0.0, "an empty projection tests nothing");
+    a.iter()
+        .zip(&b)
+        .map(|(x, y)| (x - y).abs() / top)
+        .fold(0.0, f64::max)
+}
+
+fn same_bits(a: &Path, b: &Path) {
+    let (a, b) = (npy(a), npy(b));
+    assert_eq!(a.len(), b.len());
+    for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+        assert!(
+            x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()),
+            "value {i}: {x} vs {y}"
+        );
+    }
+}
+
+/// Renders, projects and samples `data` (flags) with one process and with
+/// 1…4 ranks, comparing.
+fn check_kind(dir: &Scratch, name: &str, data: &[&str], points: &str) {
+    let d = |f: &str| dir.str(&format!("{name}_{f}"));
+    let with = |extra: &[&str]| -> Vec<String> {
+        data.iter()
+            .chain(extra)
+            .map(|s| s.to_string())
+            .collect::<Vec<_>>()
+    };
+    let args = |v: &Vec<String>| v.clone();
+    let render = |out: &str| with(&["--size", "64", "48", "--spp", "2", "-o", out]);
+    let project = |out: &str| with(&["--axis", "y", "--size", "64", "48", "-o", out]);
+    let sample = |out: &str| with(&["--points", points, "--gradient", "-o", out]);
+    let run1 = |cmd: &str, a: Vec<String>| {
+        let mut v = vec![cmd.to_string()];
+        v.extend(a);
+        one(&v.iter().map(String::as_str).collect::<Vec<_>>());
+    };
+    let runk = |k: usize, cmd: &str, a: Vec<String>| {
+        let mut v = vec![cmd.to_string()];
+        v.extend(a);
+        mpi_ok(k, &v.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    run1("render", args(&render(&d("r1.png"))));
+    run1("project", args(&project(&d("p1.npy"))));
+    run1("sample", args(&sample(&d("s1.npy"))));
+    for k in 1..=4 {
+        let err = runk(k, "render", render(&d(&format!("r{k}k.png"))));
+        assert!(err.contains(&format!("on {k} ranks")), "{err}");
+        assert!(err.contains("peak memory per rank"), "{err}");
+        let diff = png_difference(
+            Path::new(&d("r1.png")),
+            Path::new(&d(&format!("r{k}k.png"))),
+        );
+        assert!(diff <= 1, "{name}, {k} ranks: render differs by {diff}/255");
+        runk(k, "project", project(&d(&format!("p{k}k.npy"))));
+        let rel = relative_difference(
+            Path::new(&d("p1.npy")),
+            Path::new(&d(&format!("p{k}k.npy"))),
+        );
+        assert!(
+            rel <= 1e-5,
+            "{name}, {k} ranks: projection differs by {rel:e}"
+        );
+        runk(k, "sample", sample(&d(&format!("s{k}k.npy"))));
+        same_bits(
+            Path::new(&d("s1.npy")),
+            Path::new(&d(&format!("s{k}k.npy"))),
+        );
+    }
+}
+
+fn write_points(dir: &Scratch, lo: f32, hi: f32) -> String {
+    let mut rng = Lcg(21);
+    let p: Vec<f32> = (0..3 * 200).map(|_| lo + (hi - lo) * rng.f()).collect();
+    voxless_io::write_npy_f32(&dir.path("points.npy"), &[200, 3], &p).unwrap();
+    dir.str("points.npy")
+}
+
+#[test]
+fn particles_under_mpirun_equal_one_process() {
+    if !have_mpirun() {
+        return;
+    }
+    let dir = Scratch::new("mpi-particles");
+    let n = 3000;
+    let mut rng = Lcg(2);
+    let pos: Vec<f32> = (0..n)
+        .flat_map(|i| {
+            let c = [0.3f32, 0.7][i % 2];
+            [c + 0.1 * rng.normal(), 0.5 + 0.1 * rng.normal(), rng.f()]
+        })
+        .collect();
+    voxless_io::write_npy_f32(&dir.path("pos.npy"), &[n, 3], &pos).unwrap();
+    write_values(&dir.path("h.npy"), &vec![0.03; n]);
+    let speed: Vec<f32> = (0..n).map(|i| (i % 11) as f32).collect();
+    write_values(&dir.path("speed.npy"), &speed);
+    let points = write_points(&dir, -0.1, 1.1);
+    let (pos, h, speed) = (dir.str("pos.npy"), dir.str("h.npy"), dir.str("speed.npy"));
+    let data = [
+        "--particles",
+        &pos,
+        "--radii",
+        &h,
+        "--attribute",
+        &speed,
+        "--kernel",
+        "cubic-spline",
+        "--opacity-scale",
+        "40",
+    ];
+    check_kind(&dir, "sph", &data, &points);
+}
+
+#[test]
+fn amr_cells_under_mpirun_equal_one_process() {
+    if !have_mpirun() {
+        return;
+    }
+    let dir = Scratch::new("mpi-amr");
+    let mut cells: Vec<[i32; 4]> = Vec::new();
+    for z in (0..16).step_by(2) {
+        for y in (0..16).step_by(2) {
+            for x in (0..16).step_by(2) {
+                if (4..10).contains(&x) && (4..10).contains(&y) {
+                    for k in 0..8 {
+                        cells.push([x + (k & 1), y + ((k >> 1) & 1), z + (k >> 2), 0]);
+                    }
+                } else {
+                    cells.push([x, y, z, 1]);
+                }
+            }
+        }
+    }
+    let v: Vec<f32> = cells
+        .iter()
+        .map(|c| 1.0 + ((c[0] * 3 + c[1] * 5 + c[2]) % 7) as f32 * 0.3)
+        .collect();
+    let bytes: Vec<u8> = cells
+        .iter()
+        .flat_map(|c| c.iter().flat_map(|x| x.to_le_bytes()))
+        .collect();
+    std::fs::write(dir.path("g.cells"), bytes).unwrap();
+    let sc: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+    std::fs::write(dir.path("g.rho.scalars"), sc).unwrap();
+    let points = write_points(&dir, -1.0, 17.0);
+    let (cells, scalars) = (dir.str("g.cells"), dir.str("g.rho.scalars"));
+    let data = [
+        "--cells",
+        &cells,
+        "--scalars",
+        &scalars,
+        "--opacity-scale",
+        "0.3",
+    ];
+    check_kind(&dir, "amr", &data, &points);
+}
+
+#[test]
+fn tessellations_under_mpirun_equal_one_process() {
+    if !have_mpirun() {
+        return;
+    }
+    let dir = Scratch::new("mpi-tets");
+    let n = 16;
+    let l = 8.0f32;
+    let mut pos = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..n {
+                let q = [i, j, k].map(|v| (v as f32 + 0.5) * l / n as f32);
+                let s = |a: f32| 1.2 * (2.0 * std::f32::consts::PI * a / l).sin();
+                pos.extend(
+                    [q[0] + s(q[0]), q[1] + 0.4 * s(q[0] + q[1]), q[2]].map(|v| v.rem_euclid(l)),
+                );
+            }
+        }
+    }
+    voxless_io::write_npy_f32(&dir.path("lag.npy"), &[n * n * n, 3], &pos).unwrap();
+    let points = write_points(&dir, -1.0, 9.0);
+    let lag = dir.str("lag.npy");
+    let data = ["--particles", &lag, "--lagrangian", "16", "--box", "8"];
+    check_kind(&dir, "tets", &data, &points);
+}
+
+#[test]
+fn time_series_by_frame_and_by_space_equal_one_process() {
+    if !have_mpirun() {
+        return;
+    }
+    let dir = Scratch::new("mpi-frames");
+    for f in 0..4 {
+        let mut rng = Lcg(30 + f);
+        let pos: Vec<f32> = (0..3 * 800)
+            .map(|i| rng.f() * 0.5 + 0.1 * (f as f32) * (i % 3 == 0) as u8 as f32)
+            .collect();
+        voxless_io::write_npy_f32(&dir.path(&format!("step_{f:02}.npy")), &[800, 3], &pos).unwrap();
+    }
+    let pattern = dir.str("step_%02d.npy");
+    let base = [
+        "--particles",
+        &pattern,
+        "--radius",
+        "0.05",
+        "--size",
+        "48",
+        "40",
+    ];
+    let out1 = dir.str("one.png");
+    let mut a: Vec<&str> = vec!["render"];
+    a.extend(base);
+    a.extend(["--frames", "0..3", "-o", &out1]);
+    one(&a);
+    // 2 ranks, 4 frames: whole frames per rank; 3 ranks, 2 frames: by space.
+    for (k, range, how) in [
+        (2, "0..3", "whole frames per rank"),
+        (3, "0..1", "each frame decomposed"),
+    ] {
+        let out = dir.str(&format!("k{k}.png"));
+        let mut a: Vec<&str> = vec!["render"];
+        a.extend(base);
+        a.extend(["--frames", range, "-o", &out]);
+        let err = mpi_ok(k, &a);
+        assert!(err.contains(how), "{err}");
+        let (lo, hi) = range.split_once("..").unwrap();
+        for f in lo.parse::<usize>().unwrap()..=hi.parse().unwrap() {
+            let one_f = dir.path(&format!("one_{f:04}.png"));
+            let k_f = dir.path(&format!("k{k}_{f:04}.png"));
+            let d = png_difference(&one_f, &k_f);
+            assert!(d <= 1, "{k} ranks, frame {f}: {d}/255");
+        }
+    }
+}
+
+#[test]
+fn an_error_on_one_rank_ends_every_rank_with_one_message() {
+    if !have_mpirun() {
+        return;
+    }
+    let dir = Scratch::new("mpi-error");
+    let n = 600;
+    let mut rng = Lcg(4);
+    let pos: Vec<f32> = (0..3 * n).map(|_| rng.f()).collect();
+    voxless_io::write_npy_f32(&dir.path("pos.npy"), &[n, 3], &pos).unwrap();
+    let mut h = vec![0.05f32; n];
+    h[590] = f32::NAN;
+    write_values(&dir.path("h.npy"), &h);
+    let (pos, hh, out) = (dir.str("pos.npy"), dir.str("h.npy"), dir.str("x.png"));
+    let (ok, err) = mpi(
+        3,
+        &["render", "--particles", &pos, "--radii", &hh, "-o", &out],
+    );
+    assert!(!ok, "a bad radius must fail:\n{err}");
+    assert_eq!(err.matches("error:").count(), 1, "said once:\n{err}");
+    assert!(err.contains("h.npy") && err.contains("590"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!Path::new(&out).exists());
+}
