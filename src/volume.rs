@@ -148,8 +148,11 @@ impl AnyVolume {
         grid: &voxless_parallel::TileGrid,
         order: &[usize],
         control: &Control,
+        timings: &mut crate::parallel::Timings,
     ) -> Result<voxless_parallel::composite::OwnedTiles, crate::parallel::ParallelError> {
-        with_volume!(self, v => crate::parallel::render_part(v, comm, s, grid, order, control))
+        with_volume!(self, v => {
+            crate::parallel::render_part(v, comm, s, grid, order, control, timings)
+        })
     }
 
     /// This rank's share of a decomposed projection: the part of each

@@ -159,9 +159,22 @@ fn render_image(comm: &MpiComm, s: &DistributedScene, what: &str) -> Result<Opti
             p.set_fraction(0, d, total);
         }
     };
-    let image = s.render(comm, &Control::new().with_progress(&report))?;
+    let (image, times) = s.render_timed(comm, &Control::new().with_progress(&report))?;
     if let Some(p) = &progress {
         p.finish();
+    }
+    let all = comm.all_gather_f64(&[times.render, times.composite])?;
+    if comm.is_root() {
+        let most = |k: usize| all.iter().map(|v| v[k]).fold(0.0, f64::max);
+        let least = |k: usize| all.iter().map(|v| v[k]).fold(f64::INFINITY, f64::min);
+        // A rank's compositing time includes waiting for slower renderers;
+        // the least of them is the compositing itself.
+        eprintln!(
+            "ranks rendering their boxes: {:.3}–{:.3}s; compositing: {:.3}s",
+            least(0),
+            most(0),
+            least(1)
+        );
     }
     Ok(image)
 }

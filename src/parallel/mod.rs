@@ -102,6 +102,14 @@ pub(crate) enum Columns {
     Amr(Vec<String>),
 }
 
+/// Where one rank's time went in a render, in seconds: rendering its box's
+/// passes, and compositing (waiting for the others included).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timings {
+    pub render: f64,
+    pub composite: f64,
+}
+
 /// How many items a rank read and holds, for memory reports.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PartCounts {
@@ -224,7 +232,18 @@ impl DistributedScene {
         comm: &dyn Comm,
         control: &Control,
     ) -> Result<Option<Image>, ParallelError> {
-        render::render(self, comm, control)
+        self.render_timed(comm, control).map(|r| r.0)
+    }
+
+    /// [`DistributedScene::render`], and where this rank's time went.
+    pub fn render_timed(
+        &self,
+        comm: &dyn Comm,
+        control: &Control,
+    ) -> Result<(Option<Image>, Timings), ParallelError> {
+        let mut timings = Timings::default();
+        let image = render::render(self, comm, control, &mut timings)?;
+        Ok((image, timings))
     }
 
     /// Column densities `∫ value dt` per pixel centre of `camera` (an axis

@@ -7,7 +7,7 @@ use voxless_parallel::{Comm, CommExt, Reader, TileGrid, Writer};
 use voxless_render::{Job, PixelRequest};
 
 use super::share::{agree, exchange, outboxes};
-use super::{Columns, DistributedScene, ParallelError};
+use super::{Columns, DistributedScene, ParallelError, Timings};
 
 /// Side of the compositing tiles in pixels: small enough that every rank
 /// owns several tiles of a modest image, large enough to keep messages few.
@@ -22,6 +22,7 @@ pub(crate) fn render_part<P: Prepare>(
     grid: &TileGrid,
     order: &[usize],
     control: &Control,
+    timings: &mut Timings,
 ) -> Result<OwnedTiles, ParallelError> {
     let st = &s.settings;
     let prepared = voxless_render::prepare(volume, &s.tf, st);
@@ -30,9 +31,12 @@ pub(crate) fn render_part<P: Prepare>(
     let total = per * st.spp as u64;
     let mut acc = OwnedTiles::zeros(*grid, 4, comm.rank(), comm.size());
     for sample in 0..st.spp {
+        let t = std::time::Instant::now();
         let pass = job
             .pass_pixels(sample, &control.part(sample as u64 * per, total))
             .map_err(ParallelError::from);
+        timings.render += t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
         let (pixels, _) = agree(comm, pass)?;
         let tiles = composite::over(
             comm,
@@ -49,6 +53,7 @@ pub(crate) fn render_part<P: Prepare>(
             },
         )?;
         acc.add(&tiles);
+        timings.composite += t.elapsed().as_secs_f64();
     }
     Ok(acc)
 }
@@ -57,17 +62,19 @@ pub(crate) fn render(
     s: &DistributedScene,
     comm: &dyn Comm,
     control: &Control,
+    timings: &mut Timings,
 ) -> Result<Option<Image>, ParallelError> {
     let st = &s.settings;
     let grid = TileGrid::new(st.width, st.height, COMPOSITE_TILE);
     let order = s.decomposition.front_to_back(&s.camera);
     let mut acc = match &s.part {
-        Some(v) => v.render_part(comm, s, &grid, &order, control)?,
+        Some(v) => v.render_part(comm, s, &grid, &order, control, timings)?,
         None => {
             // No data here: take part in every pass with an empty image.
             let empty = vec![[0.0f32; 4]; (st.width * st.height) as usize];
             let mut acc = OwnedTiles::zeros(grid, 4, comm.rank(), comm.size());
             for _ in 0..st.spp {
+                let t = std::time::Instant::now();
                 agree(comm, Ok::<(), ParallelError>(()))?;
                 let tiles = composite::over(
                     comm,
@@ -78,12 +85,16 @@ pub(crate) fn render(
                     &mut |req| vec![[0.0; 4]; req.len()],
                 )?;
                 acc.add(&tiles);
+                timings.composite += t.elapsed().as_secs_f64();
             }
             acc
         }
     };
     acc.scale(1.0 / st.spp.max(1) as f32);
-    Ok(composite::gather(comm, &acc)?.map(|v| Image {
+    let t = std::time::Instant::now();
+    let image = composite::gather(comm, &acc)?;
+    timings.composite += t.elapsed().as_secs_f64();
+    Ok(image.map(|v| Image {
         width: st.width,
         height: st.height,
         pixels: v

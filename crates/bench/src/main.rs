@@ -3,7 +3,7 @@
 //! integrator `voxless render` uses), not through copies of it.
 //!
 //! ```sh
-//! cargo run --release -p voxless-bench -- bvh|frame|packets|amr|tets [flags]
+//! cargo run --release -p voxless-bench -- bvh|frame|packets|amr|tets|parallel [flags]
 //! ```
 //!
 //! Every benchmark reports a ratio against a baseline measured in the same
@@ -24,6 +24,8 @@
 //!   ([`amr`]).
 //! - `tets`: phase-space tessellations — build, projection, exact render,
 //!   block culling, k-buffer and level of detail ([`tets`]).
+//! - `parallel`: sort-last compositing against image size and rank count,
+//!   and the inputs of the per-rank memory measurements ([`parallel`]).
 //!
 //! Variants the library does not offer (an AMR volume that hands out every
 //! interval, a tessellation with every block in every tile) are small
@@ -35,6 +37,7 @@ mod bvh;
 mod common;
 mod frame;
 mod packets;
+mod parallel;
 mod tets;
 
 use anyhow::Result;
@@ -68,6 +71,9 @@ enum Which {
     /// (64³ JaxPM run, optionally a refined 128³), block culling, k-buffer
     /// size and level of detail against exact mode.
     Tets(tets::TetsArgs),
+    /// Data-parallel rendering: direct-send compositing time against image
+    /// size and rank count; the inputs of the per-rank memory runs.
+    Parallel(parallel::ParallelArgs),
 }
 
 fn main() {
@@ -101,5 +107,6 @@ fn run(which: Which) -> Result<()> {
         Which::Frame(o) => frame::run(o),
         Which::Amr(o) => amr::run(o),
         Which::Tets(o) => tets::run(o),
+        Which::Parallel(o) => parallel::run(o),
     }
 }
