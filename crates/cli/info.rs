@@ -46,6 +46,7 @@ fn describe(args: &InfoArgs) -> Result<String> {
         let options = TableOptions {
             group: args.group.clone(),
             part_type: args.part_type,
+            share: None,
         };
         for (i, f) in files.iter().enumerate() {
             if i < LISTED_FRAMES / 2 || i + LISTED_FRAMES / 2 >= files.len() {
@@ -124,6 +125,7 @@ fn particles(path: &Path, format: ParticleFormat, args: &InfoArgs) -> Result<Str
     let options = TableOptions {
         group: args.group.clone(),
         part_type: args.part_type,
+        share: None,
     };
     let frames = formats::frames_in(path, format)?;
     let mut out = String::new();
@@ -463,6 +465,7 @@ fn hdf5(path: &Path, args: &InfoArgs) -> Result<String> {
         let options = TableOptions {
             group: args.group.clone(),
             part_type: args.part_type,
+            share: None,
         };
         let table = formats::read_table(path, ParticleFormat::Hdf5, 0, &options)?;
         if let Some(note) = table.note {

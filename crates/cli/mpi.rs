@@ -3,7 +3,7 @@
 //! scenes ([`voxless::parallel`]). Rank 0 prints and writes; every rank
 //! renders its box. Other commands run on rank 0 alone.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -500,7 +500,7 @@ fn sample(
     comm: &MpiComm,
     desc: &SceneDesc,
     base: &Path,
-    points: &PathBuf,
+    points: &Path,
     output: &Path,
     gradient: bool,
 ) -> Result<()> {

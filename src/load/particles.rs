@@ -70,6 +70,9 @@ pub(crate) struct FrameData {
     pub files: Vec<(&'static str, PathBuf)>,
     pub sph_defaults: bool,
     pub notes: Vec<String>,
+    /// When only a share of the rows was read: the first row and the
+    /// file's particle count.
+    pub rows: Option<(usize, usize)>,
 }
 
 /// The file of `spec` for frame `frame`: the `frame`-th of a sequence, or the
@@ -125,7 +128,22 @@ pub(crate) fn read_frame(
     base: &Path,
     frame: usize,
 ) -> Result<FrameData, SceneError> {
+    read_frame_share(p, base, frame, None)
+}
+
+/// [`read_frame`], asking for share `r` of `k` of the rows (`share =
+/// Some((r, k))`; see `TableOptions::share`): formats that can read part of
+/// their rows (HDF5) read only those and say so in [`FrameData::rows`]; the
+/// others read every row. Per-particle arrays must then be columns of the
+/// file, not files of their own.
+pub(crate) fn read_frame_share(
+    p: &ParticlesDesc,
+    base: &Path,
+    frame: usize,
+    share: Option<(usize, usize)>,
+) -> Result<FrameData, SceneError> {
     let mut files: Vec<(&'static str, PathBuf)> = Vec::new();
+    let mut rows = None;
     let mut notes = Vec::new();
     let mut sph_defaults = false;
     let (data, main_file) = match (&p.file, p.demo.unwrap_or(false)) {
@@ -135,11 +153,13 @@ pub(crate) fn read_frame(
                 options: TableOptions {
                     group: p.group.clone(),
                     part_type: p.part_type,
+                    share,
                 },
                 species: p.species.as_ref().map(|s| s.0.as_str()),
             };
             let (positions, source, note) = load::open(&path, in_file, &select)?;
             notes.extend(note);
+            rows = source.table.rows;
             let n = positions.len();
             let mut data = ParticleData {
                 positions,
@@ -199,6 +219,7 @@ pub(crate) fn read_frame(
         files,
         sph_defaults,
         notes,
+        rows,
     })
 }
 

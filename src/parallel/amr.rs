@@ -137,7 +137,7 @@ pub(crate) fn open(comm: &dyn Comm, a: &AmrDesc, base: &Path) -> Result<Part, Pa
         .cells
         .iter()
         .enumerate()
-        .filter(|(i, _)| (run.offset + i) % stride == 0)
+        .filter(|(i, _)| (run.offset + i).is_multiple_of(stride))
         .map(|(_, c)| support_box(c, h).center())
         .collect();
     let decomposition = decompose(comm, root_box(bounds), &sample)?;

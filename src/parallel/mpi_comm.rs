@@ -1,7 +1,8 @@
 //! [`Comm`] over MPI (the `mpi` feature: rsmpi over the system's MPI
 //! library). Messages of any size: each exchange first tells every rank
-//! how many bytes to expect, then moves them in rounds small enough that a
-//! rank's total per round fits MPI's 32-bit counts and offsets.
+//! how many bytes to expect, then moves them in rounds of bounded size (so
+//! the transient buffers stay small and MPI's 32-bit counts and offsets
+//! suffice); a rank's message to itself is moved, not copied.
 
 use mpi::Count;
 use mpi::collective::SystemOperation;
@@ -12,9 +13,14 @@ use mpi::traits::*;
 
 use super::{Comm, CommError};
 
-/// At most this many bytes go from one rank to another per round (fewer
-/// with many ranks: a rank's total per round stays below 2³¹).
-pub const ROUND_BYTES: usize = 1 << 28;
+/// At most about this many bytes leave a rank per round (split evenly over
+/// the destinations), so the round's send and receive buffers stay small
+/// next to the messages themselves, and far below MPI's 2³¹ limit.
+pub const ROUND_BYTES: usize = 64 << 20;
+
+/// Per destination and round at least this many bytes, so many ranks do
+/// not make rounds of tiny messages.
+const MIN_CHUNK: usize = 64 << 10;
 
 /// The world communicator of an MPI run.
 pub struct MpiComm {
@@ -72,19 +78,22 @@ impl Comm for MpiComm {
         self.world.size() as usize
     }
 
-    fn exchange(&self, send: Vec<Vec<u8>>) -> Result<Vec<Vec<u8>>, CommError> {
+    fn exchange(&self, mut send: Vec<Vec<u8>>) -> Result<Vec<Vec<u8>>, CommError> {
         let k = self.size();
+        let me = self.rank();
         if send.len() != k {
             return Err(CommError::Transport(format!(
                 "{} messages for {k} ranks",
                 send.len()
             )));
         }
+        // This rank's message to itself is moved, not sent.
+        let own = std::mem::take(&mut send[me]);
         // How much comes from every rank.
         let lens: Vec<u64> = send.iter().map(|m| m.len() as u64).collect();
         let mut incoming = vec![0u64; k];
         self.world.all_to_all_into(&lens[..], &mut incoming[..]);
-        let chunk = ROUND_BYTES.min(i32::MAX as usize / k).max(1);
+        let chunk = (ROUND_BYTES / k).max(MIN_CHUNK);
         let most = lens.iter().chain(&incoming).copied().max().unwrap_or(0) as usize;
         let rounds = self.max_u64(most.div_ceil(chunk) as u64) as usize;
         let mut got: Vec<Vec<u8>> = incoming
@@ -98,10 +107,14 @@ impl Comm for MpiComm {
             };
             let mut flat = Vec::new();
             let mut counts: Vec<Count> = Vec::with_capacity(k);
-            for m in &send {
+            for m in &mut send {
                 let r = part(m.len());
                 counts.push(r.len() as Count);
-                flat.extend_from_slice(&m[r]);
+                flat.extend_from_slice(&m[r.clone()]);
+                if r.end == m.len() {
+                    // Sent in full: free it now.
+                    *m = Vec::new();
+                }
             }
             let rcounts: Vec<Count> = incoming
                 .iter()
@@ -133,6 +146,7 @@ impl Comm for MpiComm {
                 msg.extend_from_slice(&buf[at..at + rcounts[src] as usize]);
             }
         }
+        got[me] = own;
         Ok(got)
     }
 }

@@ -28,7 +28,7 @@ use super::share::{agree, exchange, outboxes, root_box, share, union_bounds};
 use super::{Columns, ParallelError, Part, PartCounts};
 use crate::load::materials::{build_materials, material_descs};
 use crate::load::particles::{
-    FrameData, OccupancyGrid, blame, frame_file, locate, particle_settings, read_frame,
+    FrameData, OccupancyGrid, blame, frame_file, locate, particle_settings, read_frame_share,
 };
 use crate::{AnyVolume, SceneError, VolumeKind, VolumeSummary, WorldFrame};
 
@@ -259,11 +259,11 @@ impl Set {
         // The probes, gathered in row order.
         let stride = probe_stride(rows.total);
         let mut w = Writer::new();
-        for i in 0..n {
-            if (rows.offset + i) % stride == 0 {
+        for (i, (q, r)) in rows.data.positions.iter().zip(&radius).enumerate() {
+            if (rows.offset + i).is_multiple_of(stride) {
                 w.u8(1);
-                w.vec3(rows.data.positions[i]);
-                w.f32(radius[i]);
+                w.vec3(*q);
+                w.f32(*r);
             }
         }
         let mut probes = Vec::new();
@@ -353,15 +353,17 @@ impl Set {
                 }
             }
         }
-        let got = exchange(comm, out)?;
         let has = [
             data.radii.is_some(),
             data.weights.is_some(),
             data.attribute.is_some(),
         ];
+        // The rows are in the messages now: free them before the exchange.
+        let (main_file, files) = (rows.main_file, rows.files);
+        drop((rows.data, radius));
         let mut items: Vec<(u64, Vec3, [f32; 3])> = Vec::new();
-        for msg in &got {
-            let mut r = Reader::new(msg);
+        for msg in exchange(comm, out)? {
+            let mut r = Reader::new(&msg);
             while !r.is_done() {
                 let row = r.u64()?;
                 let q = r.vec3()?;
@@ -387,8 +389,9 @@ impl Set {
             median_support,
             value_range: Range1::new(0.0, 0.0),
         };
+        drop(items);
         let built = ParticleVolume::new_part(part_data, settings, stats)
-            .map_err(|e| blame(rows.main_file.clone(), &rows.files, e));
+            .map_err(|e| blame(main_file.clone(), &files, e));
         let mut part = agree(comm, built)?;
         // The density range: each probe evaluated where its box is.
         let me = comm.rank();
@@ -414,14 +417,33 @@ fn read_rows(
     if let Some(rows) = npy_rows(p, base, frame, rank, ranks)? {
         return Ok(rows);
     }
-    // Any other format: read the frame and keep this rank's rows.
+    // Any other format: read the frame and keep this rank's rows — HDF5
+    // files read only those (hyperslabs) when the per-particle arrays are
+    // columns of the file.
+    let columns_only = [&p.attribute, &p.radii, &p.weights]
+        .into_iter()
+        .flatten()
+        .all(|spec| !is_npy(&base.join(spec)));
+    let part = (p.species.is_none() && columns_only).then_some((rank, ranks));
     let FrameData {
         data,
         main_file,
         files,
         sph_defaults,
         notes,
-    } = read_frame(p, base, frame)?;
+        rows,
+    } = read_frame_share(p, base, frame, part)?;
+    if let Some((offset, total)) = rows {
+        return Ok(Rows {
+            data,
+            offset,
+            total,
+            main_file,
+            files,
+            sph_defaults,
+            notes,
+        });
+    }
     let total = data.positions.len();
     let r = share(total, rank, ranks);
     let cut = |v: Option<Vec<f32>>| v.map(|v| v[r.clone()].to_vec());

@@ -164,7 +164,7 @@ pub(crate) fn open(
     let stride = density_stride(total);
     let mut w = Writer::new();
     for (i, tet) in mesh.tets.iter().enumerate() {
-        if (before + i) % stride == 0 {
+        if (before + i).is_multiple_of(stride) {
             w.f32(tet.density);
             w.vec3(centroid(tet));
         }
@@ -228,50 +228,46 @@ pub(crate) fn open(
     }
     let (n, tet_mass, mean_volume) = (mesh.n, mesh.tet_mass, mesh.mean_volume);
     drop(mesh);
-    let mut blocks: Vec<(u32, usize, Vec<Tet>)> = Vec::new();
-    let mut point_masses = Vec::new();
-    for (src, msg) in exchange(comm, out)?.iter().enumerate() {
-        let mut r = Reader::new(msg);
-        while !r.is_done() {
-            if r.u8()? == 1 {
-                point_masses.push((r.vec3()?, r.f64()?));
-                continue;
-            }
-            let lagrangian = r.u32()?;
-            let count = r.u64()? as usize;
-            let mut tets = Vec::with_capacity(count.min(1 << 20));
-            for _ in 0..count {
-                let v = [r.vec3()?, r.vec3()?, r.vec3()?, r.vec3()?];
-                tets.push(Tet {
-                    v,
-                    density: r.f32()?,
-                });
-            }
-            blocks.push((lagrangian, src, tets));
-        }
-    }
-    // In Lagrangian block order, whoever sent them.
-    blocks.sort_by_key(|b| (b.0, b.1));
     let mut local = TetMesh {
         n,
         box_size: l,
         tet_mass,
         tets: Vec::new(),
         blocks: Vec::new(),
-        point_masses,
+        point_masses: Vec::new(),
         mean_volume,
         lod: Vec::new(),
     };
-    for (lagrangian, _, tets) in blocks {
-        let start = local.tets.len() as u32;
-        let bounds = tets.iter().fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
-        local.tets.extend(tets);
-        local.blocks.push(Block {
-            tets: start..local.tets.len() as u32,
-            bounds,
-            lagrangian,
-        });
+    // Decoded straight into the mesh, message by message (each freed once
+    // read), in source order and, within a source, Lagrangian block order.
+    for msg in exchange(comm, out)? {
+        let mut r = Reader::new(&msg);
+        while !r.is_done() {
+            if r.u8()? == 1 {
+                local.point_masses.push((r.vec3()?, r.f64()?));
+                continue;
+            }
+            let lagrangian = r.u32()?;
+            let count = r.u64()? as usize;
+            let start = local.tets.len() as u32;
+            let mut bounds = Aabb::EMPTY;
+            for _ in 0..count {
+                let v = [r.vec3()?, r.vec3()?, r.vec3()?, r.vec3()?];
+                let tet = Tet {
+                    v,
+                    density: r.f32()?,
+                };
+                bounds = bounds.union(tet.bounds());
+                local.tets.push(tet);
+            }
+            local.blocks.push(Block {
+                tets: start..local.tets.len() as u32,
+                bounds,
+                lagrangian,
+            });
+        }
     }
+    local.tets.shrink_to_fit();
     let held = local.tets.len() as u64;
     let volume = TetVolume::from_parts(local, value_range);
     Ok(Part {

@@ -719,9 +719,9 @@ impl BasisSink for BasisSums {
         self.sv += h as f64 * v;
         self.sc += h as f64 * c as f64;
         if gradient {
-            for a in 0..3 {
-                self.sdw[a] += d[a] as f64;
-                self.sdv[a] += d[a] as f64 * v;
+            for (a, &da) in d.iter().enumerate() {
+                self.sdw[a] += da as f64;
+                self.sdv[a] += da as f64 * v;
             }
         }
     }

@@ -177,6 +177,11 @@ fn sniff(head: &[u8]) -> Option<ParticleFormat> {
 pub struct TableOptions {
     pub group: Option<String>,
     pub part_type: Option<u32>,
+    /// Share `r` of `k` of the particles (`Some((r, k))`: rows
+    /// `n·r/k .. n·(r+1)/k`), for one rank of a parallel run. HDF5 files read
+    /// only those rows (hyperslabs) and say so in [`ParticleTable::rows`];
+    /// other formats read every row.
+    pub share: Option<(usize, usize)>,
 }
 
 /// A frame of a particle file: the table, and for HDF5 a line saying which
@@ -392,7 +397,8 @@ fn hdf5_from_memory(name: &Path) -> IoError {
 /// is on.
 #[cfg(feature = "hdf5")]
 fn read_hdf5(path: &Path, opts: &TableOptions) -> Result<Table, IoError> {
-    use crate::{Hdf5Kind, hdf5_kind, pysph_groups, read_gadget, read_pysph};
+    use crate::hdf5::{read_gadget_share, read_pysph_share};
+    use crate::{Hdf5Kind, hdf5_kind, pysph_groups};
 
     let kind = hdf5_kind(path)?;
     let what = match kind {
@@ -430,7 +436,7 @@ fn read_hdf5(path: &Path, opts: &TableOptions) -> Result<Table, IoError> {
                     .cloned()
                     .ok_or_else(|| IoError::format(path, "PySPH output without particle arrays"))?,
             };
-            let table = read_pysph(path, &group)?;
+            let table = read_pysph_share(path, &group, opts.share)?;
             let note = (opts.group.is_none() && groups.len() > 1).then(|| {
                 format!(
                     "PySPH particle array '{group}' (arrays: {}; pick one with --group)",
@@ -441,7 +447,7 @@ fn read_hdf5(path: &Path, opts: &TableOptions) -> Result<Table, IoError> {
         }
         Hdf5Kind::Gadget => {
             let part_type = opts.part_type.unwrap_or(0);
-            let table = read_gadget(path, part_type)?;
+            let table = read_gadget_share(path, part_type, opts.share)?;
             let note = opts.part_type.is_none().then(|| {
                 format!("SWIFT/Gadget PartType{part_type} (pick another with --part-type N)")
             });

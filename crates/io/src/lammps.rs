@@ -559,6 +559,7 @@ fn read_atoms(
         columns,
         time: header.timestep.map(|t| t as f64),
         domain: header.sim_box.map(|b| (b.lo, b.hi)),
+        rows: None,
     };
     table.derive_speed("vx", "vy", "vz");
     Ok(table)

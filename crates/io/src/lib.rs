@@ -108,7 +108,7 @@ pub use format::{ParticleFormat, TableOptions};
 #[cfg(feature = "hdf5")]
 pub use hdf5::{
     Hdf5Kind, JaxpmSnapshot, describe_hdf5, hdf5_kind, jaxpm_snapshots, pysph_groups, read_gadget,
-    read_jaxpm, read_pysph,
+    read_gadget_share, read_jaxpm, read_pysph, read_pysph_share,
 };
 pub use image::{
     read_exr_gray, read_exr_gray_from, read_png_rgb8, read_png_rgb8_from, write_exr_gray,

@@ -223,5 +223,6 @@ pub fn read_particles_timestep_from<R: Read + Seek>(
         columns: vec![("attribute".to_string(), attribute)],
         time: None,
         domain: None,
+        rows: None,
     })
 }

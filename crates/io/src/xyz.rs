@@ -569,6 +569,7 @@ fn read_atoms(
         columns,
         time: layout.time,
         domain: layout.domain(),
+        rows: None,
     };
     if let Some([x, y, z]) = &layout.velocity {
         table.derive_speed(x, y, z);

@@ -475,3 +475,45 @@ fn real_jaxpm_matches_npy() {
     let text = message_naming(read_jaxpm(&small, 4).unwrap_err(), &small);
     assert!(text.contains("snap_0, snap_1, snap_2, snap_3"), "{text}");
 }
+
+/// One rank's share of a parallel run: the shares' rows, in rank order, are
+/// the whole table's (positions and every column, strided PySPH properties
+/// and N×3 Gadget datasets included), and each says which rows it holds.
+#[test]
+fn shares_read_by_hyperslab_make_up_the_whole_table() {
+    use voxless_io::{read_gadget_share, read_pysph_share};
+    let check = |whole: &ParticleTable, parts: Vec<ParticleTable>, what: &str| {
+        let mut at = 0;
+        for p in &parts {
+            let (first, total) = p.rows.unwrap_or_else(|| panic!("{what}: rows"));
+            assert_eq!((first, total), (at, whole.len()), "{what}");
+            assert_eq!(p.positions[..], whole.positions[at..at + p.len()], "{what}");
+            for (name, values) in &p.columns {
+                let w = whole
+                    .column(name)
+                    .unwrap_or_else(|| panic!("{what}: {name}"));
+                assert_eq!(values[..], w[at..at + p.len()], "{what}: {name}");
+            }
+            assert_eq!(p.columns.len(), whole.columns.len(), "{what}");
+            at += p.len();
+        }
+        assert_eq!(at, whole.len(), "{what}");
+    };
+    let pysph = tiny("pysph_two_groups.hdf5");
+    let gadget = tiny("gadget4_snapshot.hdf5");
+    let swift = tiny("swift_snapshot.hdf5");
+    for k in [1, 2, 3, 5] {
+        let whole = read_pysph(&pysph, "fluid").unwrap();
+        let parts = (0..k)
+            .map(|r| read_pysph_share(&pysph, "fluid", Some((r, k))).unwrap())
+            .collect();
+        check(&whole, parts, &format!("pysph, {k} shares"));
+        for (file, part_type) in [(&gadget, 1), (&swift, 0)] {
+            let whole = read_gadget(file, part_type).unwrap();
+            let parts = (0..k)
+                .map(|r| read_gadget_share(file, part_type, Some((r, k))).unwrap())
+                .collect();
+            check(&whole, parts, &format!("{}, {k} shares", file.display()));
+        }
+    }
+}

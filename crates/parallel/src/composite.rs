@@ -72,27 +72,6 @@ impl TileGrid {
     pub fn owned(&self, rank: usize, ranks: usize) -> impl Iterator<Item = usize> + '_ {
         (rank..self.count()).step_by(ranks.max(1))
     }
-
-    /// Tile `t` of a row-major image with `ch` channels per pixel.
-    fn cut(&self, image: &[f32], ch: usize, t: usize) -> Vec<f32> {
-        let (x0, y0, w, h) = self.rect(t);
-        let mut out = Vec::with_capacity((w * h) as usize * ch);
-        for y in y0..y0 + h {
-            let row = (y * self.width + x0) as usize * ch;
-            out.extend_from_slice(&image[row..row + w as usize * ch]);
-        }
-        out
-    }
-
-    /// Copies tile `t` into a row-major image with `ch` channels per pixel.
-    fn paste(&self, image: &mut [f32], ch: usize, t: usize, tile: &[f32]) {
-        let (x0, y0, w, h) = self.rect(t);
-        for (r, y) in (y0..y0 + h).enumerate() {
-            let row = (y * self.width + x0) as usize * ch;
-            let n = w as usize * ch;
-            image[row..row + n].copy_from_slice(&tile[r * n..(r + 1) * n]);
-        }
-    }
 }
 
 /// The tiles one rank owns, composited: `ch` channels per pixel, tiles in
@@ -143,52 +122,99 @@ impl OwnedTiles {
 /// module docs); one premultiplied RGBA per request, alpha the total.
 pub type Rerender<'a> = dyn FnMut(&[(u32, u32, f32)]) -> Vec<[f32; 4]> + 'a;
 
-/// Messages for each rank: the non-empty tiles of `image` (`ch` channels)
-/// addressed to their owners, each as its index then its values.
-fn fragments(grid: &TileGrid, image: &[f32], ch: usize, ranks: usize) -> Vec<Vec<u8>> {
-    let mut out: Vec<Writer> = (0..ranks).map(|_| Writer::new()).collect();
-    for t in 0..grid.count() {
-        let tile = grid.cut(image, ch, t);
-        if tile.iter().all(|&v| v == 0.0) {
-            continue;
+/// Appends `v` as little-endian bytes (a plain copy on little-endian
+/// machines).
+#[inline]
+fn put_f32s(out: &mut Vec<u8>, v: &[f32]) {
+    if cfg!(target_endian = "little") {
+        out.extend_from_slice(bytemuck::cast_slice(v));
+    } else {
+        out.reserve(4 * v.len());
+        for x in v {
+            out.extend_from_slice(&x.to_le_bytes());
         }
-        let w = &mut out[grid.owner(t, ranks)];
-        w.u32(t as u32);
-        w.f32s(&tile);
     }
-    out.into_iter().map(Writer::into_bytes).collect()
 }
 
-/// The fragments received for each owned tile: `(source rank, values)`,
-/// in source order.
-fn received(
-    got: &[Vec<u8>],
+/// Little-endian `f32` bytes as values: borrowed when they are aligned on a
+/// little-endian machine (the usual case), else copied.
+fn f32s_of(b: &[u8]) -> std::borrow::Cow<'_, [f32]> {
+    match bytemuck::try_cast_slice::<u8, f32>(b) {
+        Ok(v) if cfg!(target_endian = "little") => std::borrow::Cow::Borrowed(v),
+        _ => std::borrow::Cow::Owned(
+            b.chunks_exact(4)
+                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect(),
+        ),
+    }
+}
+
+/// Messages for each rank: the non-empty tiles of `image` (`ch` channels
+/// per pixel, row-major) addressed to their owners, each as its index then
+/// its values row by row (their count follows from the grid).
+fn fragments(grid: &TileGrid, image: &[f32], ch: usize, ranks: usize) -> Vec<Vec<u8>> {
+    let mut out: Vec<Vec<u8>> = vec![Vec::new(); ranks];
+    for t in 0..grid.count() {
+        let (x0, y0, w, h) = grid.rect(t);
+        let row = |y: u32| {
+            let at = (y * grid.width + x0) as usize * ch;
+            &image[at..at + w as usize * ch]
+        };
+        if (y0..y0 + h).all(|y| row(y).iter().all(|&v| v == 0.0)) {
+            continue;
+        }
+        let m = &mut out[grid.owner(t, ranks)];
+        m.extend_from_slice(&(t as u32).to_le_bytes());
+        for y in y0..y0 + h {
+            put_f32s(m, row(y));
+        }
+    }
+    out
+}
+
+/// The fragments received for each owned tile: `(source rank, its values
+/// as little-endian bytes)`, in source order.
+/// Per owned tile, its fragments: `(source rank, values as bytes)`.
+type Fragments<'a> = Vec<Vec<(usize, &'a [u8])>>;
+
+fn received<'a>(
+    got: &'a [Vec<u8>],
     owned: &[usize],
     grid: &TileGrid,
     ch: usize,
-) -> Result<Vec<Vec<(usize, Vec<f32>)>>, CommError> {
+) -> Result<Fragments<'a>, CommError> {
     let mut slot = vec![usize::MAX; grid.count()];
     for (i, &t) in owned.iter().enumerate() {
         slot[t] = i;
     }
-    let mut out: Vec<Vec<(usize, Vec<f32>)>> = vec![Vec::new(); owned.len()];
+    let mut out: Vec<Vec<(usize, &[u8])>> = vec![Vec::new(); owned.len()];
     for (src, msg) in got.iter().enumerate() {
-        let mut r = Reader::new(msg);
-        while !r.is_done() {
-            let t = r.u32()? as usize;
-            let values = r.f32s()?;
-            let i = *slot.get(t).unwrap_or(&usize::MAX);
-            let (_, _, w, h) = grid.rect(t.min(grid.count().saturating_sub(1)));
-            if i == usize::MAX || values.len() != (w * h) as usize * ch {
-                return Err(CommError::Transport(format!(
-                    "rank {src} sent tile {t} that is not this rank's or has the wrong size"
-                )));
+        let mut at = 0;
+        while at < msg.len() {
+            let bad = || {
+                CommError::Transport(format!(
+                    "rank {src} sent a tile that is not this rank's or is cut short"
+                ))
+            };
+            let head = msg.get(at..at + 4).ok_or_else(bad)?;
+            let t = u32::from_le_bytes([head[0], head[1], head[2], head[3]]) as usize;
+            let i = *slot.get(t).ok_or_else(bad)?;
+            if i == usize::MAX {
+                return Err(bad());
             }
+            let (_, _, w, h) = grid.rect(t);
+            let len = 4 * (w * h) as usize * ch;
+            let values = msg.get(at + 4..at + 4 + len).ok_or_else(bad)?;
             out[i].push((src, values));
+            at += 4 + len;
         }
     }
     Ok(out)
 }
+
+/// An owned tile composited: its pixels, and the pixels to ask again as
+/// (source rank, pixel index in the tile, opacity in front).
+type Composited = (Vec<f32>, Vec<(usize, usize, f32)>);
 
 /// Composites one pass: this rank's premultiplied RGBA `image` (the whole
 /// image, transparent outside its box) with every other rank's, "over"
@@ -205,8 +231,8 @@ pub fn over(
     rerender: &mut Rerender,
 ) -> Result<OwnedTiles, CommError> {
     let ranks = comm.size();
-    let flat: Vec<f32> = image.iter().flatten().copied().collect();
-    let got = comm.exchange(fragments(grid, &flat, 4, ranks))?;
+    let flat: &[f32] = image.as_flattened();
+    let got = comm.exchange(fragments(grid, flat, 4, ranks))?;
     let owned: Vec<usize> = grid.owned(comm.rank(), ranks).collect();
     let frags = received(&got, &owned, grid, 4)?;
     let mut pos = vec![usize::MAX; ranks];
@@ -218,11 +244,13 @@ pub fn over(
     // Per owned tile: its composited pixels and the pixels to ask again,
     // (source rank, pixel index in the tile, opacity in front).
     let et = early_termination;
-    let done: Vec<(Vec<f32>, Vec<(usize, usize, f32)>)> = owned
+    let done: Vec<Composited> = owned
         .par_iter()
         .zip(frags.into_par_iter())
         .map(|(&t, mut fr)| {
             fr.sort_by_key(|f| pos[f.0]);
+            let fr: Vec<(usize, std::borrow::Cow<[f32]>)> =
+                fr.into_iter().map(|(src, b)| (src, f32s_of(b))).collect();
             let (_, _, w, h) = grid.rect(t);
             let n = (w * h) as usize;
             let mut px = vec![0.0f32; 4 * n];
@@ -319,8 +347,8 @@ pub fn over(
         let mut r = Reader::new(msg);
         for &(i, p) in &pending[src] {
             let px = &mut tiles[i].1[4 * p..4 * p + 4];
-            for k in 0..3 {
-                px[k] += r.f32()?;
+            for c in &mut px[..3] {
+                *c += r.f32()?;
             }
             px[3] = r.f32()?;
         }
@@ -352,7 +380,7 @@ pub fn sum(
             let mut acc = vec![0.0f64; (w * h) as usize * channels];
             // `received` keeps source order: the sum's order is fixed.
             for (_, v) in &fr {
-                for (a, x) in acc.iter_mut().zip(v) {
+                for (a, x) in acc.iter_mut().zip(f32s_of(v).iter()) {
                     *a += *x as f64;
                 }
             }
@@ -370,15 +398,15 @@ pub fn sum(
 /// the others; tiles that are zero are not sent.
 pub fn gather(comm: &dyn Comm, owned: &OwnedTiles) -> Result<Option<Vec<f32>>, CommError> {
     let ranks = comm.size();
-    let mut w = Writer::new();
+    let mut mine = Vec::new();
     for (t, v) in &owned.tiles {
         if v.iter().any(|&x| x != 0.0) {
-            w.u32(*t as u32);
-            w.f32s(v);
+            mine.extend_from_slice(&(*t as u32).to_le_bytes());
+            put_f32s(&mut mine, v);
         }
     }
     let mut send = vec![Vec::new(); ranks];
-    send[0] = w.into_bytes();
+    send[0] = mine;
     let got = comm.exchange(send)?;
     if comm.rank() != 0 {
         return Ok(None);
@@ -387,20 +415,26 @@ pub fn gather(comm: &dyn Comm, owned: &OwnedTiles) -> Result<Option<Vec<f32>>, C
     let ch = owned.channels;
     let mut image = vec![0.0f32; (g.width * g.height) as usize * ch];
     for msg in &got {
-        let mut r = Reader::new(msg);
-        while !r.is_done() {
-            let t = r.u32()? as usize;
-            let v = r.f32s()?;
-            let ok = t < g.count() && {
-                let (_, _, w, h) = g.rect(t);
-                v.len() == (w * h) as usize * ch
-            };
-            if !ok {
-                return Err(CommError::Transport(format!(
-                    "tile {t} of the wrong size or out of the image"
-                )));
+        let mut at = 0;
+        while at < msg.len() {
+            let bad =
+                || CommError::Transport("a gathered tile is cut short or out of the image".into());
+            let head = msg.get(at..at + 4).ok_or_else(bad)?;
+            let t = u32::from_le_bytes([head[0], head[1], head[2], head[3]]) as usize;
+            if t >= g.count() {
+                return Err(bad());
             }
-            g.paste(&mut image, ch, t, &v);
+            let (x0, y0, w, h) = g.rect(t);
+            let n = w as usize * ch;
+            let values = f32s_of(
+                msg.get(at + 4..at + 4 + 4 * n * h as usize)
+                    .ok_or_else(bad)?,
+            );
+            for r in 0..h as usize {
+                let row = ((y0 as usize + r) * g.width as usize + x0 as usize) * ch;
+                image[row..row + n].copy_from_slice(&values[r * n..(r + 1) * n]);
+            }
+            at += 4 + 4 * n * h as usize;
         }
     }
     Ok(Some(image))

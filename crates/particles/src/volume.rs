@@ -398,7 +398,7 @@ impl ParticleVolume {
     /// volume order.
     fn probes(&self) -> impl Iterator<Item = usize> + '_ {
         let stride = probe_stride(self.len()) as u32;
-        (0..self.len()).filter(move |&j| self.original_index[j] % stride == 0)
+        (0..self.len()).filter(move |&j| self.original_index[j].is_multiple_of(stride))
     }
 
     /// Macrocells, value range and nominal step, from the current radii —

@@ -29,6 +29,17 @@ use crate::{IoError, ParticleTable};
 /// A missing group is an error listing the `PartType` groups present; so is
 /// a dataset whose length differs from `Coordinates`'.
 pub fn read_gadget(path: &Path, part_type: u32) -> Result<ParticleTable, IoError> {
+    read_gadget_share(path, part_type, None)
+}
+
+/// [`read_gadget`] of share `r` of `k` of the particles (`share = (r, k)`:
+/// rows `n·r/k .. n·(r+1)/k`), read by hyperslab; the table's `rows` says
+/// which. `None` reads them all.
+pub fn read_gadget_share(
+    path: &Path,
+    part_type: u32,
+    share: Option<(usize, usize)>,
+) -> Result<ParticleTable, IoError> {
     let f = Hdf5File::open(path)?;
     let root = f.root();
     let gname = format!("PartType{part_type}");
@@ -49,7 +60,13 @@ pub fn read_gadget(path: &Path, part_type: u32) -> Result<ParticleTable, IoError
     // Positions.
     let coords_name = format!("{gname}/Coordinates");
     let ds = f.required_dataset(&group, "Coordinates", &coords_name)?;
-    let coords = f.read_f32(&ds, &coords_name)?;
+    let rows =
+        share.map(|(r, k)| super::share_rows(ds.shape().first().copied().unwrap_or(0), r, k));
+    let read = |ds: &hdf5_metno::Dataset, full: &str| match &rows {
+        Some(r) => f.read_f32_rows(ds, full, r.clone(), 1),
+        None => f.read_f32(ds, full),
+    };
+    let coords = read(&ds, &coords_name)?;
     if coords.shape.len() != 2 || coords.shape[1] != 3 {
         return Err(f.err(format!(
             "dataset {coords_name}: expected an N×3 array, found shape {}",
@@ -65,6 +82,7 @@ pub fn read_gadget(path: &Path, part_type: u32) -> Result<ParticleTable, IoError
     drop(coords);
     let mut table = ParticleTable {
         positions,
+        rows: rows.as_ref().map(|r| (r.start, n)),
         ..ParticleTable::default()
     };
 
@@ -84,7 +102,7 @@ pub fn read_gadget(path: &Path, part_type: u32) -> Result<ParticleTable, IoError
         if shape[0] != n {
             return Err(f.length_mismatch(&full, shape[0], &coords_name, n));
         }
-        let values = f.read_f32(&ds, &full)?.data;
+        let values = read(&ds, &full)?.data;
         if shape.len() == 1 {
             table.columns.push((name, values));
             continue;
@@ -108,7 +126,10 @@ pub fn read_gadget(path: &Path, part_type: u32) -> Result<ParticleTable, IoError
             && let Some(&mass) = masses.get(part_type as usize)
             && mass != 0.0
         {
-            table.columns.push(("Masses".into(), vec![mass as f32; n]));
+            let count = table.positions.len();
+            table
+                .columns
+                .push(("Masses".into(), vec![mass as f32; count]));
         }
         table.time = f.attr_scalar(header, owner, "Time")?;
         if let Some(size) = f.attr_f64(header, owner, "BoxSize")? {

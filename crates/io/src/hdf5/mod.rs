@@ -49,9 +49,9 @@ mod jaxpm;
 mod pysph;
 
 pub use describe::describe_hdf5;
-pub use gadget::read_gadget;
+pub use gadget::{read_gadget, read_gadget_share};
 pub use jaxpm::{JaxpmSnapshot, jaxpm_snapshots, read_jaxpm};
-pub use pysph::{pysph_groups, read_pysph};
+pub use pysph::{pysph_groups, read_pysph, read_pysph_share};
 
 /// The 8-byte signature at the start of an HDF5 superblock.
 const SIGNATURE: &[u8; 8] = b"\x89HDF\r\n\x1a\n";
@@ -124,6 +124,13 @@ pub(crate) fn name_list(names: &[String]) -> String {
 }
 
 /// A shape as `(a, b, c)`; `()` for a scalar.
+/// Rows `n·r/k .. n·(r+1)/k` of `n`: share `r` of `k`.
+pub(crate) fn share_rows(n: usize, r: usize, k: usize) -> std::ops::Range<usize> {
+    let k = k.max(1) as u128;
+    let at = |r: usize| ((n as u128 * r as u128) / k) as usize;
+    at(r.min(k as usize))..at((r + 1).min(k as usize))
+}
+
 pub(crate) fn shape_text(shape: &[usize]) -> String {
     match shape {
         [n] => format!("({n},)"),
@@ -316,6 +323,65 @@ impl<'p> Hdf5File<'p> {
         } else {
             let wide = ds.read_raw::<f64>().map_err(|e| self.h5err(&what, e))?;
             wide.into_iter().map(|v| v as f32).collect()
+        };
+        Ok(Values { shape, data })
+    }
+
+    /// Rows `rows` of the numeric 1-D or N×k dataset `ds` (path `full`) as
+    /// `f32`, read by hyperslab: entries `rows.start·per .. rows.end·per`
+    /// of the first axis (`per` > 1 for PySPH's strided arrays), every
+    /// entry of the second. The shape returned is the whole dataset's.
+    pub(crate) fn read_f32_rows(
+        &self,
+        ds: &h5::Dataset,
+        full: &str,
+        rows: std::ops::Range<usize>,
+        per: usize,
+    ) -> Result<Values, IoError> {
+        let what = format!("dataset {full}");
+        self.expect_numeric(ds, &what)?;
+        let shape = ds.shape();
+        self.checked_count(ds, &shape, !ds.filters().is_empty(), &what)?;
+        let first = shape.first().copied().unwrap_or(0);
+        let (a, b) = ((rows.start * per).min(first), (rows.end * per).min(first));
+        let single = matches!(
+            ds.dtype().and_then(|t| t.to_descriptor()),
+            Ok(TypeDescriptor::Float(FloatSize::U4))
+        );
+        let err = |e| self.h5err(&what, e);
+        let slab = || -> h5::Selection {
+            h5::Hyperslab::from(vec![
+                h5::SliceOrIndex::from(a..b),
+                h5::SliceOrIndex::from(..),
+            ])
+            .into()
+        };
+        let data: Vec<f32> = match (shape.len(), single) {
+            (1, true) => ds.read_slice_1d::<f32, _>(a..b).map_err(err)?.to_vec(),
+            (1, false) => ds
+                .read_slice_1d::<f64, _>(a..b)
+                .map_err(err)?
+                .iter()
+                .map(|&v| v as f32)
+                .collect(),
+            (2, true) => ds
+                .read_slice_2d::<f32, _>(slab())
+                .map_err(err)?
+                .iter()
+                .copied()
+                .collect(),
+            (2, false) => ds
+                .read_slice_2d::<f64, _>(slab())
+                .map_err(err)?
+                .iter()
+                .map(|&v| v as f32)
+                .collect(),
+            _ => {
+                return Err(self.err(format!(
+                    "{what}: expected a 1-D or N×k array, found shape {}",
+                    shape_text(&shape)
+                )));
+            }
         };
         Ok(Values { shape, data })
     }

@@ -40,6 +40,17 @@ pub fn pysph_groups(path: &Path) -> Result<Vec<String>, IoError> {
 /// that lists the groups present; so is a property whose length is not the
 /// number of particles.
 pub fn read_pysph(path: &Path, group: &str) -> Result<ParticleTable, IoError> {
+    read_pysph_share(path, group, None)
+}
+
+/// [`read_pysph`] of share `r` of `k` of the particles (`share = (r, k)`:
+/// rows `n·r/k .. n·(r+1)/k`), read by hyperslab; the table's `rows` says
+/// which. `None` reads them all.
+pub fn read_pysph_share(
+    path: &Path,
+    group: &str,
+    share: Option<(usize, usize)>,
+) -> Result<ParticleTable, IoError> {
     let f = Hdf5File::open(path)?;
     let particles = particles_group(&f)?;
     let groups = f.subgroup_names(&particles, "particles", |_| true)?;
@@ -56,33 +67,47 @@ pub fn read_pysph(path: &Path, group: &str) -> Result<ParticleTable, IoError> {
         ))
     })?;
 
-    // Positions.
+    // Positions (this share's rows of them).
+    let x_full = format!("{prefix}/x");
+    let total = f
+        .required_dataset(&arrays, "x", &x_full)?
+        .shape()
+        .first()
+        .copied()
+        .unwrap_or(0);
+    let rows = share.map(|(r, k)| super::share_rows(total, r, k));
+    let read = |ds: &h5::Dataset, full: &str, per: usize| match &rows {
+        Some(r) => f.read_f32_rows(ds, full, r.clone(), per),
+        None => f.read_f32(ds, full),
+    };
     let mut coords = Vec::with_capacity(3);
     for axis in ["x", "y", "z"] {
         let full = format!("{prefix}/{axis}");
         let ds = f.required_dataset(&arrays, axis, &full)?;
-        let values = f.read_f32(&ds, &full)?;
+        let values = read(&ds, &full, 1)?;
         if values.shape.len() != 1 {
             return Err(f.err(format!(
                 "dataset {full}: expected a 1-D array, found shape {}",
                 super::shape_text(&values.shape)
             )));
         }
-        coords.push((full, values.data));
+        coords.push((full, values.shape[0], values.data));
     }
-    let n = coords[0].1.len();
-    for (full, data) in &coords[1..] {
-        if data.len() != n {
-            return Err(f.length_mismatch(full, data.len(), &coords[0].0, n));
+    let n = coords[0].1;
+    for (full, len, _) in &coords[1..] {
+        if *len != n {
+            return Err(f.length_mismatch(full, *len, &coords[0].0, n));
         }
     }
-    let positions = (0..n)
-        .map(|i| [coords[0].1[i], coords[1].1[i], coords[2].1[i]])
+    let count = coords[0].2.len();
+    let positions = (0..count)
+        .map(|i| [coords[0].2[i], coords[1].2[i], coords[2].2[i]])
         .collect();
     drop(coords);
 
     let mut table = ParticleTable {
         positions,
+        rows: rows.as_ref().map(|r| (r.start, n)),
         ..ParticleTable::default()
     };
     let reference = format!("{prefix}/x");
@@ -106,7 +131,7 @@ pub fn read_pysph(path: &Path, group: &str) -> Result<ParticleTable, IoError> {
         if len != n && (stride <= 1 || Some(len) != n.checked_mul(stride)) {
             return Err(f.length_mismatch(&full, len, &reference, n));
         }
-        let values = f.read_f32(&ds, &full)?.data;
+        let values = read(&ds, &full, if len == n { 1 } else { stride })?.data;
         if len == n {
             table.columns.push((name, values));
         } else {

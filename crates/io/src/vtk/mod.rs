@@ -104,6 +104,7 @@ pub fn read_vtk_points_bytes(bytes: &[u8], name: &Path) -> Result<ParticleTable,
         columns: Vec::new(),
         time,
         domain: None,
+        rows: None,
     };
     arrays.to_columns(&mut table.columns, None);
     if let Some([x, y, z]) = arrays.velocity_names() {

@@ -161,6 +161,7 @@ fn table_options_and_unsupported_sources() {
     let group = TableOptions {
         group: Some("fluid".into()),
         part_type: None,
+        share: None,
     };
     let err = read_table_from(Cursor::new(csv), name, F::Csv, 0, &group)
         .err()
@@ -211,6 +212,7 @@ fn hdf5_table_dispatch() {
     let type1 = TableOptions {
         group: None,
         part_type: Some(1),
+        share: None,
     };
     let gadget = read("gadget4_snapshot.hdf5", &type1).unwrap();
     assert!(!gadget.table.is_empty() && gadget.note.is_none());
@@ -218,6 +220,7 @@ fn hdf5_table_dispatch() {
     let group = TableOptions {
         group: Some("fluid".into()),
         part_type: None,
+        share: None,
     };
     let err = read("gadget4_snapshot.hdf5", &group)
         .unwrap_err()
