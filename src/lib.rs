@@ -46,6 +46,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod autorange;
 mod camera;
 pub mod demo;
 mod error;
@@ -61,7 +62,9 @@ pub use frame::WorldFrame;
 pub use load::AmrArrays;
 pub use load::{Loaded, frame_count, load, read_points, read_scene};
 pub use memory::ParticleArrays;
-pub use resolve::{Resolved, resolve, resolve_in, transfer_function, transfer_function_at};
+pub use resolve::{
+    Resolved, resolve, resolve_in, resolve_with, transfer_function, transfer_function_at,
+};
 pub use scene::Scene;
 pub use volume::AnyVolume;
 

@@ -15,7 +15,8 @@ use voxless_scene::{
 };
 use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
 
-use crate::camera::{ViewAdjust, default_light_direction};
+use crate::autorange::{HIGH_PERCENTILE, LOW_PERCENTILE, Probe, TARGET_OPTICAL_DEPTH};
+use crate::camera::{DEFAULT_UP, VIEW_FOV_DEG, ViewAdjust, default_eye, default_light_direction};
 use crate::load::{positive, range};
 use crate::{AnyVolume, SceneError, WorldFrame};
 
@@ -49,6 +50,21 @@ pub fn resolve_in(
     desc: &SceneDesc,
     base: &Path,
 ) -> Result<Resolved, SceneError> {
+    resolve_with(volume, frame, desc, base, None, None)
+}
+
+/// [`resolve_in`] with defaults taken over more than this volume: a probe
+/// of the field (see [`Probe`]; e.g. merged over every frame of a time
+/// series) for the value range and opacity scale, and the world box to
+/// frame with the camera (e.g. the union over the frames).
+pub fn resolve_with(
+    volume: &AnyVolume,
+    frame: &WorldFrame,
+    desc: &SceneDesc,
+    base: &Path,
+    probe: Option<&Probe>,
+    framed: Option<([f64; 3], [f64; 3])>,
+) -> Result<Resolved, SceneError> {
     let mut notes = Vec::new();
     let tf = transfer_function_at(&desc.transfer, base, &mut notes)?;
     let width = desc.image.width.unwrap_or(800);
@@ -66,19 +82,18 @@ pub fn resolve_in(
             "samples per pixel must be ≥ 1",
         ));
     }
-    let camera = camera(
-        &desc.camera,
-        &volume.bounds(),
-        width as f32 / height as f32,
-        frame,
-    )?;
+    let bounds = match framed {
+        Some((lo, hi)) => Aabb::new(frame.to_local(lo), frame.to_local(hi)),
+        None => volume.bounds(),
+    };
+    let camera = camera(&desc.camera, &bounds, width as f32 / height as f32, frame)?;
 
     let mut settings = volume.default_settings(width, height);
     settings.spp = spp;
     let r = &desc.render;
     if let Some(step) = r.step {
-        positive("render.step", step)?;
-        settings.step = Some(step);
+        positive("render.step (--step)", step)?;
+        settings.step = Some(frame.length_to_local(step as f64));
     }
     if let Some(rate) = r.sampling_rate {
         positive("render.sampling_rate", rate)?;
@@ -98,10 +113,6 @@ pub fn resolve_in(
         // spacing across need a denser medium to show.
         settings.opacity_scale = 100.0 / volume.bounds().diagonal().max(1e-12);
     }
-    if let Some(s) = r.opacity_scale {
-        positive("render.opacity_scale", s)?;
-        settings.opacity_scale = s;
-    }
     settings.packets = r.packets.unwrap_or(true);
     settings.log_scale = r.log_scale.unwrap_or(matches!(volume, AnyVolume::Tets(..)));
     if settings.log_scale {
@@ -112,8 +123,68 @@ pub fn resolve_in(
         let lo = if vr.lo > 0.0 { vr.lo.log10() } else { hi - 3.0 };
         settings.value_range = Range1::new(lo, hi);
     }
-    if let Some([lo, hi]) = desc.transfer.value_range {
-        settings.value_range = range("transfer.value_range", lo, hi)?;
+    if let Some(c) = r.clip {
+        let b = frame.box_to_local(c);
+        if !c.iter().all(|v| v.is_finite()) || b.is_empty() {
+            return Err(SceneError::setting(
+                "render.clip (--clip)",
+                format!("{c:?} is not a finite box with min ≤ max"),
+            ));
+        }
+        settings.clip = Some(b);
+    }
+    // What the data looks like along probe rays (a time series passes the
+    // probe of all its frames), for the defaults below; inside the clip box,
+    // as that is what the image shows.
+    let needs_probe = desc.transfer.value_range.is_none() || r.opacity_scale.is_none();
+    let own_probe;
+    let probe = match (needs_probe, probe) {
+        (false, _) => None,
+        (true, Some(p)) => Some(p),
+        (true, None) => {
+            own_probe = Probe::of(volume, settings.clip.as_ref());
+            Some(&own_probe)
+        }
+    };
+    let units = if settings.log_scale { "log10 " } else { "" };
+    match desc.transfer.value_range {
+        Some([lo, hi]) => {
+            settings.value_range = range("transfer.value_range (--value-range)", lo, hi)?;
+        }
+        None => {
+            let floor_zero = matches!(volume, AnyVolume::Particles(_));
+            if let Some(vr) = probe.and_then(|p| p.value_range(floor_zero, settings.log_scale)) {
+                settings.value_range = vr;
+                notes.push(format!(
+                    "value range [{:.4e}, {:.4e}] ({units}{} of the field in the data; set \
+                     with --value-range)",
+                    vr.lo,
+                    vr.hi,
+                    if floor_zero {
+                        format!("0 to the {HIGH_PERCENTILE}th percentile")
+                    } else {
+                        format!("{LOW_PERCENTILE}th to {HIGH_PERCENTILE}th percentile")
+                    }
+                ));
+            }
+        }
+    }
+    match r.opacity_scale {
+        Some(s) => {
+            positive("render.opacity_scale (--opacity-scale)", s)?;
+            // Extinction per world length → per local length.
+            settings.opacity_scale = (s as f64 * frame.scale) as f32;
+        }
+        None => {
+            if let Some(s) = probe.and_then(|p| p.opacity_scale(&tf, &settings)) {
+                settings.opacity_scale = s;
+                notes.push(format!(
+                    "opacity scale {:.4e} per unit length (a typical ray through the data \
+                     reaches optical depth {TARGET_OPTICAL_DEPTH}; set with --opacity-scale)",
+                    s as f64 / frame.scale
+                ));
+            }
+        }
     }
     settings.seed = r.seed.unwrap_or(0);
     if let Some(iso) = &r.iso {
@@ -140,16 +211,6 @@ pub fn resolve_in(
         settings.iso_opacity = o;
     }
     settings.volume = r.volume.unwrap_or(true);
-    if let Some(c) = r.clip {
-        let b = frame.box_to_local(c);
-        if !c.iter().all(|v| v.is_finite()) || b.is_empty() {
-            return Err(SceneError::setting(
-                "render.clip",
-                format!("{c:?} is not a finite box with min ≤ max"),
-            ));
-        }
-        settings.clip = Some(b);
-    }
     if let AnyVolume::Amr(v) = volume {
         let visible = v.visible_region_count(&|r: Range1| settings.is_visible(&tf, r));
         notes.push(format!(
@@ -320,26 +381,70 @@ pub(crate) fn camera(
     aspect: f32,
     frame: &WorldFrame,
 ) -> Result<Camera, SceneError> {
-    let framing = Camera::framing(bounds, aspect);
-    let eye = c.eye.map(|p| frame.to_local(p)).unwrap_or(framing.eye);
+    let mut up = Vec3::from_array(c.up.unwrap_or(DEFAULT_UP));
+    if !(up.is_finite() && up.length_squared() > 0.0) {
+        return Err(SceneError::setting(
+            "camera.up (--up)",
+            format!("{:?} is not a finite, non-zero vector", up.to_array()),
+        ));
+    }
+    let fov = c.fov.unwrap_or(VIEW_FOV_DEG);
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(SceneError::setting(
+            "camera.fov (--fov)",
+            format!("{fov} is outside (0, 180) degrees"),
+        ));
+    }
+    for (field, p) in [
+        ("camera.eye (--eye)", c.eye),
+        ("camera.look_at (--look-at)", c.look_at),
+    ] {
+        if let Some(p) = p
+            && !p.iter().all(|v| v.is_finite())
+        {
+            return Err(SceneError::setting(field, format!("{p:?} is not finite")));
+        }
+    }
     let look_at = c
         .look_at
         .map(|p| frame.to_local(p))
         .unwrap_or(bounds.center());
-    let up =
-        c.up.map(Vec3::from_array)
-            .unwrap_or(Vec3::new(0.0, 1.0, 0.0));
+    let eye = match c.eye {
+        Some(p) => frame.to_local(p),
+        None => default_eye(bounds, aspect, up, fov).ok_or_else(|| {
+            SceneError::setting(
+                "camera",
+                format!(
+                    "the data's bounds {:?}..{:?} cannot be framed; give --eye and --look-at",
+                    bounds.min.to_array(),
+                    bounds.max.to_array()
+                ),
+            )
+        })?,
+    };
+    if c.up.is_none() && eye != look_at {
+        // The default up (+z) along the line of sight of an explicit eye
+        // (looking straight down or up): +y instead, as before +z was the
+        // default.
+        let d = (look_at - eye).normalized();
+        if d.is_finite() && d.z.abs() > 0.999 {
+            up = Vec3::new(0.0, 1.0, 0.0);
+        }
+    }
     // Orbit, elevation and zoom act on the eye the lines above chose.
     let view = ViewAdjust::from_desc(c)?;
     let ortho = c.projection == Some(ProjectionName::Orthographic);
     let eye = view.place_eye(eye, look_at, up, !ortho);
     let projection = match c.projection.unwrap_or(ProjectionName::Perspective) {
-        ProjectionName::Perspective => Projection::Perspective {
-            fov_y_deg: c.fov.unwrap_or(30.0),
-        },
+        ProjectionName::Perspective => Projection::Perspective { fov_y_deg: fov },
         ProjectionName::Orthographic => {
-            let h = c.ortho_height.unwrap_or(bounds.diagonal());
-            positive("camera.ortho_height", h)?;
+            let h = match c.ortho_height {
+                Some(h) => {
+                    positive("camera.ortho_height (--orthographic)", h)?;
+                    frame.length_to_local(h as f64)
+                }
+                None => bounds.diagonal(),
+            };
             let h = h / view.zoom;
             Projection::Orthographic {
                 half_width: 0.5 * h * aspect,

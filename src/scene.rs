@@ -164,7 +164,14 @@ impl Scene {
         if let (AnyVolume::Materials(_), Some(p)) = (&self.volume, &desc.particles) {
             // Each material is rebuilt from the new frame (no buffer reuse).
             let mats = p.materials.as_deref().unwrap_or_default();
-            let v = load::materials::load_materials(p, mats, base, &mut Vec::new(), frame)?;
+            let (v, _) = load::materials::load_materials(
+                p,
+                mats,
+                base,
+                &mut Vec::new(),
+                frame,
+                Some(&self.frame),
+            )?;
             self.volume = AnyVolume::Materials(Box::new(v));
             return Ok(());
         }
@@ -174,12 +181,10 @@ impl Scene {
                 "time series are supported for particle data",
             ));
         };
-        let particles::FrameData {
-            data,
-            main_file,
-            files,
-            ..
-        } = particles::read_frame(p, base, frame)?;
+        let fd = particles::read_frame(p, base, frame)?;
+        let kernel = fd.kernel(p);
+        let (mut data, main_file, files) = fd.place(&self.frame);
+        particles::localise(&mut data, kernel, self.frame.scale);
         v.load_frame(data)
             .map_err(|source| particles::blame(main_file, &files, source))?;
         Ok(())

@@ -187,8 +187,8 @@ fn table_summary(
     let which = frame.map(|f| format!("frame {f}: ")).unwrap_or_default();
     writeln!(out, "{which}{}{}", count(t.len()), time_of(format, t.time))?;
     if !t.is_empty() {
-        let mut lo = [f32::INFINITY; 3];
-        let mut hi = [f32::NEG_INFINITY; 3];
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
         for p in &t.positions {
             for a in 0..3 {
                 lo[a] = lo[a].min(p[a]);

@@ -204,11 +204,7 @@ fn run(cli: Cli) -> Result<()> {
             let pts = voxless::read_points(&points)?;
             let cols = s.volume.sample_columns(gradient);
             let t = Instant::now();
-            let world: Vec<[f64; 3]> = pts
-                .iter()
-                .map(|p| [p.x as f64, p.y as f64, p.z as f64])
-                .collect();
-            let values = s.sample(&world, gradient);
+            let values = s.sample(&pts, gradient);
             voxless::io::write_npy_f32(&output, &[pts.len(), cols.len()], &values)?;
             eprintln!(
                 "sampled {} points in {:.2}s → {} (columns: {})",

@@ -4,10 +4,9 @@
 
 use std::path::Path;
 
-use voxless_tets::LagrangianGrid;
-
 use voxless_scene::TetsDesc;
 
+use super::tets::WorldGrid;
 use crate::SceneError;
 
 /// The Lagrangian grid of snapshot `t.snapshot` (default: the last) of the
@@ -17,8 +16,7 @@ pub(crate) fn grid(
     t: &TetsDesc,
     path: &Path,
     notes: &mut Vec<String>,
-) -> Result<LagrangianGrid, SceneError> {
-    use voxless_core::Vec3;
+) -> Result<WorldGrid, SceneError> {
     use voxless_io::{Hdf5Kind, hdf5_kind, jaxpm_snapshots, read_jaxpm};
 
     let kind = hdf5_kind(path)?;
@@ -93,11 +91,17 @@ pub(crate) fn grid(
         "JaxPM snapshot snap_{k}{scale}: N = {}, box L = {}{others}",
         snap.n, snap.box_size
     ));
-    Ok(LagrangianGrid {
+    let grid = WorldGrid {
         n: snap.n,
-        box_size: snap.box_size as f32,
-        positions: snap.positions.into_iter().map(Vec3::from_array).collect(),
-    })
+        box_size: snap.box_size,
+        positions: snap
+            .positions
+            .into_iter()
+            .map(|p| p.map(f64::from))
+            .collect(),
+    };
+    super::tets::check_grid(&grid, path)?;
+    Ok(grid)
 }
 
 /// Without the `hdf5` feature a JaxPM file is an error saying how to build
@@ -107,6 +111,6 @@ pub(crate) fn grid(
     _: &TetsDesc,
     path: &Path,
     _: &mut Vec<String>,
-) -> Result<LagrangianGrid, SceneError> {
+) -> Result<WorldGrid, SceneError> {
     Err(crate::formats::hdf5::unsupported(path))
 }

@@ -534,14 +534,11 @@ fn read_atoms(
         }
     }
 
-    let mut positions: Vec<[f32; 3]> = raw_positions
+    let mut positions: Vec<[f64; 3]> = raw_positions
         .into_iter()
-        .map(|p| {
-            let p = match (scaled, &header.sim_box) {
-                (true, Some(b)) => b.unscale(p),
-                _ => p,
-            };
-            [p[0] as f32, p[1] as f32, p[2] as f32]
+        .map(|p| match (scaled, &header.sim_box) {
+            (true, Some(b)) => b.unscale(p),
+            _ => p,
         })
         .collect();
     if id_col.is_some() {
