@@ -263,6 +263,7 @@ pub fn resolve_with(
         }
     }
     refuse_what_the_kind_cannot_honour(volume, &settings)?;
+    refuse_absurd_work(volume, frame, desc, &camera, &tf, &settings)?;
     let background = r.background.unwrap_or([0.0; 3]);
     Ok(Resolved {
         camera,
@@ -454,6 +455,75 @@ pub(crate) fn camera(
     };
     Camera::look_at(eye, look_at, up, projection)
         .map_err(|e| SceneError::setting("camera", e.to_string()))
+}
+
+/// Mean samples per camera ray beyond which a render is refused: real data
+/// needs thousands (10⁹ particles: ~8,000 at the default radius); a
+/// quarter of a million means a radius or step far below the data's scale,
+/// and minutes for even a thumbnail.
+pub const MAX_SAMPLES_PER_RAY: f64 = (1u64 << 18) as f64;
+/// Samples in all beyond which a render is refused (about a day at 10⁸
+/// samples per second).
+pub const MAX_SAMPLES: f64 = 1e13;
+
+/// A render whose estimated work (see [`AnyVolume::estimate_work`]) is
+/// absurd is an error with the estimate and the flags that change it,
+/// before any work starts.
+fn refuse_absurd_work(
+    volume: &AnyVolume,
+    frame: &WorldFrame,
+    desc: &SceneDesc,
+    camera: &Camera,
+    tf: &TransferFunction,
+    settings: &RenderSettings,
+) -> Result<(), SceneError> {
+    let work = volume.estimate_work(camera, tf, settings);
+    if work.per_ray <= MAX_SAMPLES_PER_RAY && work.total <= MAX_SAMPLES {
+        return Ok(());
+    }
+    let extent = frame.length_to_world(volume.bounds().diagonal());
+    let given_radius = desc
+        .particles
+        .as_ref()
+        .is_some_and(|p| p.radius.is_some() || p.radii.is_some());
+    let (field, fix) = if let Some(step) = desc.render.step {
+        (
+            "render.step (--step)",
+            format!("the step {step} is tiny against the data (extent {extent:.3e}): give a larger --step"),
+        )
+    } else if given_radius {
+        (
+            "particles.radius (--radius)",
+            format!(
+                "the particles' supports are tiny against the data (extent {extent:.3e}), and \
+                 rays step 1/8 of a support: give a larger --radius (or omit it for one from \
+                 the particle spacing), or a --step"
+            ),
+        )
+    } else if work.per_ray > MAX_SAMPLES_PER_RAY {
+        (
+            "render.step (--step)",
+            format!(
+                "the data's own step is tiny against its extent ({extent:.3e}) — outliers far \
+                 from the rest, or a sampling rate too high: give a --step (e.g. {:.3e}), a \
+                 smaller --sampling-rate, or leave out the outliers",
+                extent / 2000.0
+            ),
+        )
+    } else {
+        (
+            "image (--size, --spp)",
+            "give a smaller --size or fewer --spp".to_string(),
+        )
+    };
+    Err(SceneError::setting(
+        field,
+        format!(
+            "this render would take about {:.1e} samples per ray, {:.1e} in all (limits \
+             {MAX_SAMPLES_PER_RAY:.1e} per ray, {MAX_SAMPLES:.0e} in all): {fix}",
+            work.per_ray, work.total
+        ),
+    ))
 }
 
 /// Settings the volume's kind cannot honour are errors naming them.
