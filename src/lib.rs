@@ -47,20 +47,23 @@
 //! ```
 
 pub mod autorange;
+pub mod budget;
 mod camera;
 pub mod demo;
 mod error;
 mod frame;
 pub mod load;
 mod memory;
+pub mod output;
 mod resolve;
 mod scene;
+pub mod series;
 mod volume;
 
 pub use error::{Error, SceneError};
 pub use frame::WorldFrame;
 pub use load::AmrArrays;
-pub use load::{Loaded, frame_count, load, read_points, read_scene};
+pub use load::{Loaded, frame_count, frame_numbers, load, read_points, read_scene};
 pub use memory::ParticleArrays;
 pub use resolve::{
     Resolved, resolve, resolve_in, resolve_with, transfer_function, transfer_function_at,

@@ -75,6 +75,7 @@ pub fn resolve_with(
             format!("{width}×{height} is outside 1..=32768 per side"),
         ));
     }
+    crate::budget::check_image_memory(width, height)?;
     let spp = desc.image.spp.unwrap_or(1);
     if spp == 0 {
         return Err(SceneError::setting(
@@ -223,12 +224,23 @@ pub fn resolve_with(
     }
     if let AnyVolume::Tets(_) = volume
         && let Some(t) = &desc.tets
-        && t.mode == Some(TetModeName::Kbuffer)
     {
-        settings.event_budget = Some(EventBudget {
-            k: t.k.unwrap_or(16).max(1),
-            layers: t.layers.unwrap_or(64).max(1),
-        });
+        if t.mode == Some(TetModeName::Kbuffer) {
+            settings.event_budget = Some(EventBudget {
+                k: at_least_one("tets.k (--k)", t.k.unwrap_or(16))?,
+                layers: at_least_one("tets.layers (--layers)", t.layers.unwrap_or(64))?,
+            });
+        } else if t.k.is_some() || t.layers.is_some() {
+            return Err(SceneError::setting(
+                if t.k.is_some() {
+                    "tets.k (--k)"
+                } else {
+                    "tets.layers (--layers)"
+                },
+                "applies to the k-buffer only: add --tet-mode kbuffer (scene: tets.mode), \
+                 or leave it out for the exact render",
+            ));
+        }
     }
     if let Some(l) = &desc.light {
         let dir = match l.direction {
@@ -263,8 +275,13 @@ pub fn resolve_with(
         }
     }
     refuse_what_the_kind_cannot_honour(volume, &settings)?;
-    refuse_absurd_work(volume, frame, desc, &camera, &tf, &settings)?;
     let background = r.background.unwrap_or([0.0; 3]);
+    if !background.iter().all(|c| c.is_finite() && *c >= 0.0) {
+        return Err(SceneError::setting(
+            "render.background (--background)",
+            format!("{background:?} is not a colour: give three finite linear RGB values ≥ 0"),
+        ));
+    }
     Ok(Resolved {
         camera,
         tf,
@@ -272,6 +289,13 @@ pub fn resolve_with(
         background,
         notes,
     })
+}
+
+fn at_least_one(field: &str, v: usize) -> Result<usize, SceneError> {
+    if v == 0 {
+        return Err(SceneError::setting(field, "must be at least 1"));
+    }
+    Ok(v)
 }
 
 /// The single-scattering settings of a light with `shadows = true`.
@@ -468,20 +492,28 @@ pub const MAX_SAMPLES: f64 = 1e13;
 
 /// A render whose estimated work (see [`AnyVolume::estimate_work`]) is
 /// absurd is an error with the estimate and the flags that change it,
-/// before any work starts.
-fn refuse_absurd_work(
+/// before any work starts. Otherwise returns a note when the step was
+/// raised to what f32 can resolve along the rays.
+pub(crate) fn check_work(
     volume: &AnyVolume,
     frame: &WorldFrame,
     desc: &SceneDesc,
     camera: &Camera,
     tf: &TransferFunction,
     settings: &RenderSettings,
-) -> Result<(), SceneError> {
+) -> Result<Option<String>, SceneError> {
     let work = volume.estimate_work(camera, tf, settings);
-    if work.per_ray <= MAX_SAMPLES_PER_RAY && work.total <= MAX_SAMPLES {
-        return Ok(());
-    }
     let extent = frame.length_to_world(volume.bounds().diagonal());
+    if work.per_ray <= MAX_SAMPLES_PER_RAY && work.total <= MAX_SAMPLES {
+        return Ok(work.step_raised.then(|| {
+            format!(
+                "the ray-marching step is finer than float32 can resolve along the rays \
+                 (data extent {extent:.3e}); it was raised to {} units in the last place of \
+                 the distance along each ray",
+                voxless_render::MIN_STEP_ULPS
+            )
+        }));
+    }
     let given_radius = desc
         .particles
         .as_ref()
@@ -489,9 +521,12 @@ fn refuse_absurd_work(
     let (field, fix) = if let Some(step) = desc.render.step {
         (
             "render.step (--step)",
-            format!("the step {step} is tiny against the data (extent {extent:.3e}): give a larger --step"),
+            format!(
+                "the step {step} is tiny against the data (extent {extent:.3e}): give a \
+                 larger --step"
+            ),
         )
-    } else if given_radius {
+    } else if given_radius && work.per_ray > MAX_SAMPLES_PER_RAY {
         (
             "particles.radius (--radius)",
             format!(

@@ -22,7 +22,7 @@ use voxless_scene::SceneDesc;
 
 pub use amr::AmrArrays;
 pub(crate) use amr::build_amr;
-pub use particles::{SUPPORT_PER_SPACING, default_radius, frame_count};
+pub use particles::{SUPPORT_PER_SPACING, default_radius, frame_count, frame_numbers};
 pub(crate) use particles::{positive, range};
 
 use crate::{AnyVolume, SceneError, WorldFrame};

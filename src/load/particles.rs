@@ -132,34 +132,37 @@ pub(crate) fn frame_for(reach: Option<([f64; 3], [f64; 3])>) -> WorldFrame {
     reach.map_or_else(WorldFrame::default, |(lo, hi)| WorldFrame::fit(lo, hi))
 }
 
-/// The file of `spec` for frame `frame`: the `frame`-th of a sequence, or the
-/// file itself (the same for every frame).
+/// The file of `spec` for frame number `frame` (see [`frames`]): the file
+/// numbered `frame` of a sequence, or the file itself (the same for every
+/// frame).
 fn frame_file(spec: &str, base: &Path, frame: usize) -> Result<PathBuf, SceneError> {
-    let files = frames::expand(spec, base)?;
-    if files.len() == 1 && !frames::is_sequence(spec, base) {
-        return Ok(files[0].clone());
+    if frames::is_sequence(spec, base) {
+        frames::file_numbered(spec, base, frame)
+    } else {
+        Ok(base.join(spec))
     }
-    files.get(frame).cloned().ok_or_else(|| {
-        SceneError::data(
-            base.join(spec),
-            format!(
-                "frame {frame} requested, but the pattern matches {} files (frames 0..{})",
-                files.len(),
-                files.len() - 1
-            ),
-        )
-    })
 }
 
-/// The particle file of frame `frame` and the frame to read in it: the
-/// `frame`-th file (its first frame) of a sequence, else frame `frame` of
-/// the file itself (single-frame formats have the same data every frame).
+/// The particle file of frame number `frame` and the frame to read in it:
+/// the file numbered `frame` (its first frame) of a sequence, else frame
+/// `frame` of the file itself, which must have it.
 fn locate(spec: &str, base: &Path, frame: usize) -> Result<(PathBuf, usize), SceneError> {
     if frames::is_sequence(spec, base) {
-        Ok((frame_file(spec, base, frame)?, 0))
-    } else {
-        Ok((base.join(spec), frame))
+        return Ok((frames::file_numbered(spec, base, frame)?, 0));
     }
+    let path = base.join(spec);
+    if frame > 0
+        && let Some(format) = ParticleFormat::detect(&path)?
+    {
+        let count = formats::frames_in(&path, format)?;
+        if frame >= count {
+            return Err(SceneError::data(
+                &path,
+                format!("frame {frame} was asked for, but the file holds frames 0..{count}"),
+            ));
+        }
+    }
+    Ok((path, frame))
 }
 
 /// The columns SPH output carries for smoothing lengths and masses, when
@@ -396,23 +399,49 @@ pub(crate) fn build_particles(
     ParticleVolume::new(data, settings).map_err(BuildError::Data)
 }
 
-/// Number of frames the scene's data source names: the files of a sequence
-/// (see [`frames`]), the frames of a multi-frame file (LAMMPS dump, XYZ,
-/// `.particles`), else 1.
-pub fn frame_count(desc: &voxless_scene::SceneDesc, base: &Path) -> Result<usize, SceneError> {
-    match &desc.particles {
-        Some(ParticlesDesc { file: Some(f), .. }) if frames::is_sequence(f, base) => {
-            Ok(frames::expand(f, base)?.len())
-        }
-        Some(ParticlesDesc { file: Some(f), .. }) => {
-            let path = base.join(f);
-            match ParticleFormat::detect(&path)? {
-                Some(format) => formats::frames_in(&path, format),
-                None => Ok(1),
+/// The frame numbers of the scene's data (see [`frames`]): the numbers of
+/// a sequence's files — over every sequence the particles pair (positions,
+/// attribute, radii, weights), so a number one of them lacks is found when
+/// that frame is loaded — the frames 0, 1, … of a multi-frame file (LAMMPS
+/// dump, XYZ, `.particles`), else just 0.
+pub fn frame_numbers(
+    desc: &voxless_scene::SceneDesc,
+    base: &Path,
+) -> Result<Vec<usize>, SceneError> {
+    let Some(p) = &desc.particles else {
+        return Ok(vec![0]);
+    };
+    let Some(f) = &p.file else {
+        return Ok(vec![0]);
+    };
+    if frames::is_sequence(f, base) {
+        let mut numbers = Vec::new();
+        let specs = [
+            Some(f),
+            p.attribute.as_ref(),
+            p.radii.as_ref(),
+            p.weights.as_ref(),
+        ];
+        for spec in specs.into_iter().flatten() {
+            if frames::is_sequence(spec, base) {
+                numbers.extend(frames::numbered(spec, base)?.into_iter().map(|(n, _)| n));
             }
         }
-        _ => Ok(1),
+        numbers.sort_unstable();
+        numbers.dedup();
+        return Ok(numbers);
     }
+    let path = base.join(f);
+    let count = match ParticleFormat::detect(&path)? {
+        Some(format) => formats::frames_in(&path, format)?,
+        None => 1,
+    };
+    Ok((0..count.max(1)).collect())
+}
+
+/// Number of frames of the scene's data ([`frame_numbers`]).
+pub fn frame_count(desc: &voxless_scene::SceneDesc, base: &Path) -> Result<usize, SceneError> {
+    Ok(frame_numbers(desc, base)?.len())
 }
 
 /// Radii and weights of `data` from world units into a frame of scale

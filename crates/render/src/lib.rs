@@ -45,10 +45,12 @@ pub mod scatter;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 mod tile;
+mod work;
 
-pub use march::{RayStats, march};
+pub use march::{MIN_STEP_ULPS, RayStats, march, min_step_at, step_in};
 pub use packet::{PACKET, WINDOW_STEPS};
 pub use scatter::{FreeFlight, LightSource, Noise, Scatter};
+pub use work::{WorkEstimate, estimate_work};
 
 use rayon::prelude::*;
 use voxless_core::{
@@ -171,84 +173,6 @@ impl RenderSettings {
 /// Side of a square render tile in pixels, unless the volume's tile view
 /// asks for another.
 pub const TILE: u32 = 16;
-
-/// What a render is expected to cost, before it starts (see
-/// [`estimate_work`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WorkEstimate {
-    /// Mean samples (field evaluations, or constant pieces) per camera ray.
-    pub per_ray: f64,
-    /// The most samples of any probed ray.
-    pub max_per_ray: f64,
-    /// `per_ray` × pixels × passes (× 2 with shadow rays).
-    pub total: f64,
-}
-
-/// Rays per image axis that [`estimate_work`] traces.
-const ESTIMATE_RAYS: u32 = 16;
-
-/// The samples a render of `volume` with these settings will take, from
-/// the intervals of a [`ESTIMATE_RAYS`]² grid of camera rays and the same
-/// step rule as the integrators (the step, else each interval's nominal step
-/// over the sampling rate; constant pieces count one each). Early
-/// termination is ignored, so this is an upper estimate: it tells a render
-/// that would run for hours (a radius or step far below the data's scale)
-/// before it starts.
-pub fn estimate_work<V: Volume>(
-    volume: &V,
-    camera: &Camera,
-    tf: &TransferFunction,
-    settings: &RenderSettings,
-) -> WorkEstimate {
-    let region = tile::region(volume, settings.clip);
-    let is_visible = |r: Range1| settings.is_visible(tf, r);
-    let query = voxless_core::IntervalQuery {
-        is_visible: &is_visible,
-    };
-    let n = ESTIMATE_RAYS;
-    let counts: Vec<f64> = (0..n * n)
-        .into_par_iter()
-        .map(|k| {
-            let (x, y) = (k % n, k / n);
-            let px = (x as f32 + 0.5) / n as f32 * settings.width as f32;
-            let py = (y as f32 + 0.5) / n as f32 * settings.height as f32;
-            let ray = camera.ray(px, py, settings.width, settings.height);
-            let t = region.clip_ray(&ray, Range1::new(0.0, f32::INFINITY));
-            if t.is_empty() {
-                return 0.0;
-            }
-            let mut out = Vec::new();
-            volume.intervals(&ray, t, &query, &mut out);
-            out.iter()
-                .map(|iv| {
-                    if iv.constant_value().is_some() {
-                        return 1.0;
-                    }
-                    let span = iv.t.span() as f64;
-                    let dt = settings
-                        .step
-                        .unwrap_or(iv.nominal_dt / settings.sampling_rate)
-                        .max(iv.t.span() * 1e-6)
-                        .max(f32::MIN_POSITIVE) as f64;
-                    (span / dt).ceil()
-                })
-                .sum::<f64>()
-        })
-        .collect();
-    let per_ray = counts.iter().sum::<f64>() / counts.len().max(1) as f64;
-    let max_per_ray = counts.iter().fold(0.0f64, |m, &c| m.max(c));
-    let shadows = if settings.scatter.is_some() { 2.0 } else { 1.0 };
-    let total = per_ray
-        * settings.width as f64
-        * settings.height as f64
-        * settings.spp.max(1) as f64
-        * shadows;
-    WorkEstimate {
-        per_ray,
-        max_per_ray,
-        total,
-    }
-}
 
 /// `volume` prepared for `tf` and `settings`: what the integrators sample.
 pub fn prepare<'a, P: Prepare>(
