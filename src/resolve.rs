@@ -170,6 +170,9 @@ pub fn resolve_with(
             }
         }
     }
+    if desc.transfer.value_range.is_none() && !matches!(volume, AnyVolume::Materials(_)) {
+        constant_field(volume, &mut settings, &mut notes);
+    }
     match r.opacity_scale {
         Some(s) => {
             positive("render.opacity_scale (--opacity-scale)", s)?;
@@ -289,6 +292,31 @@ pub fn resolve_with(
         background,
         notes,
     })
+}
+
+/// A value range of one value (a constant field) maps everything to 0,
+/// which the transfer function shows as nothing: map the constant to the
+/// top of the range instead, so the field shows as a uniform medium (a
+/// field that is 0 everywhere stays as it is; [`check_work`] refuses it).
+fn constant_field(volume: &AnyVolume, settings: &mut RenderSettings, notes: &mut Vec<String>) {
+    let vr = settings.value_range;
+    if vr.hi > vr.lo || !(vr.lo.is_finite() && vr.hi.is_finite()) {
+        return;
+    }
+    let data = volume.value_range();
+    if !(data.hi > 0.0 || data.lo < 0.0) {
+        return;
+    }
+    settings.value_range = if settings.log_scale {
+        Range1::new(vr.hi - 1.0, vr.hi)
+    } else {
+        Range1::new(data.hi.min(0.0), data.hi.max(0.0))
+    };
+    notes.push(format!(
+        "the field is {:.4e} everywhere: shown as a uniform medium (value range [{:.4e}, \
+         {:.4e}]; set with --value-range)",
+        data.hi, settings.value_range.lo, settings.value_range.hi
+    ));
 }
 
 fn at_least_one(field: &str, v: usize) -> Result<usize, SceneError> {
@@ -502,6 +530,21 @@ pub(crate) fn check_work(
     tf: &TransferFunction,
     settings: &RenderSettings,
 ) -> Result<Option<String>, SceneError> {
+    let data = volume.value_range();
+    if !matches!(volume, AnyVolume::Materials(_)) && !(data.hi > 0.0 || data.lo < 0.0) {
+        let (field, why) = match volume {
+            AnyVolume::Particles(_) => (
+                "particles.weights (--weights)",
+                "every particle's weight is 0 (or a weight or radius map hides it)",
+            ),
+            AnyVolume::Amr(_) => ("amr.field (--field)", "every cell's value is 0"),
+            _ => ("data", "it holds no mass"),
+        };
+        return Err(SceneError::setting(
+            field,
+            format!("the field is 0 everywhere, so there is nothing to render: {why}"),
+        ));
+    }
     let work = volume.estimate_work(camera, tf, settings);
     let extent = frame.length_to_world(volume.bounds().diagonal());
     if work.per_ray <= MAX_SAMPLES_PER_RAY && work.total <= MAX_SAMPLES {

@@ -77,7 +77,8 @@ pub struct DataArgs {
         allow_negative_numbers = true
     )]
     pub box_size: Option<f32>,
-    /// Mass per particle (default: total mass 1).
+    /// Mass per particle, world units (default: the mean density is 1, so
+    /// densities read as the overdensity 1 + δ).
     #[arg(long, help_heading = "Phase-space tessellation")]
     pub particle_mass: Option<f64>,
     /// ExaBricks cells: .cells (int32 x, y, z, level per cell).

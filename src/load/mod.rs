@@ -62,7 +62,18 @@ pub fn load_in(
             "more than one data source ([particles], [amr], [tets]) is given; pick one",
         ));
     }
-    let (volume, world) = match (&desc.particles, &desc.amr, &desc.tets) {
+    // `--particles run.h5` of a JaxPM run: its tessellation.
+    let jaxpm = match &desc.particles {
+        Some(p) => jaxpm::as_tessellation(p, base)?,
+        None => None,
+    };
+    let particles = if jaxpm.is_some() {
+        None
+    } else {
+        desc.particles.as_ref()
+    };
+    let tets = desc.tets.as_ref().or(jaxpm.as_ref());
+    let (volume, world) = match (particles, &desc.amr, tets) {
         (Some(p), _, _) if p.materials.is_some() => {
             let mats = p.materials.as_deref().unwrap_or_default();
             let (v, f) = materials::load_materials(p, mats, base, &mut notes, frame, world)?;

@@ -107,7 +107,12 @@ impl FrameData {
             (None, Some(r)) => r.iter().fold(0.0f32, |m, &v| m.max(v)) as f64,
             (None, None) => 0.0,
         };
-        let grow = if radius.is_finite() {
+        let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+        // A support beyond the data's extent is refused when there are many
+        // particles (see `ParticleError::HugeRadius`): placing the frame
+        // around it would only blur the positions the error reports.
+        let refused = self.positions.len() > 1000 && factor * radius > extent;
+        let grow = if radius.is_finite() && !refused {
             factor * radius
         } else {
             0.0
@@ -396,7 +401,24 @@ pub(crate) fn build_particles(
         attribute_range,
         classification,
     };
-    ParticleVolume::new(data, settings).map_err(BuildError::Data)
+    ParticleVolume::new(data, settings).map_err(|e| BuildError::Data(in_world_units(e, scale)))
+}
+
+/// A particle error's lengths in world units (they are local to a frame of
+/// scale `scale`).
+fn in_world_units(e: ParticleError, scale: f64) -> ParticleError {
+    match e {
+        ParticleError::HugeRadius {
+            support,
+            extent,
+            count,
+        } => ParticleError::HugeRadius {
+            support: (support as f64 * scale) as f32,
+            extent: (extent as f64 * scale) as f32,
+            count,
+        },
+        other => other,
+    }
 }
 
 /// The frame numbers of the scene's data (see [`frames`]): the numbers of

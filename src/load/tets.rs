@@ -4,8 +4,9 @@
 //! The periodic box `[0, L)³` keeps its corner at the world origin; only its
 //! scale is chosen by the placement policy ([`WorldFrame::fit`] on the box),
 //! so boxes of 10⁻¹² or 10³⁰ units compute in a local unit about their size.
-//! Particle masses are divided by the scale's cube so densities (mass over
-//! tet volume) stay in world units.
+//! Without a particle mass the mean density is 1 (densities read as the
+//! overdensity 1 + δ), whatever the box size; a given mass is divided by the
+//! scale's cube so densities (mass over tet volume) stay in world units.
 
 use std::path::Path;
 
@@ -147,20 +148,41 @@ pub(crate) fn build_world(
             .map(|p| Vec3::new((p[0] / s) as f32, (p[1] / s) as f32, (p[2] / s) as f32))
             .collect(),
     };
-    // Mass over local volume is density in world units when the mass is
+    // Without a mass, the mean density is 1 (densities read as 1 + δ, the
+    // overdensity), whatever the box size. A given mass is in world units:
+    // mass over local volume is density in world units when the mass is
     // divided by scale³.
     let n3 = (g.n as f64).powi(3);
-    let mass = t.particle_mass.unwrap_or(1.0 / n3);
+    let mass = match t.particle_mass {
+        None => (grid.box_size as f64).powi(3) / n3,
+        Some(m) => {
+            if !(m.is_finite() && m > 0.0) {
+                return Err(SceneError::setting(
+                    "tets.particle_mass (--particle-mass)",
+                    format!("{m} must be finite and > 0"),
+                ));
+            }
+            let local = m / s.powi(3);
+            let mean = local * n3 / (grid.box_size as f64).powi(3);
+            if !(1e-30..=1e30).contains(&mean) {
+                return Err(SceneError::setting(
+                    "tets.particle_mass (--particle-mass)",
+                    format!(
+                        "a mass of {m} per particle in a box of {} gives a mean density of \
+                         {:.3e}, beyond what float32 computes with; give the mass in other \
+                         units, or leave it out for a mean density of 1",
+                        g.box_size,
+                        m * n3 / g.box_size.powi(3)
+                    ),
+                ));
+            }
+            local
+        }
+    };
     let local = TetsDesc {
-        particle_mass: Some(mass / s.powi(3)),
+        particle_mass: Some(mass),
         ..t.clone()
     };
-    if t.particle_mass.is_some() && !(mass.is_finite() && mass > 0.0) {
-        return Err(SceneError::setting(
-            "tets.particle_mass (--particle-mass)",
-            format!("{mass} must be finite and > 0"),
-        ));
-    }
     let v = build_tets(&grid, &local, source)?;
     Ok((v, frame))
 }
