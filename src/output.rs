@@ -131,6 +131,20 @@ pub fn check_outputs(
 ) -> Result<(), SceneError> {
     let allowed = kind.extensions();
     for (i, out) in outputs.iter().enumerate() {
+        if let Some(input) = inputs.iter().find(|input| same_file(out, input)) {
+            let how = if out == input {
+                String::new()
+            } else {
+                format!(" ({})", input.display())
+            };
+            return Err(SceneError::output(
+                out,
+                format!(
+                    "is one of the inputs{how}: writing it would destroy the data; give \
+                     another output name"
+                ),
+            ));
+        }
         match extension(out) {
             Some(e) if allowed.contains(&e.as_str()) => {}
             other => {
@@ -156,20 +170,6 @@ pub fn check_outputs(
         }
         if out.is_dir() {
             return Err(SceneError::output(out, "is a directory; give a file name"));
-        }
-        if let Some(input) = inputs.iter().find(|input| same_file(out, input)) {
-            let how = if out == input {
-                String::new()
-            } else {
-                format!(" ({})", input.display())
-            };
-            return Err(SceneError::output(
-                out,
-                format!(
-                    "is one of the inputs{how}: writing it would destroy the data; give \
-                     another output name"
-                ),
-            ));
         }
         if let Some(j) = outputs[..i]
             .iter()

@@ -18,8 +18,8 @@ pub struct DataArgs {
     /// Particle file: .npy N×3 (float32/float64), CSV with x, y, z columns,
     /// .vtp/.vtu, .xyz/.extxyz, a LAMMPS dump (dump.*, .lammpstrj, .dump),
     /// .particles, or .h5/.hdf5 (PySPH, SWIFT/Gadget; JaxPM with
-    /// --lagrangian/--snapshot; needs --features hdf5). A multi-frame file,
-    /// pattern or directory is a time series (--frames).
+    /// --lagrangian/--snapshot, or alone; needs --features hdf5). A
+    /// multi-frame file, pattern, glob or directory is a time series.
     #[arg(long, help_heading = "Particles")]
     pub particles: Option<PathBuf>,
     /// Per-particle attribute: a column of the particle file (case-insensitive),

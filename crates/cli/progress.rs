@@ -2,7 +2,9 @@
 //! has taken over a second (quick runs stay quiet), and plain lines when
 //! stderr is not a terminal (a render piped to a log still says where it
 //! is): the first once work has taken a second, then one every few
-//! seconds, and a last one at 100 % when any was printed.
+//! seconds, and a last one at 100 % when any was printed. The environment
+//! variable `VOXLESS_PROGRESS_EVERY` (seconds) sets both the wait and the
+//! interval.
 //!
 //! Positions are kept in thousandths of a unit, so a unit (a frame) can be
 //! split by the renderer's own (done, total) reports.
@@ -20,14 +22,30 @@ const LINE_EVERY: Duration = Duration::from_secs(5);
 /// When the first line (or the bar) appears.
 const QUIET_FOR: Duration = Duration::from_secs(1);
 
+/// The quiet time and line interval: `VOXLESS_PROGRESS_EVERY` seconds for
+/// both when set, else [`QUIET_FOR`] and [`LINE_EVERY`].
+fn intervals() -> (Duration, Duration) {
+    std::env::var("VOXLESS_PROGRESS_EVERY")
+        .ok()
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|s| s.is_finite() && *s >= 0.0)
+        .map_or((QUIET_FOR, LINE_EVERY), |s| {
+            let d = Duration::from_secs_f64(s);
+            (d, d)
+        })
+}
+
 pub struct Progress {
     bar: ProgressBar,
     what: String,
     start: Instant,
     terminal: bool,
+    /// Quiet for this long, then a line (or the bar); then a line this often.
+    every: (Duration, Duration),
     /// Whether the bar is drawn (terminal) or a line was printed (not a
-    /// terminal) yet, and when the last line was printed.
-    state: Mutex<(bool, Instant)>,
+    /// terminal) yet, when the last line was printed, and whether it said
+    /// 100 %.
+    state: Mutex<(bool, Instant, bool)>,
 }
 
 impl Progress {
@@ -47,7 +65,8 @@ impl Progress {
             what: what.to_string(),
             start: Instant::now(),
             terminal: std::io::stderr().is_terminal(),
-            state: Mutex::new((false, Instant::now())),
+            every: intervals(),
+            state: Mutex::new((false, Instant::now(), false)),
         }
     }
 
@@ -69,15 +88,17 @@ impl Progress {
             return;
         };
         if self.terminal {
-            if elapsed > QUIET_FOR && !state.0 {
+            if elapsed > self.every.0 && !state.0 {
                 state.0 = true;
                 self.bar.set_draw_target(ProgressDrawTarget::stderr());
             }
-        } else if (!state.0 && elapsed > QUIET_FOR) || (state.0 && state.1.elapsed() >= LINE_EVERY)
+        } else if (!state.0 && elapsed >= self.every.0)
+            || (state.0 && state.1.elapsed() >= self.every.1)
         {
             state.0 = true;
             state.1 = Instant::now();
             let len = self.bar.length().unwrap_or(1).max(1);
+            state.2 = pos >= len;
             self.line(pos as f64 / len as f64, elapsed);
         }
     }
@@ -111,7 +132,7 @@ impl Progress {
 
     pub fn finish(&self) {
         self.bar.finish_and_clear();
-        if !self.terminal && self.state.lock().is_ok_and(|s| s.0) {
+        if !self.terminal && self.state.lock().is_ok_and(|s| s.0 && !s.2) {
             self.line(1.0, self.start.elapsed());
         }
     }

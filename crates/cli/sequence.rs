@@ -37,6 +37,14 @@ pub fn render(
             voxless::frames::list_numbers(&numbers)
         );
     }
+    if range.start() < &numbers[0] || range.end() > &numbers[numbers.len() - 1] {
+        eprintln!(
+            "note: --frames {}..{} reaches past the data, whose frames in that range are {}",
+            range.start(),
+            range.end(),
+            voxless::frames::list_numbers(&frames)
+        );
+    }
     let outputs = frames
         .iter()
         .map(|&f| out::frame_path(output, f))

@@ -384,6 +384,7 @@ pub(crate) fn build_particles(
             r
         }
     };
+    check_resolvable(&data, radius * kernel.support_factor(), scale)?;
     let classification = match p.classification.unwrap_or(ClassificationName::Post) {
         ClassificationName::Post => Classification::Post,
         ClassificationName::Pre => Classification::Pre,
@@ -459,6 +460,55 @@ pub fn frame_numbers(
         None => 1,
     };
     Ok((0..count.max(1)).collect())
+}
+
+/// Supports below what float32 resolves across the data's extent (one
+/// particle 10³⁸ away from the rest, say) would collapse the particles onto
+/// each other: an error naming the particle farthest from the rest.
+fn check_resolvable(data: &ParticleData, support: f32, scale: f64) -> Result<(), BuildError> {
+    let median = |v: &[f32]| {
+        let mut v = v.to_vec();
+        let mid = v.len() / 2;
+        v.select_nth_unstable_by(mid, f32::total_cmp);
+        v[mid]
+    };
+    let support = match &data.radii {
+        Some(r) if !r.is_empty() => support * median(r),
+        _ => support,
+    } as f64;
+    let mut b = voxless_core::Aabb::EMPTY;
+    data.positions.iter().for_each(|p| b.grow(*p));
+    let extent = (0..3)
+        .map(|a| (b.max[a] - b.min[a]) as f64)
+        .fold(0.0, f64::max);
+    if data.positions.len() < 2 || !(support < extent * 1e-6) {
+        return Ok(());
+    }
+    let centre: [f32; 3] =
+        std::array::from_fn(|a| median(&data.positions.iter().map(|p| p[a]).collect::<Vec<_>>()));
+    let dist = |p: &Vec3| {
+        (0..3)
+            .map(|a| (p[a] - centre[a]).abs() as f64)
+            .fold(0.0, f64::max)
+    };
+    let (far, _) = data
+        .positions
+        .iter()
+        .enumerate()
+        .fold(
+            (0, -1.0),
+            |m, (i, p)| if dist(p) > m.1 { (i, dist(p)) } else { m },
+        );
+    Err(BuildError::Setting(SceneError::setting(
+        "particles (positions)",
+        format!(
+            "the particles' supports ({:.3e}) are too small for float32 to resolve across the \
+             data's extent ({:.3e}): particle {far} lies farthest from the rest; leave out \
+             outliers like it (or give a larger --radius)",
+            support * scale,
+            extent * scale
+        ),
+    )))
 }
 
 /// Number of frames of the scene's data ([`frame_numbers`]).
