@@ -47,10 +47,26 @@ pub const TARGET_OPTICAL_DEPTH: f64 = 2.0;
 /// The field along the probe rays (see the module docs).
 #[derive(Clone, Debug, Default)]
 pub struct Probe {
-    /// Per ray: the step between its samples (local units) and the value at
-    /// each sample (NaN where the data does not cover the point).
-    rays: Vec<(f32, Vec<f32>)>,
+    rays: Vec<ProbeRay>,
 }
+
+/// One probe ray: parallel to axis `axis` from `start`, samples at
+/// `start + (k + ½)·dt` along it.
+#[derive(Clone, Debug)]
+struct ProbeRay {
+    start: Vec3,
+    axis: usize,
+    /// The step between samples (local units).
+    dt: f32,
+    /// Half the spacing of the probe's grid across the ray.
+    half_cell: [f32; 3],
+    /// The value at each sample (NaN where the data does not cover it).
+    values: Vec<f32>,
+}
+
+/// Opacity (of the transfer function's maximum 1) below which a probe
+/// sample does not count as visible for framing.
+const VISIBLE_OPACITY: f32 = 0.02;
 
 /// The opacity-field value at `p`, when the data covers it.
 fn value_at(volume: &AnyVolume, p: Vec3) -> Option<f32> {
@@ -114,7 +130,22 @@ impl Probe {
                             .unwrap_or(f32::NAN)
                     })
                     .collect();
-                (dt, values)
+                let mut start = p;
+                match a {
+                    0 => start.x = b.min.x,
+                    1 => start.y = b.min.y,
+                    _ => start.z = b.min.z,
+                }
+                let mut half_cell = [0.5 * dt; 3];
+                half_cell[u] = 0.5 * e[u] / GRID as f32;
+                half_cell[v] = 0.5 * e[v] / GRID as f32;
+                ProbeRay {
+                    start,
+                    axis: a,
+                    dt,
+                    half_cell,
+                    values,
+                }
             })
             .collect();
         Probe { rays }
@@ -127,7 +158,10 @@ impl Probe {
 
     /// Whether no ray met any data.
     pub fn is_empty(&self) -> bool {
-        !self.rays.iter().any(|(_, v)| v.iter().any(|x| !x.is_nan()))
+        !self
+            .rays
+            .iter()
+            .any(|r| r.values.iter().any(|x| !x.is_nan()))
     }
 
     /// The `q`th percentile (0..=100) of the covered samples that pass
@@ -136,7 +170,7 @@ impl Probe {
         let mut v: Vec<f32> = self
             .rays
             .iter()
-            .flat_map(|(_, r)| r.iter().copied())
+            .flat_map(|r| r.values.iter().copied())
             .filter(|x| !x.is_nan() && keep(*x))
             .collect();
         if v.is_empty() {
@@ -177,10 +211,11 @@ impl Probe {
         let mut depths: Vec<f64> = self
             .rays
             .iter()
-            .map(|(dt, r)| {
-                r.iter()
+            .map(|r| {
+                r.values
+                    .iter()
                     .filter(|x| !x.is_nan())
-                    .map(|&x| tf.opacity(settings.normalize(x)) as f64 * *dt as f64)
+                    .map(|&x| tf.opacity(settings.normalize(x)) as f64 * r.dt as f64)
                     .sum::<f64>()
             })
             .filter(|&d| d > 0.0 && d.is_finite())
@@ -192,5 +227,31 @@ impl Probe {
         let median = *depths.select_nth_unstable_by(mid, f64::total_cmp).1;
         let s = (TARGET_OPTICAL_DEPTH / median) as f32;
         (s.is_finite() && s > 0.0).then_some(s)
+    }
+
+    /// The box (local units) around the probe samples that `tf` and
+    /// `settings` make visible (opacity above [`VISIBLE_OPACITY`]), padded by
+    /// the probe's spacing: what a default camera frames. `None` when no
+    /// sample is visible.
+    pub fn visible_box(&self, tf: &TransferFunction, settings: &RenderSettings) -> Option<Aabb> {
+        let mut b = Aabb::EMPTY;
+        for r in &self.rays {
+            for (k, &x) in r.values.iter().enumerate() {
+                if x.is_nan() || tf.opacity(settings.normalize(x)) <= VISIBLE_OPACITY {
+                    continue;
+                }
+                let mut p = r.start;
+                let t = (k as f32 + 0.5) * r.dt;
+                match r.axis {
+                    0 => p.x += t,
+                    1 => p.y += t,
+                    _ => p.z += t,
+                }
+                let h = Vec3::new(r.half_cell[0], r.half_cell[1], r.half_cell[2]);
+                b.grow(p - h);
+                b.grow(p + h);
+            }
+        }
+        (!b.is_empty()).then_some(b)
     }
 }

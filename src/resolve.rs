@@ -31,6 +31,10 @@ pub struct Resolved {
     pub background: [f32; 3],
     /// Defaults chosen from the data, worth telling the user.
     pub notes: Vec<String>,
+    /// The box (local) the camera frames when the description places no
+    /// eye or look-at point: the part of the data the transfer function
+    /// shows, within the bounds (see [`Probe::visible_box`]).
+    pub framed: Aabb,
 }
 
 /// Fills every default of `desc` for `volume`, whose coordinates are the
@@ -87,7 +91,6 @@ pub fn resolve_with(
         Some((lo, hi)) => Aabb::new(frame.to_local(lo), frame.to_local(hi)),
         None => volume.bounds(),
     };
-    let camera = camera(&desc.camera, &bounds, width as f32 / height as f32, frame)?;
 
     let mut settings = volume.default_settings(width, height);
     settings.spp = spp;
@@ -137,7 +140,9 @@ pub fn resolve_with(
     // What the data looks like along probe rays (a time series passes the
     // probe of all its frames), for the defaults below; inside the clip box,
     // as that is what the image shows.
-    let needs_probe = desc.transfer.value_range.is_none() || r.opacity_scale.is_none();
+    let default_view = desc.camera.eye.is_none() && desc.camera.look_at.is_none();
+    let needs_probe =
+        desc.transfer.value_range.is_none() || r.opacity_scale.is_none() || default_view;
     let own_probe;
     let probe = match (needs_probe, probe) {
         (false, _) => None,
@@ -245,6 +250,33 @@ pub fn resolve_with(
             ));
         }
     }
+    // The default view frames what the transfer function shows (the whole
+    // bounds with iso-surfaces, whose visibility the probe cannot tell).
+    let mut framed_box = bounds;
+    if default_view
+        && settings.volume
+        && settings.iso.is_empty()
+        && let Some(v) = probe.and_then(|p| p.visible_box(&tf, &settings))
+    {
+        let v = Aabb::new(v.min.max(bounds.min), v.max.min(bounds.max));
+        let shrinks = (0..3).any(|a| v.extent()[a] < 0.9 * bounds.extent()[a]);
+        if !v.is_empty() && shrinks {
+            framed_box = v;
+            let (lo, hi) = (frame.to_world(v.min), frame.to_world(v.max));
+            notes.push(format!(
+                "the view frames the part of the data the transfer function shows, \
+                 [{:.4e}, {:.4e}, {:.4e}]..[{:.4e}, {:.4e}, {:.4e}] (give --eye/--look-at to \
+                 frame otherwise)",
+                lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
+            ));
+        }
+    }
+    let camera = camera(
+        &desc.camera,
+        &framed_box,
+        width as f32 / height as f32,
+        frame,
+    )?;
     if let Some(l) = &desc.light {
         let dir = match l.direction {
             Some(d) => Vec3::from_array(d).normalized(),
@@ -278,6 +310,7 @@ pub fn resolve_with(
         }
     }
     refuse_what_the_kind_cannot_honour(volume, &settings)?;
+    refuse_settings_without_effect(desc)?;
     let background = r.background.unwrap_or([0.0; 3]);
     if !background.iter().all(|c| c.is_finite() && *c >= 0.0) {
         return Err(SceneError::setting(
@@ -291,6 +324,7 @@ pub fn resolve_with(
         settings,
         background,
         notes,
+        framed: framed_box,
     })
 }
 
@@ -602,6 +636,57 @@ pub(crate) fn check_work(
             work.per_ray, work.total
         ),
     ))
+}
+
+/// Settings that only act together with another one, given without it,
+/// are errors naming both: they would silently do nothing.
+fn refuse_settings_without_effect(desc: &SceneDesc) -> Result<(), SceneError> {
+    let r = &desc.render;
+    let no_iso = r.iso.as_ref().is_none_or(|v| v.is_empty());
+    if no_iso && r.iso_opacity.is_some() {
+        return Err(SceneError::setting(
+            "render.iso_opacity (--iso-opacity)",
+            "applies to iso-surfaces: add --iso V",
+        ));
+    }
+    if no_iso && r.volume == Some(false) {
+        return Err(SceneError::setting(
+            "render.volume (--iso-only)",
+            "with the volume off and no iso-surface the image would be empty: add --iso V",
+        ));
+    }
+    if let Some(l) = &desc.light
+        && !l.shadows.unwrap_or(false)
+    {
+        let only_with_shadows = [
+            ("light.position (--light-pos)", l.position.is_some()),
+            ("light.intensity (--light-intensity)", l.intensity.is_some()),
+            ("light.free_flight (--free-flight)", l.free_flight.is_some()),
+            ("light.noise (--noise)", l.noise.is_some()),
+        ];
+        if let Some((field, _)) = only_with_shadows.iter().find(|f| f.1) {
+            return Err(SceneError::setting(
+                field,
+                "applies to single scattering: add --shadows (scene: light.shadows = true)",
+            ));
+        }
+    }
+    if let Some(p) = &desc.particles
+        && p.kernel != Some(voxless_scene::KernelName::Gaussian)
+    {
+        for (field, given) in [
+            ("particles.kappa (--kappa)", p.kappa.is_some()),
+            ("particles.sigma (--sigma)", p.sigma.is_some()),
+        ] {
+            if given {
+                return Err(SceneError::setting(
+                    field,
+                    "applies to the gaussian kernel only: add --kernel gaussian",
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Settings the volume's kind cannot honour are errors naming them.

@@ -26,6 +26,8 @@ pub struct Scene {
     pub background: [f32; 3],
     /// Defaults chosen from the data, worth telling the user.
     pub notes: Vec<String>,
+    /// The box (local) a default camera frames (see [`Resolved::framed`]).
+    pub framed: voxless_core::Aabb,
 }
 
 impl Scene {
@@ -83,6 +85,7 @@ impl Scene {
             settings,
             background,
             notes,
+            framed,
         } = resolve_with(&volume, &frame, desc, base, probe, framed)?;
         Ok(Scene {
             volume,
@@ -92,6 +95,7 @@ impl Scene {
             settings,
             background,
             notes,
+            framed,
         })
     }
 

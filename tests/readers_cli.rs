@@ -87,11 +87,11 @@ fn lammps_dump_renders_frames_columns_and_species() {
         "--particles",
         &dump,
         "--frames",
-        "0..2",
+        "2..3",
         "-o",
         &out,
     ]);
-    assert!(e.contains("2 frame"), "{e}");
+    assert!(e.contains("frames 0, 1"), "{e}");
 
     // Columns by name, case-insensitively, for attribute, radii and weights.
     render(&["--frame", "1", "--attribute", "VX"], &s.str("vx.png"));
@@ -474,9 +474,24 @@ mod hdf5 {
         .unwrap();
         let log = ok(&["render", &s.str("dm.toml"), "-o", &s.str("scene.png")]);
         assert!(log.contains("snap_1"), "{log}");
-        // Without tessellation flags a JaxPM file says how to render it.
-        let e = fails(&["render", "--particles", &file, "-o", &out]);
-        assert!(e.contains("--snapshot"), "{e}");
+        // Without tessellation flags a JaxPM file is its last snapshot's
+        // tessellation, as the help says; particle flags do not apply.
+        let log = ok(&[
+            "render",
+            "--particles",
+            &file,
+            "--size",
+            "16",
+            "16",
+            "-o",
+            &out,
+        ]);
+        assert!(
+            log.contains("snap_1") && log.contains("phase-space"),
+            "{log}"
+        );
+        let e = fails(&["render", "--particles", &file, "--radius", "2", "-o", &out]);
+        assert!(e.contains("--radius") && e.contains("JaxPM"), "{e}");
     }
 
     #[test]

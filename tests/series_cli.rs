@@ -175,7 +175,7 @@ fn series_defaults_hold_over_every_frame() {
         "--particles",
         &d,
         "--attribute",
-        "x",
+        "id",
         "--size",
         "24",
         "16",
@@ -338,6 +338,18 @@ fn bad_values_are_refused_by_name() {
         &out,
     ]);
     assert!(e.contains("--background"), "{e}");
+    // Flags that would do nothing without another are refused, naming both.
+    for (flags, needs) in [
+        (&["--light-pos", "0", "0", "1"][..], "--shadows"),
+        (&["--noise", "white"][..], "--shadows"),
+        (&["--iso-opacity", "0.5"][..], "--iso"),
+        (&["--kappa", "2"][..], "--kernel gaussian"),
+    ] {
+        let mut a = vec!["render", "--particles", p.as_str(), "-o", out.as_str()];
+        a.extend(flags);
+        let e = fails(&a);
+        assert!(e.contains(flags[0]) && e.contains(needs), "{flags:?}: {e}");
+    }
     // An 8³ Lagrangian grid.
     let n = 8;
     let grid: Vec<f32> = (0..n * n * n)

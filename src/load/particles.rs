@@ -481,7 +481,8 @@ fn check_resolvable(data: &ParticleData, support: f32, scale: f64) -> Result<(),
     let extent = (0..3)
         .map(|a| (b.max[a] - b.min[a]) as f64)
         .fold(0.0, f64::max);
-    if data.positions.len() < 2 || !(support < extent * 1e-6) {
+    // Non-finite positions are reported as such when the volume is built.
+    if data.positions.len() < 2 || !extent.is_finite() || !(support < extent * 1e-6) {
         return Ok(());
     }
     let centre: [f32; 3] =
