@@ -502,7 +502,8 @@ mod hdf5 {
         let s = Scratch::new("real-h5");
         let dam: PathBuf = dir.join("sph-dam-break");
         let dam = dam.to_string_lossy().into_owned();
-        // A directory of PySPH outputs is a time series in name order.
+        // A directory of PySPH outputs is a time series numbered by the
+        // solver iterations in the names (0, 250, …, 2250).
         let log = ok(&[
             "render",
             "--particles",
@@ -510,7 +511,7 @@ mod hdf5 {
             "--attribute",
             "speed",
             "--frames",
-            "8..9",
+            "2000..2250",
             "--size",
             "32",
             "24",
@@ -518,10 +519,12 @@ mod hdf5 {
             &s.str("dam.png"),
         ]);
         assert!(log.contains("rendered 2 frames"), "{log}");
-        assert!(s.path("dam_0008.png").exists() && s.path("dam_0009.png").exists());
+        assert!(s.path("dam_2000.png").exists() && s.path("dam_2250.png").exists());
         let info = stdout_of(&["info", &dam]);
         assert!(
-            info.contains("10 frame") && info.contains("23760 particles"),
+            info.contains("10 frame")
+                && info.contains("frame 1750")
+                && info.contains("23760 particles"),
             "{info}"
         );
 

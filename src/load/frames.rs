@@ -176,9 +176,14 @@ fn wildcard(pattern: &str, name: &str) -> bool {
     p[i..].iter().all(|&c| c == '*')
 }
 
-/// The last run of digits in a file name: its frame number.
+/// The last run of digits in a file name before its extension (the `5` of
+/// `.hdf5` is no frame number): its frame number.
 fn last_number(name: &str) -> Option<usize> {
-    let digits: String = name
+    let stem = match name.rfind('.') {
+        Some(dot) if dot > 0 => &name[..dot],
+        _ => name,
+    };
+    let digits: String = stem
         .chars()
         .rev()
         .skip_while(|c| !c.is_ascii_digit())
@@ -340,6 +345,13 @@ mod tests {
         let e = expand("h5", &dir).unwrap_err().to_string();
         assert!(e.contains(".hdf5") && e.contains(".npy"), "{e}");
         assert!(wildcard("a?c*", "abcdef") && !wildcard("a?c", "abcd"));
+        assert_eq!(number_of(Path::new("dam_break_3d_00250.hdf5")), Some(250));
+        assert_eq!(number_of(Path::new("run.0007.h5")), Some(7));
+        assert_eq!(number_of(Path::new("final.npy")), None);
+        assert_eq!(
+            fill_pattern(Path::new("d/f_%04d.png"), 12),
+            Some(PathBuf::from("d/f_0012.png"))
+        );
         assert_eq!(parse_range("3..7").unwrap(), 3..=7);
         assert!(parse_range("7..3").is_err() && parse_range("x").is_err());
         let _ = std::fs::remove_dir_all(&dir);
