@@ -71,11 +71,11 @@ pub(crate) fn default_eye(bounds: &Aabb, aspect: f32, up: Vec3, fov_y_deg: f32) 
         add(e, scale(u, -dot(e, u)))
     };
     let (mut best, mut h1) = (-1.0, [1.0, 0.0, 0.0]);
-    for a in 0..3 {
+    for (a, &extent) in ext.iter().enumerate() {
         let f = flat(a);
         let len = dot(f, f).sqrt();
-        if len > 1e-3 && ext[a] * len > best * (1.0 + 1e-6) {
-            best = ext[a] * len;
+        if len > 1e-3 && extent * len > best * (1.0 + 1e-6) {
+            best = extent * len;
             h1 = scale(f, 1.0 / len);
         }
     }

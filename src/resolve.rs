@@ -565,7 +565,8 @@ pub(crate) fn check_work(
     settings: &RenderSettings,
 ) -> Result<Option<String>, SceneError> {
     let data = volume.value_range();
-    if !matches!(volume, AnyVolume::Materials(_)) && !(data.hi > 0.0 || data.lo < 0.0) {
+    let materials = matches!(volume, AnyVolume::Materials(_));
+    if !(materials || data.hi > 0.0 || data.lo < 0.0) {
         let (field, why) = match volume {
             AnyVolume::Particles(_) => (
                 "particles.weights (--weights)",

@@ -188,7 +188,8 @@ impl Scene {
         let (lo, hi) = self.world_bounds();
         let point = |p: [f64; 3]| format!("[{:.4e}, {:.4e}, {:.4e}]", p[0], p[1], p[2]);
         let (lo, hi) = (point(lo), point(hi));
-        let why = if seen.is_empty() || !(seen.hi > 0.0 || seen.lo < 0.0) && !st.log_scale {
+        let zero = !(seen.hi > 0.0 || seen.lo < 0.0 || st.log_scale);
+        let why = if seen.is_empty() || zero {
             format!(
                 "no ray meets any of the field: the camera does not see the data's bounds \
                  {lo}..{hi}, or the field there is zero or far thinner than a pixel \

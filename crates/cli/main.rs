@@ -32,6 +32,8 @@ struct Cli {
     command: Command,
 }
 
+// Parsed once per run: the size of the largest variant does not matter.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand)]
 enum Command {
     /// Render the built-in demo particles (a spiral galaxy) to an image.
@@ -188,7 +190,13 @@ fn run(cli: Cli) -> Result<()> {
             desc.render.opacity_scale.get_or_insert(10.0);
             desc.camera.look_at.get_or_insert([0.0, -0.1, 0.0]);
             desc.light.get_or_insert_with(Default::default);
-            out::check(&[output.clone()], OutputKind::Image, &desc, &base, &[])?;
+            out::check(
+                std::slice::from_ref(&output),
+                OutputKind::Image,
+                &desc,
+                &base,
+                &[],
+            )?;
             let s = resolve(&desc, &base, 0)?;
             render_to(&s, &desc, &output, colorbar)
         }
@@ -214,7 +222,13 @@ fn run(cli: Cli) -> Result<()> {
             match frames {
                 Some(range) => sequence::render(&desc, &base, &range, &output, colorbar),
                 None => {
-                    out::check(&[output.clone()], OutputKind::Image, &desc, &base, &[])?;
+                    out::check(
+                        std::slice::from_ref(&output),
+                        OutputKind::Image,
+                        &desc,
+                        &base,
+                        &[],
+                    )?;
                     let s = resolve(&desc, &base, frame.unwrap_or(0))?;
                     render_to(&s, &desc, &output, colorbar)
                 }
@@ -233,11 +247,11 @@ fn run(cli: Cli) -> Result<()> {
             };
             let (desc, base) = args.scene()?;
             out::check(
-                &[output.clone()],
+                std::slice::from_ref(&output),
                 OutputKind::Columns,
                 &desc,
                 &base,
-                &[points.clone()],
+                std::slice::from_ref(&points),
             )?;
             let s = resolve(&desc, &base, frame.unwrap_or(0))?;
             let pts = voxless::read_points(&points)?;
@@ -271,7 +285,13 @@ fn run(cli: Cli) -> Result<()> {
                 ..Default::default()
             };
             let (desc, base) = args.scene()?;
-            out::check(&[output.clone()], OutputKind::Map, &desc, &base, &[])?;
+            out::check(
+                std::slice::from_ref(&output),
+                OutputKind::Map,
+                &desc,
+                &base,
+                &[],
+            )?;
             let s = resolve(&desc, &base, frame.unwrap_or(0))?;
             project(&s, axis, bounds, &output)
         }

@@ -42,14 +42,13 @@ pub fn read_positions(path: &Path) -> Result<(Vec<[f64; 3]>, Source), SceneError
     Ok((p, s))
 }
 
+/// World positions (float64), the rest of the table, and a note.
+pub type Opened = (Vec<[f64; 3]>, Source, Option<String>);
+
 /// Reads frame `frame` of the particle file at `path` in whichever format it
 /// is (see [`formats`]); returns the world positions (float64), the rest of
 /// the table, and a note on what part of the file was read, if worth one.
-pub fn open(
-    path: &Path,
-    frame: usize,
-    select: &Selection,
-) -> Result<(Vec<[f64; 3]>, Source, Option<String>), SceneError> {
+pub fn open(path: &Path, frame: usize, select: &Selection) -> Result<Opened, SceneError> {
     let format = ParticleFormat::detect(path)?.unwrap_or(ParticleFormat::Csv);
     let formats::Table { mut table, note } =
         formats::read_table(path, format, frame, &select.options)?;
