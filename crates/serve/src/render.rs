@@ -321,6 +321,7 @@ fn state_message(
         "shade": st.light.is_some(),
         "shadows": st.scatter.is_some(),
         "spp": st.spp,
+        "opacity_scale": st.opacity_scale,
         "width": st.width,
         "height": st.height,
         "histogram": memory.histogram,
