@@ -5,8 +5,9 @@
 //!
 //! Needs `chromedriver` (Debian: `chromium-driver`) and `chromium` on PATH
 //! and the shared data next to the repository; without them it prints a
-//! notice and passes. `VOXLESS_SCREENSHOT=FILE` also saves a screenshot of
-//! the page (the README's).
+//! notice and passes (fails instead when `VOXLESS_REQUIRE_BROWSER` is set,
+//! as CI does). `VOXLESS_SCREENSHOT=FILE` also saves a screenshot of the
+//! page (the README's).
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -131,6 +132,10 @@ async fn the_page_orbits_edits_and_saves_a_scene_the_cli_reproduces() {
         on_path("chromedriver"),
         on_path("chromium").or_else(|| on_path("chromium-browser")),
     ) else {
+        assert!(
+            std::env::var_os("VOXLESS_REQUIRE_BROWSER").is_none(),
+            "chromedriver or chromium is not on PATH"
+        );
         eprintln!("notice: chromedriver or chromium not on PATH; skipping the browser test");
         return;
     };
