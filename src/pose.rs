@@ -40,7 +40,9 @@ impl Pose {
     pub fn of(c: &CameraDesc, bounds: &Aabb, aspect: f32) -> Result<Pose, SceneError> {
         let camera = crate::resolve::camera(c, bounds, aspect)?;
         let look_at = c.look_at.map(Vec3::from_array).unwrap_or(bounds.center());
-        let up = c.up.map(Vec3::from_array).unwrap_or(Vec3::new(0.0, 1.0, 0.0));
+        let up =
+            c.up.map(Vec3::from_array)
+                .unwrap_or(Vec3::new(0.0, 1.0, 0.0));
         let ortho_height = match camera.projection {
             Projection::Orthographic { half_height, .. } => Some(2.0 * half_height),
             Projection::Perspective { .. } => None,

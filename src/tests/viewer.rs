@@ -47,7 +47,10 @@ fn a_written_pose_resolves_to_the_same_camera() {
     let mut written = desc.clone();
     pose.write(&mut written.camera);
     assert_eq!(written.camera.orbit, None);
-    assert_eq!(resolve(&v, &written, Path::new(".")).unwrap().camera, before);
+    assert_eq!(
+        resolve(&v, &written, Path::new(".")).unwrap().camera,
+        before
+    );
     // An orbit keeps the distance to the look-at point and turns the view.
     let turned = pose.orbit(30.0, 10.0);
     let d = |p: &Pose| (p.eye - p.look_at).length();
@@ -64,7 +67,9 @@ fn a_written_pose_resolves_to_the_same_camera() {
     assert!((panned.look_at - pose.look_at).length() > 0.0);
     // Orbiting over the pole stops short of it.
     let top = pose.orbit(0.0, 500.0);
-    let up = (top.eye - top.look_at).normalized().dot(Vec3::new(0.0, 1.0, 0.0));
+    let up = (top.eye - top.look_at)
+        .normalized()
+        .dot(Vec3::new(0.0, 1.0, 0.0));
     assert!(up < 1.0 && up > 0.999);
 }
 
@@ -109,7 +114,13 @@ fn radius_scale_equals_the_scaled_radius_and_weight_scale_the_density() {
         desc.transfer.value_range = Some([0.0, 5.0]);
         let v = particles(&p);
         let hi = v.value_range().hi;
-        (Scene::with_volume(v, &desc, Path::new(".")).unwrap().render(&Control::new()).unwrap(), hi)
+        (
+            Scene::with_volume(v, &desc, Path::new("."))
+                .unwrap()
+                .render(&Control::new())
+                .unwrap(),
+            hi,
+        )
     };
     let base = ParticlesDesc {
         radius: Some(0.1),

@@ -38,7 +38,10 @@ pub fn bin() -> &'static Path {
     BIN.get_or_init(|| {
         let exe = std::env::current_exe().expect("test executable path");
         // target/<profile>/deps/<test>
-        let profile_dir = exe.parent().and_then(Path::parent).expect("target/<profile>");
+        let profile_dir = exe
+            .parent()
+            .and_then(Path::parent)
+            .expect("target/<profile>");
         let target_dir = profile_dir.parent().expect("target directory");
         let profile = match profile_dir.file_name().and_then(|n| n.to_str()) {
             Some("debug") | None => "dev",
@@ -46,7 +49,15 @@ pub fn bin() -> &'static Path {
         };
         let mut cmd = Command::new(env!("CARGO"));
         cmd.current_dir(env!("CARGO_MANIFEST_DIR"))
-            .args(["build", "-q", "-p", "voxless-cli", "--bin", "voxless", "--profile"])
+            .args([
+                "build",
+                "-q",
+                "-p",
+                "voxless-cli",
+                "--bin",
+                "voxless",
+                "--profile",
+            ])
             .arg(profile)
             .arg("--target-dir")
             .arg(target_dir);
@@ -61,10 +72,7 @@ pub fn bin() -> &'static Path {
 
 /// Runs `voxless` with `args`; returns (success, stderr, output).
 pub fn voxless(args: &[&str]) -> (bool, String, Output) {
-    let out = Command::new(bin())
-        .args(args)
-        .output()
-        .unwrap();
+    let out = Command::new(bin()).args(args).output().unwrap();
     (
         out.status.success(),
         String::from_utf8_lossy(&out.stderr).into_owned(),

@@ -29,7 +29,10 @@ pub struct ServeArgs {
     #[arg(long, default_value = "../shared/data/sph-dam-break/npy_01000")]
     dam_break: PathBuf,
     /// N³ Lagrangian positions of the tessellation (.npy) and N, L.
-    #[arg(long, default_value = "../shared/data/nbody-jaxpm/npy_N64_a1/positions.npy")]
+    #[arg(
+        long,
+        default_value = "../shared/data/nbody-jaxpm/npy_N64_a1/positions.npy"
+    )]
     tets: PathBuf,
     #[arg(long, default_value_t = 64)]
     n: usize,
@@ -110,12 +113,14 @@ fn measure(name: &str, mut desc: SceneDesc, a: &ServeArgs) -> Result<()> {
         .enable_all()
         .build()?;
     let (first, coarse_size, converged, drag) = rt.block_on(async {
-        let (mut ws, _) = tokio_tungstenite::connect_async(format!("ws://{}/ws", server.addr)).await?;
+        let (mut ws, _) =
+            tokio_tungstenite::connect_async(format!("ws://{}/ws", server.addr)).await?;
         let mut seq = 1;
         let hello = json!({"seq": seq, "type": "hello", "width": a.size, "height": a.size});
         ws.send(Message::Text(hello.to_string().into())).await?;
         wait(&mut ws, seq, true).await?;
-        let (mut first, mut converged, mut drag, mut size) = (vec![], vec![], vec![], String::new());
+        let (mut first, mut converged, mut drag, mut size) =
+            (vec![], vec![], vec![], String::new());
         for _ in 0..a.repeats {
             seq += 1;
             let t = Instant::now();

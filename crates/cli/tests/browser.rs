@@ -49,7 +49,10 @@ fn free_port() -> u16 {
 async fn wait_for(c: &Client, script: &str) -> Value {
     let start = Instant::now();
     loop {
-        let v = c.execute(&format!("return {script};"), vec![]).await.unwrap();
+        let v = c
+            .execute(&format!("return {script};"), vec![])
+            .await
+            .unwrap();
         if !(v.is_null() || v == Value::Bool(false)) {
             return v;
         }
@@ -142,7 +145,10 @@ async fn the_page_orbits_edits_and_saves_a_scene_the_cli_reproduces() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let data = root.join("../shared/data/sph-dam-break/npy_01000");
     if !data.is_dir() {
-        eprintln!("notice: {} is absent; skipping the browser test", data.display());
+        eprintln!(
+            "notice: {} is absent; skipping the browser test",
+            data.display()
+        );
         return;
     }
     let scratch = std::env::temp_dir().join(format!("voxless-browser-{}", std::process::id()));
@@ -154,7 +160,12 @@ async fn the_page_orbits_edits_and_saves_a_scene_the_cli_reproduces() {
         Command::new(env!("CARGO_BIN_EXE_voxless"))
             .args(["serve", "--particles", &file("positions.npy")])
             .args(["--radii", &file("h.npy"), "--weights", &file("mass.npy")])
-            .args(["--kernel", "cubic-spline", "--attribute", &file("speed.npy")])
+            .args([
+                "--kernel",
+                "cubic-spline",
+                "--attribute",
+                &file("speed.npy"),
+            ])
             .args(["--spp", "2", "--port", "0"])
             .stdout(Stdio::piped())
             .stderr(Stdio::null())
@@ -247,7 +258,10 @@ async fn the_page_orbits_edits_and_saves_a_scene_the_cli_reproduces() {
         .unwrap();
     let (_, edited) = converged_after(&c, seq1).await;
     let tf = changed(&orbited, &edited);
-    assert!(tf > 0.01, "the transfer function changed {tf:.3} of the image");
+    assert!(
+        tf > 0.01,
+        "the transfer function changed {tf:.3} of the image"
+    );
 
     if let Some(shot) = std::env::var_os("VOXLESS_SCREENSHOT") {
         std::fs::write(shot, c.screenshot().await.unwrap()).unwrap();
@@ -271,7 +285,11 @@ async fn the_page_orbits_edits_and_saves_a_scene_the_cli_reproduces() {
         .arg(&out)
         .output()
         .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let cli = decode_png(&std::fs::read(&out).unwrap());
     assert_eq!(cli.len(), edited.len(), "same size");
     let max = cli
@@ -280,7 +298,10 @@ async fn the_page_orbits_edits_and_saves_a_scene_the_cli_reproduces() {
         .map(|(a, b)| a.abs_diff(*b))
         .max()
         .unwrap();
-    assert!(max <= 1, "voxless render differs from the page by {max}/255");
+    assert!(
+        max <= 1,
+        "voxless render differs from the page by {max}/255"
+    );
     c.close().await.unwrap();
     let _ = std::fs::remove_dir_all(&scratch);
 }

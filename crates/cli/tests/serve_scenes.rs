@@ -34,9 +34,17 @@ fn session_vs_render(s: &Scratch, desc: SceneDesc, patch: Value) -> u8 {
         .unwrap()
         .block_on(async {
             let mut ws = connect(server.addr, None).await;
-            send(&mut ws, json!({"seq": 1, "type": "hello", "width": 96, "height": 64})).await;
+            send(
+                &mut ws,
+                json!({"seq": 1, "type": "hello", "width": 96, "height": 64}),
+            )
+            .await;
             until_converged(&mut ws, 1).await;
-            send(&mut ws, json!({"seq": 2, "type": "orbit", "yaw": 25.0, "pitch": 12.5, "drag": true})).await;
+            send(
+                &mut ws,
+                json!({"seq": 2, "type": "orbit", "yaw": 25.0, "pitch": 12.5, "drag": true}),
+            )
+            .await;
             send(&mut ws, json!({"seq": 3, "type": "end_drag"})).await;
             until_converged(&mut ws, 3).await;
             send(&mut ws, json!({"seq": 4, "type": "set", "patch": patch})).await;
@@ -158,7 +166,7 @@ fn tessellation_saved_scene_renders_the_page_image() {
         for j in 0..n {
             for k in 0..n {
                 let q = [i, j, k].map(|v| (v as f32 + 0.5) / n as f32);
-                let d = 0.04 * (6.28 * q[1]).sin();
+                let d = 0.04 * (std::f32::consts::TAU * q[1]).sin();
                 pos.extend([(q[0] + d).rem_euclid(1.0), q[1], q[2]]);
             }
         }

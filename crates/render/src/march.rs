@@ -71,8 +71,7 @@ pub(crate) fn march_intervals<V: Volume>(
     // Only constant pieces and no iso-surfaces (a tessellation's usual
     // ray): each piece composited whole, without cursor or iso bookkeeping —
     // the same arithmetic as `feed`, in a tight loop.
-    if ctx.settings.iso.is_empty() && intervals.iter().all(|iv| iv.kind == IntervalKind::Constant)
-    {
+    if ctx.settings.iso.is_empty() && intervals.iter().all(|iv| iv.kind == IntervalKind::Constant) {
         if ctx.settings.volume {
             for iv in intervals {
                 let len = iv.t.hi - iv.t.lo;

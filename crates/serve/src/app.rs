@@ -61,12 +61,7 @@ impl Volumes {
     /// The volume of `desc`'s data at `frame`, loading it (once, however
     /// many ask at the same time) when it is not kept. Blocks: call it off
     /// the async runtime.
-    pub fn get(
-        &self,
-        desc: &SceneDesc,
-        base: &Path,
-        frame: usize,
-    ) -> Result<Arc<Loaded>, String> {
+    pub fn get(&self, desc: &SceneDesc, base: &Path, frame: usize) -> Result<Arc<Loaded>, String> {
         let key = Self::key(desc, frame);
         let slot = {
             let mut entries = self.lock();
@@ -145,8 +140,8 @@ pub fn preset_names(text: &str, path: &Path) -> Result<Vec<String>, String> {
         .collect();
     if names.is_empty() {
         // A plain colour list: one colormap, named after the file.
-        let m = voxless::transfer::parse_colormap_json(text, None, path)
-            .map_err(|e| e.to_string())?;
+        let m =
+            voxless::transfer::parse_colormap_json(text, None, path).map_err(|e| e.to_string())?;
         return Ok(vec![m.name]);
     }
     Ok(names)

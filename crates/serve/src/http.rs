@@ -89,7 +89,11 @@ async fn access(State(app): State<Arc<App>>, req: Request, next: Next) -> Respon
         .and_then(|h| h.to_str().ok())
         .unwrap_or("");
     if app.loopback && !is_loopback_name(host_name(host)) {
-        return (StatusCode::FORBIDDEN, "this server answers loopback hosts only\n").into_response();
+        return (
+            StatusCode::FORBIDDEN,
+            "this server answers loopback hosts only\n",
+        )
+            .into_response();
     }
     if let Some(origin) = headers.get(header::ORIGIN).and_then(|o| o.to_str().ok())
         && origin != "null"
@@ -115,7 +119,10 @@ async fn access(State(app): State<Arc<App>>, req: Request, next: Next) -> Respon
     let mut res = next.run(req).await;
     let h = res.headers_mut();
     // The token travels in the URL: never hand it to another site.
-    h.insert(header::REFERRER_POLICY, HeaderValue::from_static("no-referrer"));
+    h.insert(
+        header::REFERRER_POLICY,
+        HeaderValue::from_static("no-referrer"),
+    );
     h.insert(
         header::X_CONTENT_TYPE_OPTIONS,
         HeaderValue::from_static("nosniff"),
@@ -174,7 +181,8 @@ async fn frame_png(
         }
     }
     let result =
-        tokio::task::spawn_blocking(move || crate::render::frame_png(&app, q.width, q.height)).await;
+        tokio::task::spawn_blocking(move || crate::render::frame_png(&app, q.width, q.height))
+            .await;
     match result {
         Ok(Ok(png)) => ([(header::CONTENT_TYPE, "image/png")], png).into_response(),
         Ok(Err(e)) => (StatusCode::UNPROCESSABLE_ENTITY, format!("{e}\n")).into_response(),

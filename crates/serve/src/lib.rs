@@ -122,9 +122,8 @@ pub fn prepare(mut desc: SceneDesc, base: PathBuf) -> Result<Prepared, ServeErro
         Some(f) => {
             let path = base.join(f);
             let text = std::fs::read_to_string(&path)?;
-            let names = app::preset_names(&text, &path).map_err(|m| {
-                voxless::SceneError::setting("transfer.colormap_file", m)
-            })?;
+            let names = app::preset_names(&text, &path)
+                .map_err(|m| voxless::SceneError::setting("transfer.colormap_file", m))?;
             Some((f.clone(), names))
         }
         None => None,

@@ -5,7 +5,7 @@
 //! before anything else; renders offer their images and messages tagged
 //! with the `seq` they were made for. Each kind of message has one slot
 //! that keeps only the newest (ack, state, error, scene file, image,
-//! progress), so a client that reads slowly gets fewer, newer messages
+//! histogram, progress), so a client that reads slowly gets fewer, newer messages
 //! instead of a growing backlog, and a render never waits for a socket.
 //!
 //! Invariants (all under one lock):
@@ -36,10 +36,11 @@ pub enum Slot {
     Error = 2,
     Scene = 3,
     Image = 4,
-    Progress = 5,
+    Histogram = 5,
+    Progress = 6,
 }
 
-const SLOTS: usize = 6;
+const SLOTS: usize = 7;
 
 #[derive(Default)]
 struct Inner {

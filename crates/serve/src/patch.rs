@@ -69,7 +69,10 @@ pub fn apply_patch(
             .ok_or_else(|| format!("no imported colormap named '{name}'"))?;
         let t = patch["transfer"].as_object_mut().expect("checked above");
         t.remove("preset");
-        t.insert("colormap_points".into(), serde_json::json!(p.colormap_points));
+        t.insert(
+            "colormap_points".into(),
+            serde_json::json!(p.colormap_points),
+        );
         t.insert("colormap".into(), Value::Null);
         t.insert("colormap_file".into(), Value::Null);
         if let Some(o) = &p.opacity_points {
@@ -89,10 +92,11 @@ pub fn apply_patch(
         .and_then(|t| t.get("value_range"))
         .is_some();
     merge(&mut value, &patch);
-    if log_changes && !range_given {
-        if let Some(t) = value.get_mut("transfer").and_then(Value::as_object_mut) {
-            t.remove("value_range");
-        }
+    if log_changes
+        && !range_given
+        && let Some(t) = value.get_mut("transfer").and_then(Value::as_object_mut)
+    {
+        t.remove("value_range");
     }
     serde_json::from_value(value).map_err(|e| format!("scene: {e}"))
 }
@@ -189,7 +193,10 @@ mod tests {
     #[test]
     fn merge_follows_rfc_7396() {
         let mut t = serde_json::json!({"a": {"b": 1, "c": 2}, "d": 3});
-        merge(&mut t, &serde_json::json!({"a": {"b": null, "e": 4}, "d": [1]}));
+        merge(
+            &mut t,
+            &serde_json::json!({"a": {"b": null, "e": 4}, "d": [1]}),
+        );
         assert_eq!(t, serde_json::json!({"a": {"c": 2, "e": 4}, "d": [1]}));
     }
 }

@@ -45,8 +45,14 @@ pub struct ClientMessage {
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum Action {
     /// First message: the size of the image element in device pixels.
-    Hello { width: u32, height: u32 },
-    Resize { width: u32, height: u32 },
+    Hello {
+        width: u32,
+        height: u32,
+    },
+    Resize {
+        width: u32,
+        height: u32,
+    },
     /// Degrees about the up vector and towards it.
     Orbit {
         yaw: f32,
@@ -72,11 +78,17 @@ pub enum Action {
     Reset,
     /// A partial scene description merged into the tab's (see
     /// `session::apply_patch` for what may be patched).
-    Set { patch: serde_json::Value },
+    Set {
+        patch: serde_json::Value,
+    },
     /// A frame of a time series.
-    Frame { frame: usize },
+    Frame {
+        frame: usize,
+    },
     /// A ParaView preset file (JSON text) to pick colormaps from.
-    ColormapImport { json: String },
+    ColormapImport {
+        json: String,
+    },
     /// Asks for the view as a scene file.
     SaveScene,
 }

@@ -19,8 +19,7 @@ use serde_json::json;
 use voxless::histogram::Histogram;
 use voxless::progressive::check_iso;
 use voxless::{
-    AnyVolume, CancelToken, CoarseBudget, Control, Film, RenderSettings, Resolved, SceneDesc,
-    Stage,
+    AnyVolume, CancelToken, CoarseBudget, Control, Film, RenderSettings, Resolved, SceneDesc, Stage,
 };
 
 use crate::app::{App, Loaded};
@@ -104,7 +103,9 @@ fn run_job(
         outbox.offer(
             Slot::Progress,
             seq,
-            text(json!({"type": "progress", "seq": seq, "stage": "loading", "done": 0, "total": 1})),
+            text(
+                json!({"type": "progress", "seq": seq, "stage": "loading", "done": 0, "total": 1}),
+            ),
         );
     }
     let loaded = match app.volumes.get(&job.desc, &app.base, job.frame) {
@@ -172,8 +173,7 @@ fn run_job(
             if !send_frame(outbox, job, stage, film, at, resolved.background, converged) {
                 return false;
             }
-            // The controls follow the first image (the histogram costs a
-            // little; the image should not wait for it).
+            // The controls follow the first image.
             send_state(memory);
             if converged && let Err(e) = check_iso(settings, film) {
                 fail(e.to_string());
@@ -184,6 +184,9 @@ fn run_job(
     memory.budget = budget;
     if result.is_ok() && outbox.is_current(seq) {
         send_state(memory);
+        if !job.drag {
+            send_histogram(outbox, job, &loaded, settings, memory);
+        }
     }
 }
 
@@ -225,6 +228,37 @@ fn send_frame(
     )
 }
 
+/// What a histogram depends on: the data, value range, scale and clip box.
+fn histogram_key(job: &Job, st: &RenderSettings) -> String {
+    format!(
+        "{}|{:?}|{}|{:?}",
+        crate::app::Volumes::key(&job.desc, job.frame),
+        st.value_range,
+        st.log_scale,
+        st.clip
+    )
+}
+
+/// The histogram of the view, computed after its image converged (it costs
+/// a little, and the image should not wait for it) unless it is known.
+fn send_histogram(
+    outbox: &Outbox,
+    job: &Job,
+    loaded: &Loaded,
+    st: &RenderSettings,
+    memory: &mut Memory,
+) {
+    let key = histogram_key(job, st);
+    if memory.histogram_key.as_deref() == Some(key.as_str()) {
+        return;
+    }
+    let h = voxless::field_histogram(&loaded.volume, st, HIST_BINS, HIST_SAMPLES);
+    let msg = json!({"type": "histogram", "seq": job.seq, "histogram": h});
+    memory.histogram = Some(h);
+    memory.histogram_key = Some(key);
+    outbox.offer(Slot::Histogram, job.seq, text(msg));
+}
+
 /// The `state` message: what the page's controls show for this view.
 fn state_message(
     app: &App,
@@ -236,23 +270,11 @@ fn state_message(
 ) -> serde_json::Value {
     let st = &resolved.settings;
     let volume = &loaded.volume;
-    // The histogram only changes with the data, range, scale or clip box.
-    let key = format!(
-        "{}|{:?}|{}|{:?}",
-        crate::app::Volumes::key(&job.desc, job.frame),
-        st.value_range,
-        st.log_scale,
-        st.clip
-    );
-    if memory.histogram_key.as_deref() != Some(key.as_str()) {
-        memory.histogram = Some(voxless::field_histogram(
-            volume,
-            st,
-            HIST_BINS,
-            HIST_SAMPLES,
-        ));
-        memory.histogram_key = Some(key);
-    }
+    let key = histogram_key(job, st);
+    let histogram = memory
+        .histogram
+        .as_ref()
+        .filter(|_| memory.histogram_key.as_deref() == Some(key.as_str()));
     let b = volume.bounds();
     let tf = &resolved.tf;
     let colors: Vec<[f32; 3]> = (0..64)
@@ -324,7 +346,7 @@ fn state_message(
         "opacity_scale": st.opacity_scale,
         "width": st.width,
         "height": st.height,
-        "histogram": memory.histogram,
+        "histogram": histogram,
         "notes": loaded.notes.iter().chain(&resolved.notes).collect::<Vec<_>>(),
     })
 }
@@ -351,6 +373,7 @@ pub fn frame_png(app: &App, width: Option<u32>, height: Option<u32>) -> Result<V
             &mut |_| true,
         )
         .map_err(|e| e.to_string())?;
-    let image = encode::encode(&film.resolve(), resolved.background, true).map_err(|e| e.to_string())?;
+    let image =
+        encode::encode(&film.resolve(), resolved.background, true).map_err(|e| e.to_string())?;
     Ok(image.bytes)
 }

@@ -197,7 +197,11 @@ fn handle_text(app: &App, outbox: &Outbox, tab: &Mutex<Tab>, worker: &Worker, te
                 Ok(toml) => json!({"type": "scene", "seq": seq, "toml": toml}),
                 Err(e) => json!({"type": "error", "seq": seq, "message": e.to_string()}),
             };
-            outbox.offer(Slot::Scene, seq.max(outbox.latest()), Outgoing::Text(reply.to_string()));
+            outbox.offer(
+                Slot::Scene,
+                seq.max(outbox.latest()),
+                Outgoing::Text(reply.to_string()),
+            );
             return;
         }
         Action::ColormapImport { json } => {
@@ -211,7 +215,11 @@ fn handle_text(app: &App, outbox: &Outbox, tab: &Mutex<Tab>, worker: &Worker, te
                 }
                 Err(e) => json!({"type": "error", "seq": seq, "message": e}),
             };
-            outbox.offer(Slot::Scene, seq.max(outbox.latest()), Outgoing::Text(reply.to_string()));
+            outbox.offer(
+                Slot::Scene,
+                seq.max(outbox.latest()),
+                Outgoing::Text(reply.to_string()),
+            );
             return;
         }
         _ => {}
@@ -263,12 +271,10 @@ fn apply(app: &App, t: &mut Tab, action: &Action) -> Result<(), String> {
                 .map_err(|e| e.to_string())?;
         }
         Action::Pan { dx, dy, .. } => {
-            voxless::pose::pan_camera(cam, &bounds, aspect, *dx, *dy)
-                .map_err(|e| e.to_string())?;
+            voxless::pose::pan_camera(cam, &bounds, aspect, *dx, *dy).map_err(|e| e.to_string())?;
         }
         Action::Zoom { factor, .. } => {
-            voxless::pose::zoom_camera(cam, &bounds, aspect, *factor)
-                .map_err(|e| e.to_string())?;
+            voxless::pose::zoom_camera(cam, &bounds, aspect, *factor).map_err(|e| e.to_string())?;
         }
         Action::EndDrag => {}
         Action::Reset => t.desc.camera = app.initial.camera.clone(),

@@ -78,7 +78,8 @@ fn malformed_and_oversized_messages_leave_the_server_serving() {
             r#"{"seq": 1, "type": "orbit", "yaw": "x", "pitch": 0}"#.into(),
             r#"{"seq": 1e400, "type": "reset"}"#.into(),
             r#"{"seq": 2, "type": "set", "patch": {"particles": {"file": "/etc/passwd"}}}"#.into(),
-            r#"{"seq": 3, "type": "set", "patch": {"transfer": {"colormap_file": "/etc/passwd"}}}"#.into(),
+            r#"{"seq": 3, "type": "set", "patch": {"transfer": {"colormap_file": "/etc/passwd"}}}"#
+                .into(),
             r#"{"seq": 4, "type": "set", "patch": 5}"#.into(),
             r#"{"seq": 5, "type": "zoom", "factor": -3}"#.into(),
             r#"{"seq": 6, "type": "frame", "frame": 99999999}"#.into(),
@@ -91,13 +92,19 @@ fn malformed_and_oversized_messages_leave_the_server_serving() {
         for i in 0..10_000 {
             let m = &bad[i % bad.len()];
             if i % 97 == 0 {
-                ws.send(Message::Binary(vec![0xff; 64].into())).await.unwrap();
+                ws.send(Message::Binary(vec![0xff; 64].into()))
+                    .await
+                    .unwrap();
             } else {
                 ws.send(Message::Text(m.clone().into())).await.unwrap();
             }
         }
         // The socket still works after all that: a valid view renders.
-        send(&mut ws, json!({"seq": 100, "type": "hello", "width": 64, "height": 48})).await;
+        send(
+            &mut ws,
+            json!({"seq": 100, "type": "hello", "width": 64, "height": 48}),
+        )
+        .await;
         until_converged(&mut ws, 100).await;
         // Oversized messages close their own socket, nothing else.
         for _ in 0..20 {
@@ -107,10 +114,17 @@ fn malformed_and_oversized_messages_leave_the_server_serving() {
             while next(&mut big).await.is_some() {}
         }
         let mut fresh = connect(server.addr, None).await;
-        send(&mut fresh, json!({"seq": 1, "type": "hello", "width": 64, "height": 48})).await;
+        send(
+            &mut fresh,
+            json!({"seq": 1, "type": "hello", "width": 64, "height": 48}),
+        )
+        .await;
         until_converged(&mut fresh, 1).await;
     });
-    assert_eq!(status(server.addr, "/frame.png?width=32&height=32", ""), 200);
+    assert_eq!(
+        status(server.addr, "/frame.png?width=32&height=32", ""),
+        200
+    );
     assert_eq!(status(server.addr, "/frame.png?width=0&height=32", ""), 400);
     assert_eq!(status(server.addr, "/frame.png?width=abc", ""), 400);
 }
@@ -140,7 +154,11 @@ fn traversal_in_any_spelling_is_404() {
     // A loopback server answers loopback host names only (DNS rebinding).
     let mut s = std::net::TcpStream::connect(server.addr).unwrap();
     use std::io::{Read, Write};
-    write!(s, "GET / HTTP/1.1\r\nHost: attacker.example\r\nConnection: close\r\n\r\n").unwrap();
+    write!(
+        s,
+        "GET / HTTP/1.1\r\nHost: attacker.example\r\nConnection: close\r\n\r\n"
+    )
+    .unwrap();
     let mut buf = Vec::new();
     let _ = s.read_to_end(&mut buf);
     assert!(String::from_utf8_lossy(&buf).starts_with("HTTP/1.1 403"));
@@ -155,16 +173,31 @@ fn beyond_loopback_every_request_needs_the_token() {
     let addr = std::net::SocketAddr::from(([127, 0, 0, 1], server.addr.port()));
     for path in ["/", "/frame.png?width=8&height=8", "/ws", "/nope"] {
         assert_eq!(status(addr, path, ""), 401, "{path} without a token");
-        let wrong = if path.contains('?') { "&token=0000" } else { "?token=0000" };
-        assert_eq!(status(addr, &format!("{path}{wrong}"), ""), 403, "{path} wrong token");
+        let wrong = if path.contains('?') {
+            "&token=0000"
+        } else {
+            "?token=0000"
+        };
+        assert_eq!(
+            status(addr, &format!("{path}{wrong}"), ""),
+            403,
+            "{path} wrong token"
+        );
     }
     assert_eq!(status(addr, &format!("/?token={token}"), ""), 200);
-    assert_eq!(status(addr, "/", &format!("x-voxless-token: {token}\r\n")), 200);
+    assert_eq!(
+        status(addr, "/", &format!("x-voxless-token: {token}\r\n")),
+        200
+    );
     runtime().block_on(async {
         let url = format!("ws://{addr}/ws");
         assert!(tokio_tungstenite::connect_async(url).await.is_err());
         let mut ws = connect(addr, Some(&token)).await;
-        send(&mut ws, json!({"seq": 1, "type": "hello", "width": 32, "height": 32})).await;
+        send(
+            &mut ws,
+            json!({"seq": 1, "type": "hello", "width": 32, "height": 32}),
+        )
+        .await;
         until_converged(&mut ws, 1).await;
     });
 }
@@ -176,17 +209,37 @@ fn a_client_that_does_not_read_stalls_no_other() {
     runtime().block_on(async {
         // The slow tab asks for big images and never reads a byte.
         let mut slow = connect(server.addr, None).await;
-        send(&mut slow, json!({"seq": 1, "type": "hello", "width": 1024, "height": 1024})).await;
-        send(&mut slow, json!({"seq": 2, "type": "set", "patch": {"image": {"spp": 1}}})).await;
+        send(
+            &mut slow,
+            json!({"seq": 1, "type": "hello", "width": 1024, "height": 1024}),
+        )
+        .await;
+        send(
+            &mut slow,
+            json!({"seq": 2, "type": "set", "patch": {"image": {"spp": 1}}}),
+        )
+        .await;
         for seq in 3..40 {
-            send(&mut slow, json!({"seq": seq, "type": "orbit", "yaw": 5.0, "pitch": 0.0})).await;
+            send(
+                &mut slow,
+                json!({"seq": seq, "type": "orbit", "yaw": 5.0, "pitch": 0.0}),
+            )
+            .await;
         }
         // Another tab gets every view it asks for, converged.
         let mut fast = connect(server.addr, None).await;
-        send(&mut fast, json!({"seq": 1, "type": "hello", "width": 96, "height": 64})).await;
+        send(
+            &mut fast,
+            json!({"seq": 1, "type": "hello", "width": 96, "height": 64}),
+        )
+        .await;
         until_converged(&mut fast, 1).await;
         for seq in 2..6 {
-            send(&mut fast, json!({"seq": seq, "type": "orbit", "yaw": 20.0, "pitch": 5.0})).await;
+            send(
+                &mut fast,
+                json!({"seq": seq, "type": "orbit", "yaw": 20.0, "pitch": 5.0}),
+            )
+            .await;
             until_converged(&mut fast, seq).await;
         }
         drop(slow);

@@ -72,7 +72,8 @@ pub fn serve(desc: SceneDesc, host: &str) -> Running {
     .unwrap()
 }
 
-pub type Ws = tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
+pub type Ws =
+    tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
 
 /// A message from the server.
 #[derive(Debug)]
