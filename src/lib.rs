@@ -52,6 +52,7 @@
 //! ```
 
 mod camera;
+mod columns;
 pub mod demo;
 mod error;
 pub mod histogram;
@@ -74,6 +75,7 @@ pub use volume::AnyVolume;
 
 // For interactive front-ends (the browser viewer, notebooks): camera poses
 // written back into descriptions, progressive renders, histograms, saving.
+pub use columns::particle_columns;
 pub use histogram::{Histogram, field_histogram};
 pub use pose::Pose;
 pub use progressive::{CoarseBudget, Stage, render_progressive};

@@ -107,6 +107,8 @@ pub struct App {
     /// Whether the server listens on loopback only (then Host headers must
     /// name loopback: no DNS rebinding).
     pub loopback: bool,
+    /// Columns of the particle file a tab may colour by (`particles.attribute`).
+    pub particle_columns: Vec<String>,
     /// Colormap presets of the scene's colormap file: (file, preset names).
     pub colormap_file: Option<(String, Vec<String>)>,
     /// The view of the tab that changed last, and its frame.

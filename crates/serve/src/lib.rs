@@ -128,6 +128,14 @@ pub fn prepare(mut desc: SceneDesc, base: PathBuf) -> Result<Prepared, ServeErro
         }
         None => None,
     };
+    // Colour-field choices: only for plain particles (materials colour per
+    // species); a file that cannot list them offers none.
+    let particle_columns = match loaded.volume {
+        voxless::AnyVolume::Particles(_) => {
+            voxless::particle_columns(&desc, &base).unwrap_or_default()
+        }
+        _ => Vec::new(),
+    };
     let mut notes = loaded.notes.clone();
     notes.extend(resolved.notes);
     let kind = loaded.volume.kind();
@@ -139,6 +147,7 @@ pub fn prepare(mut desc: SceneDesc, base: PathBuf) -> Result<Prepared, ServeErro
         token: None,
         loopback: true,
         colormap_file,
+        particle_columns,
         current: Mutex::new((desc.clone(), 0)),
         initial: desc,
     };

@@ -34,6 +34,7 @@ const PATCHABLE: &[(&str, &[&str])] = &[
     (
         "particles",
         &[
+            "attribute",
             "radius_scale",
             "weight_scale",
             "attribute_range",
@@ -91,7 +92,23 @@ pub fn apply_patch(
         .get("transfer")
         .and_then(|t| t.get("value_range"))
         .is_some();
+    // A new colour or opacity field: ranges pinned in the old field's units
+    // go too (unless the patch gives new ones).
+    let field_changes = patch.pointer("/amr/field").is_some();
+    let colour_changes = patch.pointer("/particles/attribute").is_some();
     merge(&mut value, &patch);
+    if field_changes
+        && !range_given
+        && let Some(t) = value.get_mut("transfer").and_then(Value::as_object_mut)
+    {
+        t.remove("value_range");
+    }
+    if colour_changes
+        && patch.pointer("/particles/attribute_range").is_none()
+        && let Some(p) = value.get_mut("particles").and_then(Value::as_object_mut)
+    {
+        p.remove("attribute_range");
+    }
     if log_changes
         && !range_given
         && let Some(t) = value.get_mut("transfer").and_then(Value::as_object_mut)
@@ -119,6 +136,26 @@ fn check_patchable(app: &App, patch: &Value) -> Result<(), String> {
         for (key, v) in fields {
             if !keys.contains(&key.as_str()) {
                 return Err(format!("'{table}.{key}' cannot be changed from the page"));
+            }
+            if table == "particles" && key == "attribute" && !v.is_null() {
+                // A column of the file, or the scene's own attribute: never
+                // a new path.
+                let name = v.as_str().unwrap_or("");
+                let own = app
+                    .initial
+                    .particles
+                    .as_ref()
+                    .and_then(|p| p.attribute.as_deref());
+                let column = app
+                    .particle_columns
+                    .iter()
+                    .any(|c| c.eq_ignore_ascii_case(name));
+                if !(column || own == Some(name)) {
+                    return Err(format!(
+                        "particles.attribute can only name a column of the particle file ({})",
+                        app.particle_columns.join(", ")
+                    ));
+                }
             }
             if key == "colormap_file" && !v.is_null() {
                 let known = app.colormap_file.as_ref().map(|f| f.0.as_str());

@@ -81,6 +81,9 @@ fn malformed_and_oversized_messages_leave_the_server_serving() {
             r#"{"seq": 3, "type": "set", "patch": {"transfer": {"colormap_file": "/etc/passwd"}}}"#
                 .into(),
             r#"{"seq": 4, "type": "set", "patch": 5}"#.into(),
+            r#"{"seq": 4, "type": "set", "patch": {"particles": {"attribute": "/etc/passwd"}}}"#
+                .into(),
+            r#"{"seq": 4, "type": "set", "patch": {"amr": {"cells": "/etc/passwd"}}}"#.into(),
             r#"{"seq": 5, "type": "zoom", "factor": -3}"#.into(),
             r#"{"seq": 6, "type": "frame", "frame": 99999999}"#.into(),
             r#"{"seq": 7, "type": "colormap_import", "json": "{]"}"#.into(),
@@ -243,5 +246,62 @@ fn a_client_that_does_not_read_stalls_no_other() {
             until_converged(&mut fast, seq).await;
         }
         drop(slow);
+    });
+}
+
+#[test]
+fn a_tab_colours_by_a_column_of_the_file_and_by_nothing_else() {
+    let s = Scratch::new("columns");
+    let mut csv = String::from("x,y,z,temp,mass\n");
+    let mut rng = voxless::core::SmallRng(9);
+    for _ in 0..800 {
+        let (x, y, z) = (rng.f(), rng.f(), rng.f());
+        csv += &format!("{x},{y},{z},{},{}\n", x * 10.0, 1.0 + y);
+    }
+    let file = s.0.join("p.csv");
+    std::fs::write(&file, csv).unwrap();
+    let desc = voxless::SceneDesc {
+        particles: Some(voxless::ParticlesDesc {
+            file: Some(file.to_string_lossy().into_owned()),
+            attribute: Some("temp".into()),
+            radius: Some(0.12),
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let server = serve(desc, "127.0.0.1");
+    runtime().block_on(async {
+        let mut ws = connect(server.addr, None).await;
+        send(
+            &mut ws,
+            json!({"seq": 1, "type": "hello", "width": 48, "height": 32}),
+        )
+        .await;
+        let msgs = until_converged(&mut ws, 1).await;
+        let state = msgs
+            .iter()
+            .find_map(|m| match m {
+                Msg::Text(v) if v["type"] == "state" => Some(v.clone()),
+                _ => None,
+            })
+            .expect("a state message");
+        // Every column, coordinates included (colouring by height is a view).
+        assert_eq!(state["columns"], json!(["x", "y", "z", "temp", "mass"]));
+        send(
+            &mut ws,
+            json!({"seq": 2, "type": "set", "patch": {"particles": {"attribute": "mass"}}}),
+        )
+        .await;
+        until_converged(&mut ws, 2).await;
+        let bad = json!({"seq": 3, "type": "set", "patch": {"particles": {"attribute": "p.csv"}}});
+        send(&mut ws, bad).await;
+        loop {
+            if let Some(Msg::Text(v)) = next(&mut ws).await
+                && v["type"] == "error"
+            {
+                assert!(v["message"].as_str().unwrap().contains("column"), "{v}");
+                break;
+            }
+        }
     });
 }
