@@ -48,7 +48,6 @@ use std::sync::{Arc, Mutex};
 
 use voxless::SceneDesc;
 
-pub use outbox::{Outbox, Outgoing, Slot};
 pub use protocol::{FrameHeader, unpack_frame};
 
 /// Why the server could not start or went down.
@@ -180,14 +179,17 @@ impl Bound {
         }
     }
 
-    /// Serves until the process ends (or `shutdown` resolves).
+    /// Serves until `shutdown` resolves. Open websockets do not hold it
+    /// up: their tasks end with the runtime (a graceful shutdown would wait
+    /// for every tab to close).
     pub async fn serve(
         self,
         shutdown: impl std::future::Future<Output = ()> + Send + 'static,
     ) -> Result<(), ServeError> {
-        axum::serve(self.listener, http::router(self.app))
-            .with_graceful_shutdown(shutdown)
-            .await?;
+        tokio::select! {
+            served = axum::serve(self.listener, http::router(self.app)) => served?,
+            () = shutdown => {}
+        }
         Ok(())
     }
 }
