@@ -12,8 +12,8 @@
 use std::path::{Path, PathBuf};
 
 use voxless::{
-    AmrArrays, AmrDesc, AnyVolume, Control, ParticleArrays, ParticlesDesc, Scene, SceneDesc,
-    TetsDesc, Vec3,
+    AmrArrays, AmrDesc, AnyVolume, Control, Loaded, ParticleArrays, ParticlesDesc, Scene,
+    SceneDesc, TetsDesc, Vec3,
 };
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -34,7 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         positions.push(Vec3::new(r * a.cos(), h, r * a.sin()));
         temperature.push(1.3 - r);
     }
-    let (particles, notes) = AnyVolume::from_particles(
+    let particles = AnyVolume::from_particles(
         ParticleArrays {
             positions,
             attribute: Some(temperature),
@@ -42,7 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
         &ParticlesDesc::default(),
     )?;
-    render(particles, &notes, &out.join("particles.png"))?;
+    render(particles, &out.join("particles.png"))?;
 
     // AMR: a spherical blast on a 32³ base grid of cells 2 wide, refined
     // (cells 1 wide) where the shock runs.
@@ -79,7 +79,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
         &AmrDesc::default(),
     )?;
-    render(amr, &[], &out.join("amr.png"))?;
+    render(amr, &out.join("amr.png"))?;
 
     // Tessellation: 48³ particles displaced by two crossing Zel'dovich
     // waves, past shell crossing, in a periodic box of side 100.
@@ -105,19 +105,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let tets = AnyVolume::from_tessellation(grid, side, l, &TetsDesc::default())?;
-    render(tets, &[], &out.join("tets.png"))?;
+    render(tets, &out.join("tets.png"))?;
     Ok(())
 }
 
-/// Renders `volume` with every default and writes it as a PNG.
-fn render(
-    volume: AnyVolume,
-    notes: &[String],
-    path: &Path,
-) -> Result<(), Box<dyn std::error::Error>> {
-    let kind = volume.kind();
-    let scene = Scene::with_volume(volume, &SceneDesc::default(), Path::new("."))?;
-    for n in notes.iter().chain(&scene.notes) {
+/// Renders a loaded volume with every default and writes it as a PNG.
+fn render(loaded: Loaded, path: &Path) -> Result<(), Box<dyn std::error::Error>> {
+    let kind = loaded.volume.kind();
+    let scene = Scene::with_loaded(loaded, &SceneDesc::default(), Path::new("."))?;
+    for n in &scene.notes {
         eprintln!("note: {n}");
     }
     let image = scene.render(&Control::new())?;

@@ -160,7 +160,8 @@ impl Scene {
     /// follows the camera.
     pub fn reaim(&mut self, desc: &SceneDesc) -> Result<(), SceneError> {
         let aspect = self.settings.width as f32 / self.settings.height as f32;
-        self.camera = crate::resolve::camera(&desc.camera, &self.volume.bounds(), aspect)?;
+        self.camera =
+            crate::resolve::camera(&desc.camera, &self.volume.bounds(), aspect, &self.frame)?;
         let follows = desc.light.as_ref().is_some_and(|l| l.direction.is_none());
         if let Some(light) = &mut self.settings.light
             && follows

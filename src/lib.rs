@@ -42,11 +42,11 @@
 //! let positions: Vec<Vec3> = (0..1000)
 //!     .map(|i| Vec3::new((i % 10) as f32, (i / 10 % 10) as f32, (i / 100) as f32))
 //!     .collect();
-//! let (volume, _notes) = AnyVolume::from_particles(
+//! let loaded = AnyVolume::from_particles(
 //!     ParticleArrays { positions, ..Default::default() },
 //!     &Default::default(),
 //! )?;
-//! let scene = Scene::with_volume(volume, &SceneDesc::default(), ".".as_ref())?;
+//! let scene = Scene::with_loaded(loaded, &SceneDesc::default(), ".".as_ref())?;
 //! let image = scene.render(&Control::new())?;
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
@@ -55,6 +55,7 @@ mod camera;
 mod columns;
 pub mod demo;
 mod error;
+mod frame;
 pub mod histogram;
 pub mod load;
 mod memory;
@@ -66,10 +67,11 @@ mod scene;
 mod volume;
 
 pub use error::{Error, SceneError};
+pub use frame::WorldFrame;
 pub use load::AmrArrays;
 pub use load::{Loaded, frame_count, load, read_points, read_scene};
 pub use memory::ParticleArrays;
-pub use resolve::{Resolved, resolve, transfer_function, transfer_function_at};
+pub use resolve::{Resolved, resolve, resolve_in, transfer_function, transfer_function_at};
 pub use scene::Scene;
 pub use volume::AnyVolume;
 

@@ -10,13 +10,17 @@ use voxless_core::Vec3;
 use voxless_particles::ParticleData;
 use voxless_scene::{AmrDesc, ParticlesDesc, TetsDesc};
 
-use crate::load::{self, AmrArrays};
-use crate::{AnyVolume, SceneError};
+use crate::load::{self, AmrArrays, Loaded};
+use crate::{AnyVolume, SceneError, WorldFrame};
 
 /// Particle arrays in memory, one entry per particle.
 #[derive(Clone, Debug, Default)]
 pub struct ParticleArrays {
+    /// Positions relative to `frame`'s origin.
     pub positions: Vec<Vec3>,
+    /// Where the positions' origin lies in the world (the world origin by
+    /// default; [`ParticleArrays::from_f64`] centres it on the data).
+    pub frame: WorldFrame,
     /// Per-particle radius parameter (else the description's `radius`, else
     /// one estimated from the particle spacing).
     pub radii: Option<Vec<f32>>,
@@ -38,6 +42,18 @@ fn array_files() -> Vec<(&'static str, PathBuf)> {
 }
 
 impl ParticleArrays {
+    /// Particles at float64 world positions: recentred on their bounding
+    /// box's centre in float64 before they become float32, so positions far
+    /// from zero (10⁹ + a small spread) keep their digits.
+    pub fn from_f64(positions: &[[f64; 3]]) -> ParticleArrays {
+        let frame = WorldFrame::centred_on(positions);
+        ParticleArrays {
+            positions: positions.iter().map(|&p| frame.to_local(p)).collect(),
+            frame,
+            ..Default::default()
+        }
+    }
+
     /// The particles whose species is `species` (a number).
     fn keep(&self, species: &str) -> Result<ParticleArrays, SceneError> {
         let Some(types) = &self.species else {
@@ -62,6 +78,7 @@ impl ParticleArrays {
         let pick = |v: &Option<Vec<f32>>| v.as_ref().map(|v| rows.iter().map(|&i| v[i]).collect());
         Ok(ParticleArrays {
             positions: rows.iter().map(|&i| self.positions[i]).collect(),
+            frame: self.frame,
             radii: pick(&self.radii),
             weights: pick(&self.weights),
             attribute: pick(&self.attribute),
@@ -117,11 +134,11 @@ impl AnyVolume {
     /// Particles from arrays, with `desc`'s settings (kernel, radius,
     /// cluster size, classification, maps, a species or materials; its
     /// file fields are not used) and the data's defaults; the notes say
-    /// which defaults were chosen.
+    /// which defaults were chosen, and the frame is the arrays'.
     pub fn from_particles(
         arrays: ParticleArrays,
         desc: &ParticlesDesc,
-    ) -> Result<(AnyVolume, Vec<String>), SceneError> {
+    ) -> Result<Loaded, SceneError> {
         arrays.check_lengths()?;
         let mut notes = Vec::new();
         let volume = match &desc.materials {
@@ -139,17 +156,23 @@ impl AnyVolume {
             }
             None => AnyVolume::Particles(Box::new(particle_volume(&arrays, desc, &mut notes)?)),
         };
-        Ok((volume, notes))
+        Ok(Loaded {
+            volume,
+            frame: arrays.frame,
+            notes,
+        })
     }
 
     /// AMR leaf cells from arrays, with `desc`'s field choices and
-    /// reconstruction (its file fields are not used).
-    pub fn from_amr(arrays: AmrArrays, desc: &AmrDesc) -> Result<AnyVolume, SceneError> {
-        Ok(AnyVolume::Amr(Box::new(load::build_amr(
-            arrays,
-            desc,
-            Path::new("cells"),
-        )?)))
+    /// reconstruction (its file fields are not used); the frame's origin is
+    /// the arrays' (or the description's) origin.
+    pub fn from_amr(arrays: AmrArrays, desc: &AmrDesc) -> Result<Loaded, SceneError> {
+        let (v, frame) = load::build_amr(arrays, desc, Path::new("cells"))?;
+        Ok(Loaded {
+            volume: AnyVolume::Amr(Box::new(v)),
+            frame,
+            notes: Vec::new(),
+        })
     }
 
     /// A phase-space tessellation of N³ positions in Lagrangian order
@@ -160,17 +183,18 @@ impl AnyVolume {
         n: usize,
         box_size: f32,
         desc: &TetsDesc,
-    ) -> Result<AnyVolume, SceneError> {
+    ) -> Result<Loaded, SceneError> {
         let t = TetsDesc {
             lagrangian: Some(n),
             box_size: Some(box_size),
             ..desc.clone()
         };
         let grid = load::tets::grid_of(positions, &t)?;
-        Ok(AnyVolume::Tets(Box::new(load::tets::build_tets(
-            &grid,
-            &t,
-            Path::new("positions"),
-        )?)))
+        let v = load::tets::build_tets(&grid, &t, Path::new("positions"))?;
+        Ok(Loaded {
+            volume: AnyVolume::Tets(Box::new(v)),
+            frame: WorldFrame::default(),
+            notes: Vec::new(),
+        })
     }
 }

@@ -5,12 +5,13 @@
 //!
 //! Model: a pose is an eye, a look-at point (the orbit centre) and an up
 //! vector, plus the orthographic view height when the projection is
-//! orthographic. [`Pose::of`] resolves a description exactly as
-//! [`crate::resolve`] does (default framing, orbit, elevation and zoom
-//! applied); [`Pose::write`] stores the pose as explicit `eye`, `look_at`,
-//! `up` (and `ortho_height`) and clears the relative `orbit`, `elevation`
-//! and `zoom`, so resolving the written description gives the pose's camera
-//! again.
+//! orthographic — in the volume's own coordinates, with the [`WorldFrame`]
+//! that places them in the world. [`Pose::of`] resolves a description
+//! exactly as [`crate::resolve_in`] does (default framing, orbit, elevation
+//! and zoom applied); [`Pose::write`] stores the pose as explicit world
+//! `eye`, `look_at`, `up` (and `ortho_height`) and clears the relative
+//! `orbit`, `elevation` and `zoom`, so resolving the written description
+//! gives the pose's camera again.
 //!
 //! Invariants: orbiting keeps the distance to the look-at point; the eye
 //! never passes over the pole (elevation stays within ±89.9° of the plane
@@ -20,26 +21,38 @@
 use voxless_core::{Aabb, Camera, Projection, Vec3};
 use voxless_scene::{CameraDesc, ProjectionName};
 
-use crate::SceneError;
 use crate::camera::ViewAdjust;
+use crate::{SceneError, WorldFrame};
 
 /// An explicit camera pose (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pose {
+    /// Eye and look-at point in the volume's coordinates.
     pub eye: Vec3,
     pub look_at: Vec3,
     pub up: Vec3,
     /// World-space view height of an orthographic camera; `None` for
     /// perspective.
     pub ortho_height: Option<f32>,
+    /// Where the volume's coordinates sit in the world.
+    pub frame: WorldFrame,
 }
 
 impl Pose {
-    /// The pose `c` describes for data in `bounds`, seen in an image of
+    /// The pose `c` describes for data in `bounds` (the volume's
+    /// coordinates, placed in the world by `frame`), seen in an image of
     /// `aspect` = width / height (the default framing depends on it).
-    pub fn of(c: &CameraDesc, bounds: &Aabb, aspect: f32) -> Result<Pose, SceneError> {
-        let camera = crate::resolve::camera(c, bounds, aspect)?;
-        let look_at = c.look_at.map(Vec3::from_array).unwrap_or(bounds.center());
+    pub fn of(
+        c: &CameraDesc,
+        bounds: &Aabb,
+        aspect: f32,
+        frame: &WorldFrame,
+    ) -> Result<Pose, SceneError> {
+        let camera = crate::resolve::camera(c, bounds, aspect, frame)?;
+        let look_at = c
+            .look_at
+            .map(|p| frame.to_local(p))
+            .unwrap_or(bounds.center());
         let up =
             c.up.map(Vec3::from_array)
                 .unwrap_or(Vec3::new(0.0, 1.0, 0.0));
@@ -52,6 +65,7 @@ impl Pose {
             look_at,
             up,
             ortho_height,
+            frame: *frame,
         })
     }
 
@@ -128,8 +142,8 @@ impl Pose {
     /// Writes the pose into `c` as explicit vectors (see the module docs);
     /// field of view and projection stay as they are.
     pub fn write(&self, c: &mut CameraDesc) {
-        c.eye = Some(self.eye.to_array());
-        c.look_at = Some(self.look_at.to_array());
+        c.eye = Some(self.frame.to_world(self.eye));
+        c.look_at = Some(self.frame.to_world(self.look_at));
         c.up = Some(self.up.to_array());
         c.orbit = None;
         c.elevation = None;
@@ -141,16 +155,16 @@ impl Pose {
     }
 }
 
-/// Orbits the camera `c` describes (see [`Pose::orbit`]) and writes the
-/// result back as explicit vectors.
+/// Orbits the camera `c` describes for `view` = (the volume's bounds, the
+/// image's aspect ratio, its world frame) — see [`Pose::orbit`] — and
+/// writes the result back as explicit vectors.
 pub fn orbit_camera(
     c: &mut CameraDesc,
-    bounds: &Aabb,
-    aspect: f32,
+    view: (&Aabb, f32, &WorldFrame),
     yaw_deg: f32,
     pitch_deg: f32,
 ) -> Result<(), SceneError> {
-    Pose::of(c, bounds, aspect)?
+    Pose::of(c, view.0, view.1, view.2)?
         .orbit(yaw_deg, pitch_deg)
         .write(c);
     Ok(())
@@ -159,23 +173,23 @@ pub fn orbit_camera(
 /// Pans the camera `c` describes (see [`Pose::pan`]).
 pub fn pan_camera(
     c: &mut CameraDesc,
-    bounds: &Aabb,
-    aspect: f32,
+    view: (&Aabb, f32, &WorldFrame),
     dx: f32,
     dy: f32,
 ) -> Result<(), SceneError> {
     let fov = c.fov.unwrap_or(30.0);
-    Pose::of(c, bounds, aspect)?.pan(dx, dy, fov).write(c);
+    Pose::of(c, view.0, view.1, view.2)?
+        .pan(dx, dy, fov)
+        .write(c);
     Ok(())
 }
 
 /// Zooms the camera `c` describes (see [`Pose::zoom`]).
 pub fn zoom_camera(
     c: &mut CameraDesc,
-    bounds: &Aabb,
-    aspect: f32,
+    view: (&Aabb, f32, &WorldFrame),
     factor: f32,
 ) -> Result<(), SceneError> {
-    Pose::of(c, bounds, aspect)?.zoom(factor).write(c);
+    Pose::of(c, view.0, view.1, view.2)?.zoom(factor).write(c);
     Ok(())
 }

@@ -17,7 +17,7 @@ use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
 
 use crate::camera::{ViewAdjust, default_light_direction};
 use crate::load::{positive, range};
-use crate::{AnyVolume, SceneError};
+use crate::{AnyVolume, SceneError, WorldFrame};
 
 /// How to look at a volume: everything a render, projection or sample needs
 /// besides the volume itself.
@@ -32,9 +32,23 @@ pub struct Resolved {
     pub notes: Vec<String>,
 }
 
-/// Fills every default of `desc` for `volume`. Colormap files are read
-/// relative to `base` (the scene file's directory).
+/// Fills every default of `desc` for `volume`, whose coordinates are the
+/// world's. Colormap files are read relative to `base` (the scene file's
+/// directory).
 pub fn resolve(volume: &AnyVolume, desc: &SceneDesc, base: &Path) -> Result<Resolved, SceneError> {
+    resolve_in(volume, &WorldFrame::default(), desc, base)
+}
+
+/// [`resolve`] for a volume whose coordinates are relative to `frame`:
+/// the description's world positions (eye, look-at, clip box, point light)
+/// are moved into the volume's frame, and the resolved camera and settings
+/// are in it.
+pub fn resolve_in(
+    volume: &AnyVolume,
+    frame: &WorldFrame,
+    desc: &SceneDesc,
+    base: &Path,
+) -> Result<Resolved, SceneError> {
     let mut notes = Vec::new();
     let tf = transfer_function_at(&desc.transfer, base, &mut notes)?;
     let width = desc.image.width.unwrap_or(800);
@@ -52,7 +66,12 @@ pub fn resolve(volume: &AnyVolume, desc: &SceneDesc, base: &Path) -> Result<Reso
             "samples per pixel must be ≥ 1",
         ));
     }
-    let camera = camera(&desc.camera, &volume.bounds(), width as f32 / height as f32)?;
+    let camera = camera(
+        &desc.camera,
+        &volume.bounds(),
+        width as f32 / height as f32,
+        frame,
+    )?;
 
     let mut settings = volume.default_settings(width, height);
     settings.spp = spp;
@@ -122,8 +141,8 @@ pub fn resolve(volume: &AnyVolume, desc: &SceneDesc, base: &Path) -> Result<Reso
     }
     settings.volume = r.volume.unwrap_or(true);
     if let Some(c) = r.clip {
-        let b = Aabb::new(Vec3::new(c[0], c[1], c[2]), Vec3::new(c[3], c[4], c[5]));
-        if !(b.min.is_finite() && b.max.is_finite()) || b.is_empty() {
+        let b = frame.box_to_local(c);
+        if !c.iter().all(|v| v.is_finite()) || b.is_empty() {
             return Err(SceneError::setting(
                 "render.clip",
                 format!("{c:?} is not a finite box with min ≤ max"),
@@ -173,7 +192,7 @@ pub fn resolve(volume: &AnyVolume, desc: &SceneDesc, base: &Path) -> Result<Reso
             ambient,
         });
         if l.shadows.unwrap_or(false) {
-            settings.scatter = Some(scatter_settings(l, dir, ambient)?);
+            settings.scatter = Some(scatter_settings(l, dir, ambient, frame)?);
             if !settings.iso.is_empty() {
                 return Err(SceneError::setting(
                     "light.shadows",
@@ -194,14 +213,18 @@ pub fn resolve(volume: &AnyVolume, desc: &SceneDesc, base: &Path) -> Result<Reso
 }
 
 /// The single-scattering settings of a light with `shadows = true`.
-fn scatter_settings(l: &LightDesc, dir: Vec3, ambient: f32) -> Result<Scatter, SceneError> {
+fn scatter_settings(
+    l: &LightDesc,
+    dir: Vec3,
+    ambient: f32,
+    frame: &WorldFrame,
+) -> Result<Scatter, SceneError> {
     let light = match l.position {
         Some(p) => {
-            let p = Vec3::from_array(p);
-            if !p.is_finite() {
+            if !p.iter().all(|v| v.is_finite()) {
                 return Err(SceneError::setting("light.position", "must be finite"));
             }
-            LightSource::Point(p)
+            LightSource::Point(frame.to_local(p))
         }
         None => LightSource::Directional(dir),
     };
@@ -289,10 +312,20 @@ pub fn transfer_function_at(
     Ok(TransferFunction::new(colormap, opacity))
 }
 
-pub(crate) fn camera(c: &CameraDesc, bounds: &Aabb, aspect: f32) -> Result<Camera, SceneError> {
+/// The camera `c` describes (world positions moved into `frame`) for data
+/// within `bounds` (in the frame).
+pub(crate) fn camera(
+    c: &CameraDesc,
+    bounds: &Aabb,
+    aspect: f32,
+    frame: &WorldFrame,
+) -> Result<Camera, SceneError> {
     let framing = Camera::framing(bounds, aspect);
-    let eye = c.eye.map(Vec3::from_array).unwrap_or(framing.eye);
-    let look_at = c.look_at.map(Vec3::from_array).unwrap_or(bounds.center());
+    let eye = c.eye.map(|p| frame.to_local(p)).unwrap_or(framing.eye);
+    let look_at = c
+        .look_at
+        .map(|p| frame.to_local(p))
+        .unwrap_or(bounds.center());
     let up =
         c.up.map(Vec3::from_array)
             .unwrap_or(Vec3::new(0.0, 1.0, 0.0));

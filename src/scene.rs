@@ -9,12 +9,15 @@ use voxless_render::{Film, RenderSettings};
 use voxless_scene::SceneDesc;
 use voxless_transfer::TransferFunction;
 
-use crate::load::{self, particles};
-use crate::{AnyVolume, Resolved, SceneError, resolve};
+use crate::load::{self, Loaded, particles};
+use crate::{AnyVolume, Resolved, SceneError, WorldFrame, resolve_in};
 
 /// Everything a render, sample or projection needs.
 pub struct Scene {
     pub volume: AnyVolume,
+    /// Where the volume's coordinates sit in the world; the camera and
+    /// settings below are in the volume's coordinates.
+    pub frame: WorldFrame,
     pub camera: Camera,
     pub tf: TransferFunction,
     pub settings: RenderSettings,
@@ -28,18 +31,35 @@ impl Scene {
     /// Loads the data `desc` names (paths relative to `base`) at frame
     /// `frame` and fills every default.
     pub fn open(desc: &SceneDesc, base: &Path, frame: usize) -> Result<Scene, SceneError> {
-        let loaded = load::load(desc, base, frame)?;
-        let mut scene = Scene::with_volume(loaded.volume, desc, base)?;
-        let mut notes = loaded.notes;
-        notes.append(&mut scene.notes);
-        scene.notes = notes;
+        Scene::with_loaded(load::load(desc, base, frame)?, desc, base)
+    }
+
+    /// A volume loaded (from files or memory) with the defaults `desc`
+    /// leaves open; the loading notes come first.
+    pub fn with_loaded(loaded: Loaded, desc: &SceneDesc, base: &Path) -> Result<Scene, SceneError> {
+        let Loaded {
+            volume,
+            frame,
+            notes: mut loading,
+        } = loaded;
+        let mut scene = Scene::in_frame(volume, frame, desc, base)?;
+        loading.append(&mut scene.notes);
+        scene.notes = loading;
         Ok(scene)
     }
 
-    /// A volume built elsewhere (from memory) with the defaults `desc`
-    /// leaves open, exactly as for a loaded one.
+    /// A volume in world coordinates with the defaults `desc` leaves open.
     pub fn with_volume(
         volume: AnyVolume,
+        desc: &SceneDesc,
+        base: &Path,
+    ) -> Result<Scene, SceneError> {
+        Scene::in_frame(volume, WorldFrame::default(), desc, base)
+    }
+
+    fn in_frame(
+        volume: AnyVolume,
+        frame: WorldFrame,
         desc: &SceneDesc,
         base: &Path,
     ) -> Result<Scene, SceneError> {
@@ -49,9 +69,10 @@ impl Scene {
             settings,
             background,
             notes,
-        } = resolve(&volume, desc, base)?;
+        } = resolve_in(&volume, &frame, desc, base)?;
         Ok(Scene {
             volume,
+            frame,
             camera,
             tf,
             settings,
@@ -83,9 +104,16 @@ impl Scene {
         crate::progressive::check_iso(&self.settings, film)
     }
 
-    /// The fields at `points` (see [`AnyVolume::sample_points`]).
-    pub fn sample(&self, points: &[Vec3], gradient: bool) -> Vec<f32> {
-        self.volume.sample_points(points, gradient)
+    /// The fields at world `points` (see [`AnyVolume::sample_points`]).
+    pub fn sample(&self, points: &[[f64; 3]], gradient: bool) -> Vec<f32> {
+        let local: Vec<Vec3> = points.iter().map(|&p| self.frame.to_local(p)).collect();
+        self.volume.sample_points(&local, gradient)
+    }
+
+    /// The volume's bounds in world coordinates (lower, upper corner).
+    pub fn world_bounds(&self) -> ([f64; 3], [f64; 3]) {
+        let b = self.volume.bounds();
+        (self.frame.to_world(b.min), self.frame.to_world(b.max))
     }
 
     /// Moves a particle scene to frame `frame` of its sequence: the BVH is

@@ -69,7 +69,9 @@ fn particles_of_every_kernel_pass() {
             classification: Some(classification),
             ..Default::default()
         };
-        let (v, _) = AnyVolume::from_particles(particles(600, 3), &desc).unwrap();
+        let v = AnyVolume::from_particles(particles(600, 3), &desc)
+            .unwrap()
+            .volume;
         let AnyVolume::Particles(v) = v else {
             unreachable!()
         };
@@ -88,7 +90,9 @@ fn multi_material_particles_pass() {
         materials: Some(vec![mat("1", "viridis"), mat("2", "inferno")]),
         ..Default::default()
     };
-    let (v, _) = AnyVolume::from_particles(particles(800, 5), &desc).unwrap();
+    let v = AnyVolume::from_particles(particles(800, 5), &desc)
+        .unwrap()
+        .volume;
     let AnyVolume::Materials(v) = v else {
         unreachable!()
     };
@@ -110,7 +114,7 @@ fn amr_cells_pass_with_both_reconstructions() {
             color_field: Some("energy".into()),
             ..Default::default()
         };
-        let AnyVolume::Amr(v) = AnyVolume::from_amr(amr_cells(), &desc).unwrap() else {
+        let AnyVolume::Amr(v) = AnyVolume::from_amr(amr_cells(), &desc).unwrap().volume else {
             unreachable!()
         };
         let c = match reconstruction {
@@ -135,7 +139,7 @@ fn tessellations_pass() {
     let v =
         AnyVolume::from_tessellation(g.positions.clone(), g.n, g.box_size, &TetsDesc::default())
             .unwrap();
-    let AnyVolume::Tets(v) = v else {
+    let AnyVolume::Tets(v) = v.volume else {
         unreachable!()
     };
     // The density is piecewise constant: its samples have no derivative to

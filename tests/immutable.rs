@@ -54,7 +54,9 @@ fn concurrent_equals_sequential(name: &str, volume: &AnyVolume) {
 
 #[test]
 fn amr_visible_regions_live_in_each_render_not_in_the_volume() {
-    let v = AnyVolume::from_amr(fixtures::amr_cells(), &AmrDesc::default()).unwrap();
+    let v = AnyVolume::from_amr(fixtures::amr_cells(), &AmrDesc::default())
+        .unwrap()
+        .volume;
     concurrent_equals_sequential("AMR", &v);
 }
 
@@ -65,7 +67,9 @@ fn pre_classified_particles_colour_each_render_with_its_own_colormap() {
         attribute_range: Some([0.0, 3.0]),
         ..Default::default()
     };
-    let (v, _) = AnyVolume::from_particles(fixtures::particles(2000, 9), &desc).unwrap();
+    let v = AnyVolume::from_particles(fixtures::particles(2000, 9), &desc)
+        .unwrap()
+        .volume;
     concurrent_equals_sequential("pre-classified particles", &v);
     // And the colours are pre-classified: averaging colours is not
     // colour-mapping the average.
@@ -73,7 +77,9 @@ fn pre_classified_particles_colour_each_render_with_its_own_colormap() {
         classification: Some(ClassificationName::Post),
         ..desc.clone()
     };
-    let (w, _) = AnyVolume::from_particles(fixtures::particles(2000, 9), &post).unwrap();
+    let w = AnyVolume::from_particles(fixtures::particles(2000, 9), &post)
+        .unwrap()
+        .volume;
     let camera = Camera::framing(&v.bounds(), 1.0);
     let settings = v.default_settings(48, 48);
     let tf = &two_tfs()[1];

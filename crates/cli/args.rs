@@ -112,7 +112,7 @@ pub struct SceneArgs {
     pub amrclaw: Option<PathBuf>,
     /// World position of cell coordinate 0 (default: .meta.json beside the cells, else 0).
     #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "AMR", allow_negative_numbers = true)]
-    pub origin: Option<Vec<f32>>,
+    pub origin: Option<Vec<f64>>,
     /// World width of a finest cell (default: .meta.json, else 1).
     #[arg(long, help_heading = "AMR")]
     pub cell_size: Option<f32>,
@@ -152,9 +152,9 @@ pub struct SceneArgs {
 
     // ---- camera ----
     #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true)]
-    pub eye: Option<Vec<f32>>,
+    pub eye: Option<Vec<f64>>,
     #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true)]
-    pub look_at: Option<Vec<f32>>,
+    pub look_at: Option<Vec<f64>>,
     #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true)]
     pub up: Option<Vec<f32>>,
     /// Vertical field of view in degrees.
@@ -205,7 +205,7 @@ pub struct SceneArgs {
     pub shadows: bool,
     /// A point light at this position (with --shadows).
     #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Lighting", allow_negative_numbers = true)]
-    pub light_pos: Option<Vec<f32>>,
+    pub light_pos: Option<Vec<f64>>,
     /// Light intensity (with --shadows; default 1).
     #[arg(long, help_heading = "Lighting")]
     pub light_intensity: Option<f32>,
@@ -242,10 +242,10 @@ pub struct SceneArgs {
     pub no_packets: bool,
     /// Render only what lies inside this box.
     #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], help_heading = "Render", allow_negative_numbers = true)]
-    pub clip: Option<Vec<f32>>,
+    pub clip: Option<Vec<f64>>,
 }
 
-fn arr3(v: &Option<Vec<f32>>) -> Option<[f32; 3]> {
+fn arr3<T: Copy>(v: &Option<Vec<T>>) -> Option<[T; 3]> {
     v.as_ref().map(|v| [v[0], v[1], v[2]])
 }
 fn arr2(v: &Option<Vec<f32>>) -> Option<[f32; 2]> {

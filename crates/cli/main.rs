@@ -14,7 +14,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use voxless::render::colorbar::ColorbarSpec;
-use voxless::{Aabb, Camera, Control, ParticlesDesc, Scene, Vec3};
+use voxless::{Camera, Control, ParticlesDesc, Scene};
 
 use args::SceneArgs;
 use progress::Progress;
@@ -91,7 +91,7 @@ enum Command {
         axis: Axis,
         /// Override the bounds covered: x0 y0 z0 x1 y1 z1.
         #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], allow_negative_numbers = true)]
-        bounds: Option<Vec<f32>>,
+        bounds: Option<Vec<f64>>,
         /// Output .npy (float32 H×W) or .exr (one channel "Y").
         #[arg(short, long)]
         output: PathBuf,
@@ -220,7 +220,11 @@ fn run(cli: Cli) -> Result<()> {
             let pts = voxless::read_points(&points)?;
             let cols = s.volume.sample_columns(gradient);
             let t = Instant::now();
-            let values = s.volume.sample_points(&pts, gradient);
+            let world: Vec<[f64; 3]> = pts
+                .iter()
+                .map(|p| [p.x as f64, p.y as f64, p.z as f64])
+                .collect();
+            let values = s.sample(&world, gradient);
             voxless::io::write_npy_f32(&output, &[pts.len(), cols.len()], &values)?;
             eprintln!(
                 "sampled {} points in {:.2}s → {} (columns: {})",
@@ -241,7 +245,7 @@ fn run(cli: Cli) -> Result<()> {
             let s = resolve(&desc, &base)?;
             let axis_index = axis as usize;
             let b = match bounds {
-                Some(v) => Aabb::new(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5])),
+                Some(v) => s.frame.box_to_local([v[0], v[1], v[2], v[3], v[4], v[5]]),
                 None => s.volume.bounds(),
             };
             let camera = Camera::axis_projection(&b, axis_index).context("--bounds")?;
@@ -329,17 +333,17 @@ fn resolve_frame(desc: &voxless::SceneDesc, base: &Path, frame: usize) -> Result
     for n in &s.notes {
         eprintln!("note: {n}");
     }
-    let b = s.volume.bounds();
+    let (lo, hi) = s.world_bounds();
     eprintln!(
         "loaded {} in {:.2}s: bounds [{:.3}, {:.3}, {:.3}]..[{:.3}, {:.3}, {:.3}], value range [{:.4e}, {:.4e}]",
         s.volume.kind(),
         t.elapsed().as_secs_f64(),
-        b.min.x,
-        b.min.y,
-        b.min.z,
-        b.max.x,
-        b.max.y,
-        b.max.z,
+        lo[0],
+        lo[1],
+        lo[2],
+        hi[0],
+        hi[1],
+        hi[2],
         s.settings.value_range.lo,
         s.settings.value_range.hi,
     );

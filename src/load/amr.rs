@@ -7,7 +7,7 @@ use voxless_amr::{AmrCells, AmrSettings, AmrVolume, Reconstruction};
 use voxless_core::Vec3;
 use voxless_scene::{AmrDesc, ReconstructionName};
 
-use crate::SceneError;
+use crate::{SceneError, WorldFrame};
 
 /// Leaf cells in memory: `(x, y, z, level)` per cell (lower corner in
 /// finest-cell units, width `2^level`, level 0 finest), one value per cell
@@ -17,11 +17,13 @@ use crate::SceneError;
 pub struct AmrArrays {
     pub cells: Vec<[i32; 4]>,
     pub fields: Vec<(String, Vec<f32>)>,
-    pub origin: [f32; 3],
+    /// World position of cell coordinate 0 (float64: the volume works
+    /// relative to it, so an origin far from zero loses no digits).
+    pub origin: [f64; 3],
     pub cell_size: f32,
 }
 
-pub(crate) fn load_amr(a: &AmrDesc, base: &Path) -> Result<AmrVolume, SceneError> {
+pub(crate) fn load_amr(a: &AmrDesc, base: &Path) -> Result<(AmrVolume, WorldFrame), SceneError> {
     let (data, path) = match (&a.cells, &a.amrclaw) {
         (Some(cells), None) => {
             let scalars: Vec<PathBuf> = a.scalars.iter().flatten().map(|s| base.join(s)).collect();
@@ -54,19 +56,21 @@ pub(crate) fn load_amr(a: &AmrDesc, base: &Path) -> Result<AmrVolume, SceneError
     let arrays = AmrArrays {
         cells: data.cells,
         fields: data.fields,
-        origin: data.origin.map(|v| v as f32),
+        origin: data.origin,
         cell_size: data.finest_cell_size as f32,
     };
     build_amr(arrays, a, &path)
 }
 
 /// An AMR volume from cell arrays, with the description's field choices,
-/// reconstruction and geometry overrides; errors name `source`.
+/// reconstruction and geometry overrides, and the world frame it sits in
+/// (cell coordinate 0 at the world origin the arrays or the description
+/// give); errors name `source`.
 pub(crate) fn build_amr(
     data: AmrArrays,
     a: &AmrDesc,
     source: &Path,
-) -> Result<AmrVolume, SceneError> {
+) -> Result<(AmrVolume, WorldFrame), SceneError> {
     let names: Vec<&str> = data.fields.iter().map(|f| f.0.as_str()).collect();
     let index = |what: &str, name: &str| {
         names.iter().position(|n| *n == name).ok_or_else(|| {
@@ -94,11 +98,13 @@ pub(crate) fn build_amr(
         ReconstructionName::Basis => Reconstruction::Basis,
         ReconstructionName::Nearest => Reconstruction::Nearest,
     };
-    let origin = a.origin.unwrap_or(data.origin);
+    let frame = WorldFrame {
+        origin: a.origin.unwrap_or(data.origin),
+    };
     let cells = AmrCells {
         cells: data.cells,
         fields: data.fields,
-        origin: Vec3::from_array(origin),
+        origin: Vec3::ZERO,
         cell_size: a.cell_size.unwrap_or(data.cell_size),
     };
     AmrVolume::new(
@@ -109,6 +115,7 @@ pub(crate) fn build_amr(
             reconstruction,
         },
     )
+    .map(|v| (v, frame))
     .map_err(|source_err| SceneError::Amr {
         path: source.to_path_buf(),
         source: source_err,

@@ -26,11 +26,13 @@ pub(crate) use amr::build_amr;
 pub use particles::{default_radius, frame_count};
 pub(crate) use particles::{positive, range};
 
-use crate::{AnyVolume, SceneError};
+use crate::{AnyVolume, SceneError, WorldFrame};
 
-/// A loaded volume and what was worth saying about loading it.
+/// A loaded volume, the world frame its coordinates are relative to, and
+/// what was worth saying about loading it.
 pub struct Loaded {
     pub volume: AnyVolume,
+    pub frame: WorldFrame,
     pub notes: Vec<String>,
 }
 
@@ -49,6 +51,7 @@ pub fn load(desc: &SceneDesc, base: &Path, frame: usize) -> Result<Loaded, Scene
             "more than one data source ([particles], [amr], [tets]) is given; pick one",
         ));
     }
+    let mut world = WorldFrame::default();
     let volume = match (&desc.particles, &desc.amr, &desc.tets) {
         (Some(p), _, _) if p.materials.is_some() => {
             let mats = p.materials.as_deref().unwrap_or_default();
@@ -59,7 +62,11 @@ pub fn load(desc: &SceneDesc, base: &Path, frame: usize) -> Result<Loaded, Scene
         (Some(p), _, _) => AnyVolume::Particles(Box::new(particles::load_particles(
             p, base, &mut notes, frame,
         )?)),
-        (_, Some(a), _) => AnyVolume::Amr(Box::new(amr::load_amr(a, base)?)),
+        (_, Some(a), _) => {
+            let (v, f) = amr::load_amr(a, base)?;
+            world = f;
+            AnyVolume::Amr(Box::new(v))
+        }
         (_, _, Some(t)) => AnyVolume::Tets(Box::new(tets::load_tets(t, base, &mut notes)?)),
         (None, None, None) => {
             return Err(SceneError::setting(
@@ -68,7 +75,11 @@ pub fn load(desc: &SceneDesc, base: &Path, frame: usize) -> Result<Loaded, Scene
             ));
         }
     };
-    Ok(Loaded { volume, notes })
+    Ok(Loaded {
+        volume,
+        frame: world,
+        notes,
+    })
 }
 
 /// Query points for `sample`: an N×3 `.npy` (float32/float64) or a CSV with

@@ -1,7 +1,17 @@
 use std::path::Path;
 
+use crate::WorldFrame;
 use crate::camera::{ViewAdjust, name_of};
-use crate::resolve::camera;
+use crate::resolve as defaults;
+
+/// The camera `c` describes in the world frame.
+fn camera(
+    c: &CameraDesc,
+    b: &Aabb,
+    aspect: f32,
+) -> Result<voxless_core::Camera, crate::SceneError> {
+    defaults::camera(c, b, aspect, &WorldFrame::default())
+}
 use crate::{
     CameraDesc, ParticlesDesc, Scene, SceneDesc, TransferDesc, Vec3, transfer_function_at,
 };

@@ -23,7 +23,7 @@ fn particles(desc: &ParticlesDesc) -> AnyVolume {
         attribute,
         ..Default::default()
     };
-    AnyVolume::from_particles(arrays, desc).unwrap().0
+    AnyVolume::from_particles(arrays, desc).unwrap().volume
 }
 
 fn small(desc: &mut SceneDesc) {
@@ -43,7 +43,7 @@ fn a_written_pose_resolves_to_the_same_camera() {
     desc.camera.zoom = Some(1.5);
     let before = resolve(&v, &desc, Path::new(".")).unwrap().camera;
     // Writing the pose unchanged keeps the camera, bit for bit.
-    let pose = Pose::of(&desc.camera, &v.bounds(), 1.5).unwrap();
+    let pose = Pose::of(&desc.camera, &v.bounds(), 1.5, &Default::default()).unwrap();
     let mut written = desc.clone();
     pose.write(&mut written.camera);
     assert_eq!(written.camera.orbit, None);
@@ -92,7 +92,7 @@ fn saved_scenes_read_back_equal_with_absolute_paths() {
     desc.transfer.opacity_points = Some(vec![[0.0, 0.1], [0.337, 0.71], [1.0, 1.0]]);
     desc.transfer.value_range = Some([0.1, 3.3]);
     desc.render.clip = Some([0.1, 0.2, 0.3, 0.9, 0.8, 0.7]);
-    Pose::of(&desc.camera, &v.bounds(), 4.0 / 3.0)
+    Pose::of(&desc.camera, &v.bounds(), 4.0 / 3.0, &Default::default())
         .unwrap()
         .orbit(33.3, -12.1)
         .write(&mut desc.camera);

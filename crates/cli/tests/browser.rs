@@ -142,6 +142,14 @@ async fn the_page_orbits_edits_and_saves_a_scene_the_cli_reproduces() {
         eprintln!("notice: chromedriver or chromium not on PATH; skipping the browser test");
         return;
     };
+    // An unoptimised server renders the dam break at page size in minutes,
+    // not seconds, so the test's patience is meant for release builds.
+    if cfg!(debug_assertions) && std::env::var_os("VOXLESS_REQUIRE_BROWSER").is_none() {
+        eprintln!(
+            "notice: the browser test runs in release builds (cargo test --release); skipping"
+        );
+        return;
+    }
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let data = root.join("../shared/data/sph-dam-break/npy_01000");
     if !data.is_dir() {

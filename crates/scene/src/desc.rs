@@ -116,7 +116,7 @@ pub struct AmrDesc {
     pub amrclaw: Option<String>,
     /// World position of cell coordinate 0 (default: from a `.meta.json`
     /// beside the cells, else 0).
-    pub origin: Option<[f32; 3]>,
+    pub origin: Option<[f64; 3]>,
     /// World width of a finest cell (default: from `.meta.json`, else 1).
     pub cell_size: Option<f32>,
     /// Field driving opacity (default: the first).
@@ -160,8 +160,11 @@ pub struct TetsDesc {
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
-    pub eye: Option<[f32; 3]>,
-    pub look_at: Option<[f32; 3]>,
+    /// World position of the eye (float64: positions far from the origin
+    /// keep their digits).
+    pub eye: Option<[f64; 3]>,
+    /// World position the camera looks at.
+    pub look_at: Option<[f64; 3]>,
     pub up: Option<[f32; 3]>,
     /// Vertical field of view in degrees (perspective).
     pub fov: Option<f32>,
@@ -227,7 +230,7 @@ pub struct RenderDesc {
     /// Render the volume itself (default true; false = iso-surfaces only).
     pub volume: Option<bool>,
     /// Clip box `[x0, y0, z0, x1, y1, z1]`: only what is inside is rendered.
-    pub clip: Option<[f32; 6]>,
+    pub clip: Option<[f64; 6]>,
     /// Map log10(value) through the transfer function (default: on for
     /// tessellations, whose densities span decades; off otherwise). The value
     /// range is then given in log10 units.
@@ -250,7 +253,7 @@ pub struct LightDesc {
     pub shadows: Option<bool>,
     /// A point light at this position instead of a directional light
     /// (shadows only).
-    pub position: Option<[f32; 3]>,
+    pub position: Option<[f64; 3]>,
     /// Light intensity (default 1; shadows only).
     pub intensity: Option<f32>,
     /// Free-flight sampling: marching (default; stochastic ray marching) or

@@ -6,11 +6,13 @@ use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock};
 
-use voxless::{AnyVolume, SceneDesc};
+use voxless::{AnyVolume, SceneDesc, WorldFrame};
 
-/// A loaded volume and the notes its loading made.
+/// A loaded volume, where its coordinates sit in the world, and the notes
+/// its loading made.
 pub struct Loaded {
     pub volume: AnyVolume,
+    pub frame: WorldFrame,
     pub notes: Vec<String>,
 }
 
@@ -79,6 +81,7 @@ impl Volumes {
                 .map(|l| {
                     Arc::new(Loaded {
                         volume: l.volume,
+                        frame: l.frame,
                         notes: l.notes,
                     })
                 })
@@ -95,9 +98,10 @@ pub struct App {
     /// The scene the server started with (every tab's first view; the
     /// page's reset goes back to its camera).
     pub initial: SceneDesc,
-    /// Bounds of the initial volume (camera moves turn about them until a
-    /// tab has rendered its own).
+    /// Bounds of the initial volume and its world frame (camera moves turn
+    /// about them until a tab has rendered its own).
     pub initial_bounds: voxless::Aabb,
+    pub initial_frame: WorldFrame,
     /// Frames of the data (1 unless a time series).
     pub frames: usize,
     pub volumes: Volumes,

@@ -115,13 +115,14 @@ fn run_job(
     if !outbox.is_current(seq) {
         return;
     }
-    let resolved = match voxless::resolve(&loaded.volume, &job.desc, &app.base) {
+    let resolved = match voxless::resolve_in(&loaded.volume, &loaded.frame, &job.desc, &app.base) {
         Ok(r) => r,
         Err(e) => return fail(e.to_string()),
     };
     {
         let mut t = tab.lock().unwrap_or_else(|e| e.into_inner());
         t.bounds = loaded.volume.bounds();
+        t.world = loaded.frame;
         let vr = resolved.settings.value_range;
         t.value_range = Some([vr.lo, vr.hi]);
         t.attribute_range = resolved.settings.attribute_range.map(|r| [r.lo, r.hi]);
@@ -275,7 +276,9 @@ fn state_message(
         .histogram
         .as_ref()
         .filter(|_| memory.histogram_key.as_deref() == Some(key.as_str()));
+    // Positions the page shows and edits (clip box) are world positions.
     let b = volume.bounds();
+    let (lo, hi) = (loaded.frame.to_world(b.min), loaded.frame.to_world(b.max));
     let tf = &resolved.tf;
     let colors: Vec<[f32; 3]> = (0..64)
         .map(|i| tf.colormap().srgb(i as f32 / 63.0))
@@ -341,8 +344,8 @@ fn state_message(
         "field": field,
         "color_field": color_field,
         "iso": st.iso.iter().map(|&v| unit(v)).collect::<Vec<f32>>(),
-        "clip": st.clip.map(|c| [c.min.x, c.min.y, c.min.z, c.max.x, c.max.y, c.max.z]),
-        "bounds": [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z],
+        "clip": job.desc.render.clip,
+        "bounds": [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]],
         "shade": st.light.is_some(),
         "shadows": st.scatter.is_some(),
         "spp": st.spp,
@@ -365,7 +368,8 @@ pub fn frame_png(app: &App, width: Option<u32>, height: Option<u32>) -> Result<V
         desc.image.height = Some(h);
     }
     let loaded = app.volumes.get(&desc, &app.base, frame)?;
-    let resolved = voxless::resolve(&loaded.volume, &desc, &app.base).map_err(|e| e.to_string())?;
+    let resolved = voxless::resolve_in(&loaded.volume, &loaded.frame, &desc, &app.base)
+        .map_err(|e| e.to_string())?;
     let film = loaded
         .volume
         .render_passes(

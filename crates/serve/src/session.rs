@@ -19,7 +19,7 @@ use std::time::Instant;
 use axum::extract::ws::{Message, WebSocket};
 use futures_util::{SinkExt, StreamExt};
 use serde_json::json;
-use voxless::{Aabb, CancelToken, SceneDesc};
+use voxless::{Aabb, CancelToken, SceneDesc, WorldFrame};
 
 use crate::app::App;
 use crate::outbox::{Outbox, Outgoing, Slot};
@@ -41,8 +41,10 @@ pub struct ImportedPreset {
 pub struct Tab {
     pub desc: SceneDesc,
     pub frame: usize,
-    /// Bounds of the volume rendered last (camera moves turn about them).
+    /// Bounds of the volume rendered last and its world frame (camera moves
+    /// turn about them).
     pub bounds: Aabb,
+    pub world: WorldFrame,
     /// The value and attribute ranges resolved last (kept fixed when the
     /// frame of a time series changes, as the CLI does).
     pub value_range: Option<[f32; 2]>,
@@ -111,6 +113,7 @@ pub async fn run(socket: WebSocket, app: Arc<App>) {
         desc: app.initial.clone(),
         frame: 0,
         bounds: app.initial_bounds,
+        world: app.initial_frame,
         value_range: None,
         attribute_range: None,
         imported: Vec::new(),
@@ -258,7 +261,8 @@ fn apply(app: &App, t: &mut Tab, action: &Action) -> Result<(), String> {
         let h = t.desc.image.height.unwrap_or(600).max(1) as f32;
         w / h
     };
-    let bounds = t.bounds;
+    let (bounds, world) = (t.bounds, t.world);
+    let view = (&bounds, aspect, &world);
     let cam = &mut t.desc.camera;
     match action {
         Action::Hello { width, height } | Action::Resize { width, height } => {
@@ -267,14 +271,13 @@ fn apply(app: &App, t: &mut Tab, action: &Action) -> Result<(), String> {
             t.desc.image.height = Some(side(*height));
         }
         Action::Orbit { yaw, pitch, .. } => {
-            voxless::pose::orbit_camera(cam, &bounds, aspect, *yaw, *pitch)
-                .map_err(|e| e.to_string())?;
+            voxless::pose::orbit_camera(cam, view, *yaw, *pitch).map_err(|e| e.to_string())?;
         }
         Action::Pan { dx, dy, .. } => {
-            voxless::pose::pan_camera(cam, &bounds, aspect, *dx, *dy).map_err(|e| e.to_string())?;
+            voxless::pose::pan_camera(cam, view, *dx, *dy).map_err(|e| e.to_string())?;
         }
         Action::Zoom { factor, .. } => {
-            voxless::pose::zoom_camera(cam, &bounds, aspect, *factor).map_err(|e| e.to_string())?;
+            voxless::pose::zoom_camera(cam, view, *factor).map_err(|e| e.to_string())?;
         }
         Action::EndDrag => {}
         Action::Reset => t.desc.camera = app.initial.camera.clone(),
