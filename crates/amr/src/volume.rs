@@ -80,6 +80,14 @@ pub struct AmrVolume {
     stats: BuildStats,
 }
 
+/// `⌊x⌋` for |x| < 2³¹ without a libm call (`f32::floor` is one on
+/// baseline x86-64, and the reconstruction takes three per brick).
+#[inline]
+pub(crate) fn floor_i32(x: f32) -> i32 {
+    let i = x as i32;
+    i - (x < i as f32) as i32
+}
+
 /// Reconstructed values at a point.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Recon {
@@ -315,9 +323,9 @@ impl AmrVolume {
         self.h
     }
 
-    /// Basis value of `field` at `p` (world) from region `region`'s bricks.
-    pub(crate) fn basis_value(&self, p: Vec3, region: usize, field: usize) -> Option<f32> {
-        self.reconstruct(p, region, field, false).map(|r| r.value)
+    /// Values of `field`, in brick order.
+    pub(crate) fn field_values(&self, field: usize) -> &[f32] {
+        &self.values[field]
     }
 
     fn to_units(&self, p: Vec3) -> Vec3 {
@@ -362,9 +370,8 @@ impl AmrVolume {
             let mut empty = false;
             for a in 0..3 {
                 let t = (pu[a] - b.lower[a] as f32) / w - 0.5;
-                let i0 = t.floor();
-                let f = t - i0;
-                let i0 = i0 as i32;
+                let i0 = floor_i32(t);
+                let f = t - i0 as f32;
                 for (k, (i, weight, dw)) in [(i0, 1.0 - f, -1.0 / w), (i0 + 1, f, 1.0 / w)]
                     .into_iter()
                     .enumerate()

@@ -234,6 +234,7 @@ impl Aabb {
     /// the plane of `min` it is inside, in the plane of `max` outside. Boxes
     /// that tile space (cells, bricks, regions) thus share such a ray
     /// between them exactly once, with no gap and no double count.
+    #[inline]
     pub fn clip_ray(&self, ray: &Ray, t: Range1) -> Range1 {
         let inv = ray.inv_dir();
         let t0 = (self.min - ray.origin).mul_elem(inv);
@@ -287,6 +288,7 @@ impl Ray {
     pub fn at(&self, t: f32) -> Vec3 {
         self.origin + self.dir * t
     }
+    #[inline]
     pub fn inv_dir(&self) -> Vec3 {
         Vec3::new(1.0 / self.dir.x, 1.0 / self.dir.y, 1.0 / self.dir.z)
     }
