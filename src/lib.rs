@@ -23,6 +23,11 @@
 //!   **projecting** ([`AnyVolume::project`]) and **sampling**
 //!   ([`AnyVolume::sample_points`]) report progress and stop when their
 //!   [`Control`]'s [`CancelToken`] is cancelled.
+//! - **Interactive front-ends** move a camera [`Pose`] and write it back
+//!   into the description ([`pose`]), render a coarse image first and then
+//!   pass by pass ([`render_progressive`]), draw a [`field_histogram`]
+//!   under the transfer function, and save the view as a scene file that
+//!   `voxless render` reproduces ([`save`]).
 //!
 //! Volumes are immutable after they are built and `Sync`: one volume serves
 //! several renders at once, each with its own camera and transfer function.
@@ -49,13 +54,18 @@
 pub mod autorange;
 pub mod budget;
 mod camera;
+mod columns;
 pub mod demo;
 mod error;
 mod frame;
+pub mod histogram;
 pub mod load;
 mod memory;
 pub mod output;
+pub mod pose;
+pub mod progressive;
 mod resolve;
+pub mod save;
 mod scene;
 pub mod series;
 mod volume;
@@ -70,6 +80,14 @@ pub use resolve::{
 };
 pub use scene::Scene;
 pub use volume::AnyVolume;
+
+// For interactive front-ends (the browser viewer, notebooks): camera poses
+// written back into descriptions, progressive renders, histograms, saving.
+pub use columns::particle_columns;
+pub use histogram::{Histogram, field_histogram};
+pub use pose::Pose;
+pub use progressive::{CoarseBudget, Stage, render_progressive};
+pub use save::{scene_toml, with_absolute_paths};
 
 /// File formats: which reader a path needs and one frame of any of them.
 pub use load::formats;

@@ -143,7 +143,7 @@ fn outputs_are_checked_before_any_work_and_written_as_named() {
     let e = fails(&["render", "--particles", &p, "-o", &s.str("none/x.png")]);
     assert!(e.contains("does not exist"), "{e}");
     // Memory for the image is checked up front.
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_voxless"))
+    let out = std::process::Command::new(bin())
         .args([
             "render",
             "--particles",

@@ -250,7 +250,7 @@ fn series_defaults_hold_over_every_frame() {
 fn progress_lines_when_stderr_is_not_a_terminal() {
     let s = Scratch::new("progress");
     write_positions(&s.path("p.npy"), 500, 1);
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_voxless"))
+    let out = std::process::Command::new(bin())
         .args([
             "render",
             "--particles",

@@ -361,6 +361,7 @@ pub(crate) fn build_particles(
     notes: &mut Vec<String>,
     scale: f64,
 ) -> Result<ParticleVolume, BuildError> {
+    super::scale::scale_arrays(&mut data, p)?;
     let kernel = if sph_defaults {
         Kernel::CubicSpline
     } else {
@@ -384,6 +385,8 @@ pub(crate) fn build_particles(
             r
         }
     };
+    // The radius scale acts on the global radius too (radii were scaled above).
+    let radius = radius * super::scale::scales(p)?.0;
     check_resolvable(&data, radius * kernel.support_factor(), scale)?;
     let classification = match p.classification.unwrap_or(ClassificationName::Post) {
         ClassificationName::Post => Classification::Post,
