@@ -23,6 +23,11 @@
 //!   **projecting** ([`AnyVolume::project`]) and **sampling**
 //!   ([`AnyVolume::sample_points`]) report progress and stop when their
 //!   [`Control`]'s [`CancelToken`] is cancelled.
+//! - **Interactive front-ends** move a camera [`Pose`] and write it back
+//!   into the description ([`pose`]), render a coarse image first and then
+//!   pass by pass ([`render_progressive`]), draw a [`field_histogram`]
+//!   under the transfer function, and save the view as a scene file that
+//!   `voxless render` reproduces ([`save`]).
 //!
 //! Volumes are immutable after they are built and `Sync`: one volume serves
 //! several renders at once, each with its own camera and transfer function.
@@ -46,28 +51,45 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod autorange;
+pub mod budget;
 mod camera;
+mod columns;
 pub mod demo;
 mod error;
 mod frame;
+pub mod histogram;
 pub mod load;
 mod memory;
+pub mod output;
 pub mod parallel;
+pub mod pose;
+pub mod progressive;
 mod resolve;
+pub mod save;
 mod scene;
+pub mod series;
 mod volume;
 
 pub use error::{Error, SceneError};
 pub use frame::WorldFrame;
 pub use load::AmrArrays;
-pub use load::{Loaded, frame_count, load, read_points, read_scene};
+pub use load::{Loaded, frame_count, frame_numbers, load, read_points, read_scene};
 pub use memory::ParticleArrays;
 pub use resolve::{
-    Resolved, VolumeKind, VolumeSummary, resolve, resolve_in, resolve_summary, transfer_function,
-    transfer_function_at,
+    Resolved, VolumeKind, VolumeSummary, resolve, resolve_in, resolve_summary, resolve_with,
+    transfer_function, transfer_function_at,
 };
 pub use scene::Scene;
 pub use volume::AnyVolume;
+
+// For interactive front-ends (the browser viewer, notebooks): camera poses
+// written back into descriptions, progressive renders, histograms, saving.
+pub use columns::particle_columns;
+pub use histogram::{Histogram, field_histogram};
+pub use pose::Pose;
+pub use progressive::{CoarseBudget, Stage, render_progressive};
+pub use save::{scene_toml, with_absolute_paths};
 
 /// File formats: which reader a path needs and one frame of any of them.
 pub use load::formats;

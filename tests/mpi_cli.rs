@@ -14,8 +14,6 @@ use std::process::Command;
 
 use common::{Lcg, Scratch, write_values};
 
-const BIN: &str = env!("CARGO_BIN_EXE_voxless");
-
 fn have_mpirun() -> bool {
     let ok = Command::new("mpirun")
         .arg("--version")
@@ -29,7 +27,7 @@ fn have_mpirun() -> bool {
 
 /// `voxless args` on one process (no MPI launcher in its environment).
 fn one(args: &[&str]) {
-    let out = Command::new(BIN).args(args).output().unwrap();
+    let out = Command::new(common::bin()).args(args).output().unwrap();
     assert!(
         out.status.success(),
         "voxless {args:?}:\n{}",
@@ -42,7 +40,7 @@ fn mpi(ranks: usize, args: &[&str]) -> (bool, String) {
     let out = Command::new("mpirun")
         .args(["--allow-run-as-root", "--oversubscribe", "-n"])
         .arg(ranks.to_string())
-        .arg(BIN)
+        .arg(common::bin())
         .args(args)
         .output()
         .unwrap();
@@ -100,7 +98,7 @@ fn same_bits(a: &Path, b: &Path) {
 
 /// Renders, projects and samples `data` (flags) with one process and with
 /// 1…4 ranks, comparing.
-fn check_kind(dir: &Scratch, name: &str, data: &[&str], points: &str) {
+fn check_kind(dir: &Scratch, name: &str, data: &[&str], view: &[&str], points: &str) {
     let d = |f: &str| dir.str(&format!("{name}_{f}"));
     let with = |extra: &[&str]| -> Vec<String> {
         data.iter()
@@ -109,7 +107,11 @@ fn check_kind(dir: &Scratch, name: &str, data: &[&str], points: &str) {
             .collect::<Vec<_>>()
     };
     let args = |v: &Vec<String>| v.clone();
-    let render = |out: &str| with(&["--size", "64", "48", "--spp", "2", "-o", out]);
+    let render = |out: &str| {
+        let mut a = with(&["--size", "64", "48", "--spp", "2", "-o", out]);
+        a.extend(view.iter().map(|s| s.to_string()));
+        a
+    };
     let project = |out: &str| with(&["--axis", "y", "--size", "64", "48", "-o", out]);
     let sample = |out: &str| with(&["--points", points, "--gradient", "-o", out]);
     let run1 = |cmd: &str, a: Vec<String>| {
@@ -187,10 +189,8 @@ fn particles_under_mpirun_equal_one_process() {
         &speed,
         "--kernel",
         "cubic-spline",
-        "--opacity-scale",
-        "40",
     ];
-    check_kind(&dir, "sph", &data, &points);
+    check_kind(&dir, "sph", &data, &["--opacity-scale", "40"], &points);
 }
 
 #[test]
@@ -226,15 +226,8 @@ fn amr_cells_under_mpirun_equal_one_process() {
     std::fs::write(dir.path("g.rho.scalars"), sc).unwrap();
     let points = write_points(&dir, -1.0, 17.0);
     let (cells, scalars) = (dir.str("g.cells"), dir.str("g.rho.scalars"));
-    let data = [
-        "--cells",
-        &cells,
-        "--scalars",
-        &scalars,
-        "--opacity-scale",
-        "0.3",
-    ];
-    check_kind(&dir, "amr", &data, &points);
+    let data = ["--cells", &cells, "--scalars", &scalars];
+    check_kind(&dir, "amr", &data, &["--opacity-scale", "0.3"], &points);
 }
 
 #[test]
@@ -261,7 +254,7 @@ fn tessellations_under_mpirun_equal_one_process() {
     let points = write_points(&dir, -1.0, 9.0);
     let lag = dir.str("lag.npy");
     let data = ["--particles", &lag, "--lagrangian", "16", "--box", "8"];
-    check_kind(&dir, "tets", &data, &points);
+    check_kind(&dir, "tets", &data, &[], &points);
 }
 
 #[test]
@@ -287,16 +280,18 @@ fn time_series_by_frame_and_by_space_equal_one_process() {
         "48",
         "40",
     ];
-    let out1 = dir.str("one.png");
-    let mut a: Vec<&str> = vec!["render"];
-    a.extend(base);
-    a.extend(["--frames", "0..3", "-o", &out1]);
-    one(&a);
+    // The defaults hold over the frames rendered, so each mpirun series is
+    // compared with one process rendering the same frames.
     // 2 ranks, 4 frames: whole frames per rank; 3 ranks, 2 frames: by space.
     for (k, range, how) in [
         (2, "0..3", "whole frames per rank"),
         (3, "0..1", "each frame decomposed"),
     ] {
+        let one_out = dir.str(&format!("one{k}.png"));
+        let mut a: Vec<&str> = vec!["render"];
+        a.extend(base);
+        a.extend(["--frames", range, "-o", &one_out]);
+        one(&a);
         let out = dir.str(&format!("k{k}.png"));
         let mut a: Vec<&str> = vec!["render"];
         a.extend(base);
@@ -305,7 +300,7 @@ fn time_series_by_frame_and_by_space_equal_one_process() {
         assert!(err.contains(how), "{err}");
         let (lo, hi) = range.split_once("..").unwrap();
         for f in lo.parse::<usize>().unwrap()..=hi.parse().unwrap() {
-            let one_f = dir.path(&format!("one_{f:04}.png"));
+            let one_f = dir.path(&format!("one{k}_{f:04}.png"));
             let k_f = dir.path(&format!("k{k}_{f:04}.png"));
             let d = png_difference(&one_f, &k_f);
             assert!(d <= 1, "{k} ranks, frame {f}: {d}/255");

@@ -511,3 +511,127 @@ fn hdf5_shares_render_as_one_process() {
     let d = render_difference(&desc, &dir, 3);
     assert!(d <= 1.0 / 255.0, "render differs by {d}");
 }
+
+/// Particles far from the origin and tiny (a frame with an origin and a
+/// scale ≠ 1), with every default left to the data: the ranks find the
+/// one-process frame, default radius (the median nearest-neighbour spacing
+/// over all rows), value range and opacity scale (the probe they sample
+/// together), and render its image.
+#[test]
+fn whole_data_defaults_far_away_and_tiny_are_the_one_process_ones() {
+    let dir = Scratch::new("parallel-defaults");
+    let n = 5000;
+    let mut rng = Lcg(17);
+    let mut pos: Vec<f64> = Vec::with_capacity(3 * n);
+    for i in 0..n {
+        let c = [0.3, 0.7][i % 2];
+        pos.extend([
+            1e8 + 1e-6 * (c + 0.1 * rng.normal() as f64),
+            -3e7 + 1e-6 * (0.5 + 0.1 * rng.normal() as f64),
+            1e-6 * rng.f() as f64,
+        ]);
+    }
+    // float64 positions, as the readers keep them.
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    let mut header = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({n}, 3), }}");
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    bytes.extend((header.len() as u16).to_le_bytes());
+    bytes.extend(header.as_bytes());
+    bytes.extend(pos.iter().flat_map(|v| v.to_le_bytes()));
+    std::fs::write(dir.path("pos.npy"), bytes).unwrap();
+    let mut desc = SceneDesc {
+        particles: Some(ParticlesDesc {
+            file: Some("pos.npy".into()),
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    image(&mut desc, 60, 40, 2);
+    let one = Scene::open(&desc, &dir.0, 0).unwrap();
+    assert!(one.frame.scale != 1.0 && one.frame.origin != [0.0; 3]);
+    let radius = |v: &voxless::AnyVolume| match v {
+        voxless::AnyVolume::Particles(p) => p.settings().radius,
+        _ => f32::NAN,
+    };
+    let want = radius(&one.volume);
+    let got = run_local(3, |comm| {
+        let s = DistributedScene::open(comm, &desc, &dir.0, 0, Purpose::Render).unwrap();
+        (
+            s.frame,
+            s.part.as_ref().map(radius),
+            s.settings.value_range,
+            s.settings.opacity_scale,
+            s.camera.eye,
+        )
+    });
+    for (frame, r, vr, os, eye) in got {
+        assert_eq!(frame, one.frame, "world frame");
+        assert_eq!(r.map(f32::to_bits), Some(want.to_bits()), "default radius");
+        let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs());
+        assert!(
+            close(vr.lo, one.settings.value_range.lo) && close(vr.hi, one.settings.value_range.hi),
+            "value range {vr:?} vs {:?}",
+            one.settings.value_range
+        );
+        assert!(close(os, one.settings.opacity_scale), "opacity scale {os}");
+        assert_eq!(eye, one.camera.eye, "camera");
+    }
+    let d = render_difference(&desc, &dir.0, 3);
+    assert!(d <= 1.0 / 255.0, "render differs by {d}");
+}
+
+/// A time series decomposed frame by frame: the defaults over the series
+/// (value range, opacity, framing, attribute range) and each later frame in
+/// the first frame's world frame and settings, as one process renders it.
+#[test]
+fn a_time_series_by_space_renders_as_one_process() {
+    let dir = Scratch::new("parallel-series");
+    for f in 0..3usize {
+        let mut rng = Lcg(40 + f as u64);
+        let n = 1500;
+        let pos: Vec<f32> = (0..3 * n)
+            .map(|i| 0.5 * rng.f() + 0.15 * f as f32 * (i % 3 == 0) as u8 as f32)
+            .collect();
+        let speed: Vec<f32> = (0..n).map(|i| (f * 10 + i % 7) as f32).collect();
+        voxless_io::write_npy_f32(&dir.path(&format!("p_{f:02}.npy")), &[n, 3], &pos).unwrap();
+        write_values(&dir.path(&format!("s_{f:02}.npy")), &speed);
+    }
+    let mut desc = SceneDesc {
+        particles: Some(ParticlesDesc {
+            file: Some("p_%02d.npy".into()),
+            attribute: Some("s_%02d.npy".into()),
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    image(&mut desc, 48, 40, 1);
+    let frames = [0, 1, 2];
+    let (mut one, series) = Scene::open_series(&desc, &dir.0, &frames).unwrap();
+    let mut want = Vec::new();
+    for &f in &frames {
+        if f > 0 {
+            one.load_frame(&series, &dir.0, f).unwrap();
+        }
+        one.settings.frame = f as u32;
+        want.push(one.render(&Control::new()).unwrap());
+    }
+    let mut got = run_local(3, |comm| {
+        let (mut s, series) = DistributedScene::open_series(comm, &desc, &dir.0, &frames).unwrap();
+        let mut images = Vec::new();
+        for &f in &frames {
+            if f > 0 {
+                s.load_frame(comm, &series, &dir.0, f).unwrap();
+            }
+            s.settings.frame = f as u32;
+            images.push(s.render(comm, &Control::new()).unwrap());
+        }
+        images
+    });
+    for (f, (a, b)) in want.iter().zip(got.remove(0)).enumerate() {
+        let d = max_difference(a, &b.expect("rank 0 has the image"));
+        assert!(d <= 1.0 / 255.0, "frame {f}: render differs by {d}");
+    }
+}

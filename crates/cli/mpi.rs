@@ -3,18 +3,21 @@
 //! scenes ([`voxless::parallel`]). Rank 0 prints and writes; every rank
 //! renders its box. Other commands run on rank 0 alone.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use voxless::output::OutputKind;
 use voxless::parallel::{
     Comm, CommExt, DistributedScene, FramePlan, MpiComm, Purpose, available_bytes, frame_plan,
     peak_rss_bytes, ranks_on_this_node,
 };
+use voxless::render::colorbar::ColorbarSpec;
 use voxless::{Camera, Control, Image, Scene, SceneDesc};
 
+use crate::args::{SceneArgs, ViewArgs};
 use crate::progress::Progress;
-use crate::{Cli, Command};
+use crate::{Cli, Command, out};
 
 /// Runs `cli` on every rank of the MPI job this process belongs to, then
 /// exits: 0 when every rank succeeded, 1 otherwise (rank 0 says why).
@@ -31,31 +34,54 @@ pub fn main(cli: Cli) -> ! {
             frame,
             turntable,
             colorbar,
-            scene,
-        } => scene.scene().and_then(|(desc, base)| {
-            let f = frame.unwrap_or(0);
-            match (frames, turntable) {
-                (_, Some(n)) => turntable_frames(&comm, &desc, &base, f, n, &output, colorbar),
-                (Some(range), None) => sequence(&comm, &desc, &base, &range, &output, colorbar),
-                (None, None) => render(&comm, &desc, &base, f, &output, colorbar),
-            }
-        }),
+            data,
+            kind,
+            view,
+        } => SceneArgs { data, kind, view }
+            .scene()
+            .and_then(|(desc, base)| {
+                let f = frame.unwrap_or(0);
+                match (frames, turntable) {
+                    (_, Some(n)) => turntable_frames(&comm, &desc, &base, f, n, &output, colorbar),
+                    (Some(range), None) => sequence(&comm, &desc, &base, &range, &output, colorbar),
+                    (None, None) => render(&comm, &desc, &base, f, &output, colorbar),
+                }
+            }),
         Command::Project {
             axis,
             bounds,
             output,
-            scene,
-        } => scene
-            .scene()
-            .and_then(|(desc, base)| project(&comm, &desc, &base, axis as usize, bounds, &output)),
+            size,
+            frame,
+            data,
+        } => SceneArgs {
+            data,
+            view: ViewArgs {
+                size,
+                ..Default::default()
+            },
+            ..Default::default()
+        }
+        .scene()
+        .and_then(|(desc, base)| {
+            let f = frame.unwrap_or(0);
+            project(&comm, &desc, &base, f, axis as usize, bounds, &output)
+        }),
         Command::Sample {
             points,
             output,
             gradient,
-            scene,
-        } => scene
-            .scene()
-            .and_then(|(desc, base)| sample(&comm, &desc, &base, &points, &output, gradient)),
+            frame,
+            data,
+        } => SceneArgs {
+            data,
+            ..Default::default()
+        }
+        .scene()
+        .and_then(|(desc, base)| {
+            let f = frame.unwrap_or(0);
+            sample(&comm, &desc, &base, f, &points, &output, gradient)
+        }),
         other => {
             // Commands without data to share run once.
             if root {
@@ -94,28 +120,32 @@ fn open(
 ) -> Result<DistributedScene> {
     let t = Instant::now();
     let s = DistributedScene::open(comm, desc, base, frame, purpose)?;
-    if comm.is_root() {
-        for n in &s.notes {
-            eprintln!("note: {n}");
-        }
-        let (lo, hi) = s.world_bounds();
-        eprintln!(
-            "loaded {} on {} ranks in {:.2}s: bounds [{:.3}, {:.3}, {:.3}]..[{:.3}, {:.3}, {:.3}], \
-             value range [{:.4e}, {:.4e}]",
-            kind_name(&s),
-            comm.size(),
-            t.elapsed().as_secs_f64(),
-            lo[0],
-            lo[1],
-            lo[2],
-            hi[0],
-            hi[1],
-            hi[2],
-            s.settings.value_range.lo,
-            s.settings.value_range.hi,
-        );
-    }
+    report_loaded(comm, &s, t);
     Ok(s)
+}
+
+/// Rank 0 prints the scene's notes and what was loaded.
+fn report_loaded(comm: &MpiComm, s: &DistributedScene, t: Instant) {
+    if !comm.is_root() {
+        return;
+    }
+    for n in &s.notes {
+        eprintln!("note: {n}");
+    }
+    let (lo, hi) = s.world_bounds();
+    eprintln!(
+        "loaded {} on {} ranks in {:.2}s: bounds [{:.4e}, {:.4e}, {:.4e}]..[{:.4e}, {:.4e}, \
+         {:.4e}]",
+        kind_name(s),
+        comm.size(),
+        t.elapsed().as_secs_f64(),
+        lo[0],
+        lo[1],
+        lo[2],
+        hi[0],
+        hi[1],
+        hi[2],
+    );
 }
 
 fn kind_name(s: &DistributedScene) -> &'static str {
@@ -179,13 +209,47 @@ fn render_image(comm: &MpiComm, s: &DistributedScene, what: &str) -> Result<Opti
     Ok(image)
 }
 
-fn decorate(image: &mut Image, s: &DistributedScene, colorbar: bool) {
-    if colorbar && voxless::render::colorbar::draw_colorbar(image, &s.tf, &s.colorbar()).is_none() {
+/// The colour bar to draw, when asked for.
+fn colorbar_of(s: &DistributedScene, on: bool) -> Option<ColorbarSpec> {
+    on.then(|| s.colorbar())
+}
+
+/// Draws the colour bar (if any) into a rendered image (rank 0).
+fn decorate(image: &mut Image, s: &DistributedScene, bar: Option<&ColorbarSpec>) {
+    if let Some(spec) = bar
+        && voxless::render::colorbar::draw_colorbar(image, &s.tf, spec).is_none()
+    {
         eprintln!(
             "note: a {}×{} image is too small for a colour bar",
             image.width, image.height
         );
     }
+}
+
+/// Rank 0's outcome of a check the others cannot make, told to every rank.
+fn check_field(comm: &MpiComm, s: &DistributedScene) -> Result<()> {
+    agree(comm, s.check_field().map_err(anyhow::Error::from))
+}
+
+/// An error when rank 0's image shows nothing at all (never a silent
+/// black image), as one process refuses it.
+fn check_visible(image: &Image, s: &DistributedScene) -> Result<()> {
+    let alpha = image.pixels.iter().fold(0f32, |m, p| m.max(p[3]));
+    if alpha >= 0.5 / 255.0 {
+        return Ok(());
+    }
+    let (lo, hi) = s.world_bounds();
+    bail!(
+        "image: the image would be empty: no ray meets a visible part of the field (the data's \
+         bounds [{:.4e}, {:.4e}, {:.4e}]..[{:.4e}, {:.4e}, {:.4e}]); check --eye/--look-at, \
+         --clip, --value-range, --opacity or --opacity-scale",
+        lo[0],
+        lo[1],
+        lo[2],
+        hi[0],
+        hi[1],
+        hi[2]
+    )
 }
 
 fn render(
@@ -196,15 +260,25 @@ fn render(
     output: &Path,
     colorbar: bool,
 ) -> Result<()> {
+    out::check(
+        std::slice::from_ref(&output.to_path_buf()),
+        OutputKind::Image,
+        desc,
+        base,
+        &[],
+    )?;
     let s = open(comm, desc, base, frame, Purpose::Render)?;
+    check_field(comm, &s)?;
     let t = Instant::now();
     let image = render_image(comm, &s, "rendering")?;
     let secs = t.elapsed().as_secs_f64();
+    let bar = colorbar_of(&s, colorbar);
     agree(
         comm,
         image.map_or(Ok(()), |mut image| {
-            decorate(&mut image, &s, colorbar);
-            crate::write_image(output, &image, s.background)
+            check_visible(&image, &s)?;
+            decorate(&mut image, &s, bar.as_ref());
+            out::write_image(output, &image, s.background)
         }),
     )?;
     report_memory(comm, Some(&s))?;
@@ -231,29 +305,38 @@ fn turntable_frames(
     output: &Path,
     colorbar: bool,
 ) -> Result<()> {
+    let outputs: Vec<PathBuf> = (0..frames as usize)
+        .map(|k| out::frame_path(output, k))
+        .collect::<Result<_>>()?;
+    out::check(&outputs, OutputKind::Image, desc, base, &[])?;
     let mut s = open(comm, desc, base, data_frame, Purpose::Render)?;
+    check_field(comm, &s)?;
+    let bar = colorbar_of(&s, colorbar);
     let start = desc.camera.orbit.unwrap_or(0.0);
     let mut view = desc.clone();
     let t = Instant::now();
-    for k in 0..frames {
+    for (k, path) in outputs.iter().enumerate() {
         view.camera.orbit = Some(start + 360.0 * k as f32 / frames as f32);
         s.reaim(&view)?;
-        s.settings.frame = k;
+        // Blue noise advances with the frame (spatiotemporal).
+        s.settings.frame = k as u32;
         let image = render_image(comm, &s, &format!("turntable frame {k}"))?;
         agree(
             comm,
             image.map_or(Ok(()), |mut image| {
-                decorate(&mut image, &s, colorbar);
-                crate::write_image(&crate::frame_path(output, k as usize), &image, s.background)
+                decorate(&mut image, &s, bar.as_ref());
+                out::write_image(path, &image, s.background)
             }),
         )?;
     }
     report_memory(comm, Some(&s))?;
     if comm.is_root() {
         eprintln!(
-            "rendered a {frames}-frame turntable on {} ranks in {:.2}s",
+            "rendered a {frames}-frame turntable on {} ranks in {:.2}s → {} … {}",
             comm.size(),
-            t.elapsed().as_secs_f64()
+            t.elapsed().as_secs_f64(),
+            outputs[0].display(),
+            outputs[outputs.len() - 1].display()
         );
     }
     Ok(())
@@ -269,15 +352,56 @@ fn frame_bytes(desc: &SceneDesc, base: &Path, frame: usize) -> u64 {
         .into_iter()
         .flatten()
         .map(|spec| {
-            let path = match voxless::frames::expand(spec, base) {
-                Ok(list) if list.len() > 1 => list.get(frame).cloned(),
-                Ok(list) => list.first().cloned(),
-                Err(_) => None,
+            let path = if voxless::frames::is_sequence(spec, base) {
+                voxless::frames::file_numbered(spec, base, frame).ok()
+            } else {
+                Some(base.join(spec))
             };
             path.and_then(|p| std::fs::metadata(p).ok())
                 .map_or(0, |m| m.len())
         })
         .sum()
+}
+
+/// The frames numbered in `range` (A..B) and their output files, checked,
+/// as one process picks them (see `crate::sequence`).
+fn series_frames(
+    comm: &MpiComm,
+    desc: &SceneDesc,
+    base: &Path,
+    range: &str,
+    output: &Path,
+) -> Result<(Vec<usize>, Vec<PathBuf>)> {
+    let range = voxless::frames::parse_range(range)?;
+    let numbers = voxless::frame_numbers(desc, base)?;
+    let frames: Vec<usize> = numbers
+        .iter()
+        .copied()
+        .filter(|n| range.contains(n))
+        .collect();
+    if frames.is_empty() {
+        bail!(
+            "--frames {}..{}: no frame is numbered in that range; the data has frames {}",
+            range.start(),
+            range.end(),
+            voxless::frames::list_numbers(&numbers)
+        );
+    }
+    if comm.is_root() && (range.start() < &numbers[0] || range.end() > &numbers[numbers.len() - 1])
+    {
+        eprintln!(
+            "note: --frames {}..{} reaches past the data, whose frames in that range are {}",
+            range.start(),
+            range.end(),
+            voxless::frames::list_numbers(&frames)
+        );
+    }
+    let outputs = frames
+        .iter()
+        .map(|&f| out::frame_path(output, f))
+        .collect::<Result<Vec<_>>>()?;
+    out::check(&outputs, OutputKind::Image, desc, base, &[])?;
+    Ok((frames, outputs))
 }
 
 fn sequence(
@@ -288,17 +412,7 @@ fn sequence(
     output: &Path,
     colorbar: bool,
 ) -> Result<()> {
-    let range = voxless::frames::parse_range(range)?;
-    let count = voxless::frame_count(desc, base)?;
-    if *range.end() >= count {
-        bail!(
-            "--frames {}..{}: the data has {count} frame(s), 0..{}",
-            range.start(),
-            range.end(),
-            count - 1
-        );
-    }
-    let frames: Vec<usize> = range.clone().collect();
+    let (frames, outputs) = series_frames(comm, desc, base, range, output)?;
     let k = comm.size();
     let per_rank =
         available_bytes().map_or(0, |a| a / ranks_on_this_node().unwrap_or(k).max(1) as u64);
@@ -312,8 +426,8 @@ fn sequence(
     );
     let t = Instant::now();
     match plan {
-        FramePlan::ByFrame => by_frame(comm, desc, base, &frames, output, colorbar)?,
-        FramePlan::BySpace => by_space(comm, desc, base, &frames, output, colorbar)?,
+        FramePlan::ByFrame => by_frame(comm, desc, base, &frames, &outputs, colorbar)?,
+        FramePlan::BySpace => by_space(comm, desc, base, &frames, &outputs, colorbar)?,
     }
     if comm.is_root() {
         let how = match plan {
@@ -321,32 +435,45 @@ fn sequence(
             FramePlan::BySpace => "each frame decomposed over all ranks",
         };
         eprintln!(
-            "rendered {} frames on {k} ranks ({how}) in {:.2}s → {}",
+            "rendered {} frames on {k} ranks ({how}) in {:.2}s → {} … {}",
             frames.len(),
             t.elapsed().as_secs_f64(),
-            crate::frame_path(output, frames[0]).display()
+            outputs[0].display(),
+            outputs[outputs.len() - 1].display()
         );
     }
     Ok(())
 }
 
-/// Frames `r, r + K, …` of the list on rank `r`, one process each; the
+/// Frames `r, r + K, …` of the list on rank `r`, one process each, with
+/// the series' defaults (every rank takes them as one process does); the
 /// images go to rank 0, which writes them.
 fn by_frame(
     comm: &MpiComm,
     desc: &SceneDesc,
     base: &Path,
     frames: &[usize],
-    output: &Path,
+    outputs: &[PathBuf],
     colorbar: bool,
 ) -> Result<()> {
     let k = comm.size();
-    // Every rank resolves the first frame's view, as one process does.
-    let first = Scene::open(desc, base, frames[0]).map_err(anyhow::Error::from);
-    let mut scene = match comm.agree(first.map_err(|e| crate::describe(&e)))? {
+    let t = Instant::now();
+    let first = Scene::open_series(desc, base, frames).map_err(anyhow::Error::from);
+    let (mut scene, series) = match comm.agree(first.map_err(|e| crate::describe(&e)))? {
         Ok(s) => s,
         Err(e) => bail!(e),
     };
+    if comm.is_root() {
+        crate::report_loaded(&scene, t);
+    }
+    let work = scene.check_work(desc).map_err(anyhow::Error::from);
+    let note = match comm.agree(work.map_err(|e| crate::describe(&e)))? {
+        Ok(n) => n,
+        Err(e) => bail!(e),
+    };
+    if let (true, Some(note)) = (comm.is_root(), note) {
+        eprintln!("note: {note}");
+    }
     let bar = crate::view::colorbar(&scene, desc, colorbar);
     let progress = comm
         .is_root()
@@ -356,7 +483,7 @@ fn by_frame(
         let rendered: Result<Option<Image>> = match mine {
             Some(f) => (|| {
                 if f != frames[0] {
-                    scene.load_frame(desc, base, f)?;
+                    scene.load_frame(&series, base, f)?;
                 }
                 scene.settings.frame = f as u32;
                 let mut image = scene.render(&Control::new())?;
@@ -383,7 +510,9 @@ fn by_frame(
         let written: Result<()> = if comm.is_root() {
             (|| {
                 for (r, bytes) in got.iter().enumerate() {
-                    let Some(&f) = chunk.get(r) else { continue };
+                    if r >= chunk.len() {
+                        continue;
+                    }
                     let v: Vec<f32> = bytes
                         .chunks_exact(4)
                         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
@@ -396,7 +525,7 @@ fn by_frame(
                             .map(|c| [c[0], c[1], c[2], c[3]])
                             .collect(),
                     };
-                    crate::write_image(&crate::frame_path(output, f), &image, scene.background)?;
+                    out::write_image(&outputs[round * k + r], &image, scene.background)?;
                 }
                 if let Some(p) = &progress {
                     p.set((round * k + chunk.len()) as u64);
@@ -414,55 +543,59 @@ fn by_frame(
     report_memory(comm, None)
 }
 
-/// Each frame in turn, decomposed over all ranks, with the first frame's
-/// view.
+/// Each frame in turn, decomposed over all ranks, with the series'
+/// defaults (see [`DistributedScene::open_series`]).
 fn by_space(
     comm: &MpiComm,
     desc: &SceneDesc,
     base: &Path,
     frames: &[usize],
-    output: &Path,
+    outputs: &[PathBuf],
     colorbar: bool,
 ) -> Result<()> {
-    let mut first = open(comm, desc, base, frames[0], Purpose::Render)?;
-    // Later frames map their attributes over the first frame's range.
-    let mut later = desc.clone();
-    if let (Some(p), Some(r)) = (&mut later.particles, first.summary.attribute_range)
-        && p.attribute_range.is_none()
-    {
-        p.attribute_range = Some([r.lo, r.hi]);
-    }
-    for &f in frames {
-        let mut next = None;
-        if f != frames[0] {
-            let mut s = DistributedScene::open(comm, &later, base, f, Purpose::Render)?;
-            s.keep_view_of(&first);
-            next = Some(s);
+    let t = Instant::now();
+    let (mut s, series) = DistributedScene::open_series(comm, desc, base, frames)?;
+    report_loaded(comm, &s, t);
+    check_field(comm, &s)?;
+    let bar = colorbar_of(&s, colorbar);
+    for (k, (&f, path)) in frames.iter().zip(outputs).enumerate() {
+        if k > 0 {
+            s.load_frame(comm, &series, base, f)?;
         }
-        let s = next.as_mut().unwrap_or(&mut first);
         // Blue noise advances with the frame, as for one process.
         s.settings.frame = f as u32;
-        let image = render_image(comm, s, &format!("frame {f}"))?;
+        let image = render_image(comm, &s, &format!("frame {f}"))?;
         agree(
             comm,
             image.map_or(Ok(()), |mut image| {
-                decorate(&mut image, s, colorbar);
-                crate::write_image(&crate::frame_path(output, f), &image, s.background)
+                if let Err(e) = check_visible(&image, &s) {
+                    eprintln!("note: frame {f}: {e}");
+                }
+                decorate(&mut image, &s, bar.as_ref());
+                out::write_image(path, &image, s.background)
             }),
         )?;
     }
-    report_memory(comm, Some(&first))
+    report_memory(comm, Some(&s))
 }
 
 fn project(
     comm: &MpiComm,
     desc: &SceneDesc,
     base: &Path,
+    frame: usize,
     axis: usize,
     bounds: Option<Vec<f64>>,
     output: &Path,
 ) -> Result<()> {
-    let s = open(comm, desc, base, 0, Purpose::Project)?;
+    out::check(
+        std::slice::from_ref(&output.to_path_buf()),
+        OutputKind::Map,
+        desc,
+        base,
+        &[],
+    )?;
+    let s = open(comm, desc, base, frame, Purpose::Project)?;
     let b = match bounds {
         Some(v) => s.frame.box_to_local([v[0], v[1], v[2], v[3], v[4], v[5]]),
         None => s.summary.bounds,
@@ -481,12 +614,21 @@ fn project(
         p.finish();
     }
     let secs = t.elapsed().as_secs_f64();
+    let (u, v) = match axis {
+        0 => (1, 2),
+        1 => (0, 2),
+        _ => (0, 1),
+    };
+    let extent = |a: usize| s.frame.length_to_world(b.extent()[a]);
+    let pixel_area = extent(u) / w as f64 * (extent(v) / h as f64);
     agree(
         comm,
         column.map_or(Ok(()), |c| {
-            crate::write_gray(output, w, h, &c)?;
+            out::write_gray(output, w, h, &c)?;
+            let integral: f64 = c.iter().map(|&x| x as f64).sum::<f64>() * pixel_area;
             eprintln!(
-                "projected {w}×{h} on {} ranks in {secs:.2}s → {}",
+                "projected {w}×{h} on {} ranks in {secs:.2}s → {} (Σ column × pixel area = \
+                 {integral:.6e})",
                 comm.size(),
                 output.display()
             );
@@ -500,11 +642,19 @@ fn sample(
     comm: &MpiComm,
     desc: &SceneDesc,
     base: &Path,
+    frame: usize,
     points: &Path,
     output: &Path,
     gradient: bool,
 ) -> Result<()> {
-    let s = open(comm, desc, base, 0, Purpose::Render)?;
+    out::check(
+        std::slice::from_ref(&output.to_path_buf()),
+        OutputKind::Columns,
+        desc,
+        base,
+        &[points.to_path_buf()],
+    )?;
+    let s = open(comm, desc, base, frame, Purpose::Render)?;
     // Rank 0 reads the points; the library hands them out.
     let read = if comm.is_root() {
         voxless::read_points(points).map_err(anyhow::Error::from)
@@ -515,10 +665,7 @@ fn sample(
         Ok(p) => p,
         Err(e) => bail!(e),
     };
-    let local: Vec<voxless::Vec3> = pts
-        .iter()
-        .map(|p| s.frame.to_local([p.x as f64, p.y as f64, p.z as f64]))
-        .collect();
+    let local: Vec<voxless::Vec3> = pts.iter().map(|&p| s.frame.to_local(p)).collect();
     let cols = s.sample_columns(gradient);
     let t = Instant::now();
     let values = s.sample(comm, &local, gradient)?;

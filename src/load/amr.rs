@@ -72,8 +72,9 @@ pub(crate) fn build_amr(
     source: &Path,
 ) -> Result<(AmrVolume, WorldFrame), SceneError> {
     let names: Vec<&str> = data.fields.iter().map(|f| f.0.as_str()).collect();
+    let reach = cells_reach(&data.cells);
     let (settings, frame, cell_size) =
-        amr_settings(&names, data.origin, data.cell_size, a, source)?;
+        amr_settings(&names, data.origin, data.cell_size, reach, a, source)?;
     let cells = AmrCells {
         cells: data.cells,
         fields: data.fields,
@@ -88,14 +89,29 @@ pub(crate) fn build_amr(
         })
 }
 
+/// How far the cells reach from cell coordinate 0, in finest cells (what
+/// the frame's scale follows; a decomposed volume takes the maximum over
+/// its parts).
+pub(crate) fn cells_reach(cells: &[[i32; 4]]) -> f64 {
+    cells
+        .iter()
+        .map(|c| {
+            let w = 2f64.powi(c[3].clamp(0, 62));
+            [c[0], c[1], c[2]].map(|v| (v as f64 + w).abs().max((v as f64).abs()))
+        })
+        .fold(0.0f64, |m, c| m.max(c[0]).max(c[1]).max(c[2]))
+}
+
 /// The AMR settings `a` describes for cells with fields `names` (the
 /// opacity and colour fields, the reconstruction), the world frame (cell
-/// coordinate 0 at the arrays' or the description's origin) and the finest
-/// cell width; errors name `source`.
+/// coordinate 0 at the arrays' or the description's origin; its scale from
+/// the cells' `reach`, see [`cells_reach`]) and the finest cell width in
+/// the frame's units; errors name `source`.
 pub(crate) fn amr_settings(
     names: &[&str],
     origin: [f64; 3],
-    cell_size: f32,
+    data_cell_size: f32,
+    reach: f64,
     a: &AmrDesc,
     source: &Path,
 ) -> Result<(AmrSettings, WorldFrame, f32), SceneError> {
@@ -125,13 +141,34 @@ pub(crate) fn amr_settings(
         ReconstructionName::Basis => Reconstruction::Basis,
         ReconstructionName::Nearest => Reconstruction::Nearest,
     };
+    let cell_size = a.cell_size.unwrap_or(data_cell_size);
+    if !(cell_size.is_finite() && cell_size > 0.0) {
+        return Err(SceneError::setting(
+            "amr.cell_size (--cell-size)",
+            format!("{cell_size} must be finite and > 0"),
+        ));
+    }
+    if let Some(o) = a.origin
+        && !o.iter().all(|v| v.is_finite())
+    {
+        return Err(SceneError::setting(
+            "amr.origin (--origin)",
+            format!("{o:?} must be finite"),
+        ));
+    }
+    // The frame's scale from the data's extent (cell coordinate 0 at the
+    // origin): cells of 10⁻²⁰ or 10²⁰ world units compute in a local unit
+    // about the data's size. Field values have no length unit and stay.
+    let extent = reach * cell_size as f64;
+    let scale = WorldFrame::fit([0.0; 3], [extent; 3]).scale;
     let frame = WorldFrame {
         origin: a.origin.unwrap_or(origin),
+        scale,
     };
     let settings = AmrSettings {
         field,
         color_field,
         reconstruction,
     };
-    Ok((settings, frame, a.cell_size.unwrap_or(cell_size)))
+    Ok((settings, frame, (cell_size as f64 / scale) as f32))
 }

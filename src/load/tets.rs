@@ -1,21 +1,34 @@
 //! Phase-space tessellations: N³ positions in Lagrangian order from a
 //! `.npy` (or any particle file), a JaxPM `.h5` run, or memory.
+//!
+//! The periodic box `[0, L)³` keeps its corner at the world origin; only its
+//! scale is chosen by the placement policy ([`WorldFrame::fit`] on the box),
+//! so boxes of 10⁻¹² or 10³⁰ units compute in a local unit about their size.
+//! Without a particle mass the mean density is 1 (densities read as the
+//! overdensity 1 + δ), whatever the box size; a given mass is divided by the
+//! scale's cube so densities (mass over tet volume) stay in world units.
 
 use std::path::Path;
 
-use voxless_core::Vec3;
 use voxless_scene::TetsDesc;
 use voxless_tets::{LagrangianGrid, TetSettings, TetVolume};
 
 use super::formats::ParticleFormat;
 use super::particles::positive;
-use crate::SceneError;
+use crate::{SceneError, WorldFrame};
+
+/// Lagrangian positions in world units, before they are placed.
+pub(crate) struct WorldGrid {
+    pub n: usize,
+    pub box_size: f64,
+    pub positions: Vec<[f64; 3]>,
+}
 
 pub(crate) fn load_tets(
     t: &TetsDesc,
     base: &Path,
     notes: &mut Vec<String>,
-) -> Result<TetVolume, SceneError> {
+) -> Result<(TetVolume, WorldFrame), SceneError> {
     let file = t.file.as_ref().ok_or_else(|| {
         SceneError::setting(
             "tets.file",
@@ -37,13 +50,18 @@ pub(crate) fn load_tets(
             ));
         }
         let (positions, _) = super::table::read_positions(&path)?;
-        grid_of(positions, t)?
+        world_grid(positions, t, &path)?
     };
-    build_tets(&grid, t, &path)
+    build_world(&grid, t, &path)
 }
 
-/// The Lagrangian grid of `positions` with the description's N and L.
-pub(crate) fn grid_of(positions: Vec<Vec3>, t: &TetsDesc) -> Result<LagrangianGrid, SceneError> {
+/// The Lagrangian grid of world `positions` with the description's N and
+/// L, checked: N³ particles, all inside the periodic box.
+pub(crate) fn world_grid(
+    positions: Vec<[f64; 3]>,
+    t: &TetsDesc,
+    source: &Path,
+) -> Result<WorldGrid, SceneError> {
     let n = t.lagrangian.ok_or_else(|| {
         SceneError::setting(
             "tets.lagrangian",
@@ -53,15 +71,152 @@ pub(crate) fn grid_of(positions: Vec<Vec3>, t: &TetsDesc) -> Result<LagrangianGr
     let box_size = t.box_size.ok_or_else(|| {
         SceneError::setting("tets.box_size", "the periodic box size is needed (--box L)")
     })?;
-    Ok(LagrangianGrid {
+    let grid = WorldGrid {
         n,
-        box_size,
+        box_size: box_size as f64,
         positions,
-    })
+    };
+    check_grid(&grid, source)?;
+    Ok(grid)
 }
 
-/// A tessellation of `grid` with the description's mass and level of
-/// detail; errors name `source`.
+/// N³ particles inside `[0, L)³` (a hair of rounding past L allowed).
+pub(crate) fn check_grid(g: &WorldGrid, source: &Path) -> Result<(), SceneError> {
+    check_count(g.n, g.positions.len(), source)?;
+    check_inside(&g.positions, 0, g.box_size, source)
+}
+
+/// `count` particles for a Lagrangian grid of N = `n`.
+pub(crate) fn check_count(n: usize, count: usize, source: &Path) -> Result<(), SceneError> {
+    if n.checked_pow(3) != Some(count) {
+        let cube = (count as f64).cbrt().round() as usize;
+        let hint = if cube >= 2 && cube.checked_pow(3) == Some(count) {
+            format!(" ({count} = {cube}³: use --lagrangian {cube})")
+        } else {
+            " (which is not N³ for any whole N)".to_string()
+        };
+        return Err(SceneError::data(
+            source,
+            format!(
+                "tets.lagrangian (--lagrangian) N = {} needs N³ = {} particles, but there are \
+                 {count}{hint}",
+                n,
+                n.checked_pow(3)
+                    .map_or("too many".to_string(), |c| c.to_string())
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// `positions` (particles `first ..` of the grid) inside a periodic box of
+/// size `l`.
+pub(crate) fn check_inside(
+    positions: &[[f64; 3]],
+    first: usize,
+    l: f64,
+    source: &Path,
+) -> Result<(), SceneError> {
+    if !(l.is_finite() && l > 0.0) {
+        return Err(SceneError::setting(
+            "tets.box_size (--box)",
+            format!("the box size {l} must be finite and > 0"),
+        ));
+    }
+    let slack = 1e-5 * l;
+    let outside = |p: &[f64; 3]| p.iter().any(|&c| !(c >= -slack && c <= l + slack));
+    if let Some(i) = positions.iter().position(outside) {
+        let (lo, hi) = crate::frame::bounds_of(positions).unwrap_or(([0.0; 3], [0.0; 3]));
+        let span_lo = lo.iter().fold(f64::INFINITY, |m, &v| m.min(v));
+        let span_hi = hi.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+        return Err(SceneError::data(
+            source,
+            format!(
+                "particle {i} at {:?} lies outside the periodic box [0, {l})³ (positions span \
+                 [{span_lo}, {span_hi}]); is the box size (--box) right?",
+                positions[i],
+                i = first + i
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A tessellation of world positions, placed in the frame its box picks.
+pub(crate) fn build_world(
+    g: &WorldGrid,
+    t: &TetsDesc,
+    source: &Path,
+) -> Result<(TetVolume, WorldFrame), SceneError> {
+    let frame = box_frame(g.box_size);
+    let grid = LagrangianGrid {
+        n: g.n,
+        box_size: (g.box_size / frame.scale) as f32,
+        positions: g.positions.iter().map(|&p| frame.to_local(p)).collect(),
+    };
+    let mass = particle_mass(t, g.n, grid.box_size, g.box_size, frame.scale)?;
+    let local = TetsDesc {
+        particle_mass: Some(mass),
+        ..t.clone()
+    };
+    let v = build_tets(&grid, &local, source)?;
+    Ok((v, frame))
+}
+
+/// The frame of a periodic box of size `l` (world): its corner stays at
+/// the origin, its scale is the policy's for the box.
+pub(crate) fn box_frame(l: f64) -> WorldFrame {
+    WorldFrame {
+        origin: [0.0; 3],
+        scale: WorldFrame::fit([0.0; 3], [l; 3]).scale,
+    }
+}
+
+/// The particle mass in a frame of scale `s` for a grid of N = `n` in a box
+/// of `box_local` (local) and `box_world` units.
+pub(crate) fn particle_mass(
+    t: &TetsDesc,
+    n: usize,
+    box_local: f32,
+    box_world: f64,
+    s: f64,
+) -> Result<f64, SceneError> {
+    // Without a mass, the mean density is 1 (densities read as 1 + δ, the
+    // overdensity), whatever the box size. A given mass is in world units:
+    // mass over local volume is density in world units when the mass is
+    // divided by scale³.
+    let n3 = (n as f64).powi(3);
+    let mass = match t.particle_mass {
+        None => (box_local as f64).powi(3) / n3,
+        Some(m) => {
+            if !(m.is_finite() && m > 0.0) {
+                return Err(SceneError::setting(
+                    "tets.particle_mass (--particle-mass)",
+                    format!("{m} must be finite and > 0"),
+                ));
+            }
+            let local = m / s.powi(3);
+            let mean = local * n3 / (box_local as f64).powi(3);
+            if !(1e-30..=1e30).contains(&mean) {
+                return Err(SceneError::setting(
+                    "tets.particle_mass (--particle-mass)",
+                    format!(
+                        "a mass of {m} per particle in a box of {} gives a mean density of \
+                         {:.3e}, beyond what float32 computes with; give the mass in other \
+                         units, or leave it out for a mean density of 1",
+                        box_world,
+                        m * n3 / box_world.powi(3)
+                    ),
+                ));
+            }
+            local
+        }
+    };
+    Ok(mass)
+}
+
+/// A tessellation of `grid` (local units) with the description's mass and
+/// level of detail; errors name `source`.
 pub(crate) fn build_tets(
     grid: &LagrangianGrid,
     t: &TetsDesc,
@@ -72,7 +227,7 @@ pub(crate) fn build_tets(
         ..Default::default()
     };
     if let Some(p) = t.lod_pixels {
-        positive("tets.lod_pixels", p)?;
+        positive("tets.lod_pixels (--lod)", p)?;
     }
     let levels = if t.lod_pixels.is_some() { 3 } else { 0 };
     let v = TetVolume::new(grid, &settings, levels).map_err(|e| SceneError::Tets {

@@ -1,11 +1,13 @@
 //! AMR cells over the ranks: each rank reads a run of cells (by offset from
 //! ExaBricks files; AMRClaw output is read whole and cut), the ranks agree
-//! on the fields' ranges and the bounds (the union of the cells' basis
-//! supports, computed as the volume computes its regions), decompose a
-//! sample of cell centres, and send every cell to each box its basis
-//! support overlaps. Each rank then builds an ordinary AMR volume from its
-//! cells: inside its box every cell whose tent reaches a point is there, so
-//! the reconstruction is the whole volume's.
+//! on the world frame (its scale from the cells' reach), the fields' ranges
+//! and the bounds (the cells' domain, computed as the volume computes its
+//! bricks' boxes), decompose a sample of cell centres, and send every cell
+//! to each box its basis support overlaps. Each rank then builds an
+//! ordinary AMR volume from its cells: inside its box every cell whose tent
+//! reaches a point is there, so the reconstruction is the whole volume's,
+//! and a projection integrates it (the exact basis line integral) over the
+//! part of each ray inside the box, half-open like the cells.
 
 use std::path::{Path, PathBuf};
 
@@ -16,7 +18,7 @@ use voxless_scene::AmrDesc;
 
 use super::share::{agree, decompose, exchange, outboxes, root_box, share, union_bounds};
 use super::{Columns, ParallelError, Part, PartCounts};
-use crate::load::amr_settings;
+use crate::load::{amr_settings, cells_reach};
 use crate::{AnyVolume, SceneError, VolumeKind, VolumeSummary};
 
 /// Cells sampled for the decomposition, about.
@@ -95,14 +97,28 @@ fn support_box(c: &[i32; 4], h: f32) -> Aabb {
     )
 }
 
+/// A cell's box, computed as the volume computes its bricks' boxes.
+fn cell_box(c: &[i32; 4], h: f32) -> Aabb {
+    let w = 1i64 << c[3];
+    let at = |a: usize, d: i64| (c[a] as i64 + d) as f64 as f32;
+    Aabb::new(
+        Vec3::ZERO + Vec3::new(at(0, 0), at(1, 0), at(2, 0)) * h,
+        Vec3::ZERO + Vec3::new(at(0, w), at(1, w), at(2, w)) * h,
+    )
+}
+
 pub(crate) fn open(comm: &dyn Comm, a: &AmrDesc, base: &Path) -> Result<Part, ParallelError> {
     let run = agree(comm, read_run(a, base, comm.rank(), comm.size()))?;
     let names: Vec<String> = run.data.fields.iter().map(|f| f.0.clone()).collect();
     let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
+    // The frame's scale from how far the whole data reaches (as one
+    // process finds it over every cell).
+    let reach = comm.all_max(&[cells_reach(&run.data.cells)])?[0];
     let (settings, frame, h) = amr_settings(
         &name_refs,
         run.data.origin,
         run.data.finest_cell_size as f32,
+        reach,
         a,
         &run.source,
     )?;
@@ -125,11 +141,13 @@ pub(crate) fn open(comm: &dyn Comm, a: &AmrDesc, base: &Path) -> Result<Part, Pa
             Range1::EMPTY
         }
     };
+    // The bounds are the cells' domain (the volume's bounds: its bricks'
+    // boxes), not the tents' margin around them.
     let own = run
         .data
         .cells
         .iter()
-        .fold(Aabb::EMPTY, |b, c| b.union(support_box(c, h)));
+        .fold(Aabb::EMPTY, |b, c| b.union(cell_box(c, h)));
     let bounds = union_bounds(comm, own)?;
     let stride = (run.total / SAMPLE).max(1);
     let sample: Vec<Vec3> = run

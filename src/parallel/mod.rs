@@ -39,13 +39,14 @@ mod particles;
 mod render;
 mod share;
 mod tets;
+mod view;
 
 pub(crate) use render::render_part;
 
 use std::path::Path;
 
 use voxless_core::{Aabb, Camera, Control, Image, Vec3};
-use voxless_render::{Domain, RenderSettings};
+use voxless_render::RenderSettings;
 use voxless_scene::SceneDesc;
 use voxless_transfer::TransferFunction;
 
@@ -56,7 +57,8 @@ pub use voxless_parallel::{
     Comm, CommError, CommExt, Decomposition, LocalComm, SingleComm, run_local,
 };
 
-use crate::{AnyVolume, SceneError, VolumeSummary, WorldFrame, resolve_summary};
+use crate::{AnyVolume, SceneError, VolumeSummary, WorldFrame};
+use share::agree;
 
 /// Why a decomposed scene failed: the scene (the same error one process
 /// gives), or the ranks' communication.
@@ -145,6 +147,9 @@ pub struct DistributedScene {
     pub settings: RenderSettings,
     pub background: [f32; 3],
     pub notes: Vec<String>,
+    /// The box (local) a default camera frames (see
+    /// [`crate::Resolved::framed`]).
+    pub framed: Aabb,
     /// The boxes of all ranks.
     pub decomposition: Decomposition,
     /// The whole data's kind, bounds and ranges.
@@ -158,8 +163,9 @@ impl DistributedScene {
     /// Opens frame `frame` of the data `desc` names (paths relative to
     /// `base`) on every rank of `comm`: each reads its share, the ranks
     /// decompose the data and exchange it, and each resolves the view from
-    /// the whole data's summary. Every rank must call this with the same
-    /// arguments; an error on any rank is an error on all.
+    /// the whole data's summary and a probe of its field the ranks sample
+    /// together. Every rank must call this with the same arguments; an
+    /// error on any rank is an error on all.
     pub fn open(
         comm: &dyn Comm,
         desc: &SceneDesc,
@@ -167,57 +173,8 @@ impl DistributedScene {
         frame: usize,
         purpose: Purpose,
     ) -> Result<DistributedScene, ParallelError> {
-        if comm.size() > 1 {
-            refuse_what_boxes_cannot_do(desc)?;
-        }
-        let sources = [
-            desc.particles.is_some(),
-            desc.amr.is_some(),
-            desc.tets.is_some(),
-        ];
-        if sources.iter().filter(|&&s| s).count() > 1 {
-            return Err(SceneError::setting(
-                "scene",
-                "more than one data source ([particles], [amr], [tets]) is given; pick one",
-            )
-            .into());
-        }
-        let part = match (&desc.particles, &desc.amr, &desc.tets) {
-            (Some(p), _, _) => particles::open(comm, p, base, frame)?,
-            (_, Some(a), _) => amr::open(comm, a, base)?,
-            (_, _, Some(t)) => tets::open(comm, t, base, purpose)?,
-            (None, None, None) => {
-                return Err(SceneError::setting(
-                    "scene",
-                    "no data source: add a [particles], [amr] or [tets] table to the scene, or \
-                     pass --particles FILE (with --lagrangian N --box L for a phase-space \
-                     tessellation), --cells FILE --scalars FILE, or --amrclaw FILE",
-                )
-                .into());
-            }
-        };
-        let resolved = resolve_summary(&part.summary, &part.frame, desc, base)?;
-        let mut settings = resolved.settings;
-        settings.domain = Some(Domain {
-            owned: part.decomposition.box_of(comm.rank()),
-            bounds: part.summary.bounds,
-        });
-        let mut notes = part.notes;
-        notes.extend(resolved.notes);
-        Ok(DistributedScene {
-            part: part.volume,
-            frame: part.frame,
-            camera: resolved.camera,
-            tf: resolved.tf,
-            settings,
-            background: resolved.background,
-            notes,
-            decomposition: part.decomposition,
-            summary: part.summary,
-            counts: part.counts,
-            columns: part.columns,
-            colour_name: part.colour_name,
-        })
+        let part = open_part(comm, desc, base, frame, purpose, None)?;
+        view::resolve(comm, part, desc, base, None, None)
     }
 
     /// This rank's box, half-open.
@@ -247,8 +204,8 @@ impl DistributedScene {
     }
 
     /// Column densities `∫ value dt` per pixel centre of `camera` (an axis
-    /// projection, typically over [`DistributedScene::summary`]'s bounds):
-    /// on rank 0 the image, `None` on the others.
+    /// projection, typically over [`DistributedScene::summary`]'s bounds),
+    /// in world units: on rank 0 the image, `None` on the others.
     pub fn project(
         &self,
         comm: &dyn Comm,
@@ -257,7 +214,16 @@ impl DistributedScene {
         height: u32,
         control: &Control,
     ) -> Result<Option<Vec<f32>>, ParallelError> {
-        render::project(self, comm, camera, width, height, control)
+        let local = render::project(self, comm, camera, width, height, control)?;
+        // In world units, as [`crate::Scene::project`] gives them.
+        let s = self.frame.scale;
+        Ok(local.map(|c| {
+            if s == 1.0 {
+                c
+            } else {
+                c.iter().map(|&v| (v as f64 * s) as f32).collect()
+            }
+        }))
     }
 
     /// The fields at `points` (the volume's coordinates; rank 0's are used,
@@ -328,25 +294,74 @@ impl DistributedScene {
     /// light follows the camera.
     pub fn reaim(&mut self, desc: &SceneDesc) -> Result<(), SceneError> {
         let aspect = self.settings.width as f32 / self.settings.height as f32;
-        self.camera =
-            crate::resolve::camera(&desc.camera, &self.summary.bounds, aspect, &self.frame)?;
+        self.camera = crate::resolve::camera(&desc.camera, &self.framed, aspect, &self.frame)?;
         let follows = desc.light.as_ref().is_some_and(|l| l.direction.is_none());
         if let Some(light) = &mut self.settings.light
             && follows
         {
             light.direction = crate::camera::default_light_direction(&self.camera);
+            if let Some(sc) = &mut self.settings.scatter
+                && let voxless_render::LightSource::Directional(d) = &mut sc.light
+            {
+                *d = light.direction;
+            }
         }
         Ok(())
     }
+}
 
-    /// Keeps the view of `first`, an earlier frame of the same time series
-    /// (camera, light, value and attribute ranges), so a sequence does not
-    /// flicker — as one process keeps its first frame's view.
-    pub fn keep_view_of(&mut self, first: &DistributedScene) {
-        self.camera = first.camera;
-        self.settings.light = first.settings.light;
-        self.settings.value_range = first.settings.value_range;
-        self.settings.attribute_range = first.settings.attribute_range;
+/// This rank's part of frame `frame` of the data `desc` names (`earlier`:
+/// what a later frame of a series keeps of the first).
+pub(crate) fn open_part(
+    comm: &dyn Comm,
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+    purpose: Purpose,
+    earlier: Option<particles::Earlier>,
+) -> Result<Part, ParallelError> {
+    if comm.size() > 1 {
+        refuse_what_boxes_cannot_do(desc)?;
+    }
+    let sources = [
+        desc.particles.is_some(),
+        desc.amr.is_some(),
+        desc.tets.is_some(),
+    ];
+    if sources.iter().filter(|&&s| s).count() > 1 {
+        return Err(SceneError::setting(
+            "scene",
+            "more than one data source ([particles], [amr], [tets]) is given; pick one",
+        )
+        .into());
+    }
+    // `--particles run.h5` of a JaxPM run: its tessellation.
+    let jaxpm = match &desc.particles {
+        Some(p) => agree(comm, crate::load::jaxpm::as_tessellation(p, base))?,
+        None => None,
+    };
+    let particles = if jaxpm.is_some() {
+        None
+    } else {
+        desc.particles.as_ref()
+    };
+    let tets = desc.tets.as_ref().or(jaxpm.as_ref());
+    match (particles, &desc.amr, tets) {
+        (Some(p), _, _) => particles::open(comm, p, base, frame, earlier),
+        (_, Some(a), _) => amr::open(comm, a, base),
+        (_, _, Some(t)) => {
+            if comm.size() > 1 {
+                refuse_what_boxes_cannot_do_for_tets(t)?;
+            }
+            tets::open(comm, t, base, purpose)
+        }
+        (None, None, None) => Err(SceneError::setting(
+            "scene",
+            "no data source: add a [particles], [amr] or [tets] table to the scene, or pass \
+             --particles FILE (with --lagrangian N --box L for a phase-space tessellation), \
+             --cells FILE --scalars FILE, or --amrclaw FILE",
+        )
+        .into()),
     }
 }
 
@@ -403,21 +418,28 @@ fn refuse_what_boxes_cannot_do(desc: &SceneDesc) -> Result<(), SceneError> {
         ));
     }
     if let Some(t) = &desc.tets {
-        if t.lod_pixels.is_some() {
-            return Err(SceneError::setting(
-                "tets.lod_pixels (--lod)",
-                format!("the level of detail is not used on more than one rank: {why}"),
-            ));
-        }
-        if t.mode == Some(voxless_scene::TetModeName::Kbuffer) {
-            return Err(SceneError::setting(
-                "tets.mode (--tet-mode kbuffer)",
-                format!(
-                    "the k-buffer keeps the first k events of each box's part of a ray, not of \
-                     the ray ({why}); use the exact mode"
-                ),
-            ));
-        }
+        refuse_what_boxes_cannot_do_for_tets(t)?;
+    }
+    Ok(())
+}
+
+/// Tessellation settings whose result one box cannot compute alone.
+fn refuse_what_boxes_cannot_do_for_tets(t: &voxless_scene::TetsDesc) -> Result<(), SceneError> {
+    let why = "under MPI each rank renders only its own box";
+    if t.lod_pixels.is_some() {
+        return Err(SceneError::setting(
+            "tets.lod_pixels (--lod)",
+            format!("the level of detail is not used on more than one rank: {why}"),
+        ));
+    }
+    if t.mode == Some(voxless_scene::TetModeName::Kbuffer) {
+        return Err(SceneError::setting(
+            "tets.mode (--tet-mode kbuffer)",
+            format!(
+                "the k-buffer keeps the first k events of each box's part of a ray, not of \
+                 the ray ({why}); use the exact mode"
+            ),
+        ));
     }
     Ok(())
 }

@@ -1,16 +1,21 @@
-//! Particles (and multi-material particles) over the ranks.
+//! Particles (and multi-material particles) over the ranks, through the
+//! one-process pipeline of `crate::load::particles` step by step.
 //!
-//! 1. Each rank reads rows `n·r/K .. n·(r+1)/K` — by offset from `.npy`
-//!    files; any other format is read whole and cut (its rows are not at
-//!    known offsets).
-//! 2. The whole set's defaults and statistics, from mergeable pieces: the
-//!    positions' bounds (min/max), the default radius (occupied cells of a
-//!    coarse grid over those bounds: an OR of the ranks' grids), the
+//! 1. Each rank reads rows `n·r/K .. n·(r+1)/K` in float64 — by offset from
+//!    `.npy` files, by hyperslab from HDF5; any other format is read whole
+//!    and cut (its rows are not at known offsets).
+//! 2. The world frame from the whole data's reach (min/max of the
+//!    positions, max of the radii), as one process fits it over every
+//!    material; each rank places its rows in it.
+//! 3. The whole set's defaults and statistics, from mergeable pieces: the
+//!    default radius from the median nearest-neighbour spacing (the occupied
+//!    cells of the coarse grid are an OR of the ranks' grids; each probe's
+//!    nearest neighbour is the minimum over the ranks' particles), the
 //!    attribute range (min/max), and the probes — every `stride`-th row,
 //!    found by row number and gathered — for the median support (the step)
 //!    and the density range (each probe evaluated by the rank whose box
 //!    holds it, then the maximum).
-//! 3. One decomposition for all sets (materials share the boxes), from the
+//! 4. One decomposition for all sets (materials share the boxes), from the
 //!    probes' positions; every particle goes to each box its support
 //!    overlaps, and each rank builds its part in row order.
 
@@ -28,12 +33,19 @@ use super::share::{agree, exchange, outboxes, root_box, share, union_bounds};
 use super::{Columns, ParallelError, Part, PartCounts};
 use crate::load::materials::{build_materials, material_descs};
 use crate::load::particles::{
-    FrameData, OccupancyGrid, blame, frame_file, locate, particle_settings, read_frame_share,
+    FrameData, blame, frame_file, frame_for, in_world_units, locate, particle_settings,
+    prepare_arrays, radius_from_spacing, read_frame_share,
 };
 use crate::{AnyVolume, SceneError, VolumeKind, VolumeSummary, WorldFrame};
 
+mod whole;
+use whole::{WorldBox, check_resolvable, whole_spacing, world_reach};
+
 /// One rank's rows of a particle set.
 struct Rows {
+    /// World positions (float64), and the other arrays in world units (no
+    /// positions until placed in the frame).
+    world: Vec<[f64; 3]>,
     data: ParticleData,
     /// Row number of the first row, and the set's row count.
     offset: usize,
@@ -57,11 +69,21 @@ struct Set {
     bounds: Aabb,
 }
 
+/// What a later frame of a time series keeps of the first: its world
+/// frame, and (particles of one set) its settings, as
+/// [`crate::Scene::load_frame`] keeps them.
+#[derive(Clone, Copy)]
+pub(crate) struct Earlier<'a> {
+    pub world: &'a WorldFrame,
+    pub settings: Option<&'a ParticleSettings>,
+}
+
 pub(crate) fn open(
     comm: &dyn Comm,
     p: &ParticlesDesc,
     base: &Path,
     frame: usize,
+    earlier: Option<Earlier>,
 ) -> Result<Part, ParallelError> {
     let mut notes = Vec::new();
     let descs = match &p.materials {
@@ -78,9 +100,36 @@ pub(crate) fn open(
         }
         None => vec![p.clone()],
     };
-    let mut sets = Vec::with_capacity(descs.len());
+    // Every set's rows first, so one frame fits them all (as one process
+    // fits the frame over every material).
+    let mut read = Vec::with_capacity(descs.len());
     for d in &descs {
-        sets.push(Set::read(comm, d, base, frame, &mut notes)?);
+        let rows = agree(comm, read_rows(d, base, frame, comm.rank(), comm.size()))?;
+        notes.extend(rows.notes.iter().cloned());
+        read.push(rows);
+    }
+    let world = match earlier {
+        Some(e) => *e.world,
+        None => {
+            let mut reach: Option<WorldBox> = None;
+            for (d, rows) in descs.iter().zip(&read) {
+                if let Some(r) = world_reach(comm, d, rows)? {
+                    reach = Some(match reach {
+                        None => r,
+                        Some(a) => (
+                            std::array::from_fn(|i| a.0[i].min(r.0[i])),
+                            std::array::from_fn(|i| a.1[i].max(r.1[i])),
+                        ),
+                    });
+                }
+            }
+            frame_for(reach)
+        }
+    };
+    let keep = earlier.and_then(|e| e.settings);
+    let mut sets = Vec::with_capacity(descs.len());
+    for (d, rows) in descs.iter().zip(read) {
+        sets.push(Set::settle(comm, d, rows, &world, keep, &mut notes)?);
     }
     // One decomposition for every set, from all probes (the same on every
     // rank: the probes were gathered).
@@ -100,7 +149,7 @@ pub(crate) fn open(
     }
     let held = volumes.iter().map(|v| v.len() as u64).sum();
     let counts = PartCounts { read, held };
-    let frame_ = WorldFrame::default();
+    let frame_ = world;
     match &p.materials {
         Some(mats) => {
             let mut parts = volumes.into_iter();
@@ -158,71 +207,56 @@ pub(crate) fn open(
 }
 
 impl Set {
-    /// Reads this rank's rows and agrees with the others on the set's
-    /// settings and statistics.
-    fn read(
+    /// Places this rank's rows in the frame `world` and agrees with the
+    /// other ranks on the set's settings and statistics.
+    fn settle(
         comm: &dyn Comm,
         p: &ParticlesDesc,
-        base: &Path,
-        frame: usize,
+        mut rows: Rows,
+        world: &WorldFrame,
+        keep: Option<&ParticleSettings>,
         notes: &mut Vec<String>,
     ) -> Result<Set, ParallelError> {
-        let rows = agree(comm, read_rows(p, base, frame, comm.rank(), comm.size()))?;
-        notes.extend(rows.notes.iter().cloned());
+        rows.data.positions = rows.world.iter().map(|&q| world.to_local(q)).collect();
+        rows.world = Vec::new();
+        let kernel = prepare_arrays(&mut rows.data, p, rows.sph_defaults, world.scale)?;
         let blame_it = |e: ParticleError| blame(rows.main_file.clone(), &rows.files, e);
         agree(comm, check_data(&rows.data, rows.offset).map_err(blame_it))?;
+        // Every rank takes the same branches here (they depend on the
+        // description and on which arrays are given), so a default radius
+        // is found by all of them together.
+        let mut settings = match keep {
+            // A later frame of a series keeps the first frame's settings.
+            Some(k) => k.clone(),
+            None => {
+                let mut comm_error = None;
+                let settings = particle_settings(
+                    p,
+                    kernel,
+                    rows.data.radii.is_some(),
+                    &mut |kernel| match whole_spacing(comm, &rows) {
+                        Ok(d) => radius_from_spacing(d, rows.total, kernel),
+                        Err(e) => {
+                            comm_error = Some(e);
+                            (1.0, String::new())
+                        }
+                    },
+                    world.scale,
+                    notes,
+                )?;
+                if let Some(e) = comm_error {
+                    return Err(e);
+                }
+                let support = settings.radius * kernel.support_factor();
+                check_resolvable(comm, &rows, support, world.scale)?;
+                settings
+            }
+        };
         let mut own = Aabb::EMPTY;
         for q in &rows.data.positions {
             own.grow(*q);
         }
         let positions = union_bounds(comm, own)?;
-        let occupancy = |kernel| -> Result<f32, ParallelError> {
-            let mut grid = OccupancyGrid::new(positions, rows.total);
-            for q in &rows.data.positions {
-                grid.mark(*q);
-            }
-            // The union of the ranks' marks, as bits.
-            let mut w = Writer::new();
-            let bits: Vec<u8> = grid
-                .occupied
-                .chunks(8)
-                .map(|c| {
-                    c.iter()
-                        .enumerate()
-                        .fold(0u8, |b, (i, &o)| b | (o as u8) << i)
-                })
-                .collect();
-            w.bytes(&bits);
-            let mut union = vec![0u8; bits.len()];
-            for msg in comm.all_gather(&w.into_bytes())? {
-                let got = Reader::new(&msg).bytes()?.to_vec();
-                for (u, g) in union.iter_mut().zip(got) {
-                    *u |= g;
-                }
-            }
-            let count = union.iter().map(|b| b.count_ones() as usize).sum();
-            Ok(grid.radius(count, kernel))
-        };
-        // Every rank takes the same branches here (they depend on the
-        // description and on which arrays are given), so a default radius
-        // is computed by all of them together.
-        let mut comm_error = None;
-        let mut settings = particle_settings(
-            p,
-            rows.sph_defaults,
-            rows.data.radii.is_some(),
-            &mut |kernel| match occupancy(kernel) {
-                Ok(r) => r,
-                Err(e) => {
-                    comm_error = Some(e);
-                    1.0
-                }
-            },
-            notes,
-        )?;
-        if let Some(e) = comm_error {
-            return Err(e);
-        }
         if rows.data.attribute.is_none() {
             for (what, present) in [
                 ("radius map", settings.radius_map.is_some()),
@@ -283,12 +317,12 @@ impl Set {
             let support = median(&mut supports);
             let extent = positions.diagonal();
             if support > extent {
-                return Err(blame_it(ParticleError::HugeRadius {
+                let e = ParticleError::HugeRadius {
                     support,
                     extent,
                     count: rows.total,
-                })
-                .into());
+                };
+                return Err(blame_it(in_world_units(e, world.scale)).into());
             }
         }
         let mut visible: Vec<f32> = probes
@@ -406,7 +440,8 @@ impl Set {
     }
 }
 
-/// This rank's rows of the particle set `p` describes at `frame`.
+/// This rank's rows of the particle set `p` describes at `frame` (world
+/// positions; no local positions yet).
 fn read_rows(
     p: &ParticlesDesc,
     base: &Path,
@@ -426,6 +461,7 @@ fn read_rows(
         .all(|spec| !is_npy(&base.join(spec)));
     let part = (p.species.is_none() && columns_only).then_some((rank, ranks));
     let FrameData {
+        positions,
         data,
         main_file,
         files,
@@ -435,6 +471,7 @@ fn read_rows(
     } = read_frame_share(p, base, frame, part)?;
     if let Some((offset, total)) = rows {
         return Ok(Rows {
+            world: positions,
             data,
             offset,
             total,
@@ -444,12 +481,13 @@ fn read_rows(
             notes,
         });
     }
-    let total = data.positions.len();
+    let total = positions.len();
     let r = share(total, rank, ranks);
     let cut = |v: Option<Vec<f32>>| v.map(|v| v[r.clone()].to_vec());
     Ok(Rows {
+        world: positions[r.clone()].to_vec(),
         data: ParticleData {
-            positions: data.positions[r.clone()].to_vec(),
+            positions: Vec::new(),
             radii: cut(data.radii),
             attribute: cut(data.attribute),
             weights: cut(data.weights),
@@ -524,14 +562,11 @@ fn npy_rows(
         return Ok(None);
     };
     let (a, _) = voxless_io::read_npy_rows(&path, rows.clone())?;
-    let positions = a
-        .data
-        .chunks_exact(3)
-        .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
-        .collect();
+    let world = a.data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     Ok(Some(Rows {
+        world,
         data: ParticleData {
-            positions,
+            positions: Vec::new(),
             radii,
             attribute,
             weights,

@@ -11,29 +11,32 @@
 //! samples), or to the one box holding their centroid (projections, whose
 //! columns add up), degenerate tets' point masses with them.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use voxless_core::{Aabb, Vec3};
 use voxless_parallel::{Comm, CommExt, Reader, Writer};
 use voxless_scene::TetsDesc;
 use voxless_tets::{
-    BLOCK, Block, LagrangianSlab, Tet, TetError, TetMesh, TetSettings, TetVolume, density_range,
+    BLOCK, Block, LagrangianSlab, Tet, TetMesh, TetSettings, TetVolume, density_range,
     density_stride,
 };
 
 use super::share::{agree, exchange, outboxes, root_box, share};
 use super::{Columns, ParallelError, Part, PartCounts, Purpose};
 use crate::load::formats::ParticleFormat;
+use crate::load::tets::{box_frame, check_count, check_inside, particle_mass, world_grid};
 use crate::{AnyVolume, SceneError, VolumeKind, VolumeSummary, WorldFrame};
 
-/// This rank's slab of the run `t` names.
+/// This rank's slab of the run `t` names, placed in the frame its box
+/// picks (as one process places the whole grid), with that frame and the
+/// particle mass in it.
 fn read_slab(
     t: &TetsDesc,
     base: &Path,
     rank: usize,
     ranks: usize,
     notes: &mut Vec<String>,
-) -> Result<(LagrangianSlab, std::path::PathBuf), SceneError> {
+) -> Result<(LagrangianSlab, WorldFrame, f64, PathBuf), SceneError> {
     let file = t.file.as_ref().ok_or_else(|| {
         SceneError::setting(
             "tets.file",
@@ -49,8 +52,10 @@ fn read_slab(
         let planes = if rows.is_empty() { 0 } else { last - first + 1 };
         (rows, first, last, planes)
     };
-    let cut = |positions: &[Vec3], n: usize, box_size: f32| {
-        let (rows, first, last, planes) = planes_of(n);
+    // The slab's planes of the whole grid's world positions: planes
+    // `first..last`, then plane `last % n`, which the last row reaches into.
+    let cut = |positions: &[[f64; 3]], n: usize| {
+        let (_, first, last, planes) = planes_of(n);
         let nn = n * n;
         let mut slab = Vec::with_capacity(planes * nn);
         if planes > 0 {
@@ -58,79 +63,82 @@ fn read_slab(
             let extra = last % n;
             slab.extend_from_slice(&positions[extra * nn..(extra + 1) * nn]);
         }
-        LagrangianSlab {
-            n,
-            box_size,
-            rows,
-            first_plane: first,
-            planes,
-            positions: slab,
-        }
+        slab
     };
-    if ParticleFormat::detect(&path)? == Some(ParticleFormat::Hdf5) {
+    let (n, box_size, world) = if ParticleFormat::detect(&path)? == Some(ParticleFormat::Hdf5) {
         // A JaxPM run: read whole (N and L come from the file), then cut.
         let grid = crate::load::jaxpm::grid(t, &path, notes)?;
-        return Ok((cut(&grid.positions, grid.n, grid.box_size), path));
-    }
-    let grid_of = |positions: Vec<Vec3>| crate::load::tets::grid_of(positions, t);
-    let is_npy = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
-    let shape = if is_npy {
-        Some(voxless_io::read_npy_rows(&path, 0..0)?.1)
+        let world = cut(&grid.positions, grid.n);
+        (grid.n, grid.box_size, world)
     } else {
-        None
+        if t.snapshot.is_some() {
+            return Err(SceneError::setting(
+                "tets.snapshot",
+                format!(
+                    "--snapshot picks a snapshot of a JaxPM .h5 run, but {} is not one",
+                    path.display()
+                ),
+            ));
+        }
+        let is_npy = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
+        let shape = if is_npy {
+            Some(voxless_io::read_npy_rows(&path, 0..0)?.1)
+        } else {
+            None
+        };
+        match (shape, t.lagrangian) {
+            (Some(shape), Some(n)) if shape.len() == 2 && shape[1] == 3 => {
+                // Checks N and L as one process does, then reads the slab's
+                // rows only.
+                let l = t.box_size.ok_or_else(|| {
+                    SceneError::setting(
+                        "tets.box_size",
+                        "the periodic box size is needed (--box L)",
+                    )
+                })? as f64;
+                check_count(n, shape[0], &path)?;
+                let (_, first, last, planes) = planes_of(n);
+                let nn = n * n;
+                let mut world = Vec::with_capacity(planes * nn);
+                if planes > 0 {
+                    let read = |a: usize, b: usize| -> Result<Vec<[f64; 3]>, SceneError> {
+                        let (arr, _) = voxless_io::read_npy_rows(&path, a * nn..b * nn)?;
+                        Ok(arr
+                            .data
+                            .chunks_exact(3)
+                            .map(|c| [c[0], c[1], c[2]])
+                            .collect())
+                    };
+                    world.extend(read(first, last)?);
+                    check_inside(&world, first * nn, l, &path)?;
+                    world.extend(read(last % n, last % n + 1)?);
+                }
+                (n, l, world)
+            }
+            _ => {
+                // Any other file: read whole (the general reader words errors).
+                let (positions, _) = crate::load::table::read_positions(&path)?;
+                let grid = world_grid(positions, t, &path)?;
+                let world = cut(&grid.positions, grid.n);
+                (grid.n, grid.box_size, world)
+            }
+        }
     };
-    let n = t.lagrangian;
-    match (shape, n) {
-        (Some(shape), Some(n)) if shape.len() == 2 && shape[1] == 3 => {
-            let grid = grid_of(Vec::new())?;
-            if n < 2 || n.checked_pow(3) != Some(shape[0]) {
-                return Err(SceneError::Tets {
-                    path,
-                    source: TetError::NotCubic { count: shape[0] },
-                });
-            }
-            let (rows, first, last, planes) = planes_of(n);
-            let nn = n * n;
-            let mut positions = Vec::with_capacity(planes * nn);
-            if planes > 0 {
-                let read = |a: usize, b: usize| -> Result<Vec<Vec3>, SceneError> {
-                    let (arr, _) = voxless_io::read_npy_rows(&path, a * nn..b * nn)?;
-                    Ok(arr
-                        .data
-                        .chunks_exact(3)
-                        .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
-                        .collect())
-                };
-                positions.extend(read(first, last)?);
-                positions.extend(read(last % n, last % n + 1)?);
-            }
-            let slab = LagrangianSlab {
-                n,
-                box_size: grid.box_size,
-                rows,
-                first_plane: first,
-                planes,
-                positions,
-            };
-            Ok((slab, path))
-        }
-        _ => {
-            // Any other file: read whole (the general reader words errors).
-            let (positions, _) = crate::load::table::read_positions(&path)?;
-            let grid = grid_of(positions)?;
-            if grid.n < 2 || grid.n.checked_pow(3) != Some(grid.positions.len()) {
-                return Err(SceneError::Tets {
-                    path,
-                    source: TetError::NotCubic {
-                        count: grid.positions.len(),
-                    },
-                });
-            }
-            Ok((cut(&grid.positions, grid.n, grid.box_size), path))
-        }
-    }
+    let frame = box_frame(box_size);
+    let local_box = (box_size / frame.scale) as f32;
+    let mass = particle_mass(t, n, local_box, box_size, frame.scale)?;
+    let (rows, first, _, planes) = planes_of(n);
+    let slab = LagrangianSlab {
+        n,
+        box_size: local_box,
+        rows,
+        first_plane: first,
+        planes,
+        positions: world.iter().map(|&p| frame.to_local(p)).collect(),
+    };
+    Ok((slab, frame, mass, path))
 }
 
 pub(crate) fn open(
@@ -140,12 +148,12 @@ pub(crate) fn open(
     purpose: Purpose,
 ) -> Result<Part, ParallelError> {
     let mut notes = Vec::new();
-    let (slab, path) = agree(
+    let (slab, frame, mass, path) = agree(
         comm,
         read_slab(t, base, comm.rank(), comm.size(), &mut notes),
     )?;
     let settings = TetSettings {
-        particle_mass: t.particle_mass,
+        particle_mass: Some(mass),
         ..Default::default()
     };
     let read = slab.positions.len() as u64;
@@ -272,7 +280,7 @@ pub(crate) fn open(
     let volume = TetVolume::from_parts(local, value_range);
     Ok(Part {
         volume: Some(AnyVolume::Tets(Box::new(volume))),
-        frame: WorldFrame::default(),
+        frame,
         summary: VolumeSummary {
             kind: VolumeKind::Tets,
             bounds,

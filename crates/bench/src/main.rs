@@ -3,7 +3,7 @@
 //! integrator `voxless render` uses), not through copies of it.
 //!
 //! ```sh
-//! cargo run --release -p voxless-bench -- bvh|frame|packets|amr|tets|parallel [flags]
+//! cargo run --release -p voxless-bench -- bvh|frame|packets|amr|tets|parallel|serve [flags]
 //! ```
 //!
 //! Every benchmark reports a ratio against a baseline measured in the same
@@ -26,6 +26,8 @@
 //!   block culling, k-buffer and level of detail ([`tets`]).
 //! - `parallel`: sort-last compositing against image size and rank count,
 //!   and the inputs of the per-rank memory measurements ([`parallel`]).
+//! - `serve`: `voxless serve` as a client sees it — camera move to the
+//!   first coarse image and to the converged image ([`serve`]).
 //!
 //! Variants the library does not offer (an AMR volume that hands out every
 //! interval, a tessellation with every block in every tile) are small
@@ -38,6 +40,7 @@ mod common;
 mod frame;
 mod packets;
 mod parallel;
+mod serve;
 mod tets;
 
 use anyhow::Result;
@@ -74,6 +77,10 @@ enum Which {
     /// Data-parallel rendering: direct-send compositing time against image
     /// size and rank count; the inputs of the per-rank memory runs.
     Parallel(parallel::ParallelArgs),
+    /// `voxless serve` over a websocket: camera move → first (coarse) image
+    /// and → converged 1024² image, on the dam break and the 64³
+    /// tessellation.
+    Serve(serve::ServeArgs),
 }
 
 fn main() {
@@ -108,5 +115,6 @@ fn run(which: Which) -> Result<()> {
         Which::Amr(o) => amr::run(o),
         Which::Tets(o) => tets::run(o),
         Which::Parallel(o) => parallel::run(o),
+        Which::Serve(o) => serve::run(o),
     }
 }

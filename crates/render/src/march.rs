@@ -188,6 +188,30 @@ pub(crate) struct Segment {
     pub reset: bool,
 }
 
+/// The step through sampled interval `iv`: the settings' step, else the
+/// interval's nominal step over the sampling rate — but at least a
+/// millionth of the interval and [`MIN_STEP_ULPS`] units in the last place
+/// of its far end, so every step moves `t` (a step below f32's resolution
+/// at `t` would never reach the end of the interval).
+#[inline]
+pub fn step_in(iv: &Interval, settings: &RenderSettings) -> f32 {
+    settings
+        .step
+        .unwrap_or(iv.nominal_dt / settings.sampling_rate)
+        .max(iv.t.span() * 1e-6)
+        .max(min_step_at(iv.t.hi))
+}
+
+/// Smallest step [`step_in`] takes at distance `t` along a ray.
+pub const MIN_STEP_ULPS: f32 = 4.0;
+
+/// [`MIN_STEP_ULPS`] units in the last place at `t` (f32), and at least
+/// the smallest normal f32.
+#[inline]
+pub fn min_step_at(t: f32) -> f32 {
+    (MIN_STEP_ULPS * f32::EPSILON * t.abs()).max(f32::MIN_POSITIVE)
+}
+
 /// Walks the segments of a ray's intervals in order; resumable, so the
 /// packet path can take them a window at a time.
 ///
@@ -270,17 +294,13 @@ impl Cursor {
         nx.constant_value().is_none() && Self::step_of(nx, settings).to_bits() == self.dt.to_bits()
     }
 
-    /// The step of sampled interval `iv`: the fixed step or the interval's
-    /// nominal one over the sampling rate. The floor keeps the lattice
-    /// representable in `f32` at this `t` (at most about 10⁶ cells per
-    /// interval), so a tiny step can never hang a render.
+    /// The step of sampled interval `iv` ([`step_in`]: its floors keep the
+    /// lattice representable in `f32` at this `t` and bound the cells per
+    /// interval, so a tiny step can never hang a render; they depend on the
+    /// interval's extent only where the step is below a millionth of it).
     #[inline]
     fn step_of(iv: &Interval, settings: &RenderSettings) -> f32 {
-        settings
-            .step
-            .unwrap_or(iv.nominal_dt / settings.sampling_rate)
-            .max(16.0 * f32::EPSILON * iv.t.lo.abs().max(iv.t.hi.abs()))
-            .max(f32::MIN_POSITIVE)
+        step_in(iv, settings)
     }
 
     #[inline]

@@ -73,6 +73,11 @@ pub struct ParticlesDesc {
     /// `[[attribute, weight], ...]` over the normalised attribute.
     pub weight_map: Option<Vec<[f32; 2]>>,
     pub attribute_range: Option<[f32; 2]>,
+    /// Multiplies every particle's radius (global, per-particle or SPH h);
+    /// default 1.
+    pub radius_scale: Option<f32>,
+    /// Multiplies every particle's weight (mass); default 1.
+    pub weight_scale: Option<f32>,
 }
 
 /// One material of a multi-material particle scene: the particles of one
@@ -138,7 +143,8 @@ pub struct TetsDesc {
     pub box_size: Option<f32>,
     /// JaxPM snapshot K (the group `snap_<K>`; default: the last).
     pub snapshot: Option<usize>,
-    /// Mass per particle (default: total mass 1).
+    /// Mass per particle, world units (default: the mean density is 1, so
+    /// densities read as the overdensity 1 + δ).
     pub particle_mass: Option<f64>,
     /// exact (default) or kbuffer.
     pub mode: Option<TetModeName>,

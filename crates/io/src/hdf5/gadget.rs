@@ -66,20 +66,20 @@ pub fn read_gadget_share(
         Some(r) => f.read_f32_rows(ds, full, r.clone(), 1),
         None => f.read_f32(ds, full),
     };
-    let coords = read(&ds, &coords_name)?;
-    if coords.shape.len() != 2 || coords.shape[1] != 3 {
+    // Float64 (cosmological boxes store coordinates in double precision).
+    let (shape, data) = match &rows {
+        Some(r) => f.read_f64_rows(&ds, &coords_name, r.clone(), 1)?,
+        None => f.read_f64(&ds, &coords_name)?,
+    };
+    if shape.len() != 2 || shape[1] != 3 {
         return Err(f.err(format!(
             "dataset {coords_name}: expected an N×3 array, found shape {}",
-            shape_text(&coords.shape)
+            shape_text(&shape)
         )));
     }
-    let n = coords.shape[0];
-    let positions = coords
-        .data
-        .chunks_exact(3)
-        .map(|p| [p[0], p[1], p[2]])
-        .collect();
-    drop(coords);
+    let n = shape[0];
+    let positions = data.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
+    drop(data);
     let mut table = ParticleTable {
         positions,
         rows: rows.as_ref().map(|r| (r.start, n)),

@@ -123,7 +123,6 @@ pub(crate) fn name_list(names: &[String]) -> String {
     }
 }
 
-/// A shape as `(a, b, c)`; `()` for a scalar.
 /// Rows `n·r/k .. n·(r+1)/k` of `n`: share `r` of `k`.
 pub(crate) fn share_rows(n: usize, r: usize, k: usize) -> std::ops::Range<usize> {
     let k = k.max(1) as u128;
@@ -131,6 +130,7 @@ pub(crate) fn share_rows(n: usize, r: usize, k: usize) -> std::ops::Range<usize>
     at(r.min(k as usize))..at((r + 1).min(k as usize))
 }
 
+/// A shape as `(a, b, c)`; `()` for a scalar.
 pub(crate) fn shape_text(shape: &[usize]) -> String {
     match shape {
         [n] => format!("({n},)"),
@@ -384,6 +384,47 @@ impl<'p> Hdf5File<'p> {
             }
         };
         Ok(Values { shape, data })
+    }
+
+    /// [`Hdf5File::read_f32_rows`] as `f64`: rows `rows` (times `per`
+    /// along the first axis) of a 1-D or N×k dataset, by hyperslab, with
+    /// the whole dataset's shape.
+    pub(crate) fn read_f64_rows(
+        &self,
+        ds: &h5::Dataset,
+        full: &str,
+        rows: std::ops::Range<usize>,
+        per: usize,
+    ) -> Result<(Vec<usize>, Vec<f64>), IoError> {
+        let what = format!("dataset {full}");
+        self.expect_numeric(ds, &what)?;
+        let shape = ds.shape();
+        self.checked_count(ds, &shape, !ds.filters().is_empty(), &what)?;
+        let first = shape.first().copied().unwrap_or(0);
+        let (a, b) = ((rows.start * per).min(first), (rows.end * per).min(first));
+        let err = |e| self.h5err(&what, e);
+        let data: Vec<f64> = match shape.len() {
+            1 => ds.read_slice_1d::<f64, _>(a..b).map_err(err)?.to_vec(),
+            2 => {
+                let slab: h5::Selection = h5::Hyperslab::from(vec![
+                    h5::SliceOrIndex::from(a..b),
+                    h5::SliceOrIndex::from(..),
+                ])
+                .into();
+                ds.read_slice_2d::<f64, _>(slab)
+                    .map_err(err)?
+                    .iter()
+                    .copied()
+                    .collect()
+            }
+            _ => {
+                return Err(self.err(format!(
+                    "{what}: expected a 1-D or N×k array, found shape {}",
+                    shape_text(&shape)
+                )));
+            }
+        };
+        Ok((shape, data))
     }
 
     /// Reads the numeric dataset `ds` (path `full`) as `f64`.

@@ -84,14 +84,19 @@ pub fn read_pysph_share(
     for axis in ["x", "y", "z"] {
         let full = format!("{prefix}/{axis}");
         let ds = f.required_dataset(&arrays, axis, &full)?;
-        let values = read(&ds, &full, 1)?;
-        if values.shape.len() != 1 {
+        // Positions in float64, as stored: data far from the origin keeps
+        // its digits until the library recentres it.
+        let (shape, data) = match &rows {
+            Some(r) => f.read_f64_rows(&ds, &full, r.clone(), 1)?,
+            None => f.read_f64(&ds, &full)?,
+        };
+        if shape.len() != 1 {
             return Err(f.err(format!(
                 "dataset {full}: expected a 1-D array, found shape {}",
-                super::shape_text(&values.shape)
+                super::shape_text(&shape)
             )));
         }
-        coords.push((full, values.shape[0], values.data));
+        coords.push((full, shape[0], data));
     }
     let n = coords[0].1;
     for (full, len, _) in &coords[1..] {
