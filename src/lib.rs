@@ -22,7 +22,8 @@
 //! - **Rendering** ([`AnyVolume::render`], [`AnyVolume::render_passes`]),
 //!   **projecting** ([`AnyVolume::project`]) and **sampling**
 //!   ([`AnyVolume::sample_points`]) report progress and stop when their
-//!   [`Control`]'s [`CancelToken`] is cancelled.
+//!   [`Control`]'s [`CancelToken`] is cancelled. [`ProjectionView`] places
+//!   a projection (along an axis or an off-axis normal) in the world.
 //!
 //! Volumes are immutable after they are built and `Sync`: one volume serves
 //! several renders at once, each with its own camera and transfer function.
@@ -52,8 +53,10 @@ mod error;
 mod frame;
 pub mod load;
 mod memory;
+pub mod projection;
 mod resolve;
 mod scene;
+mod view;
 mod volume;
 
 pub use error::{Error, SceneError};
@@ -61,8 +64,10 @@ pub use frame::WorldFrame;
 pub use load::AmrArrays;
 pub use load::{Loaded, frame_count, load, read_points, read_scene};
 pub use memory::ParticleArrays;
+pub use projection::{ProjectionDesc, ProjectionView};
 pub use resolve::{Resolved, resolve, resolve_in, transfer_function, transfer_function_at};
 pub use scene::Scene;
+pub use view::check_iso;
 pub use volume::AnyVolume;
 
 /// File formats: which reader a path needs and one frame of any of them.

@@ -101,43 +101,7 @@ impl Scene {
     /// did see, in the transfer function's units — so an empty surface is
     /// never a silent image.
     pub fn check_iso(&self, film: &Film) -> Result<(), SceneError> {
-        let st = &self.settings;
-        if st.iso.is_empty() || film.stats().iso_hits > 0 {
-            return Ok(());
-        }
-        let unit = |v: f32| {
-            if st.log_scale {
-                v.max(f32::MIN_POSITIVE).log10()
-            } else {
-                v
-            }
-        };
-        let asked: Vec<String> = st.iso.iter().map(|&v| format!("{}", unit(v))).collect();
-        let scale = if st.log_scale {
-            "log10 of the field"
-        } else {
-            "the field"
-        };
-        let seen = film.stats().values;
-        let what = if seen.is_empty() {
-            "the rays meet no data".to_string()
-        } else {
-            format!(
-                "{scale} along the rays lies in [{:.4}, {:.4}]",
-                unit(seen.lo),
-                unit(seen.hi)
-            )
-        };
-        Err(SceneError::setting(
-            "render.iso (--iso)",
-            format!(
-                "no iso-surface at {} appears in the image: {what}; the transfer function's \
-                 value range is [{:.4}, {:.4}] in the same units",
-                asked.join(", "),
-                st.value_range.lo,
-                st.value_range.hi
-            ),
-        ))
+        crate::check_iso(&self.settings, film)
     }
 
     /// The fields at world `points` (see [`AnyVolume::sample_points`]).

@@ -124,6 +124,20 @@ impl AnyVolume {
         with_volume!(self, v => voxless_render::project(v, camera, width, height, control))
     }
 
+    /// [`AnyVolume::project`] over the part `t` of every pixel's line (one
+    /// line integral per pixel; the volume's whole-image path integrates
+    /// whole lines).
+    pub fn project_in(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        t: Range1,
+        control: &Control,
+    ) -> Result<Vec<f32>, Cancelled> {
+        with_volume!(self, v => voxless_render::project_per_pixel_in(v, camera, width, height, t, control))
+    }
+
     /// The integral of the field over all space, when the data kind knows it
     /// exactly (what a projection over the full bounds must conserve).
     pub fn total_mass(&self) -> Option<f64> {

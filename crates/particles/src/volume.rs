@@ -12,6 +12,7 @@ use crate::error::ParticleError;
 use crate::kernel::{CubicFamily, Family, GaussianFamily, Kernel};
 
 mod packet;
+mod splat;
 
 /// Particle arrays as read from a file, in file order.
 #[derive(Clone, Debug, Default)]
@@ -116,7 +117,9 @@ pub struct ParticleVolume {
     packed: Vec<Packed>,
     bvh: Bvh,
     grid: MacroGrid,
-    value_range: Range1,
+    /// Φ's range (its maximum over a sample of particle centres), probed on
+    /// first use: renders need it, projections and samples do not.
+    value_range: std::sync::OnceLock<Range1>,
     attribute_range: Option<Range1>,
     nominal_dt: f32,
 }
@@ -299,7 +302,7 @@ impl ParticleVolume {
             packed: Vec::new(),
             bvh,
             grid: MacroGrid::with_cell_size(Aabb::EMPTY, 1.0, 1),
-            value_range: Range1::new(0.0, 0.0),
+            value_range: std::sync::OnceLock::new(),
             attribute_range,
             nominal_dt: 1.0,
         };
@@ -509,14 +512,19 @@ impl ParticleVolume {
         }
         self.grid = grid;
 
-        // Φ's range for normalisation: max over (a sample of) particle centres.
+        // Φ's range depends on the radii and weights just derived.
+        self.value_range = std::sync::OnceLock::new();
+    }
+
+    /// Φ's range for normalisation: max over (a sample of) particle centres.
+    fn probe_value_range(&self) -> Range1 {
         let stride = (self.packed.len() / RANGE_PROBES).max(1);
         let max = (0..self.packed.len())
             .into_par_iter()
             .step_by(stride)
             .map(|i| self.density(self.positions[i]))
             .reduce(|| 0.0, f32::max);
-        self.value_range = Range1::new(0.0, max);
+        Range1::new(0.0, max)
     }
 
     /// Φ alone.
@@ -679,7 +687,7 @@ impl Volume for ParticleVolume {
     }
 
     fn value_range(&self) -> Range1 {
-        self.value_range
+        *self.value_range.get_or_init(|| self.probe_value_range())
     }
 
     fn attribute_range(&self) -> Option<Range1> {
@@ -715,6 +723,19 @@ impl Volume for ParticleVolume {
 
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
         self.grid.intervals(ray, t, self.nominal_dt, query, out);
+    }
+
+    /// Orthographic views: every particle's chord added to the pixels its
+    /// support covers ([`splat`]); the same image as the per-pixel path up
+    /// to summation order.
+    fn project_image(
+        &self,
+        camera: &voxless_core::Camera,
+        width: u32,
+        height: u32,
+        control: &voxless_core::Control,
+    ) -> Option<Result<Vec<f32>, voxless_core::Cancelled>> {
+        self.splat_projection(camera, width, height, control)
     }
 
     /// Exact: the closed-form chord integral of every particle the ray

@@ -424,6 +424,21 @@ pub fn project_per_pixel<V: Volume>(
     height: u32,
     control: &Control,
 ) -> Result<Vec<f32>, Cancelled> {
+    let all = Range1::new(f32::NEG_INFINITY, f32::INFINITY);
+    project_per_pixel_in(volume, camera, width, height, all, control)
+}
+
+/// [`project_per_pixel`] over the part `t` of every pixel's line (a slab of
+/// an orthographic view: `t` is the distance along the view direction from
+/// the image plane through the eye).
+pub fn project_per_pixel_in<V: Volume>(
+    volume: &V,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    t_range: Range1,
+    control: &Control,
+) -> Result<Vec<f32>, Cancelled> {
     let done = std::sync::atomic::AtomicU64::new(0);
     let bounds = volume.bounds();
     let rows: Vec<Option<Vec<f32>>> = (0..height)
@@ -435,7 +450,7 @@ pub fn project_per_pixel<V: Volume>(
             let row: Vec<f32> = (0..width)
                 .map(|x| {
                     let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5, width, height);
-                    let t = bounds.clip_ray(&ray, Range1::new(f32::NEG_INFINITY, f32::INFINITY));
+                    let t = bounds.clip_ray(&ray, t_range);
                     if t.is_empty() {
                         0.0
                     } else {
