@@ -50,6 +50,7 @@
 mod camera;
 pub mod demo;
 mod error;
+pub mod flags;
 mod frame;
 pub mod load;
 mod memory;
@@ -60,6 +61,7 @@ mod view;
 mod volume;
 
 pub use error::{Error, SceneError};
+pub use flags::SceneFlags;
 pub use frame::WorldFrame;
 pub use load::AmrArrays;
 pub use load::{Loaded, frame_count, load, read_points, read_scene};
