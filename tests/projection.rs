@@ -398,7 +398,9 @@ fn projection_image_sizes_are_the_resolved_ones() {
         let size = voxless::projection::image_size(&desc.image).unwrap();
         assert_eq!(size, (r.settings.width, r.settings.height));
     }
-    let mut bad = voxless::ImageDesc::default();
-    bad.width = Some(0);
+    let bad = voxless::ImageDesc {
+        width: Some(0),
+        ..Default::default()
+    };
     assert!(voxless::projection::image_size(&bad).is_err());
 }
