@@ -320,6 +320,13 @@ impl SceneFlags {
             .collect()
     }
 
+    /// The names of every data flag (see [`SceneFlags::data_flags`]).
+    pub fn data_names() -> Vec<&'static str> {
+        let none = SceneFlags::default();
+        let (p, t, a) = (none.particle_flags(), none.tet_flags(), none.amr_flags());
+        p.iter().chain(&t).chain(&a).map(|f| f.0).collect()
+    }
+
     /// The names of the data flags among the given ones — those that say
     /// what data to read or how to build the volume (particles, tessellation
     /// and AMR flags), as opposed to the view (image, camera, transfer

@@ -103,3 +103,13 @@ fn bad_flags_are_errors_naming_the_flag() {
         ["kernel", "lod", "field"]
     );
 }
+
+#[test]
+fn data_names_are_flag_names() {
+    let names = SceneFlags::names();
+    for n in SceneFlags::data_names() {
+        assert!(names.iter().any(|m| m == n), "{n}");
+    }
+    assert!(SceneFlags::data_names().contains(&"box"));
+    assert!(!SceneFlags::data_names().contains(&"colormap"));
+}

@@ -12,7 +12,7 @@ use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use serde_json::{Map, Number, Value};
-use voxless::SceneDesc;
+use voxless::{SceneDesc, SceneFlags};
 
 use crate::errors;
 
@@ -90,17 +90,37 @@ fn type_name(obj: &Bound<'_, PyAny>) -> String {
         .unwrap_or_else(|_| "this value".into())
 }
 
-/// A JSON value as a scene description; errors name the key path.
-pub fn desc_from_json(py: Python<'_>, value: Value) -> PyResult<SceneDesc> {
+/// A JSON value as `T` (a scene description or flags); errors name the key
+/// path, after `what` (`scene` or `flags`).
+fn from_json<T: serde::de::DeserializeOwned>(py: Python<'_>, value: Value, what: &str) -> PyResult<T> {
     serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
         let field = (path != ".").then_some(path.as_str());
         let message = match field {
-            Some(p) => format!("scene {p}: {}", e.inner()),
-            None => format!("scene: {}", e.inner()),
+            Some(p) if what == "flags" => format!("{p}: {}", e.inner()),
+            Some(p) => format!("{what} {p}: {}", e.inner()),
+            None => format!("{what}: {}", e.inner()),
         };
         errors::with_field(py, message, field)
     })
+}
+
+/// A JSON value as a scene description; errors name the key path.
+pub fn desc_from_json(py: Python<'_>, value: Value) -> PyResult<SceneDesc> {
+    from_json(py, value, "scene")
+}
+
+/// A dict of keyword arguments as the library's flags (named as the CLI's,
+/// `-` as `_`); errors name the keyword.
+pub fn flags(obj: &Bound<'_, PyAny>) -> PyResult<SceneFlags> {
+    let value = to_json(obj, "")?;
+    if !value.is_object() {
+        return Err(PyTypeError::new_err(format!(
+            "flags: expected a dict of keyword arguments, not {}",
+            type_name(obj)
+        )));
+    }
+    from_json(obj.py(), value, "flags")
 }
 
 /// A scene dictionary as a scene description.

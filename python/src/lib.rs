@@ -5,11 +5,14 @@
 //! keyword-argument API is the pure-Python `voxless` package around this
 //! module.
 //!
-//! A [`Volume`] holds one loaded volume and the scene description it was
-//! made with. Every render or projection merges a view (camera, image,
-//! transfer function, render settings) over that description and resolves
-//! it with [`voxless::resolve_in`] — what [`voxless::Scene`] does for the
-//! CLI, so the defaults are the CLI's.
+//! Every description is built the CLI's way: scene tables (a dict shaped
+//! like a TOML scene), then keyword arguments as the library's
+//! [`SceneFlags`] (the CLI's flags, `-` as `_`) applied over them.
+//! A [`Volume`] holds one loaded volume and the description it was made
+//! with. Every render or projection merges a view (camera, image, transfer
+//! function, render settings) over that description and resolves it with
+//! [`voxless::resolve_in`] — what [`voxless::Scene`] does for the CLI, so
+//! the defaults are the CLI's.
 //! Volumes are immutable and shared (`Arc`), so Python threads may render
 //! one volume at once; the GIL is released while the library works, and
 //! Ctrl-C cancels (see [`run`]).
@@ -30,7 +33,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 use voxless::{
     AmrArrays, AnyVolume, Cancelled, Image, Loaded, ParticleArrays, ProjectionDesc, ProjectionView,
-    SceneDesc, SceneError, Vec3, WorldFrame,
+    SceneDesc, SceneError, SceneFlags, Vec3, WorldFrame,
 };
 
 use errors::VoxlessError;
@@ -112,6 +115,57 @@ fn vec1<T: Copy + numpy::Element>(a: Option<PyReadonlyArray1<'_, T>>) -> Option<
     a.map(|a| a.as_array().iter().copied().collect())
 }
 
+/// A description: the scene `tables` with the keyword arguments `flags`
+/// applied over them (paths relative to `cwd`). Of the data flags, only
+/// those in `data` may be given (`what` names the call in the error).
+fn describe(
+    tables: &Bound<'_, PyAny>,
+    flags: &Bound<'_, PyAny>,
+    cwd: &std::path::Path,
+    what: &str,
+    data: &[&str],
+) -> PyResult<SceneDesc> {
+    let mut desc = convert::scene_desc(tables)?;
+    apply_flags(&mut desc, flags, cwd, what, data)?;
+    Ok(desc)
+}
+
+/// Applies the keyword arguments `flags` over `desc` (see [`describe`]).
+fn apply_flags(
+    desc: &mut SceneDesc,
+    flags: &Bound<'_, PyAny>,
+    cwd: &std::path::Path,
+    what: &str,
+    data: &[&str],
+) -> PyResult<()> {
+    let py = flags.py();
+    let flags = convert::flags(flags)?;
+    if let Some(bad) = flags.data_flags().into_iter().find(|f| !data.contains(f)) {
+        return Err(PyTypeError::new_err(format!(
+            "{what}() does not take {bad}=: it describes data that {what}() does not read \
+             (see voxless.load for files)"
+        )));
+    }
+    flags
+        .apply(desc, cwd)
+        .map_err(|e| errors::scene(py, e))
+}
+
+/// Data flags that apply to particles from arrays.
+const PARTICLE_FLAGS: &[&str] = &[
+    "radius",
+    "kernel",
+    "kappa",
+    "sigma",
+    "cluster",
+    "classification",
+    "attribute_range",
+    "species",
+];
+/// Data flags that apply to AMR cells from arrays.
+const AMR_FLAGS: &[&str] = &["field", "color_field", "reconstruction"];
+/// Data flags that apply to a tessellation from arrays.
+const TET_FLAGS: &[&str] = &["particle_mass", "tet_mode", "k", "layers", "lod"];
 /// Builds a volume off the GIL. The description's transfer function is
 /// checked now (an unknown colormap is a construction error); the rest of
 /// the view when it is used.
@@ -134,10 +188,10 @@ fn hold(
 
 /// Particles from arrays: `positions` N×3 float32 (used as they are) or
 /// float64 (recentred in float64 before they become float32); the optional
-/// per-particle arrays float32 of length N; `desc` the scene dictionary
-/// whose `particles` table holds the kernel, radius and the like.
+/// per-particle arrays float32 of length N; the kernel, radius and the like
+/// as flags (see [`describe`]).
 #[pyfunction]
-#[pyo3(signature = (positions, radii, weights, attribute, species, desc, base))]
+#[pyo3(signature = (positions, radii, weights, attribute, species, tables, flags, cwd))]
 #[allow(clippy::too_many_arguments)]
 fn particles(
     py: Python<'_>,
@@ -146,10 +200,11 @@ fn particles(
     weights: Option<PyReadonlyArray1<'_, f32>>,
     attribute: Option<PyReadonlyArray1<'_, f32>>,
     species: Option<PyReadonlyArray1<'_, f32>>,
-    desc: &Bound<'_, PyAny>,
-    base: PathBuf,
+    tables: &Bound<'_, PyAny>,
+    flags: &Bound<'_, PyAny>,
+    cwd: PathBuf,
 ) -> PyResult<Volume> {
-    let desc = convert::scene_desc(desc)?;
+    let desc = describe(tables, flags, &cwd, "Particles", PARTICLE_FLAGS)?;
     let mut arrays = if let Ok(p) = positions.extract::<PyReadonlyArray2<'_, f64>>() {
         ParticleArrays::from_f64(&rows3(py, &p, "positions")?)
     } else if let Ok(p) = positions.extract::<PyReadonlyArray2<'_, f32>>() {
@@ -169,7 +224,7 @@ fn particles(
     arrays.weights = vec1(weights);
     arrays.attribute = vec1(attribute);
     arrays.species = vec1(species);
-    hold(py, desc, base, move |d| {
+    hold(py, desc, cwd, move |d| {
         AnyVolume::from_particles(arrays, &d.particles.clone().unwrap_or_default())
     })
 }
@@ -178,17 +233,19 @@ fn particles(
 /// corner in finest-cell units, level 0 finest), one float32 array of N
 /// values per named field.
 #[pyfunction]
-#[pyo3(signature = (cells, fields, origin, cell_size, desc, base))]
+#[pyo3(signature = (cells, fields, origin, cell_size, tables, flags, cwd))]
+#[allow(clippy::too_many_arguments)]
 fn amr(
     py: Python<'_>,
     cells: PyReadonlyArray2<'_, i32>,
     fields: Vec<(String, PyReadonlyArray1<'_, f32>)>,
     origin: [f64; 3],
     cell_size: f32,
-    desc: &Bound<'_, PyAny>,
-    base: PathBuf,
+    tables: &Bound<'_, PyAny>,
+    flags: &Bound<'_, PyAny>,
+    cwd: PathBuf,
 ) -> PyResult<Volume> {
-    let desc = convert::scene_desc(desc)?;
+    let desc = describe(tables, flags, &cwd, "AmrCells", AMR_FLAGS)?;
     let shape = cells.shape();
     if shape[1] != 4 {
         return Err(errors::value(
@@ -210,7 +267,7 @@ fn amr(
         origin,
         cell_size,
     };
-    hold(py, desc, base, move |d| {
+    hold(py, desc, cwd, move |d| {
         AnyVolume::from_amr(arrays, &d.amr.clone().unwrap_or_default())
     })
 }
@@ -218,31 +275,40 @@ fn amr(
 /// A phase-space tessellation of N³ float32 positions in Lagrangian order in
 /// the periodic box `[0, box_size)³`.
 #[pyfunction]
-#[pyo3(signature = (positions, n, box_size, desc, base))]
+#[pyo3(signature = (positions, n, box_size, tables, flags, cwd))]
+#[allow(clippy::too_many_arguments)]
 fn tessellation(
     py: Python<'_>,
     positions: PyReadonlyArray2<'_, f32>,
     n: usize,
     box_size: f32,
-    desc: &Bound<'_, PyAny>,
-    base: PathBuf,
+    tables: &Bound<'_, PyAny>,
+    flags: &Bound<'_, PyAny>,
+    cwd: PathBuf,
 ) -> PyResult<Volume> {
-    let desc = convert::scene_desc(desc)?;
+    let desc = describe(tables, flags, &cwd, "Tessellation", TET_FLAGS)?;
     let positions: Vec<Vec3> = rows3(py, &positions, "positions")?
         .into_iter()
         .map(Vec3::from_array)
         .collect();
-    hold(py, desc, base, move |d| {
+    hold(py, desc, cwd, move |d| {
         AnyVolume::from_tessellation(positions, n, box_size, &d.tets.clone().unwrap_or_default())
     })
 }
 
-/// The data a scene dictionary names (paths relative to `base`), with its
-/// defaults.
+/// The data the scene `tables` (paths relative to `base`) and `flags`
+/// (paths relative to `cwd`) name, with its defaults.
 #[pyfunction]
-#[pyo3(signature = (desc, base, frame=0))]
-fn load(py: Python<'_>, desc: &Bound<'_, PyAny>, base: PathBuf, frame: usize) -> PyResult<Volume> {
-    let desc = convert::scene_desc(desc)?;
+#[pyo3(signature = (tables, flags, base, cwd, frame=0))]
+fn load(
+    py: Python<'_>,
+    tables: &Bound<'_, PyAny>,
+    flags: &Bound<'_, PyAny>,
+    base: PathBuf,
+    cwd: PathBuf,
+    frame: usize,
+) -> PyResult<Volume> {
+    let desc = describe(tables, flags, &cwd, "load", &SceneFlags::data_names())?;
     let base_for_load = base.clone();
     hold(py, desc, base, move |d| {
         voxless::load(d, &base_for_load, frame)
@@ -256,17 +322,36 @@ fn read_scene<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyAny>
     convert::desc_to_python(py, &desc)
 }
 
+impl Volume {
+    /// The volume's description with a view over it: scene `tables`
+    /// (camera, image, transfer, render, light), then view `flags`.
+    fn view(
+        &self,
+        tables: &Bound<'_, PyAny>,
+        flags: &Bound<'_, PyAny>,
+        cwd: &std::path::Path,
+        what: &str,
+    ) -> PyResult<SceneDesc> {
+        let mut desc = convert::with_view(&self.held.desc, tables)?;
+        apply_flags(&mut desc, flags, cwd, what, &[])?;
+        Ok(desc)
+    }
+}
+
 #[pymethods]
 impl Volume {
-    /// Renders with `view` merged over the volume's description: an H×W×4
-    /// float32 array of premultiplied linear RGBA, the background colour
-    /// (linear RGB) and the notes of resolving the view.
+    /// Renders with the view (scene `tables`, then view `flags`) over the
+    /// volume's description: an H×W×4 float32 array of premultiplied linear
+    /// RGBA, the background colour (linear RGB) and the notes of resolving
+    /// the view.
     fn render<'py>(
         &self,
         py: Python<'py>,
-        view: &Bound<'py, PyAny>,
+        tables: &Bound<'py, PyAny>,
+        flags: &Bound<'py, PyAny>,
+        cwd: PathBuf,
     ) -> PyResult<(Bound<'py, PyArray3<f32>>, [f32; 3], Vec<String>)> {
-        let desc = convert::with_view(&self.held.desc, view)?;
+        let desc = self.view(tables, flags, &cwd, "render")?;
         let held = self.held.clone();
         let done = run::cancellable(py, move |control| -> Result<_, Failure> {
             let r = held.resolve(&desc)?;
@@ -280,13 +365,13 @@ impl Volume {
 
     /// Column density `∫ field dt` per pixel (H×W float32, row 0 at the top)
     /// along an axis or a normal (see `voxless::projection`), at the view's
-    /// image size, and the projection's geometry.
-    #[pyo3(signature = (view, axis=None, normal=None, north=None, center=None, width=None, bounds=None, depth=None))]
+    /// image size (`flags` may give `size`), and the projection's geometry.
+    #[pyo3(signature = (flags, axis=None, normal=None, north=None, center=None, width=None, bounds=None, depth=None))]
     #[allow(clippy::too_many_arguments)]
     fn project<'py>(
         &self,
         py: Python<'py>,
-        view: &Bound<'py, PyAny>,
+        flags: &Bound<'py, PyAny>,
         axis: Option<usize>,
         normal: Option<[f64; 3]>,
         north: Option<[f64; 3]>,
@@ -295,7 +380,8 @@ impl Volume {
         bounds: Option<[f64; 6]>,
         depth: Option<f64>,
     ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyDict>)> {
-        let desc = convert::with_view(&self.held.desc, view)?;
+        let mut desc = self.held.desc.clone();
+        apply_flags(&mut desc, flags, &self.held.base, "project", &[])?;
         let projection = ProjectionDesc {
             axis,
             normal,
@@ -360,9 +446,11 @@ impl Volume {
     fn describe<'py>(
         &self,
         py: Python<'py>,
-        view: &Bound<'py, PyAny>,
+        tables: &Bound<'py, PyAny>,
+        flags: &Bound<'py, PyAny>,
+        cwd: PathBuf,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let desc = convert::with_view(&self.held.desc, view)?;
+        let desc = self.view(tables, flags, &cwd, "describe")?;
         let held = &self.held;
         let r = held.resolve(&desc).map_err(|e| errors::scene(py, e))?;
         let d = PyDict::new(py);
@@ -500,6 +588,13 @@ fn colormaps() -> Vec<&'static str> {
     voxless::transfer::COLORMAP_NAMES.to_vec()
 }
 
+/// The names of the keyword arguments that are the library's flags (the
+/// CLI's flags, `-` as `_`), and those of them that describe data.
+#[pyfunction]
+fn flag_names() -> (Vec<String>, Vec<&'static str>) {
+    (SceneFlags::names(), SceneFlags::data_names())
+}
+
 /// The image's up direction a projection along `normal` gets by default
 /// (yt's rule).
 #[pyfunction]
@@ -520,5 +615,6 @@ fn _voxless(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(png, m)?)?;
     m.add_function(wrap_pyfunction!(colormaps, m)?)?;
     m.add_function(wrap_pyfunction!(default_north, m)?)?;
+    m.add_function(wrap_pyfunction!(flag_names, m)?)?;
     Ok(())
 }

@@ -17,7 +17,6 @@ import numpy as np
 
 from . import _options as opt
 from . import _voxless
-from ._voxless import VoxlessError
 from .image import Fields, Image, Projection
 
 AXES = {"x": 0, "y": 1, "z": 2, 0: 0, 1: 1, 2: 2}
@@ -46,25 +45,12 @@ class Camera:
 
     def to_dict(self):
         """The ``[camera]`` table (unset fields as None)."""
-        conv = {
-            "eye": lambda n, v: opt.vector(n, v, 3),
-            "look_at": lambda n, v: opt.vector(n, v, 3),
-            "up": lambda n, v: opt.vector(n, v, 3),
-            "projection": lambda n, v: opt.choice(n, v, ("perspective", "orthographic")),
-        }
-        out = {}
-        for f in fields(self):
-            v = getattr(self, f.name)
-            out[f.name] = None if v is None else conv.get(f.name, opt.number)(f"camera.{f.name}", v)
-        return out
+        return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
 def _call(fn, *args, **kwargs):
-    """Calls the native module, re-labelling its errors with the keyword at fault."""
-    try:
-        return fn(*args, **kwargs)
-    except VoxlessError as e:
-        raise opt.relabel(e) from None
+    """Calls the native module with the caller's working directory (relative paths are relative to it)."""
+    return fn(*args, os.getcwd(), **kwargs)
 
 
 def _array1(name, v, n, dtype=np.float32):
@@ -95,20 +81,6 @@ def _positions(name, v):
     if a.ndim != 2 or a.shape[1] != 3:
         raise ValueError(f"{name}: expected an N×3 array, got shape {a.shape}")
     return np.ascontiguousarray(a)
-
-
-def _split(where, kwargs, data_specs):
-    """Splits keywords into data flags (known to ``data_specs``) and view flags."""
-    data, view = {}, {}
-    known = set(opt.VIEW_FLAGS).union(*data_specs)
-    for k, v in kwargs.items():
-        if any(k in s for s in data_specs):
-            data[k] = v
-        elif k in opt.VIEW_FLAGS:
-            view[k] = v
-        else:
-            raise opt.unknown(where, k, sorted(known))
-    return data, view
 
 
 class Volume:
@@ -187,8 +159,8 @@ class Volume:
         ``noise``. The GIL is released while it renders; Ctrl-C cancels it
         (``KeyboardInterrupt``).
         """
-        overlay = opt.view("render", view, _scene_view(scene))
-        rgba, background, notes = _call(self._native.render, overlay)
+        tables, flags = opt.split("render", view)
+        rgba, background, notes = _call(self._native.render, opt.merge(_scene_view(scene), tables), flags)
         return Image.wrap(rgba, background=tuple(background), notes=notes)
 
     def project(
@@ -206,14 +178,13 @@ class Volume:
         ``Projection.mass()`` (``sum(pixels) * pixel_area``) equals the total
         mass when the image covers the data.
         """
-        overlay = opt.view("project", {"size": size})
-        if axis is not None and axis not in AXES:
+        flags = {} if size is None else opt.split("project", {"size": size})[1]
+        if axis is not None and (not isinstance(axis, (str, int)) or axis not in AXES):
             raise ValueError(f"axis: {axis!r} is not 'x', 'y' or 'z'")
         if width is not None and np.ndim(width) == 0:
             width = (width, width)
-        column, geometry = _call(
-            self._native.project,
-            overlay,
+        column, geometry = self._native.project(
+            flags,
             axis=None if axis is None else AXES[axis],
             normal=None if normal is None else opt.vector("normal", normal, 3),
             north=None if north is None else opt.vector("north", north, 3),
@@ -232,12 +203,13 @@ class Volume:
         density and stream count. Rows outside AMR data are NaN.
         """
         p = _positions("points", points).astype(np.float64, copy=False)
-        values, columns = _call(self._native.sample, p, opt.boolean("gradient", gradient))
+        values, columns = self._native.sample(p, opt.boolean("gradient", gradient))
         return Fields.wrap(values, columns)
 
     def describe(self, scene=None, **view) -> dict:
         """What a render with this view would use: size, camera, value range, scale, notes."""
-        return _call(self._native.describe, opt.view("describe", view, _scene_view(scene)))
+        tables, flags = opt.split("describe", view)
+        return _call(self._native.describe, opt.merge(_scene_view(scene), tables), flags)
 
 
 def _scene_view(scene):
@@ -246,10 +218,6 @@ def _scene_view(scene):
     if not isinstance(scene, dict):
         raise TypeError(f"scene: expected a dict of scene tables, got {type(scene).__name__}")
     return {k: (dict(v) if isinstance(v, dict) else v) for k, v in scene.items()}
-
-
-def _base():
-    return os.getcwd()
 
 
 class Particles(Volume):
@@ -264,23 +232,19 @@ class Particles(Volume):
     default is estimated from the spacing), ``kernel`` (``"gaussian3"``,
     ``"gaussian"``, ``"cubic-spline"``: radius h, support 2h), ``kappa``,
     ``sigma``, ``cluster``, ``classification``, ``attribute_range``,
-    ``species`` (keep only these ``types``), ``materials`` (a list of
-    ``[[particles.materials]]`` tables). Any other keyword is a view flag
-    (see :meth:`Volume.render`).
+    ``species`` (keep only these ``types``); ``materials`` a list of
+    ``[[particles.materials]]`` tables. Any other keyword is a view flag
+    (see :meth:`Volume.render`): this volume's default view.
     """
 
+    DATA = ("radius", "kernel", "kappa", "sigma", "cluster", "classification", "attribute_range", "species")
+
     def __init__(self, positions, radii=None, weights=None, attribute=None, types=None, *, materials=None, **kwargs):
-        data, view = _split("Particles", kwargs, [opt.PARTICLE_FLAGS])
-        for name in ("attribute", "radii", "weights"):
-            if name in data:
-                # Arrays here, not file or column names.
-                data.pop(name)
+        tables, flags = opt.split("Particles", kwargs, self.DATA)
         p = _positions("positions", positions)
         n = len(p)
-        table = opt.table(data, opt.PARTICLE_FLAGS)
         if materials is not None:
-            table["materials"] = materials
-        desc = opt.view("Particles", view, {"particles": table})
+            tables["particles"] = {"materials": materials}
         native = _call(
             _voxless.particles,
             p,
@@ -288,8 +252,8 @@ class Particles(Volume):
             _array1("weights", weights, n),
             _array1("attribute", attribute, n),
             _array1("types", types, n),
-            desc,
-            _base(),
+            tables,
+            flags,
         )
         super().__init__(native)
 
@@ -306,8 +270,10 @@ class AmrCells(Volume):
     ``"nearest"``). Other keywords are view flags.
     """
 
+    DATA = ("field", "color_field", "reconstruction")
+
     def __init__(self, cells, fields, origin=(0.0, 0.0, 0.0), cell_size=1.0, **kwargs):
-        data, view = _split("AmrCells", kwargs, [opt.AMR_FLAGS])
+        tables, flags = opt.split("AmrCells", kwargs, self.DATA)
         try:
             c = np.asarray(cells)
         except (TypeError, ValueError) as e:
@@ -323,16 +289,18 @@ class AmrCells(Volume):
             fields = {"value": fields}
         if not fields:
             raise ValueError("fields: give at least one field")
-        named = [(opt.string("fields key", k), _array1(f"fields[{k!r}]", v, len(c))) for k, v in fields.items()]
-        desc = opt.view("AmrCells", view, {"amr": opt.table(data, opt.AMR_FLAGS)})
+        for k in fields:
+            if not isinstance(k, str):
+                raise TypeError(f"fields: names must be strings, got {type(k).__name__}")
+        named = [(k, _array1(f"fields[{k!r}]", v, len(c))) for k, v in fields.items()]
         native = _call(
             _voxless.amr,
             c,
             named,
             opt.vector("origin", origin, 3),
             opt.number("cell_size", cell_size),
-            desc,
-            _base(),
+            tables,
+            flags,
         )
         super().__init__(native)
 
@@ -347,21 +315,21 @@ class Tessellation(Volume):
     Other keywords are view flags.
     """
 
+    DATA = ("particle_mass", "tet_mode", "k", "layers", "lod")
+
     def __init__(self, positions, n=None, box=None, **kwargs):
-        data, view = _split("Tessellation", kwargs, [opt.TET_FLAGS])
+        tables, flags = opt.split("Tessellation", kwargs, self.DATA)
         p = np.ascontiguousarray(_positions("positions", positions), dtype=np.float32)
         if n is None:
             n = round(len(p) ** (1 / 3))
         n = opt.integer("n", n, lo=1)
         if box is None:
             raise TypeError("Tessellation() needs box=L, the periodic box size")
-        table = opt.table(data, opt.TET_FLAGS)
-        desc = opt.view("Tessellation", view, {"tets": table})
-        native = _call(_voxless.tessellation, p, n, opt.number("box", box), desc, _base())
+        native = _call(_voxless.tessellation, p, n, opt.number("box", box), tables, flags)
         super().__init__(native)
 
 
-def load(source=None, *, frame=0, **flags) -> Volume:
+def load(source=None, *, frame=0, **kwargs) -> Volume:
     """Loads data the CLI reads: a file, a TOML scene file, or a scene dict.
 
     ``source`` is a particle file (``.npy``, CSV, VTK, XYZ, LAMMPS dump,
@@ -370,59 +338,27 @@ def load(source=None, *, frame=0, **flags) -> Volume:
     with ``lagrangian=N``/``box=L`` (a tessellation), a ``.toml`` scene, or a
     scene dict. Keywords are the CLI's flags (``attribute="speed"``,
     ``radii="h.npy"``, ``kernel=…``, ``cells=``, ``scalars=``, ``amrclaw=``,
-    …); view flags become the volume's default view. ``frame`` picks a frame
-    of a time series.
+    …) applied over the scene as on the command line; view flags become the
+    volume's default view. ``frame`` picks a frame of a time series.
     """
-    desc, base = {}, _base()
+    tables, base = {}, os.getcwd()
     if isinstance(source, dict):
-        desc = {k: (dict(v) if isinstance(v, dict) else v) for k, v in source.items()}
+        tables = source
         source = None
     elif source is not None and os.fspath(source).endswith(".toml"):
-        path = opt.path("source", source)
-        desc = _call(_voxless.read_scene, path)
-        base = os.path.dirname(path)
+        scene = os.path.abspath(opt.path("source", source))
+        tables = _voxless.read_scene(scene)
+        base = os.path.dirname(scene)
         source = None
-    files = {k: flags.pop(k) for k in ("particles", "cells", "scalars", "amrclaw") if k in flags}
-    data, view = _split("load", flags, [opt.PARTICLE_FLAGS, opt.TET_FLAGS, opt.AMR_FLAGS])
+    sugar, flags = opt.split("load", kwargs, opt.DATA_FLAGS)
     if source is not None:
-        name = os.path.basename(os.fspath(source))
+        name = os.path.basename(opt.path("source", source))
         key = "cells" if name.endswith(".cells") else "amrclaw" if name.startswith("fort.q") else "particles"
-        if key in files:
+        if key in flags:
             raise TypeError(f"load() got the data twice: source and {key}=")
-        files[key] = source
-    tets = desc.get("tets") is not None or any(k in data for k in opt.TET_FLAGS)
-    if tets or "particles" in files or any(k in data for k in opt.PARTICLE_FLAGS):
-        if tets:
-            bad = [k for k in data if k in opt.PARTICLE_FLAGS]
-            if bad:
-                raise TypeError(f"{bad[0]} applies to particles, not to a phase-space tessellation")
-            t = dict(desc.get("tets") or {}, **opt.table(data, opt.TET_FLAGS))
-            if "particles" in files:
-                t["file"] = opt.path("source", files["particles"])
-            desc["tets"] = t
-        else:
-            p = dict(desc.get("particles") or {}, **opt.table(data, opt.PARTICLE_FLAGS))
-            if "particles" in files:
-                p["file"] = opt.path("source", files["particles"])
-                p.pop("demo", None)
-            desc["particles"] = p
-    amr_given = any(k in files for k in ("cells", "scalars", "amrclaw")) or any(k in data for k in opt.AMR_FLAGS)
-    if amr_given:
-        a = dict(desc.get("amr") or {}, **opt.table(data, opt.AMR_FLAGS))
-        if "cells" in files:
-            a["cells"] = opt.path("cells", files["cells"])
-            a.pop("amrclaw", None)
-        if "scalars" in files:
-            s = files["scalars"]
-            s = [s] if isinstance(s, (str, os.PathLike)) else s
-            a["scalars"] = [opt.path(f"scalars[{i}]", x) for i, x in enumerate(s)]
-        if "amrclaw" in files:
-            a["amrclaw"] = opt.path("amrclaw", files["amrclaw"])
-            a.pop("cells", None)
-        desc["amr"] = a
-    desc = opt.view("load", view, desc)
+        flags[key] = os.fspath(source)
     frame = opt.integer("frame", frame, lo=0)
-    return Volume(_call(_voxless.load, desc, base, frame))
+    return Volume(_call(_voxless.load, opt.merge(tables, sugar), flags, base, frame=frame))
 
 
 def render(source=None, *, frame=0, **kwargs) -> Image:
