@@ -207,7 +207,10 @@ def off_axis_projection(
     with ``weight``). ``volume``, ``no_ghost`` and ``num_threads`` are
     accepted for compatibility and not used (voxless uses every core);
     ``interpolated=True`` and ``method="sum"`` are not supported, as in yt's
-    SPH projections.
+    SPH projections. A ``north_vector`` is made perpendicular to the normal
+    (the image's up is its component across the view); yt's SPH projection
+    equals this only for a perpendicular north (for others it turns the view
+    away from ``normal_vector``).
     """
     if method != "integrate":
         raise NotImplementedError("method: voxless.yt.off_axis_projection integrates ('integrate')")
