@@ -92,7 +92,11 @@ fn type_name(obj: &Bound<'_, PyAny>) -> String {
 
 /// A JSON value as `T` (a scene description or flags); errors name the key
 /// path, after `what` (`scene` or `flags`).
-fn from_json<T: serde::de::DeserializeOwned>(py: Python<'_>, value: Value, what: &str) -> PyResult<T> {
+fn from_json<T: serde::de::DeserializeOwned>(
+    py: Python<'_>,
+    value: Value,
+    what: &str,
+) -> PyResult<T> {
     serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
         let field = (path != ".").then_some(path.as_str());

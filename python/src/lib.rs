@@ -38,6 +38,9 @@ use voxless::{
 
 use errors::VoxlessError;
 
+/// A render: premultiplied linear RGBA, the background and the notes.
+type Rendered<'py> = (Bound<'py, PyArray3<f32>>, [f32; 3], Vec<String>);
+
 /// What a Python `Volume` holds: the loaded volume (with its world frame and
 /// loading notes), the description it was made with, and the directory its
 /// relative paths are relative to. Views are resolved per call (nothing is
@@ -146,9 +149,7 @@ fn apply_flags(
              (see voxless.load for files)"
         )));
     }
-    flags
-        .apply(desc, cwd)
-        .map_err(|e| errors::scene(py, e))
+    flags.apply(desc, cwd).map_err(|e| errors::scene(py, e))
 }
 
 /// Data flags that apply to particles from arrays.
@@ -350,7 +351,7 @@ impl Volume {
         tables: &Bound<'py, PyAny>,
         flags: &Bound<'py, PyAny>,
         cwd: PathBuf,
-    ) -> PyResult<(Bound<'py, PyArray3<f32>>, [f32; 3], Vec<String>)> {
+    ) -> PyResult<Rendered<'py>> {
         let desc = self.view(tables, flags, &cwd, "render")?;
         let held = self.held.clone();
         let done = run::cancellable(py, move |control| -> Result<_, Failure> {
@@ -526,7 +527,7 @@ impl Volume {
 /// An image as an H×W×4 float32 array.
 fn rgba_array<'py>(py: Python<'py>, image: &Image) -> PyResult<Bound<'py, PyArray3<f32>>> {
     let (w, h) = (image.width as usize, image.height as usize);
-    Ok(PyArray1::from_vec(py, image.to_rgba_f32()).reshape([h, w, 4])?)
+    PyArray1::from_vec(py, image.to_rgba_f32()).reshape([h, w, 4])
 }
 
 /// An H×W×4 array back into an [`Image`].
@@ -559,7 +560,7 @@ fn srgb8<'py>(
 ) -> PyResult<Bound<'py, PyArray3<u8>>> {
     let image = image_of(py, &rgba)?;
     let (w, h) = (image.width as usize, image.height as usize);
-    Ok(PyArray1::from_vec(py, image.to_srgb8(background)).reshape([h, w, 3])?)
+    PyArray1::from_vec(py, image.to_srgb8(background)).reshape([h, w, 3])
 }
 
 /// [`srgb8`] encoded as PNG bytes.
