@@ -92,11 +92,9 @@ impl ParticleVolume {
                             continue;
                         }
                         let row = (y - y0) as usize * tw;
-                        let cells = &mut sum[row + cx0 as usize..row + cx1 as usize];
-                        for (s, &ux) in cells.iter_mut().zip(&u[cx0 as usize..cx1 as usize]) {
-                            let du = ux - p.a;
-                            *s += p.weight * p.column.at(du * du + dv2);
-                        }
+                        let (c0, c1) = (row + cx0 as usize, row + cx1 as usize);
+                        let u = &u[cx0 as usize..cx1 as usize];
+                        p.column.add_row(&mut sum[c0..c1], u, p.a, dv2, p.weight);
                     }
                 }
                 let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
