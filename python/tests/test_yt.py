@@ -119,3 +119,47 @@ def test_volume_of_a_data_source(sph):
     vol = voxless.yt.volume(sph.all_data())
     assert isinstance(vol, voxless.Volume) and vol.kind == "particles"
     assert vol.render(size=(32, 32)).shape == (32, 32, 4)
+
+
+def _clusters(mask, radius=12):
+    """Centres (row, column) of the pixel clusters of a mask, sorted."""
+    pts = np.argwhere(mask).astype(float)
+    out = []
+    while len(pts):
+        near = np.linalg.norm(pts - pts[0], axis=1) < radius
+        out.append(pts[near].mean(0))
+        pts = pts[~near]
+    return np.array(sorted(map(tuple, out)))
+
+
+@pytest.mark.parametrize("lens", ["plane-parallel", "perspective"])
+@pytest.mark.parametrize("width", [(5.0, 4.0, 5.0), (5.0, 5.0, 5.0)])
+def test_voxless_source_is_where_yt_draws(lens, width):
+    """Three particle blobs rendered by VoxlessSource land on yt's PointSource at their centres."""
+    from yt.visualization.volume_rendering.api import PointSource, Scene
+
+    rng = np.random.default_rng(0)
+    blobs = np.array([[1.0, 0.0, 0.0], [0.0, 1.5, 0.0], [0.0, 0.0, 0.7]])
+    pos = np.concatenate([b + 0.05 * rng.normal(size=(3000, 3)) for b in blobs])
+    m, h = np.full(len(pos), 1.0 / len(pos)), np.full(len(pos), 0.05)
+    data = {("io", f"particle_position_{a}"): pos[:, i] for i, a in enumerate("xyz")}
+    data.update({("io", "particle_mass"): m, ("io", "smoothing_length"): 2 * h, ("io", "density"): m / (2 * h) ** 3})
+    ds = yt.load_particles(data, length_unit="cm", mass_unit="g", bbox=[[-3, 3]] * 3)
+    sc = Scene()
+    cam = sc.add_camera(ds, lens_type=lens)
+    cam.resolution = (200, 160)
+    cam.set_width(ds.arr(width, "cm"))
+    cam.focus = ds.arr([0, 0, 0], "cm")
+    cam.set_position(ds.arr([2.0, -4.0, 3.0], "cm"), north_vector=[0, 0, 1])
+    src = voxless.yt.VoxlessSource(ds.all_data(), ("gas", "density"), colormap="gray", opacity_scale=50.0)
+    sc.add_source(src, keyname="voxless")
+    ours = np.asarray(sc.render()).copy()
+    assert ours.shape == (200, 160, 4)
+    # The same scene with yt's points at the blobs' centres instead.
+    del sc.sources["voxless"]
+    sc.add_source(PointSource(ds.arr(blobs, "cm"), colors=np.tile([1.0, 0, 0, 1.0], (3, 1)), radii=2))
+    theirs = np.asarray(sc.render())
+    a = _clusters(ours[..., 3] > 0.3 * ours[..., 3].max())
+    b = _clusters((theirs[..., 0] > 0.5) & (theirs[..., 1] < 0.3))
+    assert a.shape == b.shape == (3, 2), (a, b)
+    assert np.abs(a - b).max() <= 1.5, (a, b)

@@ -334,22 +334,37 @@ class VoxlessSource(RenderSource):
         if lens == "PlaneParallelLens":
             cam = voxless.Camera(eye=focus - normal * width[2], look_at=focus, up=north,
                                  projection="orthographic", ortho_height=width[1])
+            # yt's pixels cover width[0] × width[1]; voxless's are square: the
+            # image's width follows from its height (resampled to yt's
+            # resolution in render).
+            size = (max(1, int(round(res[1] * width[0] / width[1]))), res[1])
         elif lens == "PerspectiveLens":
-            fov = float(np.degrees(2 * np.arctan(0.5 * width[1] / width[2])))
+            # yt's perspective pixels are square, width[0] across at distance
+            # width[2] from the eye.
+            height = width[0] * res[1] / res[0]
+            fov = float(np.degrees(2 * np.arctan(0.5 * height / width[2])))
             cam = voxless.Camera(eye=position, look_at=position + normal, up=north, fov=fov)
+            size = res
         else:
             raise NotImplementedError(f"VoxlessSource: the {lens} is not supported (plane-parallel or perspective)")
-        return dict(self.view, size=res, camera=cam)
+        return dict(self.view, size=size, camera=cam)
 
     def render(self, camera, zbuffer=None):
         """Renders through ``camera`` and composites over ``zbuffer``'s image (yt's [east, north] layout)."""
         self._validate()
-        img = self.volume.render(**self.camera_view(camera))
-        # voxless: rows north → south, columns west → east, in a right-handed
-        # view; yt's scene image is [i, j] along (−east, −north) before its
-        # final 180° turn, i.e. [x, y] of the turned image.
-        ours = np.asarray(img, dtype=np.float64)[::-1, ::-1, :].transpose(1, 0, 2)
-        ours = ours[::-1, ::-1, :]
+        img = np.asarray(self.volume.render(**self.camera_view(camera)), dtype=np.float64)
+        nx = int(camera.resolution[0])
+        if img.shape[1] != nx:
+            # yt's pixels are not square here: resample the columns linearly.
+            x = np.clip((np.arange(nx) + 0.5) * img.shape[1] / nx - 0.5, 0, img.shape[1] - 1)
+            i0 = np.floor(x).astype(int)
+            i1 = np.minimum(i0 + 1, img.shape[1] - 1)
+            t = (x - i0)[None, :, None]
+            img = img[:, i0] * (1 - t) + img[:, i1] * t
+        # voxless: rows north → south, columns west → east; yt's scene image
+        # is indexed [i, j] along (−east, −north) (it turns the image by 180°
+        # when it saves it). Checked against yt's PointSource in the tests.
+        ours = img.transpose(1, 0, 2)[::-1, ::-1, :]
         if zbuffer is not None and zbuffer.rgba.shape == ours.shape:
             behind = np.asarray(zbuffer.rgba, dtype=np.float64)
             ours = ours + (1.0 - ours[..., 3:4]) * behind
