@@ -453,7 +453,8 @@ impl Volume {
     ) -> PyResult<Bound<'py, PyDict>> {
         let desc = self.view(tables, flags, &cwd, "describe")?;
         let held = &self.held;
-        let r = held.resolve(&desc).map_err(|e| errors::scene(py, e))?;
+        // Resolving may probe the data (a particle volume's value range).
+        let r = run::detached(py, || held.resolve(&desc))?.map_err(|e| errors::scene(py, e))?;
         let d = PyDict::new(py);
         let st = &r.settings;
         d.set_item("size", (st.width, st.height))?;
@@ -500,9 +501,10 @@ impl Volume {
 
     /// The data's value range (the transfer function's default).
     #[getter]
-    fn value_range(&self) -> (f32, f32) {
-        let r = self.held.volume().value_range();
-        (r.lo, r.hi)
+    fn value_range(&self, py: Python<'_>) -> PyResult<(f32, f32)> {
+        // Probed on first use for particles: off the GIL.
+        let r = run::detached(py, || self.held.volume().value_range())?;
+        Ok((r.lo, r.hi))
     }
 
     /// ∫ field dV when the data kind knows it exactly (else None).
