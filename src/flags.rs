@@ -6,9 +6,10 @@
 //! that a colormap file replaces the scene's colours, that any light setting
 //! turns the light on, and so on.
 //!
-//! clap parses it from a command line; serde from a table of names (a
-//! Python dict of keyword arguments), with unknown names refused. Names are
-//! the CLI's long flags with `_` for `-` (`light_dir`, `box`).
+//! clap parses it from a command line (feature `clap`, which the CLI
+//! enables); serde from a table of names (a Python dict of keyword
+//! arguments), with unknown names refused. Names are the CLI's long flags
+//! with `_` for `-` (`light_dir`, `box`).
 
 use std::path::{Path, PathBuf};
 
@@ -22,7 +23,8 @@ use crate::SceneError;
 
 /// Every scene setting as a flag (see the module docs); each overrides the
 /// description it is applied to.
-#[derive(clap::Args, Deserialize, Debug, Default, Clone, PartialEq)]
+#[derive(Deserialize, Debug, Default, Clone, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(default, deny_unknown_fields)]
 pub struct SceneFlags {
     // ---- data ----
@@ -31,228 +33,282 @@ pub struct SceneFlags {
     /// .particles, or .h5/.hdf5 (PySPH, SWIFT/Gadget; JaxPM with
     /// --lagrangian/--snapshot; needs --features hdf5). A multi-frame file,
     /// pattern or directory is a time series (--frames).
-    #[arg(long, help_heading = "Particles")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
     pub particles: Option<PathBuf>,
     /// Per-particle attribute: a column of the particle file (case-insensitive),
     /// or .npy with N values.
-    #[arg(long, help_heading = "Particles")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
     pub attribute: Option<String>,
     /// Global radius parameter (support for gaussian3, std-dev for gaussian, h for cubic-spline).
-    #[arg(long, help_heading = "Particles", allow_negative_numbers = true)]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, help_heading = "Particles", allow_negative_numbers = true)
+    )]
     pub radius: Option<f32>,
     /// Per-particle radii: a column name, or .npy with N values.
-    #[arg(long, help_heading = "Particles")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
     pub radii: Option<String>,
     /// Per-particle weights (masses for cubic-spline): a column name or .npy.
-    #[arg(long, help_heading = "Particles")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
     pub weights: Option<String>,
     /// PySPH particle array to read (default: fluid if present, else the first).
-    #[arg(long, value_name = "NAME", help_heading = "Particles")]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "NAME", help_heading = "Particles")
+    )]
     pub group: Option<String>,
     /// SWIFT/Gadget particle type N: the group PartTypeN (default 0).
-    #[arg(long, value_name = "N", help_heading = "Particles")]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "N", help_heading = "Particles")
+    )]
     pub part_type: Option<u32>,
     /// Keep only particles whose `type` column is T (LAMMPS type number; XYZ
     /// type number or element symbol).
-    #[arg(long, value_name = "T", help_heading = "Particles", value_parser = species)]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "T", help_heading = "Particles", value_parser = species))]
     pub species: Option<Species>,
     /// RBF kernel (default gaussian3; SPH files: cubic-spline).
-    #[arg(long, value_enum, help_heading = "Particles")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = "Particles"))]
     pub kernel: Option<KernelName>,
     /// Global density scale κ of the gaussian kernel (default 1).
-    #[arg(long, help_heading = "Particles", allow_negative_numbers = true)]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, help_heading = "Particles", allow_negative_numbers = true)
+    )]
     pub kappa: Option<f32>,
     /// Truncation σ of the gaussian kernel, in radii (default 2).
-    #[arg(long, help_heading = "Particles", allow_negative_numbers = true)]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, help_heading = "Particles", allow_negative_numbers = true)
+    )]
     pub sigma: Option<f32>,
     /// Particles per BVH leaf cluster, 1..=16 (default 8).
-    #[arg(long, help_heading = "Particles")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
     pub cluster: Option<usize>,
     /// Attribute classification (default post).
-    #[arg(long, value_enum, help_heading = "Particles")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = "Particles"))]
     pub classification: Option<ClassificationName>,
     /// Attribute range mapped to the colormap / maps.
-    #[arg(long, num_args = 2, value_names = ["LO", "HI"], help_heading = "Particles", allow_negative_numbers = true)]
+    #[cfg_attr(feature = "clap", arg(long, num_args = 2, value_names = ["LO", "HI"], help_heading = "Particles", allow_negative_numbers = true))]
     pub attribute_range: Option<Vec<f32>>,
 
     // ---- phase-space tessellation ----
     /// Treat --particles as N³ N-body particles on a Lagrangian grid (Lagrangian
     /// order, k fastest) and render their phase-space tessellation. A JaxPM
     /// .h5 file gives N (and L) itself.
-    #[arg(long, value_name = "N", help_heading = "Phase-space tessellation")]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "N", help_heading = "Phase-space tessellation")
+    )]
     pub lagrangian: Option<usize>,
     /// JaxPM snapshot K of a .h5 run, the group snap_K (default: the last);
     /// implies a tessellation.
-    #[arg(long, value_name = "K", help_heading = "Phase-space tessellation")]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "K", help_heading = "Phase-space tessellation")
+    )]
     pub snapshot: Option<usize>,
     /// Periodic box size L (positions in [0, L)³).
     #[serde(rename = "box")]
-    #[arg(
-        long = "box",
-        value_name = "L",
-        help_heading = "Phase-space tessellation",
-        allow_negative_numbers = true
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long = "box",
+            value_name = "L",
+            help_heading = "Phase-space tessellation",
+            allow_negative_numbers = true
+        )
     )]
     pub box_size: Option<f32>,
     /// Mass per particle (default: total mass 1).
-    #[arg(long, help_heading = "Phase-space tessellation")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Phase-space tessellation"))]
     pub particle_mass: Option<f64>,
     /// How crossing events become colour (default exact).
-    #[arg(long, value_enum, help_heading = "Phase-space tessellation")]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_enum, help_heading = "Phase-space tessellation")
+    )]
     pub tet_mode: Option<TetModeName>,
     /// k-buffer depth for --tet-mode kbuffer (default 16).
-    #[arg(long, help_heading = "Phase-space tessellation")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Phase-space tessellation"))]
     pub k: Option<usize>,
     /// Log-spaced depth layers behind the k-buffer (default 64).
-    #[arg(long, help_heading = "Phase-space tessellation")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Phase-space tessellation"))]
     pub layers: Option<usize>,
     /// Level of detail: blocks smaller than this many pixels on screen use a
     /// 2^r-subsampled Lagrangian grid (off by default).
-    #[arg(long, value_name = "PIXELS", help_heading = "Phase-space tessellation")]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "PIXELS", help_heading = "Phase-space tessellation")
+    )]
     pub lod: Option<f32>,
 
     // ---- AMR ----
     /// ExaBricks cells: .cells (int32 x, y, z, level per cell).
-    #[arg(long, help_heading = "AMR")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
     pub cells: Option<PathBuf>,
     /// ExaBricks .scalars file, one per field (repeat the flag).
-    #[arg(long, help_heading = "AMR")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
     pub scalars: Vec<PathBuf>,
     /// AMRClaw ASCII output fort.qNNNN (fields q0, q1, …).
-    #[arg(long, help_heading = "AMR")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
     pub amrclaw: Option<PathBuf>,
     /// World position of cell coordinate 0 (default: .meta.json beside the cells, else 0).
-    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "AMR", allow_negative_numbers = true)]
+    #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "AMR", allow_negative_numbers = true))]
     pub origin: Option<Vec<f64>>,
     /// World width of a finest cell (default: .meta.json, else 1).
-    #[arg(long, help_heading = "AMR")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
     pub cell_size: Option<f32>,
     /// Field driving opacity (default: the first).
-    #[arg(long, help_heading = "AMR")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
     pub field: Option<String>,
     /// Field driving colour (multi-field rendering).
-    #[arg(long, help_heading = "AMR")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
     pub color_field: Option<String>,
     /// Reconstruction between cell centres (default basis).
-    #[arg(long, value_enum, help_heading = "AMR")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = "AMR"))]
     pub reconstruction: Option<ReconstructionName>,
 
     // ---- image ----
     /// Image size in pixels.
-    #[arg(long, num_args = 2, value_names = ["W", "H"], help_heading = "Image")]
+    #[cfg_attr(feature = "clap", arg(long, num_args = 2, value_names = ["W", "H"], help_heading = "Image"))]
     pub size: Option<Vec<u32>>,
     /// Samples per pixel (progressively accumulated).
-    #[arg(long, help_heading = "Image")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Image"))]
     pub spp: Option<u32>,
 
     // ---- transfer function ----
     /// Colormap preset (see `voxless colormaps`).
-    #[arg(long, help_heading = "Transfer function")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Transfer function"))]
     pub colormap: Option<String>,
     /// Colormap file: ParaView preset JSON ("Export preset") or a JSON list of
     /// [r, g, b] / [x, r, g, b] sRGB colours; --colormap NAME picks a preset in
     /// it. Its opacity points apply unless --opacity is given.
-    #[arg(long, value_name = "FILE", help_heading = "Transfer function")]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "FILE", help_heading = "Transfer function")
+    )]
     pub colormap_file: Option<PathBuf>,
     /// Opacity preset: linear, constant, ramp-high, ramp-low.
-    #[arg(long, help_heading = "Transfer function")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Transfer function"))]
     pub opacity: Option<String>,
     /// Value range mapped to [0, 1] (default: from the data).
-    #[arg(long, num_args = 2, value_names = ["LO", "HI"], help_heading = "Transfer function", allow_negative_numbers = true)]
+    #[cfg_attr(feature = "clap", arg(long, num_args = 2, value_names = ["LO", "HI"], help_heading = "Transfer function", allow_negative_numbers = true))]
     pub value_range: Option<Vec<f32>>,
 
     // ---- camera ----
-    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true)]
+    #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true))]
     pub eye: Option<Vec<f64>>,
-    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true)]
+    #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true))]
     pub look_at: Option<Vec<f64>>,
-    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true)]
+    #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true))]
     pub up: Option<Vec<f32>>,
     /// Vertical field of view in degrees.
-    #[arg(long, help_heading = "Camera", allow_negative_numbers = true)]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, help_heading = "Camera", allow_negative_numbers = true)
+    )]
     pub fov: Option<f32>,
     /// Orthographic projection with this view height (world units).
-    #[arg(
-        long,
-        value_name = "HEIGHT",
-        help_heading = "Camera",
-        allow_negative_numbers = true
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long,
+            value_name = "HEIGHT",
+            help_heading = "Camera",
+            allow_negative_numbers = true
+        )
     )]
     pub orthographic: Option<f32>,
     /// Orbit the eye about the up axis through the look-at point (the data
     /// centre by default), in degrees; positive turns towards the right.
-    #[arg(long, value_name = "DEG", help_heading = "Camera", allow_negative_numbers = true, value_parser = degrees)]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "DEG", help_heading = "Camera", allow_negative_numbers = true, value_parser = degrees))]
     pub orbit: Option<f32>,
     /// Raise the eye towards the up vector, in degrees (negative lowers it;
     /// the view stays within ±89.9° of the horizontal).
-    #[arg(long, value_name = "DEG", help_heading = "Camera", allow_negative_numbers = true, value_parser = degrees)]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "DEG", help_heading = "Camera", allow_negative_numbers = true, value_parser = degrees))]
     pub elevation: Option<f32>,
     /// Zoom by F > 0: the eye's distance to the look-at point ÷ F
     /// (orthographic: the view height ÷ F).
-    #[arg(long, value_name = "F", help_heading = "Camera", allow_negative_numbers = true, value_parser = zoom)]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "F", help_heading = "Camera", allow_negative_numbers = true, value_parser = zoom))]
     pub zoom: Option<f32>,
 
     // ---- render ----
     /// Ray-marching step in world units (default: 1/8 of the median support radius).
-    #[arg(long, help_heading = "Render", allow_negative_numbers = true)]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, help_heading = "Render", allow_negative_numbers = true)
+    )]
     pub step: Option<f32>,
     /// Stop marching at this opacity (default 0.99).
-    #[arg(long, help_heading = "Render", allow_negative_numbers = true)]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, help_heading = "Render", allow_negative_numbers = true)
+    )]
     pub early_termination: Option<f32>,
     /// Extinction per unit length at opacity 1 (default 8 / bounds diagonal).
-    #[arg(long, help_heading = "Render", allow_negative_numbers = true)]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, help_heading = "Render", allow_negative_numbers = true)
+    )]
     pub opacity_scale: Option<f32>,
     /// Background colour, linear RGB.
-    #[arg(long, num_args = 3, value_names = ["R", "G", "B"], help_heading = "Render")]
+    #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["R", "G", "B"], help_heading = "Render"))]
     pub background: Option<Vec<f32>>,
     /// Gradient shading with a directional light.
-    #[arg(long, help_heading = "Render")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Render"))]
     pub shade: bool,
     /// Direction towards the light (implies --shade).
-    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Render", allow_negative_numbers = true)]
+    #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Render", allow_negative_numbers = true))]
     pub light_dir: Option<Vec<f32>>,
     /// Single scattering with volumetric shadows (implies --shade's light).
-    #[arg(long, help_heading = "Lighting")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Lighting"))]
     pub shadows: bool,
     /// A point light at this position (with --shadows).
-    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Lighting", allow_negative_numbers = true)]
+    #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Lighting", allow_negative_numbers = true))]
     pub light_pos: Option<Vec<f64>>,
     /// Light intensity (with --shadows; default 1).
-    #[arg(long, help_heading = "Lighting")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Lighting"))]
     pub light_intensity: Option<f32>,
     /// Fraction of colour kept in full shade (default 0.3).
-    #[arg(long, help_heading = "Lighting")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Lighting"))]
     pub ambient: Option<f32>,
     /// Free-flight sampling with shadows (default marching).
-    #[arg(long, value_enum, help_heading = "Lighting")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = "Lighting"))]
     pub free_flight: Option<FreeFlightName>,
     /// Random numbers with shadows (default blue).
-    #[arg(long, value_enum, help_heading = "Lighting")]
+    #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = "Lighting"))]
     pub noise: Option<NoiseName>,
     /// Random seed for jitter.
-    #[arg(long, help_heading = "Render")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Render"))]
     pub seed: Option<u64>,
     /// Implicit iso-surface at this value of the opacity field (repeat for more).
-    #[arg(long, help_heading = "Render", allow_negative_numbers = true)]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, help_heading = "Render", allow_negative_numbers = true)
+    )]
     pub iso: Vec<f32>,
     /// Opacity of the iso-surfaces (default 1).
-    #[arg(long, help_heading = "Render")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Render"))]
     pub iso_opacity: Option<f32>,
     /// Render only the iso-surfaces, not the volume.
-    #[arg(long, help_heading = "Render")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Render"))]
     pub iso_only: bool,
     /// Map log10(value) through the transfer function (default for tessellations).
-    #[arg(long, help_heading = "Transfer function", conflicts_with = "linear")]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, help_heading = "Transfer function", conflicts_with = "linear")
+    )]
     pub log: bool,
     /// Map the value linearly (default except for tessellations).
-    #[arg(long, help_heading = "Transfer function")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Transfer function"))]
     pub linear: bool,
     /// Sample particles point by point instead of in ray packets (same
     /// image, slower; for comparisons).
-    #[arg(long, help_heading = "Render")]
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Render"))]
     pub no_packets: bool,
     /// Render only what lies inside this box.
-    #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], help_heading = "Render", allow_negative_numbers = true)]
+    #[cfg_attr(feature = "clap", arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], help_heading = "Render", allow_negative_numbers = true))]
     pub clip: Option<Vec<f64>>,
 }
 
@@ -276,6 +332,7 @@ pub fn zoom(s: &str) -> Result<f32, String> {
 }
 
 /// A species: a type number or an element symbol.
+#[cfg(feature = "clap")]
 fn species(s: &str) -> Result<Species, String> {
     Ok(Species::from(s))
 }
@@ -311,13 +368,78 @@ fn set<T>(slot: &mut Option<T>, v: Option<T>) {
 }
 
 impl SceneFlags {
-    /// The flags' names (as in a table of them: `light_dir`, `box`).
+    /// The flags' names, in declaration order (as in a table of them:
+    /// `light_dir`, `box`; on the command line `--light-dir`, `--box`).
+    pub const NAMES: &'static [&'static str] = &[
+        "particles",
+        "attribute",
+        "radius",
+        "radii",
+        "weights",
+        "group",
+        "part_type",
+        "species",
+        "kernel",
+        "kappa",
+        "sigma",
+        "cluster",
+        "classification",
+        "attribute_range",
+        "lagrangian",
+        "snapshot",
+        "box",
+        "particle_mass",
+        "tet_mode",
+        "k",
+        "layers",
+        "lod",
+        "cells",
+        "scalars",
+        "amrclaw",
+        "origin",
+        "cell_size",
+        "field",
+        "color_field",
+        "reconstruction",
+        "size",
+        "spp",
+        "colormap",
+        "colormap_file",
+        "opacity",
+        "value_range",
+        "eye",
+        "look_at",
+        "up",
+        "fov",
+        "orthographic",
+        "orbit",
+        "elevation",
+        "zoom",
+        "step",
+        "early_termination",
+        "opacity_scale",
+        "background",
+        "shade",
+        "light_dir",
+        "shadows",
+        "light_pos",
+        "light_intensity",
+        "ambient",
+        "free_flight",
+        "noise",
+        "seed",
+        "iso",
+        "iso_opacity",
+        "iso_only",
+        "log",
+        "linear",
+        "no_packets",
+        "clip",
+    ];
+
+    /// [`SceneFlags::NAMES`] as strings.
     pub fn names() -> Vec<String> {
-        let cmd = <SceneFlags as clap::Args>::augment_args(clap::Command::new("flags"));
-        cmd.get_arguments()
-            .filter_map(|a| a.get_long())
-            .map(|l| l.replace('-', "_"))
-            .collect()
+        Self::NAMES.iter().map(|n| n.to_string()).collect()
     }
 
     /// The names of every data flag (see [`SceneFlags::data_flags`]).

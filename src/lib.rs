@@ -24,6 +24,13 @@
 //!   ([`AnyVolume::sample_points`]) report progress and stop when their
 //!   [`Control`]'s [`CancelToken`] is cancelled. [`ProjectionView`] places
 //!   a projection (along an axis or an off-axis normal) in the world.
+//! - **Interactive front-ends** move a camera [`Pose`] and write it back
+//!   into the description ([`pose`]), render a coarse image first and then
+//!   pass by pass ([`render_progressive`]), draw a [`field_histogram`]
+//!   under the transfer function, and save the view as a scene file that
+//!   `voxless render` reproduces ([`save`]).
+//! - **Flags**: every front-end's options by one set of rules
+//!   ([`SceneFlags`]: the CLI's flags, the Python package's keywords).
 //!
 //! Volumes are immutable after they are built and `Sync`: one volume serves
 //! several renders at once, each with its own camera and transfer function.
@@ -48,14 +55,19 @@
 //! ```
 
 mod camera;
+mod columns;
 pub mod demo;
 mod error;
 pub mod flags;
 mod frame;
+pub mod histogram;
 pub mod load;
 mod memory;
+pub mod pose;
+pub mod progressive;
 pub mod projection;
 mod resolve;
+pub mod save;
 mod scene;
 mod view;
 mod volume;
@@ -69,8 +81,15 @@ pub use memory::ParticleArrays;
 pub use projection::{ProjectionDesc, ProjectionView};
 pub use resolve::{Resolved, resolve, resolve_in, transfer_function, transfer_function_at};
 pub use scene::Scene;
-pub use view::check_iso;
 pub use volume::AnyVolume;
+
+// For interactive front-ends (the browser viewer, notebooks): camera poses
+// written back into descriptions, progressive renders, histograms, saving.
+pub use columns::particle_columns;
+pub use histogram::{Histogram, field_histogram};
+pub use pose::Pose;
+pub use progressive::{CoarseBudget, Stage, render_progressive};
+pub use save::{scene_toml, with_absolute_paths};
 
 /// File formats: which reader a path needs and one frame of any of them.
 pub use load::formats;

@@ -101,7 +101,7 @@ impl Scene {
     /// did see, in the transfer function's units — so an empty surface is
     /// never a silent image.
     pub fn check_iso(&self, film: &Film) -> Result<(), SceneError> {
-        crate::check_iso(&self.settings, film)
+        crate::progressive::check_iso(&self.settings, film)
     }
 
     /// The fields at world `points` (see [`AnyVolume::sample_points`]).
@@ -139,11 +139,12 @@ impl Scene {
             ));
         };
         let particles::FrameData {
-            data,
+            mut data,
             main_file,
             files,
             ..
         } = particles::read_frame(p, base, frame)?;
+        load::scale::scale_arrays(&mut data, p)?;
         v.load_frame(data)
             .map_err(|source| particles::blame(main_file, &files, source))?;
         Ok(())

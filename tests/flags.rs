@@ -17,8 +17,21 @@ fn field(e: SceneError) -> String {
     }
 }
 
+/// With the `clap` feature (the CLI's), clap's long flags are the names.
+#[cfg(feature = "clap")]
 #[test]
-fn serde_and_clap_know_the_same_names() {
+fn clap_knows_the_names() {
+    let cmd = <SceneFlags as clap::Args>::augment_args(clap::Command::new("flags"));
+    let longs: Vec<String> = cmd
+        .get_arguments()
+        .filter_map(|a| a.get_long())
+        .map(|l| l.replace('-', "_"))
+        .collect();
+    assert_eq!(longs, SceneFlags::names());
+}
+
+#[test]
+fn serde_knows_the_names() {
     let names: BTreeSet<String> = SceneFlags::names().into_iter().collect();
     for n in [
         "box",

@@ -117,6 +117,22 @@ enum Command {
         #[command(flatten)]
         scene: SceneArgs,
     },
+    /// Explore a scene in a browser: prints a URL and serves a page that
+    /// renders the data progressively on this machine (orbit, pan, zoom,
+    /// transfer function, time series, save image / scene). Takes the same
+    /// scene file and flags as `render`.
+    Serve {
+        /// TCP port to listen on.
+        #[arg(long, default_value_t = 8080, help_heading = "Server")]
+        port: u16,
+        /// Address to listen on. The default serves this machine only; any
+        /// other address (e.g. 0.0.0.0) requires the random access token
+        /// printed in the URL on every request.
+        #[arg(long, default_value = "127.0.0.1", help_heading = "Server")]
+        host: String,
+        #[command(flatten)]
+        scene: SceneArgs,
+    },
     /// Print what a data file holds: particle count, frames and their times,
     /// columns with ranges and bounds; .npy shape and range; AMR cells per
     /// level and fields; .vtu meshes; HDF5 layouts and contents.
@@ -283,6 +299,7 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
+        Command::Serve { port, host, scene } => serve(&scene, port, host),
         Command::Colormaps => {
             for name in voxless::transfer::COLORMAP_NAMES {
                 println!("{name}");
@@ -291,6 +308,41 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Info(args) => info::run(&args),
     }
+}
+
+/// `voxless serve`: load the scene (errors before listening), print the URL,
+/// serve until Ctrl-C.
+fn serve(scene: &SceneArgs, port: u16, host: String) -> Result<()> {
+    let (desc, base) = scene.scene()?;
+    let t = Instant::now();
+    let prepared = voxless_serve::prepare(desc, base)?;
+    for n in &prepared.notes {
+        eprintln!("note: {n}");
+    }
+    eprintln!(
+        "loaded {} ({} frame{}) in {:.2}s",
+        prepared.kind,
+        prepared.frames,
+        if prepared.frames == 1 { "" } else { "s" },
+        t.elapsed().as_secs_f64()
+    );
+    let options = voxless_serve::Options {
+        host,
+        port,
+        token: None,
+    };
+    voxless_serve::run(prepared, &options, |bound| {
+        if bound.token.is_some() {
+            eprintln!(
+                "note: listening on {} beyond loopback: every request must carry the access \
+                 token in this URL",
+                bound.addr
+            );
+        }
+        println!("voxless serve: open {}", bound.url());
+        eprintln!("press Ctrl-C to stop");
+    })?;
+    Ok(())
 }
 
 fn resolve(desc: &voxless::SceneDesc, base: &Path) -> Result<Scene> {

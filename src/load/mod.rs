@@ -11,6 +11,7 @@ pub mod frames;
 mod jaxpm;
 pub(crate) mod materials;
 pub(crate) mod particles;
+pub(crate) mod scale;
 pub(crate) mod table;
 pub(crate) mod tets;
 

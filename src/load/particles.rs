@@ -263,11 +263,12 @@ impl From<SceneError> for BuildError {
 /// from the particle spacing when neither a radius nor radii are given
 /// (said in `notes`).
 pub(crate) fn build_particles(
-    data: ParticleData,
+    mut data: ParticleData,
     p: &ParticlesDesc,
     sph_defaults: bool,
     notes: &mut Vec<String>,
 ) -> Result<ParticleVolume, BuildError> {
+    super::scale::scale_arrays(&mut data, p)?;
     let kernel = if sph_defaults {
         Kernel::CubicSpline
     } else {
@@ -285,6 +286,8 @@ pub(crate) fn build_particles(
             r
         }
     };
+    // The radius scale acts on the global radius too (radii were scaled above).
+    let radius = radius * super::scale::scales(p)?.0;
     let classification = match p.classification.unwrap_or(ClassificationName::Post) {
         ClassificationName::Post => Classification::Post,
         ClassificationName::Pre => Classification::Pre,

@@ -1,2 +1,3 @@
 mod camera;
 mod scene;
+mod viewer;

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use std::sync::OnceLock;
 pub use voxless_core::SmallRng as Lcg;
 
 pub struct Scratch(pub PathBuf);
@@ -29,12 +30,49 @@ impl Drop for Scratch {
     }
 }
 
+/// The `voxless` binary. It lives in its own package (crates/cli), so it is
+/// built here once per test process — with this test's profile, target
+/// directory and `hdf5` feature — which is a no-op when it is up to date.
+pub fn bin() -> &'static Path {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| {
+        let exe = std::env::current_exe().expect("test executable path");
+        // target/<profile>/deps/<test>
+        let profile_dir = exe
+            .parent()
+            .and_then(Path::parent)
+            .expect("target/<profile>");
+        let target_dir = profile_dir.parent().expect("target directory");
+        let profile = match profile_dir.file_name().and_then(|n| n.to_str()) {
+            Some("debug") | None => "dev",
+            Some(other) => other,
+        };
+        let mut cmd = Command::new(env!("CARGO"));
+        cmd.current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args([
+                "build",
+                "-q",
+                "-p",
+                "voxless-cli",
+                "--bin",
+                "voxless",
+                "--profile",
+            ])
+            .arg(profile)
+            .arg("--target-dir")
+            .arg(target_dir);
+        if cfg!(feature = "hdf5") {
+            cmd.args(["--features", "voxless-cli/hdf5"]);
+        }
+        let status = cmd.status().expect("cargo runs");
+        assert!(status.success(), "building the voxless binary failed");
+        profile_dir.join(format!("voxless{}", std::env::consts::EXE_SUFFIX))
+    })
+}
+
 /// Runs `voxless` with `args`; returns (success, stderr, output).
 pub fn voxless(args: &[&str]) -> (bool, String, Output) {
-    let out = Command::new(env!("CARGO_BIN_EXE_voxless"))
-        .args(args)
-        .output()
-        .unwrap();
+    let out = Command::new(bin()).args(args).output().unwrap();
     (
         out.status.success(),
         String::from_utf8_lossy(&out.stderr).into_owned(),

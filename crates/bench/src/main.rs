@@ -24,6 +24,8 @@
 //!   ([`amr`]).
 //! - `tets`: phase-space tessellations — build, projection, exact render,
 //!   block culling, k-buffer and level of detail ([`tets`]).
+//! - `serve`: `voxless serve` as a client sees it — camera move to the
+//!   first coarse image and to the converged image ([`serve`]).
 //!
 //! Variants the library does not offer (an AMR volume that hands out every
 //! interval, a tessellation with every block in every tile) are small
@@ -35,6 +37,7 @@ mod bvh;
 mod common;
 mod frame;
 mod packets;
+mod serve;
 mod tets;
 
 use anyhow::Result;
@@ -68,6 +71,10 @@ enum Which {
     /// (64³ JaxPM run, optionally a refined 128³), block culling, k-buffer
     /// size and level of detail against exact mode.
     Tets(tets::TetsArgs),
+    /// `voxless serve` over a websocket: camera move → first (coarse) image
+    /// and → converged 1024² image, on the dam break and the 64³
+    /// tessellation.
+    Serve(serve::ServeArgs),
 }
 
 fn main() {
@@ -101,5 +108,6 @@ fn run(which: Which) -> Result<()> {
         Which::Frame(o) => frame::run(o),
         Which::Amr(o) => amr::run(o),
         Which::Tets(o) => tets::run(o),
+        Which::Serve(o) => serve::run(o),
     }
 }

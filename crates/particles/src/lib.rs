@@ -37,6 +37,13 @@
 //! **Multi-material** volumes ([`MaterialVolume`]) give each species its own
 //! density field, radius and transfer function, blended per sample.
 //!
+//! **Per-render contexts.** A volume holds nothing that depends on a
+//! render: preparing it ([`voxless_core::Prepare`]) gives a
+//! [`ParticleContext`] with the render's pre-classified colours (each
+//! particle's attribute through the render's colormap, computed once per
+//! render) and its SIMD backend, so one volume serves renders with
+//! different transfer functions at once.
+//!
 //! Invariants: positions, radii, weights and attributes are finite (checked
 //! on construction, with the offending particle named); hidden particles have
 //! radius 0 and are skipped by every query.

@@ -73,6 +73,11 @@ pub struct ParticlesDesc {
     /// `[[attribute, weight], ...]` over the normalised attribute.
     pub weight_map: Option<Vec<[f32; 2]>>,
     pub attribute_range: Option<[f32; 2]>,
+    /// Multiplies every particle's radius (global, per-particle or SPH h);
+    /// default 1.
+    pub radius_scale: Option<f32>,
+    /// Multiplies every particle's weight (mass); default 1.
+    pub weight_scale: Option<f32>,
 }
 
 /// One material of a multi-material particle scene: the particles of one

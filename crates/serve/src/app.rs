@@ -1,0 +1,154 @@
+//! The server's shared state: the scene it started with, the loaded
+//! volumes every tab shares, the access token, and the latest view (what
+//! `/frame.png` renders).
+
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, OnceLock};
+
+use voxless::{AnyVolume, SceneDesc, WorldFrame};
+
+/// A loaded volume, where its coordinates sit in the world, and the notes
+/// its loading made.
+pub struct Loaded {
+    pub volume: AnyVolume,
+    pub frame: WorldFrame,
+    pub notes: Vec<String>,
+}
+
+/// The outcome of one load, shared by everyone who asked for it.
+type LoadSlot = Arc<OnceLock<Result<Arc<Loaded>, String>>>;
+
+/// Loaded volumes keyed by the data part of a description and the frame:
+/// tabs viewing the same data share one immutable volume; a changed radius
+/// scale, AMR field or time step loads another. The most recently used few
+/// are kept.
+pub struct Volumes {
+    entries: Mutex<VecDeque<(String, LoadSlot)>>,
+    capacity: usize,
+}
+
+impl Volumes {
+    pub fn new(capacity: usize) -> Self {
+        Volumes {
+            entries: Mutex::new(VecDeque::new()),
+            capacity: capacity.max(1),
+        }
+    }
+
+    /// The key of `desc`'s data at `frame`: its data tables as TOML.
+    pub fn key(desc: &SceneDesc, frame: usize) -> String {
+        let data = SceneDesc {
+            particles: desc.particles.clone(),
+            amr: desc.amr.clone(),
+            tets: desc.tets.clone(),
+            ..Default::default()
+        };
+        format!(
+            "{}\nframe = {frame}",
+            voxless::scene_toml(&data).unwrap_or_default()
+        )
+    }
+
+    /// Whether `desc`'s data at `frame` is loaded (or being loaded).
+    pub fn contains(&self, desc: &SceneDesc, frame: usize) -> bool {
+        let key = Self::key(desc, frame);
+        self.lock().iter().any(|(k, _)| *k == key)
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, VecDeque<(String, LoadSlot)>> {
+        self.entries.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The volume of `desc`'s data at `frame`, loading it (once, however
+    /// many ask at the same time) when it is not kept. Blocks: call it off
+    /// the async runtime.
+    pub fn get(&self, desc: &SceneDesc, base: &Path, frame: usize) -> Result<Arc<Loaded>, String> {
+        let key = Self::key(desc, frame);
+        let slot = {
+            let mut entries = self.lock();
+            let slot = match entries.iter().position(|(k, _)| *k == key) {
+                Some(i) => entries.remove(i).map(|e| e.1).unwrap_or_default(),
+                None => LoadSlot::default(),
+            };
+            // Most recent at the front; the least recent falls off the end.
+            entries.push_front((key, slot.clone()));
+            entries.truncate(self.capacity);
+            slot
+        };
+        slot.get_or_init(|| {
+            voxless::load(desc, base, frame)
+                .map(|l| {
+                    Arc::new(Loaded {
+                        volume: l.volume,
+                        frame: l.frame,
+                        notes: l.notes,
+                    })
+                })
+                .map_err(|e| e.to_string())
+        })
+        .clone()
+    }
+}
+
+/// Everything the tabs share.
+pub struct App {
+    /// Directory relative paths of the scene are relative to.
+    pub base: PathBuf,
+    /// The scene the server started with (every tab's first view; the
+    /// page's reset goes back to its camera).
+    pub initial: SceneDesc,
+    /// Bounds of the initial volume and its world frame (camera moves turn
+    /// about them until a tab has rendered its own).
+    pub initial_bounds: voxless::Aabb,
+    pub initial_frame: WorldFrame,
+    /// Frames of the data (1 unless a time series).
+    pub frames: usize,
+    pub volumes: Volumes,
+    /// The access token every request must carry, when bound beyond
+    /// loopback.
+    pub token: Option<String>,
+    /// Whether the server listens on loopback only (then Host headers must
+    /// name loopback: no DNS rebinding).
+    pub loopback: bool,
+    /// Columns of the particle file a tab may colour by (`particles.attribute`).
+    pub particle_columns: Vec<String>,
+    /// Colormap presets of the scene's colormap file: (file, preset names).
+    pub colormap_file: Option<(String, Vec<String>)>,
+    /// The view of the tab that changed last, and its frame.
+    pub current: Mutex<(SceneDesc, usize)>,
+}
+
+impl App {
+    pub fn current(&self) -> (SceneDesc, usize) {
+        self.current
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
+    }
+
+    pub fn set_current(&self, desc: &SceneDesc, frame: usize) {
+        *self.current.lock().unwrap_or_else(|e| e.into_inner()) = (desc.clone(), frame);
+    }
+}
+
+/// The names of the presets in a ParaView preset file (an object or an
+/// array of objects with `Name`), or of its one colour list.
+pub fn preset_names(text: &str, path: &Path) -> Result<Vec<String>, String> {
+    let value: serde_json::Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
+    let items = match &value {
+        serde_json::Value::Array(items) => items.clone(),
+        other => vec![other.clone()],
+    };
+    let names: Vec<String> = items
+        .iter()
+        .filter_map(|i| i.get("Name").and_then(|n| n.as_str()).map(String::from))
+        .collect();
+    if names.is_empty() {
+        // A plain colour list: one colormap, named after the file.
+        let m =
+            voxless::transfer::parse_colormap_json(text, None, path).map_err(|e| e.to_string())?;
+        return Ok(vec![m.name]);
+    }
+    Ok(names)
+}

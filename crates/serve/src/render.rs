@@ -1,0 +1,386 @@
+//! The render worker of a tab, and the converged render behind
+//! `/frame.png`.
+//!
+//! A job is one view (description + frame) for one interaction `seq`. The
+//! worker loads or shares the volume, resolves the description (the same
+//! defaults as the CLI), then renders progressively: a coarse JPEG first
+//! (its pixel count adapted to the measured speed, see
+//! [`voxless::CoarseBudget`]), then each full-resolution pass (JPEG) and
+//! the converged image as PNG. While the user drags, only the coarse image
+//! is made. Every image is offered to the outbox with the job's `seq`, so
+//! none is sent once a newer interaction arrived; the worker also stops as
+//! soon as it sees one.
+
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use serde_json::json;
+use voxless::histogram::Histogram;
+use voxless::progressive::check_iso;
+use voxless::{
+    AnyVolume, CancelToken, CoarseBudget, Control, Film, RenderSettings, Resolved, SceneDesc, Stage,
+};
+
+use crate::app::{App, Loaded};
+use crate::encode;
+use crate::outbox::{Outbox, Outgoing, Slot};
+use crate::protocol::{FrameHeader, pack_frame};
+use crate::session::Tab;
+
+/// Target time of a coarse image, seconds (the first-image latency goal is
+/// 100 ms; encoding and transfer take the rest).
+const COARSE_TARGET_SECS: f64 = 0.06;
+/// Histogram lattice (samples per axis) and bins.
+const HIST_SAMPLES: usize = 40;
+const HIST_BINS: usize = 128;
+/// Minimum milliseconds between progress messages.
+const PROGRESS_EVERY_MS: u64 = 50;
+
+/// One view to render for one interaction.
+#[derive(Clone, Debug)]
+pub struct Job {
+    pub seq: u64,
+    pub desc: SceneDesc,
+    pub frame: usize,
+    /// Render the coarse image first.
+    pub coarse: bool,
+    /// The user is dragging: the coarse image only.
+    pub drag: bool,
+    /// When the interaction arrived (for the frames' latency).
+    pub received: Instant,
+}
+
+/// What the worker remembers between jobs.
+struct Memory {
+    budget: CoarseBudget,
+    /// What the last histogram was computed for.
+    histogram_key: Option<String>,
+    histogram: Option<Histogram>,
+}
+
+/// Runs jobs from `next` until it returns `None`.
+pub fn worker_loop(
+    app: &App,
+    outbox: &Outbox,
+    tab: &Mutex<Tab>,
+    next: &mut dyn FnMut() -> Option<(Job, CancelToken)>,
+) {
+    let mut memory = Memory {
+        budget: CoarseBudget::new(COARSE_TARGET_SECS, 64 * 64),
+        histogram_key: None,
+        histogram: None,
+    };
+    while let Some((job, cancel)) = next() {
+        if !outbox.is_current(job.seq) {
+            continue;
+        }
+        run_job(app, outbox, tab, &job, &cancel, &mut memory);
+    }
+}
+
+fn text(v: serde_json::Value) -> Outgoing {
+    Outgoing::Text(v.to_string())
+}
+
+fn run_job(
+    app: &App,
+    outbox: &Outbox,
+    tab: &Mutex<Tab>,
+    job: &Job,
+    cancel: &CancelToken,
+    memory: &mut Memory,
+) {
+    let seq = job.seq;
+    let fail = |message: String| {
+        outbox.offer(
+            Slot::Error,
+            seq,
+            text(json!({"type": "error", "seq": seq, "message": message})),
+        );
+    };
+    if !app.volumes.contains(&job.desc, job.frame) {
+        outbox.offer(
+            Slot::Progress,
+            seq,
+            text(
+                json!({"type": "progress", "seq": seq, "stage": "loading", "done": 0, "total": 1}),
+            ),
+        );
+    }
+    let loaded = match app.volumes.get(&job.desc, &app.base, job.frame) {
+        Ok(l) => l,
+        Err(e) => return fail(e),
+    };
+    if !outbox.is_current(seq) {
+        return;
+    }
+    let resolved = match voxless::resolve_in(&loaded.volume, &loaded.frame, &job.desc, &app.base) {
+        Ok(r) => r,
+        Err(e) => return fail(e.to_string()),
+    };
+    {
+        let mut t = tab.lock().unwrap_or_else(|e| e.into_inner());
+        t.bounds = loaded.volume.bounds();
+        t.world = loaded.frame;
+        let vr = resolved.settings.value_range;
+        t.value_range = Some([vr.lo, vr.hi]);
+        t.attribute_range = resolved.settings.attribute_range.map(|r| [r.lo, r.hi]);
+    }
+
+    let last_progress = AtomicU64::new(0);
+    let stage_name = Mutex::new("coarse");
+    let progress = |done: u64, total: u64| {
+        // Throttled: a message per tile would only fill the socket.
+        let now = job.received.elapsed().as_millis() as u64;
+        let last = last_progress.load(Ordering::Relaxed);
+        if done < total && now < last + PROGRESS_EVERY_MS {
+            return;
+        }
+        last_progress.store(now, Ordering::Relaxed);
+        let stage = *stage_name.lock().unwrap_or_else(|e| e.into_inner());
+        outbox.offer(
+            Slot::Progress,
+            seq,
+            text(json!({"type": "progress", "seq": seq, "stage": stage, "done": done, "total": total})),
+        );
+    };
+    let control = Control::new()
+        .with_cancel(cancel.clone())
+        .with_progress(&progress);
+    let settings = &resolved.settings;
+    let full = settings.width as u64 * settings.height as u64;
+    let coarse = job.coarse.then(|| memory.budget.pixels(full));
+    let mut state_sent = false;
+    let mut send_state = |memory: &mut Memory| {
+        if !state_sent {
+            state_sent = true;
+            let msg = state_message(app, job, &loaded, &resolved, memory, tab);
+            outbox.offer(Slot::State, seq, text(msg));
+        }
+    };
+    let mut budget = memory.budget.clone();
+    let result = voxless::render_progressive(
+        &loaded.volume,
+        &resolved.camera,
+        &resolved.tf,
+        settings,
+        coarse,
+        Some(&mut budget),
+        &control,
+        &mut |stage, film, at| {
+            *stage_name.lock().unwrap_or_else(|e| e.into_inner()) = "full";
+            let converged = stage.is_converged();
+            if !send_frame(outbox, job, stage, film, at, resolved.background, converged) {
+                return false;
+            }
+            // The controls follow the first image.
+            send_state(memory);
+            if converged && let Err(e) = check_iso(settings, film) {
+                fail(e.to_string());
+            }
+            !job.drag && outbox.is_current(seq)
+        },
+    );
+    memory.budget = budget;
+    if result.is_ok() && outbox.is_current(seq) {
+        send_state(memory);
+        if !job.drag {
+            send_histogram(outbox, job, &loaded, settings, memory);
+        }
+    }
+}
+
+/// Encodes and offers one image; false when it is no longer wanted.
+fn send_frame(
+    outbox: &Outbox,
+    job: &Job,
+    stage: Stage,
+    film: &Film,
+    at: &RenderSettings,
+    background: [f32; 3],
+    converged: bool,
+) -> bool {
+    if !outbox.is_current(job.seq) {
+        return false;
+    }
+    let encoded = match encode::encode(&film.resolve(), background, converged) {
+        Ok(e) => e,
+        Err(_) => return false,
+    };
+    let header = FrameHeader {
+        seq: job.seq,
+        stage: match stage {
+            Stage::Coarse => "coarse".into(),
+            _ if converged => "converged".into(),
+            _ => "pass".into(),
+        },
+        mime: encoded.mime.into(),
+        width: at.width,
+        height: at.height,
+        passes: film.passes(),
+        spp: at.spp,
+        ms: job.received.elapsed().as_secs_f64() * 1e3,
+    };
+    outbox.offer(
+        Slot::Image,
+        job.seq,
+        Outgoing::Binary(pack_frame(&header, &encoded.bytes)),
+    )
+}
+
+/// What a histogram depends on: the data, value range, scale and clip box.
+fn histogram_key(job: &Job, st: &RenderSettings) -> String {
+    format!(
+        "{}|{:?}|{}|{:?}",
+        crate::app::Volumes::key(&job.desc, job.frame),
+        st.value_range,
+        st.log_scale,
+        st.clip
+    )
+}
+
+/// The histogram of the view, computed after its image converged (it costs
+/// a little, and the image should not wait for it) unless it is known.
+fn send_histogram(
+    outbox: &Outbox,
+    job: &Job,
+    loaded: &Loaded,
+    st: &RenderSettings,
+    memory: &mut Memory,
+) {
+    let key = histogram_key(job, st);
+    if memory.histogram_key.as_deref() == Some(key.as_str()) {
+        return;
+    }
+    let h = voxless::field_histogram(&loaded.volume, st, HIST_BINS, HIST_SAMPLES);
+    let msg = json!({"type": "histogram", "seq": job.seq, "histogram": h});
+    memory.histogram = Some(h);
+    memory.histogram_key = Some(key);
+    outbox.offer(Slot::Histogram, job.seq, text(msg));
+}
+
+/// The `state` message: what the page's controls show for this view.
+fn state_message(
+    app: &App,
+    job: &Job,
+    loaded: &Loaded,
+    resolved: &Resolved,
+    memory: &mut Memory,
+    tab: &Mutex<Tab>,
+) -> serde_json::Value {
+    let st = &resolved.settings;
+    let volume = &loaded.volume;
+    let key = histogram_key(job, st);
+    let histogram = memory
+        .histogram
+        .as_ref()
+        .filter(|_| memory.histogram_key.as_deref() == Some(key.as_str()));
+    // Positions the page shows and edits (clip box) are world positions.
+    let b = volume.bounds();
+    let (lo, hi) = (loaded.frame.to_world(b.min), loaded.frame.to_world(b.max));
+    let tf = &resolved.tf;
+    let colors: Vec<[f32; 3]> = (0..64)
+        .map(|i| tf.colormap().srgb(i as f32 / 63.0))
+        .collect();
+    let opacity: Vec<[f32; 2]> = tf
+        .opacity_map()
+        .0
+        .points()
+        .iter()
+        .map(|&(x, y)| [x, y])
+        .collect();
+    let unit = |v: f32| {
+        if st.log_scale {
+            v.max(f32::MIN_POSITIVE).log10()
+        } else {
+            v
+        }
+    };
+    let (fields, field, color_field) = match volume {
+        AnyVolume::Amr(v) => {
+            let names = v.field_names().to_vec();
+            let a = job.desc.amr.clone().unwrap_or_default();
+            let field = a.field.clone().or_else(|| names.first().cloned());
+            (names, field, a.color_field)
+        }
+        _ => (Vec::new(), None, None),
+    };
+    let mut colormaps: Vec<serde_json::Value> = voxless::transfer::COLORMAP_NAMES
+        .iter()
+        .map(|n| json!({"name": n, "source": "builtin"}))
+        .collect();
+    if let Some((file, names)) = &app.colormap_file {
+        colormaps.extend(
+            names
+                .iter()
+                .map(|n| json!({"name": n, "source": "file", "file": file})),
+        );
+    }
+    let t = tab.lock().unwrap_or_else(|e| e.into_inner());
+    colormaps.extend(
+        t.imported
+            .iter()
+            .map(|p| json!({"name": p.name, "source": "imported"})),
+    );
+    drop(t);
+    json!({
+        "type": "state",
+        "seq": job.seq,
+        "kind": volume.kind(),
+        "frames": app.frames,
+        "frame": job.frame,
+        "scene": job.desc,
+        "value_range": [st.value_range.lo, st.value_range.hi],
+        "log_scale": st.log_scale,
+        "attribute_range": st.attribute_range.map(|r| [r.lo, r.hi]),
+        "opacity_points": opacity,
+        "colors": colors,
+        "colormaps": colormaps,
+        "fields": fields,
+        "columns": app.particle_columns,
+        "attribute": job.desc.particles.as_ref().and_then(|p| p.attribute.clone()),
+        "initial_attribute": app.initial.particles.as_ref().and_then(|p| p.attribute.clone()),
+        "field": field,
+        "color_field": color_field,
+        "iso": st.iso.iter().map(|&v| unit(v)).collect::<Vec<f32>>(),
+        "clip": job.desc.render.clip,
+        "bounds": [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]],
+        "shade": st.light.is_some(),
+        "shadows": st.scatter.is_some(),
+        "spp": st.spp,
+        "opacity_scale": st.opacity_scale,
+        "width": st.width,
+        "height": st.height,
+        "histogram": histogram,
+        "notes": loaded.notes.iter().chain(&resolved.notes).collect::<Vec<_>>(),
+    })
+}
+
+/// `/frame.png`: the latest view (or the initial one) at `width`×`height`
+/// (the view's own size when not given), all passes, as PNG bytes.
+pub fn frame_png(app: &App, width: Option<u32>, height: Option<u32>) -> Result<Vec<u8>, String> {
+    let (mut desc, frame) = app.current();
+    if let Some(w) = width {
+        desc.image.width = Some(w);
+    }
+    if let Some(h) = height {
+        desc.image.height = Some(h);
+    }
+    let loaded = app.volumes.get(&desc, &app.base, frame)?;
+    let resolved = voxless::resolve_in(&loaded.volume, &loaded.frame, &desc, &app.base)
+        .map_err(|e| e.to_string())?;
+    let film = loaded
+        .volume
+        .render_passes(
+            &resolved.camera,
+            &resolved.tf,
+            &resolved.settings,
+            &Control::new(),
+            &mut |_| true,
+        )
+        .map_err(|e| e.to_string())?;
+    let image =
+        encode::encode(&film.resolve(), resolved.background, true).map_err(|e| e.to_string())?;
+    Ok(image.bytes)
+}

@@ -1,0 +1,192 @@
+//! Progressive rendering for interactive front-ends: a coarse image first,
+//! then full-resolution passes up to the requested samples per pixel.
+//!
+//! Model: after every interaction a viewer wants *something* on screen fast
+//! and the exact image eventually. [`render_progressive`] renders
+//!
+//! 1. optionally a **coarse** image: the same camera and settings at a
+//!    reduced resolution (at most a pixel budget, aspect kept) and 1 spp —
+//!    the browser scales it up; then
+//! 2. the **full** image pass by pass (the film of [`AnyVolume::render_passes`]),
+//!    handing each stage to the caller, who shows it and says whether to go
+//!    on.
+//!
+//! The last full pass is exactly what `voxless render` of the same scene
+//! draws: the full stage uses the caller's settings unchanged, and the coarse
+//! stage is a separate render that contributes nothing to it.
+//! [`CoarseBudget`] picks the coarse pixel count from the time the previous
+//! coarse renders took, so the first image keeps to a target latency on any
+//! data and machine. Cancellation ([`Control`]) stops between tiles; the
+//! caller never sees a partial pass.
+
+use std::time::Instant;
+
+use voxless_core::{Camera, Cancelled, Control};
+use voxless_render::{Film, RenderSettings};
+use voxless_transfer::TransferFunction;
+
+use crate::{AnyVolume, SceneError};
+
+/// Which image a progressive render hands out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// The reduced-resolution 1-spp image.
+    Coarse,
+    /// `done` of `of` full-resolution passes; `done == of` is converged.
+    Pass { done: u32, of: u32 },
+}
+
+impl Stage {
+    pub fn is_converged(self) -> bool {
+        matches!(self, Stage::Pass { done, of } if done >= of)
+    }
+}
+
+/// `settings` at a resolution of at most `max_pixels` pixels (aspect ratio
+/// kept, at least 1×1) and 1 spp: the coarse stage of a progressive render.
+/// Settings already within the budget keep their size.
+pub fn coarse_settings(settings: &RenderSettings, max_pixels: u64) -> RenderSettings {
+    let (w, h) = (settings.width as f64, settings.height as f64);
+    let scale = ((max_pixels.max(1) as f64) / (w * h)).sqrt().min(1.0);
+    RenderSettings {
+        width: ((w * scale).floor() as u32).max(1),
+        height: ((h * scale).floor() as u32).max(1),
+        spp: 1,
+        ..settings.clone()
+    }
+}
+
+/// Picks the pixel count of coarse images from the rate the previous ones
+/// were rendered at, aiming at `target_secs` per coarse image.
+#[derive(Clone, Debug)]
+pub struct CoarseBudget {
+    target_secs: f64,
+    min_pixels: u64,
+    /// Pixels per second of the recent coarse renders (smoothed); `None`
+    /// before the first.
+    rate: Option<f64>,
+}
+
+impl CoarseBudget {
+    /// A budget aiming at `target_secs` per coarse image, never below
+    /// `min_pixels` (a 64×64 image is still worth seeing).
+    pub fn new(target_secs: f64, min_pixels: u64) -> Self {
+        CoarseBudget {
+            target_secs: target_secs.max(1e-3),
+            min_pixels: min_pixels.max(1),
+            rate: None,
+        }
+    }
+
+    /// The pixel budget of the next coarse image of a `full`-pixel view: a
+    /// sixteenth of the view before anything was measured, then what the
+    /// measured rate renders in the target time, at most a quarter of the
+    /// view (a coarse image the size of the full one would be no faster).
+    pub fn pixels(&self, full: u64) -> u64 {
+        let want = match self.rate {
+            None => full / 16,
+            Some(r) => (r * self.target_secs) as u64,
+        };
+        want.clamp(self.min_pixels.min(full), (full / 4).max(self.min_pixels))
+    }
+
+    /// Records that `pixels` pixels took `secs` seconds.
+    pub fn record(&mut self, pixels: u64, secs: f64) {
+        if !(secs > 0.0) || pixels == 0 {
+            return;
+        }
+        let r = pixels as f64 / secs;
+        // Smooth over renders (the data, view and machine load vary), but
+        // follow a drop at once so a slow view does not stall the next.
+        self.rate = Some(match self.rate {
+            Some(old) if r > old => 0.5 * (old + r),
+            _ => r,
+        });
+    }
+}
+
+/// Renders `settings` progressively (see the module docs): the coarse stage
+/// when `coarse_pixels` is given and smaller than the view, then every
+/// full-resolution pass. `on_image(stage, film, settings)` sees each stage
+/// with the settings it was rendered at, and returns whether to go on.
+/// Returns the full film with the passes done (empty when stopped after the
+/// coarse stage), or [`Cancelled`].
+#[allow(clippy::too_many_arguments)]
+pub fn render_progressive(
+    volume: &AnyVolume,
+    camera: &Camera,
+    tf: &TransferFunction,
+    settings: &RenderSettings,
+    coarse_pixels: Option<u64>,
+    budget: Option<&mut CoarseBudget>,
+    control: &Control,
+    on_image: &mut dyn FnMut(Stage, &Film, &RenderSettings) -> bool,
+) -> Result<Film, Cancelled> {
+    let full = settings.width as u64 * settings.height as u64;
+    if let Some(max) = coarse_pixels.filter(|&m| m < full) {
+        let coarse = coarse_settings(settings, max);
+        let t = Instant::now();
+        let film = volume.render_passes(camera, tf, &coarse, control, &mut |_| true)?;
+        if let Some(b) = budget {
+            b.record(
+                coarse.width as u64 * coarse.height as u64,
+                t.elapsed().as_secs_f64(),
+            );
+        }
+        if !on_image(Stage::Coarse, &film, &coarse) {
+            return Ok(Film::new(settings.width, settings.height));
+        }
+    }
+    control.check()?;
+    volume.render_passes(camera, tf, settings, control, &mut |film| {
+        let stage = Stage::Pass {
+            done: film.passes(),
+            of: settings.spp,
+        };
+        on_image(stage, film, settings)
+    })
+}
+
+/// An error naming the iso-values when iso-surfaces were asked for but none
+/// appears anywhere in `film` — with the range of values the rays did see,
+/// in the transfer function's units — so an empty surface is never a silent
+/// image.
+pub fn check_iso(settings: &RenderSettings, film: &Film) -> Result<(), SceneError> {
+    let st = settings;
+    if st.iso.is_empty() || film.stats().iso_hits > 0 {
+        return Ok(());
+    }
+    let unit = |v: f32| {
+        if st.log_scale {
+            v.max(f32::MIN_POSITIVE).log10()
+        } else {
+            v
+        }
+    };
+    let asked: Vec<String> = st.iso.iter().map(|&v| format!("{}", unit(v))).collect();
+    let scale = if st.log_scale {
+        "log10 of the field"
+    } else {
+        "the field"
+    };
+    let seen = film.stats().values;
+    let what = if seen.is_empty() {
+        "the rays meet no data".to_string()
+    } else {
+        format!(
+            "{scale} along the rays lies in [{:.4}, {:.4}]",
+            unit(seen.lo),
+            unit(seen.hi)
+        )
+    };
+    Err(SceneError::setting(
+        "render.iso (--iso)",
+        format!(
+            "no iso-surface at {} appears in the image: {what}; the transfer function's \
+             value range is [{:.4}, {:.4}] in the same units",
+            asked.join(", "),
+            st.value_range.lo,
+            st.value_range.hi
+        ),
+    ))
+}
