@@ -591,11 +591,24 @@ fn colormaps() -> Vec<&'static str> {
     voxless::transfer::COLORMAP_NAMES.to_vec()
 }
 
+/// Flag names, data flag names, and each constructor's data flags.
+type FlagNames = (
+    Vec<String>,
+    Vec<&'static str>,
+    Vec<(&'static str, &'static [&'static str])>,
+);
+
 /// The names of the keyword arguments that are the library's flags (the
-/// CLI's flags, `-` as `_`), and those of them that describe data.
+/// CLI's flags, `-` as `_`), those of them that describe data, and the data
+/// flags each in-memory constructor takes.
 #[pyfunction]
-fn flag_names() -> (Vec<String>, Vec<&'static str>) {
-    (SceneFlags::names(), SceneFlags::data_names())
+fn flag_names() -> FlagNames {
+    let constructors = vec![
+        ("Particles", PARTICLE_FLAGS),
+        ("AmrCells", AMR_FLAGS),
+        ("Tessellation", TET_FLAGS),
+    ];
+    (SceneFlags::names(), SceneFlags::data_names(), constructors)
 }
 
 /// The image's up direction a projection along `normal` gets by default

@@ -29,8 +29,11 @@ import numpy as np
 
 from . import _voxless
 
-#: The flags (the library's names) and those of them that describe data.
-FLAG_NAMES, DATA_FLAGS = (tuple(n) for n in _voxless.flag_names())
+#: The flags (the library's names), those of them that describe data, and
+#: the data flags each in-memory constructor takes.
+FLAG_NAMES, DATA_FLAGS, _CONSTRUCTORS = _voxless.flag_names()
+FLAG_NAMES, DATA_FLAGS = tuple(FLAG_NAMES), tuple(DATA_FLAGS)
+CONSTRUCTOR_FLAGS = {name: tuple(flags) for name, flags in _CONSTRUCTORS}
 VIEW_FLAGS = tuple(n for n in FLAG_NAMES if n not in DATA_FLAGS)
 
 CAMERA_KEYS = ("eye", "look_at", "up", "fov", "projection", "ortho_height", "orbit", "elevation", "zoom")

@@ -237,10 +237,8 @@ class Particles(Volume):
     (see :meth:`Volume.render`): this volume's default view.
     """
 
-    DATA = ("radius", "kernel", "kappa", "sigma", "cluster", "classification", "attribute_range", "species")
-
     def __init__(self, positions, radii=None, weights=None, attribute=None, types=None, *, materials=None, **kwargs):
-        tables, flags = opt.split("Particles", kwargs, self.DATA)
+        tables, flags = opt.split("Particles", kwargs, opt.CONSTRUCTOR_FLAGS["Particles"])
         p = _positions("positions", positions)
         n = len(p)
         if materials is not None:
@@ -270,10 +268,8 @@ class AmrCells(Volume):
     ``"nearest"``). Other keywords are view flags.
     """
 
-    DATA = ("field", "color_field", "reconstruction")
-
     def __init__(self, cells, fields, origin=(0.0, 0.0, 0.0), cell_size=1.0, **kwargs):
-        tables, flags = opt.split("AmrCells", kwargs, self.DATA)
+        tables, flags = opt.split("AmrCells", kwargs, opt.CONSTRUCTOR_FLAGS["AmrCells"])
         try:
             c = np.asarray(cells)
         except (TypeError, ValueError) as e:
@@ -315,10 +311,8 @@ class Tessellation(Volume):
     Other keywords are view flags.
     """
 
-    DATA = ("particle_mass", "tet_mode", "k", "layers", "lod")
-
     def __init__(self, positions, n=None, box=None, **kwargs):
-        tables, flags = opt.split("Tessellation", kwargs, self.DATA)
+        tables, flags = opt.split("Tessellation", kwargs, opt.CONSTRUCTOR_FLAGS["Tessellation"])
         p = np.ascontiguousarray(_positions("positions", positions), dtype=np.float32)
         if n is None:
             n = round(len(p) ** (1 / 3))
