@@ -1,5 +1,13 @@
 //! Views and what an image says about itself.
 //!
+//! - The **default view** ([`default_view`]) is a three-quarter view: the
+//!   up vector is `camera.up` (default +z, the convention of SPH,
+//!   cosmology and most CFD output), the eye looks across the data's
+//!   longest horizontal side (so it runs across the image, left to right
+//!   along +axis), from [`VIEW_AZIMUTH_DEG`] to its side and
+//!   [`VIEW_ELEVATION_DEG`] above the horizontal, at the distance where
+//!   every corner of the bounds lies inside the image with a margin.
+//!
 //! - Orbit, elevation and zoom ([`crate::CameraDesc`]) act on the camera the
 //!   rest of the description gives (explicit or the default framing): orbit
 //!   turns the eye about the up vector through the look-at point (positive
@@ -14,7 +22,7 @@
 
 use std::path::Path;
 
-use voxless_core::{Camera, Vec3};
+use voxless_core::{Aabb, Camera, Vec3};
 use voxless_render::colorbar::ColorbarSpec;
 
 use voxless_scene::{CameraDesc, SceneDesc};
@@ -24,6 +32,95 @@ use crate::{AnyVolume, Scene, SceneError};
 
 /// Largest elevation reached, in degrees.
 const MAX_ELEVATION_DEG: f64 = 89.9;
+/// The default view's turn away from square-on to the long side, degrees.
+pub const VIEW_AZIMUTH_DEG: f64 = 35.0;
+/// The default view's height above the horizontal, degrees.
+pub const VIEW_ELEVATION_DEG: f64 = 25.0;
+/// The default view's vertical field of view, degrees.
+pub const VIEW_FOV_DEG: f32 = 30.0;
+/// Fraction of the image the default view's bounds may fill (each side
+/// keeps half the rest as margin).
+const VIEW_FILL: f64 = 0.92;
+
+/// The default up vector: +z.
+pub const DEFAULT_UP: [f32; 3] = [0.0, 0.0, 1.0];
+
+/// The eye of the default view of `bounds` (local coordinates) for an
+/// image of `aspect` = width / height, with `up` the up vector (unit) and
+/// a perspective camera of `fov_y_deg` looking at the bounds' centre. Computed
+/// in f64; `None` for empty or non-finite bounds.
+pub(crate) fn default_eye(bounds: &Aabb, aspect: f32, up: Vec3, fov_y_deg: f32) -> Option<Vec3> {
+    if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
+        return None;
+    }
+    let u = wide(up);
+    let ul = dot(u, u).sqrt();
+    if !(ul > 0.0 && ul.is_finite()) {
+        return None;
+    }
+    let u = scale(u, 1.0 / ul);
+    let lo = wide(bounds.min);
+    let hi = wide(bounds.max);
+    let centre: V3 = std::array::from_fn(|a| 0.5 * lo[a] + 0.5 * hi[a]);
+    let ext: V3 = std::array::from_fn(|a| hi[a] - lo[a]);
+    // The long horizontal direction: the world axis whose extent, seen in
+    // the plane across the up vector, is longest (the first on ties).
+    let flat = |a: usize| {
+        let mut e = [0.0; 3];
+        e[a] = 1.0;
+        add(e, scale(u, -dot(e, u)))
+    };
+    let (mut best, mut h1) = (-1.0, [1.0, 0.0, 0.0]);
+    for (a, &extent) in ext.iter().enumerate() {
+        let f = flat(a);
+        let len = dot(f, f).sqrt();
+        if len > 1e-3 && extent * len > best * (1.0 + 1e-6) {
+            best = extent * len;
+            h1 = scale(f, 1.0 / len);
+        }
+    }
+    if best < 0.0 {
+        return None;
+    }
+    // Square-on to the long side from −h2 (so +h1 runs to the right), turned
+    // by the azimuth and raised by the elevation.
+    let h2 = cross(u, h1);
+    let (sa, ca) = VIEW_AZIMUTH_DEG.to_radians().sin_cos();
+    let (se, ce) = VIEW_ELEVATION_DEG.to_radians().sin_cos();
+    let d = add(scale(add(scale(h2, -ca), scale(h1, -sa)), ce), scale(u, se));
+    let forward = scale(d, -1.0);
+    let right = {
+        let r = cross(forward, u);
+        scale(r, 1.0 / dot(r, r).sqrt())
+    };
+    let cam_up = cross(right, forward);
+    let tan_y = (0.5 * (fov_y_deg as f64).to_radians()).tan() * VIEW_FILL;
+    let tan_x = tan_y * aspect as f64;
+    // Every corner c (relative to the centre) at depth D + c·forward must
+    // satisfy |c·right| ≤ tan_x·depth and |c·up| ≤ tan_y·depth.
+    let mut dist: f64 = 0.0;
+    let diag = dot(ext, ext).sqrt();
+    for k in 0..8 {
+        let c: V3 =
+            std::array::from_fn(|a| (if k >> a & 1 == 1 { hi[a] } else { lo[a] }) - centre[a]);
+        let depth = dot(c, forward);
+        dist = dist
+            .max(dot(c, right).abs() / tan_x - depth)
+            .max(dot(c, cam_up).abs() / tan_y - depth)
+            // The eye stays outside the box.
+            .max(0.05 * diag - depth);
+    }
+    if !(dist > 0.0) {
+        // A point: any distance frames it; one that f32 can subtract.
+        dist = centre
+            .iter()
+            .fold(1e-30f64, |m, c| m.max(c.abs() * 1e-3))
+            .max(1e-6);
+    }
+    let eye = add(centre, scale(d, dist));
+    let v = Vec3::new(eye[0] as f32, eye[1] as f32, eye[2] as f32);
+    v.is_finite().then_some(v)
+}
 
 /// Orbit, elevation (degrees) and zoom, validated.
 pub(crate) struct ViewAdjust {
@@ -160,8 +257,7 @@ impl Scene {
     /// follows the camera.
     pub fn reaim(&mut self, desc: &SceneDesc) -> Result<(), SceneError> {
         let aspect = self.settings.width as f32 / self.settings.height as f32;
-        self.camera =
-            crate::resolve::camera(&desc.camera, &self.volume.bounds(), aspect, &self.frame)?;
+        self.camera = crate::resolve::camera(&desc.camera, &self.framed, aspect, &self.frame)?;
         let follows = desc.light.as_ref().is_some_and(|l| l.direction.is_none());
         if let Some(light) = &mut self.settings.light
             && follows

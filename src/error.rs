@@ -40,6 +40,9 @@ pub enum SceneError {
     /// flag of the same name).
     #[error("{field}: {message}")]
     Setting { field: String, message: String },
+    /// An output that cannot be written (checked before any work).
+    #[error("output {path}: {message}")]
+    Output { path: PathBuf, message: String },
     #[error("transfer function: {0}")]
     Transfer(#[from] TransferError),
     #[error(transparent)]
@@ -52,6 +55,12 @@ pub type Error = SceneError;
 impl SceneError {
     pub fn data(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
         SceneError::Data {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+    pub fn output(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
+        SceneError::Output {
             path: path.into(),
             message: message.into(),
         }

@@ -1,15 +1,20 @@
-//! Flags: every scene setting a one-off run needs, as one flat set of named
-//! options that override a scene description — the CLI's flags (`--kernel`,
-//! `--eye`, …) and the Python package's keyword arguments (`kernel=`,
-//! `eye=`, …) are this one struct, so both front-ends apply them by the
-//! same rules ([`SceneFlags::apply`]): which data kind the flags describe,
-//! that a colormap file replaces the scene's colours, that any light setting
-//! turns the light on, and so on.
+//! Flags: every scene setting a one-off run needs, as named options that
+//! override a scene description — the CLI's flags (`--kernel`, `--eye`, …)
+//! and the Python package's keyword arguments (`kernel=`, `eye=`, …) are
+//! these structs, so both front-ends apply them by the same rules
+//! ([`SceneFlags::apply`]): which data kind the flags describe, that a
+//! colormap file replaces the scene's colours, that any light setting turns
+//! the light on, and so on.
 //!
-//! clap parses it from a command line (feature `clap`, which the CLI
-//! enables); serde from a table of names (a Python dict of keyword
-//! arguments), with unknown names refused. Names are the CLI's long flags
-//! with `_` for `-` (`light_dir`, `box`).
+//! They come in three groups, so that a command takes only the flags it
+//! uses: [`DataFlags`] (what data to read and how to reconstruct its field;
+//! every command that loads data), [`KindFlags`] (how a render shows a data
+//! kind) and [`ViewFlags`] (image, transfer function, camera, rendering,
+//! lighting). clap parses each from a command line (feature `clap`, which
+//! the CLI enables); serde from a table of names (a Python dict of keyword
+//! arguments; [`SceneFlags::group_of`] says which group a name belongs to),
+//! with unknown names refused. Names are the CLI's long flags with `_` for
+//! `-` (`light_dir`, `box`).
 
 use std::path::{Path, PathBuf};
 
@@ -21,25 +26,26 @@ use voxless_scene::{
 
 use crate::SceneError;
 
-/// Every scene setting as a flag (see the module docs); each overrides the
-/// description it is applied to.
+/// What data to read and how to reconstruct its field: every command that
+/// loads data takes these (they override the scene file).
 #[derive(Deserialize, Debug, Default, Clone, PartialEq)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(default, deny_unknown_fields)]
-pub struct SceneFlags {
-    // ---- data ----
+pub struct DataFlags {
     /// Particle file: .npy N×3 (float32/float64), CSV with x, y, z columns,
     /// .vtp/.vtu, .xyz/.extxyz, a LAMMPS dump (dump.*, .lammpstrj, .dump),
     /// .particles, or .h5/.hdf5 (PySPH, SWIFT/Gadget; JaxPM with
-    /// --lagrangian/--snapshot; needs --features hdf5). A multi-frame file,
-    /// pattern or directory is a time series (--frames).
+    /// --lagrangian/--snapshot, or alone; needs --features hdf5). A
+    /// multi-frame file, pattern, glob or directory is a time series.
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
     pub particles: Option<PathBuf>,
     /// Per-particle attribute: a column of the particle file (case-insensitive),
     /// or .npy with N values.
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
     pub attribute: Option<String>,
-    /// Global radius parameter (support for gaussian3, std-dev for gaussian, h for cubic-spline).
+    /// Global radius parameter, world units (support for gaussian3, std-dev for
+    /// gaussian, h for cubic-spline). Default: a support of the median
+    /// nearest-neighbour distance (printed).
     #[cfg_attr(
         feature = "clap",
         arg(long, help_heading = "Particles", allow_negative_numbers = true)
@@ -48,7 +54,8 @@ pub struct SceneFlags {
     /// Per-particle radii: a column name, or .npy with N values.
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
     pub radii: Option<String>,
-    /// Per-particle weights (masses for cubic-spline): a column name or .npy.
+    /// Per-particle weights (masses for cubic-spline): a column name or .npy
+    /// (default 1).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
     pub weights: Option<String>,
     /// PySPH particle array to read (default: fluid if present, else the first).
@@ -85,14 +92,6 @@ pub struct SceneFlags {
     /// Particles per BVH leaf cluster, 1..=16 (default 8).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
     pub cluster: Option<usize>,
-    /// Attribute classification (default post).
-    #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = "Particles"))]
-    pub classification: Option<ClassificationName>,
-    /// Attribute range mapped to the colormap / maps.
-    #[cfg_attr(feature = "clap", arg(long, num_args = 2, value_names = ["LO", "HI"], help_heading = "Particles", allow_negative_numbers = true))]
-    pub attribute_range: Option<Vec<f32>>,
-
-    // ---- phase-space tessellation ----
     /// Treat --particles as N³ N-body particles on a Lagrangian grid (Lagrangian
     /// order, k fastest) and render their phase-space tessellation. A JaxPM
     /// .h5 file gives N (and L) itself.
@@ -108,7 +107,7 @@ pub struct SceneFlags {
         arg(long, value_name = "K", help_heading = "Phase-space tessellation")
     )]
     pub snapshot: Option<usize>,
-    /// Periodic box size L (positions in [0, L)³).
+    /// Periodic box size L (positions in [0, L)³; a JaxPM file's by default).
     #[serde(rename = "box")]
     #[cfg_attr(
         feature = "clap",
@@ -120,9 +119,46 @@ pub struct SceneFlags {
         )
     )]
     pub box_size: Option<f32>,
-    /// Mass per particle (default: total mass 1).
+    /// Mass per particle, world units (default: the mean density is 1, so
+    /// densities read as the overdensity 1 + δ).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Phase-space tessellation"))]
     pub particle_mass: Option<f64>,
+    /// ExaBricks cells: .cells (int32 x, y, z, level per cell).
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
+    pub cells: Option<PathBuf>,
+    /// ExaBricks .scalars file, one per field (repeat the flag).
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
+    pub scalars: Vec<PathBuf>,
+    /// AMRClaw ASCII output fort.qNNNN (fields q0, q1, …).
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
+    pub amrclaw: Option<PathBuf>,
+    /// World position of cell coordinate 0 (default: .meta.json beside the cells, else 0).
+    #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "AMR", allow_negative_numbers = true))]
+    pub origin: Option<Vec<f64>>,
+    /// World width of a finest cell (default: .meta.json, else 1).
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
+    pub cell_size: Option<f32>,
+    /// Field driving opacity (default: the first).
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
+    pub field: Option<String>,
+    /// Reconstruction between cell centres (default basis).
+    #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = "AMR"))]
+    pub reconstruction: Option<ReconstructionName>,
+}
+
+/// How `render` shows a particular data kind (particle attributes,
+/// tessellation modes, AMR colour fields).
+#[derive(Deserialize, Debug, Default, Clone, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+#[serde(default, deny_unknown_fields)]
+pub struct KindFlags {
+    /// Attribute classification (default post).
+    #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = "Particles"))]
+    pub classification: Option<ClassificationName>,
+    /// Attribute range mapped to the colormap / maps (default: over the
+    /// data, every frame of a time series).
+    #[cfg_attr(feature = "clap", arg(long, num_args = 2, value_names = ["LO", "HI"], help_heading = "Particles", allow_negative_numbers = true))]
+    pub attribute_range: Option<Vec<f32>>,
     /// How crossing events become colour (default exact).
     #[cfg_attr(
         feature = "clap",
@@ -142,43 +178,24 @@ pub struct SceneFlags {
         arg(long, value_name = "PIXELS", help_heading = "Phase-space tessellation")
     )]
     pub lod: Option<f32>,
-
-    // ---- AMR ----
-    /// ExaBricks cells: .cells (int32 x, y, z, level per cell).
-    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
-    pub cells: Option<PathBuf>,
-    /// ExaBricks .scalars file, one per field (repeat the flag).
-    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
-    pub scalars: Vec<PathBuf>,
-    /// AMRClaw ASCII output fort.qNNNN (fields q0, q1, …).
-    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
-    pub amrclaw: Option<PathBuf>,
-    /// World position of cell coordinate 0 (default: .meta.json beside the cells, else 0).
-    #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "AMR", allow_negative_numbers = true))]
-    pub origin: Option<Vec<f64>>,
-    /// World width of a finest cell (default: .meta.json, else 1).
-    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
-    pub cell_size: Option<f32>,
-    /// Field driving opacity (default: the first).
-    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
-    pub field: Option<String>,
-    /// Field driving colour (multi-field rendering).
+    /// Field driving colour (multi-field rendering; default: --field).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
     pub color_field: Option<String>,
-    /// Reconstruction between cell centres (default basis).
-    #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = "AMR"))]
-    pub reconstruction: Option<ReconstructionName>,
+}
 
-    // ---- image ----
-    /// Image size in pixels.
+/// How an image looks: size, transfer function, camera, rendering and
+/// lighting (`render` and `demo`).
+#[derive(Deserialize, Debug, Default, Clone, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+#[serde(default, deny_unknown_fields)]
+pub struct ViewFlags {
+    /// Image size in pixels (default 800 600).
     #[cfg_attr(feature = "clap", arg(long, num_args = 2, value_names = ["W", "H"], help_heading = "Image"))]
     pub size: Option<Vec<u32>>,
-    /// Samples per pixel (progressively accumulated).
+    /// Samples per pixel, progressively accumulated (default 1).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Image"))]
     pub spp: Option<u32>,
-
-    // ---- transfer function ----
-    /// Colormap preset (see `voxless colormaps`).
+    /// Colormap preset (see `voxless colormaps`; default viridis).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Transfer function"))]
     pub colormap: Option<String>,
     /// Colormap file: ParaView preset JSON ("Export preset") or a JSON list of
@@ -189,27 +206,34 @@ pub struct SceneFlags {
         arg(long, value_name = "FILE", help_heading = "Transfer function")
     )]
     pub colormap_file: Option<PathBuf>,
-    /// Opacity preset: linear, constant, ramp-high, ramp-low.
+    /// Opacity preset: linear, constant, ramp-high, ramp-low (default linear).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Transfer function"))]
     pub opacity: Option<String>,
-    /// Value range mapped to [0, 1] (default: from the data).
+    /// Value range mapped to [0, 1] (default: robust percentiles of the field
+    /// over the data, every frame of a time series; printed).
     #[cfg_attr(feature = "clap", arg(long, num_args = 2, value_names = ["LO", "HI"], help_heading = "Transfer function", allow_negative_numbers = true))]
     pub value_range: Option<Vec<f32>>,
-
-    // ---- camera ----
     #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true))]
+    /// Eye position, world coordinates (default: a three-quarter view from
+    /// 25° above the horizontal, the data's long horizontal side across the
+    /// image, far enough to keep all of it in frame).
     pub eye: Option<Vec<f64>>,
     #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true))]
+    /// Point the camera looks at, world coordinates (default: the centre of
+    /// the data's bounds).
     pub look_at: Option<Vec<f64>>,
     #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Camera", allow_negative_numbers = true))]
+    /// Up vector of the view (default 0 0 1: +z up, as in SPH, cosmology and
+    /// most CFD; the default eye is chosen around it).
     pub up: Option<Vec<f32>>,
-    /// Vertical field of view in degrees.
+    /// Vertical field of view in degrees (default 30).
     #[cfg_attr(
         feature = "clap",
         arg(long, help_heading = "Camera", allow_negative_numbers = true)
     )]
     pub fov: Option<f32>,
-    /// Orthographic projection with this view height (world units).
+    /// Orthographic projection with this view height, world units (default:
+    /// perspective).
     #[cfg_attr(
         feature = "clap",
         arg(
@@ -232,8 +256,6 @@ pub struct SceneFlags {
     /// (orthographic: the view height ÷ F).
     #[cfg_attr(feature = "clap", arg(long, value_name = "F", help_heading = "Camera", allow_negative_numbers = true, value_parser = zoom))]
     pub zoom: Option<f32>,
-
-    // ---- render ----
     /// Ray-marching step in world units (default: 1/8 of the median support radius).
     #[cfg_attr(
         feature = "clap",
@@ -246,22 +268,25 @@ pub struct SceneFlags {
         arg(long, help_heading = "Render", allow_negative_numbers = true)
     )]
     pub early_termination: Option<f32>,
-    /// Extinction per unit length at opacity 1 (default 8 / bounds diagonal).
+    /// Extinction per unit length at opacity 1 (default: chosen so a typical
+    /// ray through the data reaches optical depth 2; printed).
     #[cfg_attr(
         feature = "clap",
         arg(long, help_heading = "Render", allow_negative_numbers = true)
     )]
     pub opacity_scale: Option<f32>,
-    /// Background colour, linear RGB.
+    /// Background colour, linear RGB ≥ 0 (default 0 0 0).
     #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["R", "G", "B"], help_heading = "Render"))]
     pub background: Option<Vec<f32>>,
-    /// Gradient shading with a directional light.
+    /// Gradient shading with a directional light (default off).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Render"))]
     pub shade: bool,
-    /// Direction towards the light (implies --shade).
+    /// Direction towards the light (implies --shade; default: over the
+    /// camera's left shoulder).
     #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "Render", allow_negative_numbers = true))]
     pub light_dir: Option<Vec<f32>>,
-    /// Single scattering with volumetric shadows (implies --shade's light).
+    /// Single scattering with volumetric shadows (implies --shade's light;
+    /// default off).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Lighting"))]
     pub shadows: bool,
     /// A point light at this position (with --shadows).
@@ -279,7 +304,7 @@ pub struct SceneFlags {
     /// Random numbers with shadows (default blue).
     #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = "Lighting"))]
     pub noise: Option<NoiseName>,
-    /// Random seed for jitter.
+    /// Random seed for jitter (default 0).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Render"))]
     pub seed: Option<u64>,
     /// Implicit iso-surface at this value of the opacity field (repeat for more).
@@ -307,7 +332,7 @@ pub struct SceneFlags {
     /// image, slower; for comparisons).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Render"))]
     pub no_packets: bool,
-    /// Render only what lies inside this box.
+    /// Render only what lies inside this box, world coordinates (default: all).
     #[cfg_attr(feature = "clap", arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], help_heading = "Render", allow_negative_numbers = true))]
     pub clip: Option<Vec<f64>>,
 }
@@ -367,9 +392,8 @@ fn set<T>(slot: &mut Option<T>, v: Option<T>) {
     }
 }
 
-impl SceneFlags {
-    /// The flags' names, in declaration order (as in a table of them:
-    /// `light_dir`, `box`; on the command line `--light-dir`, `--box`).
+impl DataFlags {
+    /// The flags' names, in declaration order.
     pub const NAMES: &'static [&'static str] = &[
         "particles",
         "attribute",
@@ -383,24 +407,36 @@ impl SceneFlags {
         "kappa",
         "sigma",
         "cluster",
-        "classification",
-        "attribute_range",
         "lagrangian",
         "snapshot",
         "box",
         "particle_mass",
-        "tet_mode",
-        "k",
-        "layers",
-        "lod",
         "cells",
         "scalars",
         "amrclaw",
         "origin",
         "cell_size",
         "field",
-        "color_field",
         "reconstruction",
+    ];
+}
+
+impl KindFlags {
+    /// The flags' names, in declaration order.
+    pub const NAMES: &'static [&'static str] = &[
+        "classification",
+        "attribute_range",
+        "tet_mode",
+        "k",
+        "layers",
+        "lod",
+        "color_field",
+    ];
+}
+
+impl ViewFlags {
+    /// The flags' names, in declaration order.
+    pub const NAMES: &'static [&'static str] = &[
         "size",
         "spp",
         "colormap",
@@ -436,10 +472,98 @@ impl SceneFlags {
         "no_packets",
         "clip",
     ];
+}
 
-    /// [`SceneFlags::NAMES`] as strings.
+/// One of the three groups of flags.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FlagGroup {
+    Data,
+    Kind,
+    View,
+}
+
+/// Every flag: the three groups (a command lacking a group leaves it at its
+/// defaults, which change nothing). serde reads it from one table of named
+/// values (any self-describing format: a TOML table, a JSON object), each
+/// name going to its group; an error names the flag at fault.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SceneFlags {
+    pub data: DataFlags,
+    pub kind: KindFlags,
+    pub view: ViewFlags,
+}
+
+impl<'de> Deserialize<'de> for SceneFlags {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let table = toml::Table::deserialize(d)?;
+        SceneFlags::from_table(table).map_err(serde::de::Error::custom)
+    }
+}
+
+/// A group of flags from its part of the table; the error names the flag
+/// at fault (found by reading the flags one at a time).
+fn group<T: serde::de::DeserializeOwned>(table: toml::Table) -> Result<T, String> {
+    T::deserialize(toml::Value::Table(table.clone())).map_err(|e| {
+        for (name, value) in table {
+            let one = toml::Table::from_iter([(name.clone(), value)]);
+            if let Err(e) = T::deserialize(toml::Value::Table(one)) {
+                return format!("{name}: {e}");
+            }
+        }
+        e.to_string()
+    })
+}
+
+impl SceneFlags {
+    /// The flags of a table of named values (see [`SceneFlags`]).
+    pub fn from_table(table: toml::Table) -> Result<SceneFlags, String> {
+        let mut parts = [toml::Table::new(), toml::Table::new(), toml::Table::new()];
+        for (name, value) in table {
+            let part = match SceneFlags::group_of(&name) {
+                Some(FlagGroup::Data) => 0,
+                Some(FlagGroup::Kind) => 1,
+                Some(FlagGroup::View) => 2,
+                None => {
+                    return Err(format!(
+                        "unknown flag `{name}`, expected one of {}",
+                        SceneFlags::names().join(", ")
+                    ));
+                }
+            };
+            parts[part].insert(name, value);
+        }
+        let [data, kind, view] = parts;
+        Ok(SceneFlags {
+            data: group(data)?,
+            kind: group(kind)?,
+            view: group(view)?,
+        })
+    }
+}
+
+impl SceneFlags {
+    /// Every flag's name (as in a table of them: `light_dir`, `box`; on the
+    /// command line `--light-dir`, `--box`): data, kind, then view flags.
     pub fn names() -> Vec<String> {
-        Self::NAMES.iter().map(|n| n.to_string()).collect()
+        DataFlags::NAMES
+            .iter()
+            .chain(KindFlags::NAMES)
+            .chain(ViewFlags::NAMES)
+            .map(|n| n.to_string())
+            .collect()
+    }
+
+    /// The group the flag `name` belongs to (None: no such flag).
+    pub fn group_of(name: &str) -> Option<FlagGroup> {
+        if DataFlags::NAMES.contains(&name) {
+            Some(FlagGroup::Data)
+        } else if KindFlags::NAMES.contains(&name) {
+            Some(FlagGroup::Kind)
+        } else if ViewFlags::NAMES.contains(&name) {
+            Some(FlagGroup::View)
+        } else {
+            None
+        }
     }
 
     /// The names of every data flag (see [`SceneFlags::data_flags`]).
@@ -449,10 +573,11 @@ impl SceneFlags {
         p.iter().chain(&t).chain(&a).map(|f| f.0).collect()
     }
 
-    /// The names of the data flags among the given ones — those that say
-    /// what data to read or how to build the volume (particles, tessellation
-    /// and AMR flags), as opposed to the view (image, camera, transfer
-    /// function, render, light).
+    /// The names of the given flags that describe the data — what to read,
+    /// how to reconstruct it and how a data kind is shown (the data and kind
+    /// groups: they set the particles, tessellation or AMR table) — as
+    /// opposed to the view (image, camera, transfer function, render,
+    /// light).
     pub fn data_flags(&self) -> Vec<&'static str> {
         let (p, t, a) = (self.particle_flags(), self.tet_flags(), self.amr_flags());
         p.into_iter()
@@ -463,47 +588,50 @@ impl SceneFlags {
     }
 
     fn particle_flags(&self) -> [(&'static str, bool); 14] {
+        let (d, k) = (&self.data, &self.kind);
         [
-            ("particles", self.particles.is_some()),
-            ("attribute", self.attribute.is_some()),
-            ("radius", self.radius.is_some()),
-            ("radii", self.radii.is_some()),
-            ("weights", self.weights.is_some()),
-            ("kernel", self.kernel.is_some()),
-            ("kappa", self.kappa.is_some()),
-            ("sigma", self.sigma.is_some()),
-            ("cluster", self.cluster.is_some()),
-            ("classification", self.classification.is_some()),
-            ("attribute_range", self.attribute_range.is_some()),
-            ("group", self.group.is_some()),
-            ("part_type", self.part_type.is_some()),
-            ("species", self.species.is_some()),
+            ("particles", d.particles.is_some()),
+            ("attribute", d.attribute.is_some()),
+            ("radius", d.radius.is_some()),
+            ("radii", d.radii.is_some()),
+            ("weights", d.weights.is_some()),
+            ("kernel", d.kernel.is_some()),
+            ("kappa", d.kappa.is_some()),
+            ("sigma", d.sigma.is_some()),
+            ("cluster", d.cluster.is_some()),
+            ("classification", k.classification.is_some()),
+            ("attribute_range", k.attribute_range.is_some()),
+            ("group", d.group.is_some()),
+            ("part_type", d.part_type.is_some()),
+            ("species", d.species.is_some()),
         ]
     }
 
     fn tet_flags(&self) -> [(&'static str, bool); 8] {
+        let (d, k) = (&self.data, &self.kind);
         [
-            ("lagrangian", self.lagrangian.is_some()),
-            ("snapshot", self.snapshot.is_some()),
-            ("box", self.box_size.is_some()),
-            ("particle_mass", self.particle_mass.is_some()),
-            ("tet_mode", self.tet_mode.is_some()),
-            ("k", self.k.is_some()),
-            ("layers", self.layers.is_some()),
-            ("lod", self.lod.is_some()),
+            ("lagrangian", d.lagrangian.is_some()),
+            ("snapshot", d.snapshot.is_some()),
+            ("box", d.box_size.is_some()),
+            ("particle_mass", d.particle_mass.is_some()),
+            ("tet_mode", k.tet_mode.is_some()),
+            ("k", k.k.is_some()),
+            ("layers", k.layers.is_some()),
+            ("lod", k.lod.is_some()),
         ]
     }
 
     fn amr_flags(&self) -> [(&'static str, bool); 8] {
+        let (d, k) = (&self.data, &self.kind);
         [
-            ("cells", self.cells.is_some()),
-            ("scalars", !self.scalars.is_empty()),
-            ("amrclaw", self.amrclaw.is_some()),
-            ("origin", self.origin.is_some()),
-            ("cell_size", self.cell_size.is_some()),
-            ("field", self.field.is_some()),
-            ("color_field", self.color_field.is_some()),
-            ("reconstruction", self.reconstruction.is_some()),
+            ("cells", d.cells.is_some()),
+            ("scalars", !d.scalars.is_empty()),
+            ("amrclaw", d.amrclaw.is_some()),
+            ("origin", d.origin.is_some()),
+            ("cell_size", d.cell_size.is_some()),
+            ("field", d.field.is_some()),
+            ("color_field", k.color_field.is_some()),
+            ("reconstruction", d.reconstruction.is_some()),
         ]
     }
 
@@ -512,7 +640,7 @@ impl SceneFlags {
     /// Errors name the flag: a value of the wrong length, or particle flags
     /// for a phase-space tessellation (they would be dropped).
     pub fn apply(&self, d: &mut SceneDesc, cwd: &Path) -> Result<(), SceneError> {
-        if self.log && self.linear {
+        if self.view.log && self.view.linear {
             return Err(SceneError::setting("log", "give log or linear, not both"));
         }
         let given = |flags: &[(&'static str, bool)]| flags.iter().find(|f| f.1).map(|f| f.0);
@@ -530,137 +658,143 @@ impl SceneFlags {
                 ));
             }
             let t = d.tets.get_or_insert_with(TetsDesc::default);
-            if let Some(f) = &self.particles {
+            if let Some(f) = &self.data.particles {
                 t.file = Some(path(f));
             }
-            set(&mut t.lagrangian, self.lagrangian);
-            set(&mut t.snapshot, self.snapshot);
-            set(&mut t.box_size, self.box_size);
-            set(&mut t.particle_mass, self.particle_mass);
-            set(&mut t.mode, self.tet_mode);
-            set(&mut t.k, self.k);
-            set(&mut t.layers, self.layers);
-            set(&mut t.lod_pixels, self.lod);
+            set(&mut t.lagrangian, self.data.lagrangian);
+            set(&mut t.snapshot, self.data.snapshot);
+            set(&mut t.box_size, self.data.box_size);
+            set(&mut t.particle_mass, self.data.particle_mass);
+            set(&mut t.mode, self.kind.tet_mode);
+            set(&mut t.k, self.kind.k);
+            set(&mut t.layers, self.kind.layers);
+            set(&mut t.lod_pixels, self.kind.lod);
         } else if given(&particle_flags).is_some() {
             let p = d.particles.get_or_insert_with(ParticlesDesc::default);
-            if let Some(f) = &self.particles {
+            if let Some(f) = &self.data.particles {
                 p.file = Some(path(f));
                 p.demo = None;
             }
             let column = |s: &Option<String>| s.as_deref().map(|s| cwd_path(cwd, s));
-            set(&mut p.attribute, column(&self.attribute));
-            set(&mut p.radius, self.radius);
-            set(&mut p.radii, column(&self.radii));
-            set(&mut p.weights, column(&self.weights));
-            set(&mut p.kernel, self.kernel);
-            set(&mut p.group, self.group.clone());
-            set(&mut p.part_type, self.part_type);
-            set(&mut p.species, self.species.clone());
-            set(&mut p.kappa, self.kappa);
-            set(&mut p.sigma, self.sigma);
-            set(&mut p.cluster, self.cluster);
-            set(&mut p.classification, self.classification);
+            set(&mut p.attribute, column(&self.data.attribute));
+            set(&mut p.radius, self.data.radius);
+            set(&mut p.radii, column(&self.data.radii));
+            set(&mut p.weights, column(&self.data.weights));
+            set(&mut p.kernel, self.data.kernel);
+            set(&mut p.group, self.data.group.clone());
+            set(&mut p.part_type, self.data.part_type);
+            set(&mut p.species, self.data.species.clone());
+            set(&mut p.kappa, self.data.kappa);
+            set(&mut p.sigma, self.data.sigma);
+            set(&mut p.cluster, self.data.cluster);
+            set(&mut p.classification, self.kind.classification);
             set(
                 &mut p.attribute_range,
-                fixed("attribute_range", &self.attribute_range)?,
+                fixed("attribute_range", &self.kind.attribute_range)?,
             );
         }
         if given(&self.amr_flags()).is_some() {
             let a = d.amr.get_or_insert_with(AmrDesc::default);
-            if let Some(c) = &self.cells {
+            if let Some(c) = &self.data.cells {
                 a.cells = Some(path(c));
                 a.amrclaw = None;
             }
-            if !self.scalars.is_empty() {
-                a.scalars = Some(self.scalars.iter().map(path).collect());
+            if !self.data.scalars.is_empty() {
+                a.scalars = Some(self.data.scalars.iter().map(path).collect());
             }
-            if let Some(q) = &self.amrclaw {
+            if let Some(q) = &self.data.amrclaw {
                 a.amrclaw = Some(path(q));
                 a.cells = None;
             }
-            set(&mut a.origin, fixed("origin", &self.origin)?);
-            set(&mut a.cell_size, self.cell_size);
-            set(&mut a.field, self.field.clone());
-            set(&mut a.color_field, self.color_field.clone());
-            set(&mut a.reconstruction, self.reconstruction);
+            set(&mut a.origin, fixed("origin", &self.data.origin)?);
+            set(&mut a.cell_size, self.data.cell_size);
+            set(&mut a.field, self.data.field.clone());
+            set(&mut a.color_field, self.kind.color_field.clone());
+            set(&mut a.reconstruction, self.data.reconstruction);
         }
         self.apply_view(d, cwd)
     }
 
     /// The image, transfer-function, camera, render and light flags.
     fn apply_view(&self, d: &mut SceneDesc, cwd: &Path) -> Result<(), SceneError> {
-        if let Some([w, h]) = fixed("size", &self.size)? {
+        if let Some([w, h]) = fixed("size", &self.view.size)? {
             d.image.width = Some(w);
             d.image.height = Some(h);
         }
-        set(&mut d.image.spp, self.spp);
+        set(&mut d.image.spp, self.view.spp);
         let t = &mut d.transfer;
-        if let Some(f) = &self.colormap_file {
+        if let Some(f) = &self.view.colormap_file {
             // The file replaces the scene's colours; --colormap picks in it.
             t.colormap_file = Some(cwd.join(f).to_string_lossy().into_owned());
             t.colormap_points = None;
             t.colormap = None;
-        } else if self.colormap.is_some() {
+        } else if self.view.colormap.is_some() {
             t.colormap_file = None;
         }
-        if self.colormap.is_some() {
+        if self.view.colormap.is_some() {
             t.colormap_points = None;
         }
-        set(&mut t.colormap, self.colormap.clone());
-        if self.opacity.is_some() {
+        set(&mut t.colormap, self.view.colormap.clone());
+        if self.view.opacity.is_some() {
             t.opacity_points = None;
         }
-        set(&mut t.opacity, self.opacity.clone());
-        set(&mut t.value_range, fixed("value_range", &self.value_range)?);
+        set(&mut t.opacity, self.view.opacity.clone());
+        set(
+            &mut t.value_range,
+            fixed("value_range", &self.view.value_range)?,
+        );
         let c = &mut d.camera;
-        set(&mut c.eye, fixed("eye", &self.eye)?);
-        set(&mut c.look_at, fixed("look_at", &self.look_at)?);
-        set(&mut c.up, fixed("up", &self.up)?);
-        set(&mut c.fov, self.fov);
-        set(&mut c.orbit, self.orbit);
-        set(&mut c.elevation, self.elevation);
-        set(&mut c.zoom, self.zoom);
-        if let Some(h) = self.orthographic {
+        set(&mut c.eye, fixed("eye", &self.view.eye)?);
+        set(&mut c.look_at, fixed("look_at", &self.view.look_at)?);
+        set(&mut c.up, fixed("up", &self.view.up)?);
+        set(&mut c.fov, self.view.fov);
+        set(&mut c.orbit, self.view.orbit);
+        set(&mut c.elevation, self.view.elevation);
+        set(&mut c.zoom, self.view.zoom);
+        if let Some(h) = self.view.orthographic {
             c.projection = Some(ProjectionName::Orthographic);
             c.ortho_height = Some(h);
         }
         let r = &mut d.render;
-        set(&mut r.step, self.step);
-        set(&mut r.early_termination, self.early_termination);
-        set(&mut r.opacity_scale, self.opacity_scale);
-        set(&mut r.background, fixed("background", &self.background)?);
-        set(&mut r.seed, self.seed);
-        if !self.iso.is_empty() {
-            r.iso = Some(self.iso.clone());
+        set(&mut r.step, self.view.step);
+        set(&mut r.early_termination, self.view.early_termination);
+        set(&mut r.opacity_scale, self.view.opacity_scale);
+        set(
+            &mut r.background,
+            fixed("background", &self.view.background)?,
+        );
+        set(&mut r.seed, self.view.seed);
+        if !self.view.iso.is_empty() {
+            r.iso = Some(self.view.iso.clone());
         }
-        set(&mut r.iso_opacity, self.iso_opacity);
-        if self.iso_only {
+        set(&mut r.iso_opacity, self.view.iso_opacity);
+        if self.view.iso_only {
             r.volume = Some(false);
         }
-        if self.log {
+        if self.view.log {
             r.log_scale = Some(true);
         }
-        if self.linear {
+        if self.view.linear {
             r.log_scale = Some(false);
         }
-        if self.no_packets {
+        if self.view.no_packets {
             r.packets = Some(false);
         }
-        set(&mut r.clip, fixed("clip", &self.clip)?);
-        let lighting = self.light_pos.is_some()
-            || self.light_intensity.is_some()
-            || self.ambient.is_some()
-            || self.free_flight.is_some()
-            || self.noise.is_some();
-        if self.shade || self.shadows || self.light_dir.is_some() || lighting {
+        set(&mut r.clip, fixed("clip", &self.view.clip)?);
+        let lighting = self.view.light_pos.is_some()
+            || self.view.light_intensity.is_some()
+            || self.view.ambient.is_some()
+            || self.view.free_flight.is_some()
+            || self.view.noise.is_some();
+        if self.view.shade || self.view.shadows || self.view.light_dir.is_some() || lighting {
             let l = d.light.get_or_insert_with(LightDesc::default);
-            set(&mut l.direction, fixed("light_dir", &self.light_dir)?);
-            set(&mut l.position, fixed("light_pos", &self.light_pos)?);
-            set(&mut l.intensity, self.light_intensity);
-            set(&mut l.ambient, self.ambient);
-            set(&mut l.free_flight, self.free_flight);
-            set(&mut l.noise, self.noise);
-            if self.shadows {
+            set(&mut l.direction, fixed("light_dir", &self.view.light_dir)?);
+            set(&mut l.position, fixed("light_pos", &self.view.light_pos)?);
+            set(&mut l.intensity, self.view.light_intensity);
+            set(&mut l.ambient, self.view.ambient);
+            set(&mut l.free_flight, self.view.free_flight);
+            set(&mut l.noise, self.view.noise);
+            if self.view.shadows {
                 l.shadows = Some(true);
             }
         }

@@ -54,6 +54,8 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod autorange;
+pub mod budget;
 mod camera;
 mod columns;
 pub mod demo;
@@ -63,12 +65,14 @@ mod frame;
 pub mod histogram;
 pub mod load;
 mod memory;
+pub mod output;
 pub mod pose;
 pub mod progressive;
 pub mod projection;
 mod resolve;
 pub mod save;
 mod scene;
+pub mod series;
 mod view;
 mod volume;
 
@@ -76,10 +80,12 @@ pub use error::{Error, SceneError};
 pub use flags::SceneFlags;
 pub use frame::WorldFrame;
 pub use load::AmrArrays;
-pub use load::{Loaded, frame_count, load, read_points, read_scene};
+pub use load::{Loaded, frame_count, frame_numbers, load, read_points, read_scene};
 pub use memory::ParticleArrays;
 pub use projection::{ProjectionDesc, ProjectionView};
-pub use resolve::{Resolved, resolve, resolve_in, transfer_function, transfer_function_at};
+pub use resolve::{
+    Resolved, resolve, resolve_in, resolve_with, transfer_function, transfer_function_at,
+};
 pub use scene::Scene;
 pub use volume::AnyVolume;
 

@@ -14,17 +14,23 @@ use crate::load::{self, AmrArrays, Loaded};
 use crate::{AnyVolume, SceneError, WorldFrame};
 
 /// Particle arrays in memory, one entry per particle.
+///
+/// Positions are in `frame`'s local coordinates (the world itself by
+/// default); radii and weights are in world units. Building a volume places
+/// the particles in the frame the placement policy picks for their extent
+/// ([`WorldFrame::fit`]): for everyday data that is the world frame, and
+/// the arrays are used as they are.
 #[derive(Clone, Debug, Default)]
 pub struct ParticleArrays {
-    /// Positions relative to `frame`'s origin.
+    /// Positions in `frame`'s coordinates.
     pub positions: Vec<Vec3>,
-    /// Where the positions' origin lies in the world (the world origin by
-    /// default; [`ParticleArrays::from_f64`] centres it on the data).
+    /// Where the positions' frame lies in the world (the world frame by
+    /// default; [`ParticleArrays::from_f64`] picks one for the data).
     pub frame: WorldFrame,
-    /// Per-particle radius parameter (else the description's `radius`, else
-    /// one estimated from the particle spacing).
+    /// Per-particle radius parameter in world units (else the description's
+    /// `radius`, else one estimated from the particle spacing).
     pub radii: Option<Vec<f32>>,
-    /// Per-particle weights (masses for the cubic spline).
+    /// Per-particle weights (masses for the cubic spline), world units.
     pub weights: Option<Vec<f32>>,
     /// A per-particle scalar attribute (colour).
     pub attribute: Option<Vec<f32>>,
@@ -42,11 +48,13 @@ fn array_files() -> Vec<(&'static str, PathBuf)> {
 }
 
 impl ParticleArrays {
-    /// Particles at float64 world positions: recentred on their bounding
-    /// box's centre in float64 before they become float32, so positions far
-    /// from zero (10⁹ + a small spread) keep their digits.
+    /// Particles at float64 world positions, placed in the frame the
+    /// placement policy picks for them ([`WorldFrame::fit`]) in float64
+    /// before they become float32, so positions far from zero (10⁹ + a
+    /// small spread) keep their digits and positions of any scale keep
+    /// their range; everyday data stays in the world frame, bit for bit.
     pub fn from_f64(positions: &[[f64; 3]]) -> ParticleArrays {
-        let frame = WorldFrame::centred_on(positions);
+        let frame = WorldFrame::fit_points(positions);
         ParticleArrays {
             positions: positions.iter().map(|&p| frame.to_local(p)).collect(),
             frame,
@@ -106,6 +114,50 @@ impl ParticleArrays {
         Ok(())
     }
 
+    /// The arrays placed in the frame the policy picks for their reach
+    /// (positions grown by the largest given radius' support): the same
+    /// arrays when that is their own frame.
+    fn placed(self, desc: &ParticlesDesc) -> ParticleArrays {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in &self.positions {
+            let w = self.frame.to_world(*p);
+            for a in 0..3 {
+                lo[a] = lo[a].min(w[a]);
+                hi[a] = hi[a].max(w[a]);
+            }
+        }
+        let kernel = match desc.kernel {
+            Some(voxless_scene::KernelName::CubicSpline) => 2.0,
+            Some(voxless_scene::KernelName::Gaussian) => desc.sigma.unwrap_or(2.0) as f64,
+            _ => 1.0,
+        };
+        let radius = match (desc.radius, &self.radii) {
+            (Some(r), _) => r as f64,
+            (None, Some(r)) => r.iter().fold(0.0f32, |m, &v| m.max(v)) as f64,
+            (None, None) => 0.0,
+        };
+        let grow = if radius.is_finite() {
+            kernel * radius
+        } else {
+            0.0
+        };
+        let fitted = WorldFrame::fit(lo.map(|v| v - grow), hi.map(|v| v + grow));
+        if fitted == self.frame || self.positions.is_empty() {
+            return self;
+        }
+        let positions = self
+            .positions
+            .iter()
+            .map(|&p| fitted.to_local(self.frame.to_world(p)))
+            .collect();
+        ParticleArrays {
+            positions,
+            frame: fitted,
+            ..self
+        }
+    }
+
     fn into_data(self) -> ParticleData {
         ParticleData {
             positions: self.positions,
@@ -126,7 +178,8 @@ fn particle_volume(
         Some(s) => arrays.keep(&s.0)?,
         None => arrays.clone(),
     };
-    load::particles::build_particles(arrays.into_data(), desc, false, notes)
+    let scale = arrays.frame.scale;
+    load::particles::build_particles(arrays.into_data(), desc, false, notes, scale)
         .map_err(|e| e.blame(PathBuf::from("positions"), &array_files()))
 }
 
@@ -140,6 +193,8 @@ impl AnyVolume {
         desc: &ParticlesDesc,
     ) -> Result<Loaded, SceneError> {
         arrays.check_lengths()?;
+        // One frame for every species and material.
+        let arrays = arrays.placed(desc);
         let mut notes = Vec::new();
         let volume = match &desc.materials {
             Some(mats) => {
@@ -175,25 +230,35 @@ impl AnyVolume {
         })
     }
 
-    /// A phase-space tessellation of N³ positions in Lagrangian order
+    /// A phase-space tessellation of N³ world positions in Lagrangian order
     /// (`(i·N + j)·N + k`, k fastest) in the periodic box `[0, box_size)³`,
-    /// with `desc`'s particle mass and level of detail.
+    /// with `desc`'s particle mass and level of detail. Positions outside
+    /// the box are an error naming the particle.
     pub fn from_tessellation(
         positions: Vec<Vec3>,
         n: usize,
         box_size: f32,
         desc: &TetsDesc,
     ) -> Result<Loaded, SceneError> {
+        let grid = load::tets::WorldGrid {
+            n,
+            box_size: box_size as f64,
+            positions: positions
+                .iter()
+                .map(|p| p.to_array().map(f64::from))
+                .collect(),
+        };
         let t = TetsDesc {
             lagrangian: Some(n),
             box_size: Some(box_size),
             ..desc.clone()
         };
-        let grid = load::tets::grid_of(positions, &t)?;
-        let v = load::tets::build_tets(&grid, &t, Path::new("positions"))?;
+        let source = Path::new("positions");
+        load::tets::check_grid(&grid, source)?;
+        let (v, frame) = load::tets::build_world(&grid, &t, source)?;
         Ok(Loaded {
             volume: AnyVolume::Tets(Box::new(v)),
-            frame: WorldFrame::default(),
+            frame,
             notes: Vec::new(),
         })
     }

@@ -75,6 +75,9 @@ pub struct ProjectionView {
     /// The slab integrated, as a range of the camera rays' parameter (None:
     /// the whole line).
     pub t_range: Option<Range1>,
+    /// World length of one unit of the volume's frame: the camera works in
+    /// the frame, columns come out in world units.
+    pub scale: f64,
 }
 
 type V3 = [f64; 3];
@@ -138,12 +141,13 @@ pub fn default_north(normal: [f64; 3]) -> [f64; 3] {
     cross(n, east)
 }
 
-/// The ray parameters of a slab `depth` thick centred on the plane through
-/// `center` (local) across `camera`'s view.
-fn slab(camera: &Camera, center: Vec3, depth: Option<f64>) -> Option<Range1> {
+/// The ray parameters of a slab `depth` (world) thick centred on the plane
+/// through `center` (local) across `camera`'s view (local).
+fn slab(camera: &Camera, center: Vec3, depth: Option<f64>, frame: &WorldFrame) -> Option<Range1> {
     depth.map(|d| {
         let t = (center - camera.eye).dot(camera.forward) as f64;
-        Range1::new((t - 0.5 * d) as f32, (t + 0.5 * d) as f32)
+        let half = 0.5 * frame.length_to_local(d) as f64;
+        Range1::new((t - half) as f32, (t + half) as f32)
     })
 }
 
@@ -282,7 +286,8 @@ impl ProjectionView {
             up: e(v),
             normal: cross(e(u), e(v)),
             width: [hi[u] - lo[u], hi[v] - lo[v]],
-            t_range: slab(&camera, frame.to_local(center), desc.depth),
+            t_range: slab(&camera, frame.to_local(center), desc.depth, frame),
+            scale: frame.scale,
         })
     }
 
@@ -349,8 +354,8 @@ impl ProjectionView {
             up: to_vec3(up),
             forward: -nl,
             projection: Projection::Orthographic {
-                half_width: (0.5 * width[0]) as f32,
-                half_height: (0.5 * width[1]) as f32,
+                half_width: frame.length_to_local(0.5 * width[0]),
+                half_height: frame.length_to_local(0.5 * width[1]),
             },
         };
         Ok(ProjectionView {
@@ -360,13 +365,14 @@ impl ProjectionView {
             up,
             normal: n,
             width,
-            t_range: slab(&camera, c, desc.depth),
+            t_range: slab(&camera, c, desc.depth, frame),
+            scale: frame.scale,
         })
     }
 
-    /// The column density of `volume` through this view, row-major `h × w`:
-    /// the volume's whole-line path, or one line integral per pixel over the
-    /// slab.
+    /// The column density of `volume` through this view, row-major `h × w`,
+    /// in world units: the volume's whole-line path, or one line integral
+    /// per pixel over the slab.
     pub fn project(
         &self,
         volume: &AnyVolume,
@@ -374,10 +380,19 @@ impl ProjectionView {
         h: u32,
         control: &Control,
     ) -> Result<Vec<f32>, Cancelled> {
-        match self.t_range {
-            None => volume.project(&self.camera, w, h, control),
-            Some(t) => volume.project_in(&self.camera, w, h, t, control),
-        }
+        let local = match self.t_range {
+            None => volume.project(&self.camera, w, h, control)?,
+            Some(t) => volume.project_in(&self.camera, w, h, t, control)?,
+        };
+        // ∫ field dt with dt in the frame's units: in world units.
+        Ok(if self.scale == 1.0 {
+            local
+        } else {
+            local
+                .iter()
+                .map(|&c| (c as f64 * self.scale) as f32)
+                .collect()
+        })
     }
 
     /// The world area of one pixel of a `w`×`h` image.

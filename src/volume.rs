@@ -113,6 +113,17 @@ impl AnyVolume {
         })
     }
 
+    /// The samples a render with these settings will take (see
+    /// [`voxless_render::estimate_work`]).
+    pub fn estimate_work(
+        &self,
+        camera: &Camera,
+        tf: &TransferFunction,
+        settings: &RenderSettings,
+    ) -> voxless_render::WorkEstimate {
+        with_volume!(self, v => voxless_render::estimate_work(v, camera, tf, settings))
+    }
+
     /// Column density `∫ value dt` per pixel centre, row-major.
     pub fn project(
         &self,

@@ -536,6 +536,23 @@ fn time_series_renders_numbered_frames_with_fixed_ranges() {
         &s.str("f_%03d.png"),
     ]);
     assert!(s.path("f_001.png").exists() && s.path("f_002.png").exists());
+    // A range past the data renders the frames in it, and says so.
+    let e = ok(&[
+        "render",
+        "--particles",
+        &pattern,
+        "--radius",
+        "0.1",
+        "--size",
+        "16",
+        "16",
+        "--frames",
+        "0..5",
+        "-o",
+        &s.str("x.png"),
+    ]);
+    assert!(e.contains("frames 0, 1, 2"), "{e}");
+    assert!(s.path("x_0002.png").exists() && !s.path("x_0003.png").exists());
     let e = fails(&[
         "render",
         "--particles",
@@ -543,9 +560,12 @@ fn time_series_renders_numbered_frames_with_fixed_ranges() {
         "--radius",
         "0.1",
         "--frames",
-        "0..5",
+        "7..9",
         "-o",
         &s.str("x.png"),
     ]);
-    assert!(e.contains("3 frame"), "{e}");
+    assert!(
+        e.contains("no frame is numbered") && e.contains("0, 1, 2"),
+        "{e}"
+    );
 }

@@ -87,11 +87,11 @@ fn lammps_dump_renders_frames_columns_and_species() {
         "--particles",
         &dump,
         "--frames",
-        "0..2",
+        "2..3",
         "-o",
         &out,
     ]);
-    assert!(e.contains("2 frame"), "{e}");
+    assert!(e.contains("frames 0, 1"), "{e}");
 
     // Columns by name, case-insensitively, for attribute, radii and weights.
     render(&["--frame", "1", "--attribute", "VX"], &s.str("vx.png"));
@@ -474,9 +474,24 @@ mod hdf5 {
         .unwrap();
         let log = ok(&["render", &s.str("dm.toml"), "-o", &s.str("scene.png")]);
         assert!(log.contains("snap_1"), "{log}");
-        // Without tessellation flags a JaxPM file says how to render it.
-        let e = fails(&["render", "--particles", &file, "-o", &out]);
-        assert!(e.contains("--snapshot"), "{e}");
+        // Without tessellation flags a JaxPM file is its last snapshot's
+        // tessellation, as the help says; particle flags do not apply.
+        let log = ok(&[
+            "render",
+            "--particles",
+            &file,
+            "--size",
+            "16",
+            "16",
+            "-o",
+            &out,
+        ]);
+        assert!(
+            log.contains("snap_1") && log.contains("phase-space"),
+            "{log}"
+        );
+        let e = fails(&["render", "--particles", &file, "--radius", "2", "-o", &out]);
+        assert!(e.contains("--radius") && e.contains("JaxPM"), "{e}");
     }
 
     #[test]
@@ -487,7 +502,8 @@ mod hdf5 {
         let s = Scratch::new("real-h5");
         let dam: PathBuf = dir.join("sph-dam-break");
         let dam = dam.to_string_lossy().into_owned();
-        // A directory of PySPH outputs is a time series in name order.
+        // A directory of PySPH outputs is a time series numbered by the
+        // solver iterations in the names (0, 250, …, 2250).
         let log = ok(&[
             "render",
             "--particles",
@@ -495,7 +511,7 @@ mod hdf5 {
             "--attribute",
             "speed",
             "--frames",
-            "8..9",
+            "2000..2250",
             "--size",
             "32",
             "24",
@@ -503,10 +519,12 @@ mod hdf5 {
             &s.str("dam.png"),
         ]);
         assert!(log.contains("rendered 2 frames"), "{log}");
-        assert!(s.path("dam_0008.png").exists() && s.path("dam_0009.png").exists());
+        assert!(s.path("dam_2000.png").exists() && s.path("dam_2250.png").exists());
         let info = stdout_of(&["info", &dam]);
         assert!(
-            info.contains("10 frame") && info.contains("23760 particles"),
+            info.contains("10 frame")
+                && info.contains("frame 1750")
+                && info.contains("23760 particles"),
             "{info}"
         );
 

@@ -124,7 +124,8 @@ fn colormap_file_renders_like_the_same_control_points() {
 fn orbit_90_equals_the_rotated_eye_and_the_scene_key() {
     let s = Scratch::new("orbit");
     let base = particles(&s);
-    let at = ["--look-at", "0.5", "0.5", "0.5"];
+    // y up (the default up, +z, would roll the explicit eye's view).
+    let at = ["--look-at", "0.5", "0.5", "0.5", "--up", "0", "1", "0"];
     let mut orbit = vec!["--eye", "0.5", "0.5", "3", "--orbit", "90"];
     orbit.extend(at);
     render(&s.str("orbit.png"), &base, &orbit);
@@ -145,7 +146,7 @@ fn orbit_90_equals_the_rotated_eye_and_the_scene_key() {
     // The same from the scene file's [camera] keys.
     std::fs::write(
         s.path("cam.toml"),
-        "[camera]\neye = [0.5, 0.5, 3.0]\nlook_at = [0.5, 0.5, 0.5]\norbit = 90.0\n",
+        "[camera]\neye = [0.5, 0.5, 3.0]\nlook_at = [0.5, 0.5, 0.5]\norbit = 90.0\nup = [0.0, 1.0, 0.0]\n",
     )
     .unwrap();
     let scene = s.str("cam.toml");

@@ -1,25 +1,45 @@
-//! The command line's scene: a scene file and the flags that override it
-//! (the library's [`SceneFlags`], shared with the Python package).
+//! The command line's scene: a scene file and the flags that override it.
+//! The flags are the library's ([`voxless::flags`], shared with the Python
+//! package), in three groups so that a command takes only those it uses.
 
 use std::path::{Path, PathBuf};
 
 use clap::Args;
+use voxless::flags::{DataFlags, KindFlags, ViewFlags};
 use voxless::{SceneDesc, SceneFlags};
 
-/// A scene file and every scene setting as flags (they override the file).
+/// What data to read and how to reconstruct its field: every command that
+/// loads data takes these (they override the scene file).
 #[derive(Args, Debug, Default, Clone)]
-pub struct SceneArgs {
+pub struct DataArgs {
     /// Scene file (TOML); optional when --particles is given.
     pub scene: Option<PathBuf>,
     #[command(flatten)]
-    pub flags: SceneFlags,
+    pub flags: DataFlags,
+}
+
+/// How `render` shows a particular data kind (particle attributes,
+/// tessellation modes, AMR colour fields).
+pub type KindArgs = KindFlags;
+
+/// How an image looks: size, transfer function, camera, rendering and
+/// lighting (`render` and `demo`).
+pub type ViewArgs = ViewFlags;
+
+/// Every flag of a command (those a command lacks stay at their defaults),
+/// applied on top of the scene file.
+#[derive(Debug, Default, Clone)]
+pub struct SceneArgs {
+    pub data: DataArgs,
+    pub kind: KindArgs,
+    pub view: ViewArgs,
 }
 
 impl SceneArgs {
     /// Loads the scene file (if any) and applies the flags on top. Returns the
     /// description and the directory its relative paths are relative to.
     pub fn scene(&self) -> anyhow::Result<(SceneDesc, PathBuf)> {
-        let (mut d, base) = match &self.scene {
+        let (mut d, base) = match &self.data.scene {
             Some(path) => {
                 let d = voxless::read_scene(path)?;
                 let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -27,9 +47,14 @@ impl SceneArgs {
             }
             None => (SceneDesc::default(), PathBuf::from(".")),
         };
+        let flags = SceneFlags {
+            data: self.data.flags.clone(),
+            kind: self.kind.clone(),
+            view: self.view.clone(),
+        };
         // Paths on the command line are relative to the working directory.
         let cwd = std::env::current_dir().unwrap_or_default();
-        self.flags.apply(&mut d, &cwd)?;
+        flags.apply(&mut d, &cwd)?;
         Ok((d, base))
     }
 }

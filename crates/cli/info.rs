@@ -41,13 +41,17 @@ fn describe(args: &InfoArgs) -> Result<String> {
     let spec = path.to_string_lossy();
     let mut out = String::new();
     if voxless::frames::is_sequence(&spec, Path::new("")) {
-        let files = voxless::frames::expand(&spec, Path::new(""))?;
-        writeln!(out, "{spec}: a sequence of {} frame(s)", files.len())?;
+        let files = voxless::frames::numbered(&spec, Path::new(""))?;
+        writeln!(
+            out,
+            "{spec}: a sequence of {} frame(s), numbered by the last number in each name",
+            files.len()
+        )?;
         let options = TableOptions {
             group: args.group.clone(),
             part_type: args.part_type,
         };
-        for (i, f) in files.iter().enumerate() {
+        for (i, (n, f)) in files.iter().enumerate() {
             if i < LISTED_FRAMES / 2 || i + LISTED_FRAMES / 2 >= files.len() {
                 let name = f.file_name().unwrap_or(f.as_os_str()).to_string_lossy();
                 // Formats that record a time: the count and time of each.
@@ -58,16 +62,20 @@ fn describe(args: &InfoArgs) -> Result<String> {
                     }
                     _ => String::new(),
                 };
-                writeln!(out, "  frame {i:>4}  {name}{what}")?;
+                writeln!(out, "  frame {n:>4}  {name}{what}")?;
             } else if i == LISTED_FRAMES / 2 {
                 writeln!(out, "  …")?;
             }
         }
-        let Some(file) = files.get(args.frame) else {
+        let first = files.first().map_or(0, |f| f.0);
+        let wanted = if args.frame == 0 { first } else { args.frame };
+        let Some((_, file)) = files.iter().find(|f| f.0 == wanted) else {
+            let numbers: Vec<usize> = files.iter().map(|f| f.0).collect();
             bail!(
-                "--frame {}: the sequence has {} frame(s)",
+                "--frame {}: no file of the sequence is numbered {}; it has frames {}",
                 args.frame,
-                files.len()
+                args.frame,
+                voxless::frames::list_numbers(&numbers)
             );
         };
         writeln!(out)?;
@@ -142,6 +150,15 @@ fn particles(path: &Path, format: ParticleFormat, args: &InfoArgs) -> Result<Str
             frames - 1
         );
     }
+    if format == ParticleFormat::Lammps
+        && let (_, Some(partial)) = voxless::io::lammps_frame_scan(path)?
+    {
+        writeln!(
+            out,
+            "  (the file ends inside a further frame, so LAMMPS is probably still writing it: \
+             {partial})"
+        )?;
+    }
     if frames > 1 {
         for f in 0..frames {
             if f < LISTED_FRAMES / 2 || f + LISTED_FRAMES / 2 >= frames {
@@ -187,8 +204,8 @@ fn table_summary(
     let which = frame.map(|f| format!("frame {f}: ")).unwrap_or_default();
     writeln!(out, "{which}{}{}", count(t.len()), time_of(format, t.time))?;
     if !t.is_empty() {
-        let mut lo = [f32::INFINITY; 3];
-        let mut hi = [f32::NEG_INFINITY; 3];
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
         for p in &t.positions {
             for a in 0..3 {
                 lo[a] = lo[a].min(p[a]);

@@ -5,18 +5,20 @@
 
 mod args;
 mod info;
+mod out;
 mod progress;
+mod sequence;
 mod view;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::{Parser, Subcommand, ValueEnum};
-use voxless::render::colorbar::ColorbarSpec;
+use voxless::output::OutputKind;
 use voxless::{Control, ParticlesDesc, ProjectionDesc, ProjectionView, Scene};
 
-use args::SceneArgs;
+use args::{DataArgs, KindArgs, SceneArgs, ViewArgs};
 use progress::Progress;
 
 #[derive(Parser)]
@@ -30,32 +32,36 @@ struct Cli {
     command: Command,
 }
 
+// Parsed once per run: the size of the largest variant does not matter.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand)]
 enum Command {
-    /// Render the built-in demo particles (a spiral galaxy) to a PNG.
+    /// Render the built-in demo particles (a spiral galaxy) to an image.
     Demo {
-        /// Output image (.png, or .exr for linear float RGBA).
+        /// Output image: .png, .jpg/.jpeg, or .exr (linear float RGBA).
         #[arg(short, long, default_value = "demo.png")]
         output: PathBuf,
         /// Draw a labelled colour bar at the right edge of the image.
         #[arg(long)]
         colorbar: bool,
         #[command(flatten)]
-        scene: SceneArgs,
+        view: ViewArgs,
     },
     /// Render a scene (TOML file and/or flags) to an image.
     Render {
-        /// Output image (.png, or .exr for linear float RGBA). With --frames,
-        /// `out.png` becomes out_0000.png, out_0001.png, … (or give a
-        /// printf pattern such as frame_%03d.png).
+        /// Output image: .png, .jpg/.jpeg, or .exr (linear float RGBA). With
+        /// --frames, `out.png` becomes out_0000.png, … named by the frame
+        /// numbers (or give a printf pattern such as frame_%03d.png).
         #[arg(short, long, default_value = "out.png")]
         output: PathBuf,
-        /// Render frames A through B of a time series (a multi-frame file such
-        /// as a LAMMPS dump or XYZ, a pattern like step_%04d.npy, a glob, or a
-        /// directory, e.g. of PySPH .hdf5 outputs).
+        /// Render the frames numbered A through B of a time series (a
+        /// multi-frame file such as a LAMMPS dump or XYZ, frames 0, 1, …; or
+        /// files numbered by the last number in their names: a pattern like
+        /// step_%04d.npy, a glob, or a directory, e.g. of PySPH .hdf5
+        /// outputs). Value range, opacity and framing hold over the series.
         #[arg(long, value_name = "A..B", conflicts_with = "frame")]
         frames: Option<String>,
-        /// Render only frame N of a time series.
+        /// Render only frame N of a time series (default 0).
         #[arg(long, value_name = "N")]
         frame: Option<usize>,
         /// Render N frames of a full 360° orbit about the look-at point
@@ -66,7 +72,11 @@ enum Command {
         #[arg(long)]
         colorbar: bool,
         #[command(flatten)]
-        scene: SceneArgs,
+        data: DataArgs,
+        #[command(flatten)]
+        kind: KindArgs,
+        #[command(flatten)]
+        view: ViewArgs,
     },
     /// Evaluate the reconstructed fields at points: writes float32 N×k .npy,
     /// columns Φ, then Θ (with an attribute), then ∂Φ/∂x, ∂Φ/∂y, ∂Φ/∂z (with --gradient).
@@ -80,8 +90,11 @@ enum Command {
         /// Also write the analytic gradient of Φ.
         #[arg(long)]
         gradient: bool,
+        /// Frame N of a time series (default 0).
+        #[arg(long, value_name = "N")]
+        frame: Option<usize>,
         #[command(flatten)]
-        scene: SceneArgs,
+        data: DataArgs,
     },
     /// Column density ∫Φ dt per pixel, orthographic down an axis (or along
     /// --normal), covering the data bounds: float32 H×W .npy (or .exr), row 0
@@ -90,7 +103,7 @@ enum Command {
         /// View axis (looking down −axis; default z).
         #[arg(long, value_enum, conflicts_with = "normal")]
         axis: Option<Axis>,
-        /// Override the bounds covered: x0 y0 z0 x1 y1 z1.
+        /// Override the bounds covered: x0 y0 z0 x1 y1 z1 (default: the data's).
         #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], allow_negative_numbers = true)]
         bounds: Option<Vec<f64>>,
         /// Off-axis: look along this direction (image right = north × normal).
@@ -114,8 +127,14 @@ enum Command {
         /// Output .npy (float32 H×W) or .exr (one channel "Y").
         #[arg(short, long)]
         output: PathBuf,
+        /// Image size in pixels (default 800 600).
+        #[arg(long, num_args = 2, value_names = ["W", "H"])]
+        size: Option<Vec<u32>>,
+        /// Frame N of a time series (default 0).
+        #[arg(long, value_name = "N")]
+        frame: Option<usize>,
         #[command(flatten)]
-        scene: SceneArgs,
+        data: DataArgs,
     },
     /// Explore a scene in a browser: prints a URL and serves a page that
     /// renders the data progressively on this machine (orbit, pan, zoom,
@@ -131,7 +150,11 @@ enum Command {
         #[arg(long, default_value = "127.0.0.1", help_heading = "Server")]
         host: String,
         #[command(flatten)]
-        scene: SceneArgs,
+        data: DataArgs,
+        #[command(flatten)]
+        kind: KindArgs,
+        #[command(flatten)]
+        view: ViewArgs,
     },
     /// Print what a data file holds: particle count, frames and their times,
     /// columns with ranges and bounds; .npy shape and range; AMR cells per
@@ -181,16 +204,18 @@ fn run(cli: Cli) -> Result<()> {
         Command::Demo {
             output,
             colorbar,
-            scene,
+            view,
         } => {
-            let (mut desc, base) = scene.scene()?;
-            if desc.particles.is_none() {
-                desc.particles = Some(ParticlesDesc {
-                    demo: Some(true),
-                    attribute_range: Some([0.0, 1.0]),
-                    ..Default::default()
-                });
-            }
+            let args = SceneArgs {
+                view,
+                ..Default::default()
+            };
+            let (mut desc, base) = args.scene()?;
+            desc.particles = Some(ParticlesDesc {
+                demo: Some(true),
+                attribute_range: Some([0.0, 1.0]),
+                ..Default::default()
+            });
             // The demo's look: a galaxy seen from above at an angle, shaded.
             desc.image.width.get_or_insert(800);
             desc.image.height.get_or_insert(450);
@@ -204,8 +229,15 @@ fn run(cli: Cli) -> Result<()> {
             desc.render.opacity_scale.get_or_insert(10.0);
             desc.camera.look_at.get_or_insert([0.0, -0.1, 0.0]);
             desc.light.get_or_insert_with(Default::default);
-            let s = resolve(&desc, &base)?;
-            render_to(&s, &output, view::colorbar(&s, &desc, colorbar).as_ref())
+            out::check(
+                std::slice::from_ref(&output),
+                OutputKind::Image,
+                &desc,
+                &base,
+                &[],
+            )?;
+            let s = resolve(&desc, &base, 0)?;
+            render_to(&s, &desc, &output, colorbar)
         }
         Command::Render {
             output,
@@ -213,18 +245,31 @@ fn run(cli: Cli) -> Result<()> {
             frame,
             turntable,
             colorbar,
-            scene,
+            data,
+            kind,
+            view,
         } => {
-            let (desc, base) = scene.scene()?;
+            let (desc, base) = SceneArgs { data, kind, view }.scene()?;
             if let Some(n) = turntable {
+                let outputs: Vec<PathBuf> = (0..n as usize)
+                    .map(|k| out::frame_path(&output, k))
+                    .collect::<Result<_>>()?;
+                out::check(&outputs, OutputKind::Image, &desc, &base, &[])?;
                 let f = frame.unwrap_or(0);
                 return view::render_turntable(&desc, &base, f, n, &output, colorbar);
             }
-            match (frames, frame) {
-                (Some(range), _) => render_sequence(&desc, &base, &range, &output, colorbar),
-                (None, n) => {
-                    let s = resolve_frame(&desc, &base, n.unwrap_or(0))?;
-                    render_to(&s, &output, view::colorbar(&s, &desc, colorbar).as_ref())
+            match frames {
+                Some(range) => sequence::render(&desc, &base, &range, &output, colorbar),
+                None => {
+                    out::check(
+                        std::slice::from_ref(&output),
+                        OutputKind::Image,
+                        &desc,
+                        &base,
+                        &[],
+                    )?;
+                    let s = resolve(&desc, &base, frame.unwrap_or(0))?;
+                    render_to(&s, &desc, &output, colorbar)
                 }
             }
         }
@@ -232,18 +277,26 @@ fn run(cli: Cli) -> Result<()> {
             points,
             output,
             gradient,
-            scene,
+            frame,
+            data,
         } => {
-            let (desc, base) = scene.scene()?;
-            let s = resolve(&desc, &base)?;
+            let args = SceneArgs {
+                data,
+                ..Default::default()
+            };
+            let (desc, base) = args.scene()?;
+            out::check(
+                std::slice::from_ref(&output),
+                OutputKind::Columns,
+                &desc,
+                &base,
+                std::slice::from_ref(&points),
+            )?;
+            let s = resolve(&desc, &base, frame.unwrap_or(0))?;
             let pts = voxless::read_points(&points)?;
             let cols = s.volume.sample_columns(gradient);
             let t = Instant::now();
-            let world: Vec<[f64; 3]> = pts
-                .iter()
-                .map(|p| [p.x as f64, p.y as f64, p.z as f64])
-                .collect();
-            let values = s.sample(&world, gradient);
+            let values = s.sample(&pts, gradient);
             voxless::io::write_npy_f32(&output, &[pts.len(), cols.len()], &values)?;
             eprintln!(
                 "sampled {} points in {:.2}s → {} (columns: {})",
@@ -263,10 +316,27 @@ fn run(cli: Cli) -> Result<()> {
             width,
             depth,
             output,
-            scene,
+            size,
+            frame,
+            data,
         } => {
-            let (desc, base) = scene.scene()?;
-            let s = resolve(&desc, &base)?;
+            let args = SceneArgs {
+                data,
+                view: ViewArgs {
+                    size,
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
+            let (desc, base) = args.scene()?;
+            out::check(
+                std::slice::from_ref(&output),
+                OutputKind::Map,
+                &desc,
+                &base,
+                &[],
+            )?;
+            let s = resolve(&desc, &base, frame.unwrap_or(0))?;
             let v3 = |v: Option<Vec<f64>>| v.map(|v| [v[0], v[1], v[2]]);
             let projection = ProjectionDesc {
                 axis: axis.map(|a| a as usize),
@@ -277,29 +347,15 @@ fn run(cli: Cli) -> Result<()> {
                 bounds: bounds.map(|v| [v[0], v[1], v[2], v[3], v[4], v[5]]),
                 depth,
             };
-            let view = ProjectionView::new(&projection, &s.volume.bounds(), &s.frame)?;
-            let (w, h) = (s.settings.width, s.settings.height);
-            let progress = Progress::new("projecting", 1);
-            let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
-            let t = Instant::now();
-            let column = view.project(&s.volume, w, h, &Control::new().with_progress(&report))?;
-            progress.finish();
-            write_gray(&output, w, h, &column)?;
-            let pixel_area = view.pixel_area(w, h);
-            let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * pixel_area;
-            let mass = s
-                .volume
-                .total_mass()
-                .map(|m| format!(", exact ∫ field dV = {m:.6e}"))
-                .unwrap_or_default();
-            eprintln!(
-                "projected {w}×{h} in {:.2}s → {} (Σ column × pixel area = {integral:.6e}{mass})",
-                t.elapsed().as_secs_f64(),
-                output.display()
-            );
-            Ok(())
+            project(&s, &projection, &output)
         }
-        Command::Serve { port, host, scene } => serve(&scene, port, host),
+        Command::Serve {
+            port,
+            host,
+            data,
+            kind,
+            view,
+        } => serve(&SceneArgs { data, kind, view }, port, host),
         Command::Colormaps => {
             for name in voxless::transfer::COLORMAP_NAMES {
                 println!("{name}");
@@ -308,6 +364,28 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Info(args) => info::run(&args),
     }
+}
+
+fn project(s: &Scene, projection: &ProjectionDesc, output: &Path) -> Result<()> {
+    let view = ProjectionView::new(projection, &s.volume.bounds(), &s.frame)?;
+    let (w, h) = (s.settings.width, s.settings.height);
+    let progress = Progress::new("projecting", 1);
+    let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
+    let t = Instant::now();
+    let column = view.project(&s.volume, w, h, &Control::new().with_progress(&report))?;
+    progress.finish();
+    out::write_gray(output, w, h, &column)?;
+    let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * view.pixel_area(w, h);
+    let mass = s
+        .total_mass()
+        .map(|m| format!(", exact ∫ field dV = {m:.6e}"))
+        .unwrap_or_default();
+    eprintln!(
+        "projected {w}×{h} in {:.2}s → {} (Σ column × pixel area = {integral:.6e}{mass})",
+        t.elapsed().as_secs_f64(),
+        output.display()
+    );
+    Ok(())
 }
 
 /// `voxless serve`: load the scene (errors before listening), print the URL,
@@ -345,19 +423,22 @@ fn serve(scene: &SceneArgs, port: u16, host: String) -> Result<()> {
     Ok(())
 }
 
-fn resolve(desc: &voxless::SceneDesc, base: &Path) -> Result<Scene> {
-    resolve_frame(desc, base, 0)
-}
-
-fn resolve_frame(desc: &voxless::SceneDesc, base: &Path, frame: usize) -> Result<Scene> {
+/// Opens frame `frame` of the scene and prints its notes and a summary.
+fn resolve(desc: &voxless::SceneDesc, base: &Path, frame: usize) -> Result<Scene> {
     let t = Instant::now();
     let s = Scene::open(desc, base, frame)?;
+    report_loaded(&s, t);
+    Ok(s)
+}
+
+/// Prints a scene's notes and what was loaded.
+fn report_loaded(s: &Scene, t: Instant) {
     for n in &s.notes {
         eprintln!("note: {n}");
     }
     let (lo, hi) = s.world_bounds();
     eprintln!(
-        "loaded {} in {:.2}s: bounds [{:.3}, {:.3}, {:.3}]..[{:.3}, {:.3}, {:.3}], value range [{:.4e}, {:.4e}]",
+        "loaded {} in {:.2}s: bounds [{:.4e}, {:.4e}, {:.4e}]..[{:.4e}, {:.4e}, {:.4e}]",
         s.volume.kind(),
         t.elapsed().as_secs_f64(),
         lo[0],
@@ -366,18 +447,15 @@ fn resolve_frame(desc: &voxless::SceneDesc, base: &Path, frame: usize) -> Result
         hi[0],
         hi[1],
         hi[2],
-        s.settings.value_range.lo,
-        s.settings.value_range.hi,
     );
-    Ok(s)
 }
 
-fn is_exr(path: &Path) -> bool {
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
-}
-
-fn render_to(s: &Scene, output: &Path, colorbar: Option<&ColorbarSpec>) -> Result<()> {
+/// Checks the scene's render work (printing a note if the step was
+/// raised), renders it with a progress bar, and writes `output`.
+fn render_to(s: &Scene, desc: &voxless::SceneDesc, output: &Path, colorbar: bool) -> Result<()> {
+    if let Some(note) = s.check_work(desc)? {
+        eprintln!("note: {note}");
+    }
     let st = &s.settings;
     let progress = Progress::new("rendering", 1);
     let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
@@ -386,9 +464,10 @@ fn render_to(s: &Scene, output: &Path, colorbar: Option<&ColorbarSpec>) -> Resul
     progress.finish();
     s.check_iso(&film)?;
     let mut image = film.resolve();
+    s.check_visible(&film, &image)?;
     let secs = t.elapsed().as_secs_f64();
-    view::decorate(&mut image, s, colorbar);
-    write_image(output, &image, s.background)?;
+    view::decorate(&mut image, s, view::colorbar(s, desc, colorbar).as_ref());
+    out::write_image(output, &image, s.background)?;
     eprintln!(
         "rendered {}×{} at {} spp in {secs:.2}s → {}",
         st.width,
@@ -396,107 +475,5 @@ fn render_to(s: &Scene, output: &Path, colorbar: Option<&ColorbarSpec>) -> Resul
         st.spp,
         output.display()
     );
-    Ok(())
-}
-
-/// Renders frames `range` (A..B, inclusive) to numbered images with one
-/// progress bar. Camera, value range and attribute range come from frame A
-/// and stay fixed, so the sequence does not flicker.
-fn render_sequence(
-    desc: &voxless::SceneDesc,
-    base: &Path,
-    range: &str,
-    output: &Path,
-    colorbar: bool,
-) -> Result<()> {
-    let range = voxless::frames::parse_range(range)?;
-    let count = voxless::frame_count(desc, base)?;
-    if *range.end() >= count {
-        bail!(
-            "--frames {}..{}: the data has {count} frame(s), 0..{}",
-            range.start(),
-            range.end(),
-            count - 1
-        );
-    }
-    let mut scene = resolve_frame(desc, base, *range.start())?;
-    let bar = view::colorbar(&scene, desc, colorbar);
-    let frames = range.end() - range.start() + 1;
-    let progress = Progress::new("rendering frames", frames as u64);
-    let t = Instant::now();
-    for (k, f) in range.clone().enumerate() {
-        if k > 0 {
-            scene.load_frame(desc, base, f)?;
-        }
-        // Blue noise advances with the frame (spatiotemporal).
-        scene.settings.frame = f as u32;
-        let report = |d: u64, total: u64| progress.set_fraction(k as u64, d, total);
-        let mut image = scene.render(&Control::new().with_progress(&report))?;
-        view::decorate(&mut image, &scene, bar.as_ref());
-        write_image(&frame_path(output, f), &image, scene.background)?;
-        progress.set(k as u64 + 1);
-    }
-    progress.finish();
-    eprintln!(
-        "rendered {frames} frames in {:.2}s → {}",
-        t.elapsed().as_secs_f64(),
-        frame_path(output, *range.start()).display()
-    );
-    Ok(())
-}
-
-/// `out.png` → `out_0007.png`; a printf pattern (`f_%03d.png`) is filled in.
-fn frame_path(output: &Path, frame: usize) -> PathBuf {
-    let name = output
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let name = if let Some(at) = name.find('%') {
-        let rest = &name[at + 1..];
-        match rest.find('d') {
-            Some(d) => {
-                let width: usize = rest[..d].trim_start_matches('0').parse().unwrap_or(0);
-                format!("{}{:0width$}{}", &name[..at], frame, &rest[d + 1..])
-            }
-            None => name,
-        }
-    } else {
-        let stem = output
-            .file_stem()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        match output.extension() {
-            Some(e) => format!("{stem}_{frame:04}.{}", e.to_string_lossy()),
-            None => format!("{stem}_{frame:04}"),
-        }
-    };
-    output.with_file_name(name)
-}
-
-fn write_image(output: &Path, image: &voxless::Image, background: [f32; 3]) -> Result<()> {
-    if is_exr(output) {
-        voxless::io::write_exr_rgba(
-            output,
-            image.width as usize,
-            image.height as usize,
-            &image.to_rgba_f32(),
-        )?;
-    } else {
-        voxless::io::write_png_rgb8(
-            output,
-            image.width,
-            image.height,
-            &image.to_srgb8(background),
-        )?;
-    }
-    Ok(())
-}
-
-fn write_gray(path: &Path, w: u32, h: u32, values: &[f32]) -> Result<()> {
-    if is_exr(path) {
-        voxless::io::write_exr_gray(path, w as usize, h as usize, values)?;
-    } else {
-        voxless::io::write_npy_f32(path, &[h as usize, w as usize], values)?;
-    }
     Ok(())
 }

@@ -1,7 +1,10 @@
 //! Progress for long work: a bar on a terminal that appears only once work
-//! has taken over a second (quick runs stay quiet), and a plain line every
-//! few seconds when stderr is not a terminal (a render piped to a log still
-//! says where it is).
+//! has taken over a second (quick runs stay quiet), and plain lines when
+//! stderr is not a terminal (a render piped to a log still says where it
+//! is): the first once work has taken a second, then one every few
+//! seconds, and a last one at 100 % when any was printed. The environment
+//! variable `VOXLESS_PROGRESS_EVERY` (seconds) sets both the wait and the
+//! interval.
 //!
 //! Positions are kept in thousandths of a unit, so a unit (a frame) can be
 //! split by the renderer's own (done, total) reports.
@@ -16,15 +19,33 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 const SUB: u64 = 1000;
 /// How often a line is printed when stderr is not a terminal.
 const LINE_EVERY: Duration = Duration::from_secs(5);
+/// When the first line (or the bar) appears.
+const QUIET_FOR: Duration = Duration::from_secs(1);
+
+/// The quiet time and line interval: `VOXLESS_PROGRESS_EVERY` seconds for
+/// both when set, else [`QUIET_FOR`] and [`LINE_EVERY`].
+fn intervals() -> (Duration, Duration) {
+    std::env::var("VOXLESS_PROGRESS_EVERY")
+        .ok()
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|s| s.is_finite() && *s >= 0.0)
+        .map_or((QUIET_FOR, LINE_EVERY), |s| {
+            let d = Duration::from_secs_f64(s);
+            (d, d)
+        })
+}
 
 pub struct Progress {
     bar: ProgressBar,
     what: String,
     start: Instant,
     terminal: bool,
-    /// Terminal: whether the bar is drawn yet. Otherwise: when the last
-    /// line was printed.
-    state: Mutex<(bool, Instant)>,
+    /// Quiet for this long, then a line (or the bar); then a line this often.
+    every: (Duration, Duration),
+    /// Whether the bar is drawn (terminal) or a line was printed (not a
+    /// terminal) yet, when the last line was printed, and whether it said
+    /// 100 %.
+    state: Mutex<(bool, Instant, bool)>,
 }
 
 impl Progress {
@@ -44,7 +65,8 @@ impl Progress {
             what: what.to_string(),
             start: Instant::now(),
             terminal: std::io::stderr().is_terminal(),
-            state: Mutex::new((false, Instant::now())),
+            every: intervals(),
+            state: Mutex::new((false, Instant::now(), false)),
         }
     }
 
@@ -66,32 +88,52 @@ impl Progress {
             return;
         };
         if self.terminal {
-            if elapsed > Duration::from_secs(1) && !state.0 {
+            if elapsed > self.every.0 && !state.0 {
                 state.0 = true;
                 self.bar.set_draw_target(ProgressDrawTarget::stderr());
             }
-        } else if state.1.elapsed() >= LINE_EVERY {
+        } else if (!state.0 && elapsed >= self.every.0)
+            || (state.0 && state.1.elapsed() >= self.every.1)
+        {
+            state.0 = true;
             state.1 = Instant::now();
             let len = self.bar.length().unwrap_or(1).max(1);
-            let frac = pos as f64 / len as f64;
-            let left = if frac > 0.0 {
-                format!(
-                    ", ~{:.0} s left",
-                    elapsed.as_secs_f64() * (1.0 - frac) / frac
-                )
-            } else {
-                String::new()
-            };
-            eprintln!(
-                "{}: {:.0}% ({:.0} s elapsed{left})",
-                self.what,
-                100.0 * frac,
-                elapsed.as_secs_f64()
-            );
+            state.2 = pos >= len;
+            self.line(pos as f64 / len as f64, elapsed);
+        }
+    }
+
+    /// One plain progress line.
+    fn line(&self, frac: f64, elapsed: Duration) {
+        let left = if frac > 0.0 && frac < 1.0 {
+            format!(
+                ", ~{:.0} s left",
+                elapsed.as_secs_f64() * (1.0 - frac) / frac
+            )
+        } else {
+            String::new()
+        };
+        eprintln!(
+            "{}: {:.0}% ({:.1} s elapsed{left})",
+            self.what,
+            100.0 * frac,
+            elapsed.as_secs_f64()
+        );
+    }
+
+    /// Prints a line without tearing the bar.
+    pub fn println(&self, text: &str) {
+        if self.terminal {
+            self.bar.suspend(|| eprintln!("{text}"));
+        } else {
+            eprintln!("{text}");
         }
     }
 
     pub fn finish(&self) {
         self.bar.finish_and_clear();
+        if !self.terminal && self.state.lock().is_ok_and(|s| s.0 && !s.2) {
+            self.line(1.0, self.start.elapsed());
+        }
     }
 }

@@ -48,7 +48,10 @@ pub fn render_turntable(
     output: &Path,
     with_colorbar: bool,
 ) -> Result<()> {
-    let mut scene = crate::resolve_frame(desc, base, data_frame)?;
+    let mut scene = crate::resolve(desc, base, data_frame)?;
+    if let Some(note) = scene.check_work(desc)? {
+        eprintln!("note: {note}");
+    }
     let bar = colorbar(&scene, desc, with_colorbar);
     let progress = Progress::new("rendering turntable", frames as u64);
     let start = desc.camera.orbit.unwrap_or(0.0);
@@ -63,8 +66,8 @@ pub fn render_turntable(
         let report = |d: u64, total: u64| progress.set_fraction(k as u64, d, total);
         let mut image = scene.render(&Control::new().with_progress(&report))?;
         decorate(&mut image, &scene, bar.as_ref());
-        crate::write_image(
-            &crate::frame_path(output, k as usize),
+        crate::out::write_image(
+            &crate::out::frame_path(output, k as usize)?,
             &image,
             scene.background,
         )?;
@@ -75,8 +78,8 @@ pub fn render_turntable(
         scene.settings.width,
         scene.settings.height,
         t.elapsed().as_secs_f64(),
-        crate::frame_path(output, 0).display(),
-        crate::frame_path(output, frames as usize - 1).display()
+        crate::out::frame_path(output, 0)?.display(),
+        crate::out::frame_path(output, frames as usize - 1)?.display()
     );
     Ok(())
 }

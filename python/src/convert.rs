@@ -100,12 +100,17 @@ fn from_json<T: serde::de::DeserializeOwned>(
     serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
         let field = (path != ".").then_some(path.as_str());
-        let message = match field {
-            Some(p) if what == "flags" => format!("{p}: {}", e.inner()),
-            Some(p) => format!("{what} {p}: {}", e.inner()),
-            None => format!("{what}: {}", e.inner()),
+        let inner = e.inner().to_string();
+        let (message, field) = match field {
+            Some(p) => (format!("{what} {p}: {inner}"), Some(p.to_string())),
+            // The library's flags name the flag at fault themselves.
+            None if what == "flags" => {
+                let flag = inner.split(':').next().filter(|f| !f.contains(' '));
+                (inner.clone(), flag.map(str::to_string))
+            }
+            None => (format!("{what}: {inner}"), None),
         };
-        errors::with_field(py, message, field)
+        errors::with_field(py, message, field.as_deref())
     })
 }
 

@@ -59,6 +59,12 @@ impl Held {
     fn frame(&self) -> &WorldFrame {
         &self.loaded.frame
     }
+    /// ∫ field dV in world units (see [`voxless::Scene::total_mass`]).
+    fn total_mass(&self) -> Option<f64> {
+        self.volume()
+            .total_mass()
+            .map(|m| m * self.frame().scale.powi(3))
+    }
     fn resolve(&self, desc: &SceneDesc) -> Result<voxless::Resolved, SceneError> {
         voxless::resolve_in(self.volume(), self.frame(), desc, &self.base)
     }
@@ -355,10 +361,17 @@ impl Volume {
         let desc = self.view(tables, flags, &cwd, "render")?;
         let held = self.held.clone();
         let done = run::cancellable(py, move |control| -> Result<_, Failure> {
-            let r = held.resolve(&desc)?;
+            let mut r = held.resolve(&desc)?;
+            // The CLI's checks: absurd work before, no surface or nothing
+            // visible after.
+            if let Some(note) = r.check_work(held.volume(), held.frame(), &desc)? {
+                r.notes.push(note);
+            }
             let film = r.render_film(held.volume(), control)?;
             r.check_iso(&film)?;
-            Ok((film.resolve(), r.background, r.notes))
+            let image = film.resolve();
+            r.check_visible(held.volume(), held.frame(), &film, &image)?;
+            Ok((image, r.background, r.notes))
         })?;
         let (image, background, notes) = done.map_err(|f| raise(py, f))?;
         Ok((rgba_array(py, &image)?, background, notes))
@@ -409,7 +422,7 @@ impl Volume {
         geometry.set_item("width", view.width)?;
         geometry.set_item("pixel_area", view.pixel_area(w, h))?;
         geometry.set_item("depth", depth)?;
-        geometry.set_item("total_mass", self.held.volume().total_mass())?;
+        geometry.set_item("total_mass", self.held.total_mass())?;
         Ok((image, geometry))
     }
 
@@ -499,6 +512,13 @@ impl Volume {
         self.held.frame().origin
     }
 
+    /// World length of one local unit (a power of two; 1 for data of
+    /// everyday extent).
+    #[getter]
+    fn scale(&self) -> f64 {
+        self.held.frame().scale
+    }
+
     /// The data's value range (the transfer function's default).
     #[getter]
     fn value_range(&self, py: Python<'_>) -> PyResult<(f32, f32)> {
@@ -507,10 +527,11 @@ impl Volume {
         Ok((r.lo, r.hi))
     }
 
-    /// ∫ field dV when the data kind knows it exactly (else None).
+    /// ∫ field dV in world units when the data kind knows it exactly (else
+    /// None).
     #[getter]
     fn total_mass(&self) -> Option<f64> {
-        self.held.volume().total_mass()
+        self.held.total_mass()
     }
 
     /// Defaults chosen from the data when it was loaded.

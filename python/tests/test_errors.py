@@ -45,7 +45,7 @@ CASES = [
     (lambda v: v.render(kernel="gaussian"), TypeError, "kernel"),
     (lambda v: v.render(colormap=[[0, 1]]), ValueError, "colormap"),
     (lambda v: v.render(early_termination=2.0), ValueError, "early_termination"),
-    (lambda v: v.render(camera=voxless.Camera(fov=-5)), ValueError, "field of view"),
+    (lambda v: v.render(camera=voxless.Camera(fov=-5)), ValueError, "fov"),
     (lambda v: v.render(camera=5), TypeError, "camera"),
     (lambda v: v.render(iso=0.001, iso_only=True), ValueError, "iso"),
     (lambda v: v.render(log=True, linear=True), ValueError, "log"),

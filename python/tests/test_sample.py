@@ -48,14 +48,14 @@ def test_float64_sample_points_far_away(blob):
 
 
 def test_tessellation_sample_and_projection():
-    # An 8³ lattice in a periodic box of 8: total mass 1 over 512 cells.
+    # An 8³ lattice in a periodic box of 8: the mean density is 1 by default.
     n, box = 8, 8.0
     g = (np.arange(n) + 0.5) * box / n
     lattice = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)
     vol = voxless.Tessellation(lattice, n=n, box=box)
     f = vol.sample(np.array([[4.1, 4.2, 4.3], [1.3, 2.7, 5.1]]))
     assert f.columns[0] == "density"
-    assert np.allclose(f["density"], 1.0 / box**3, rtol=1e-4)
+    assert np.allclose(f["density"], 1.0, rtol=1e-4)
     # Displaced particles (a lattice's pixel lines run along tet faces).
     moved = (lattice + np.random.default_rng(0).normal(scale=0.2, size=lattice.shape)) % box
     vol = voxless.Tessellation(moved, n=n, box=box)

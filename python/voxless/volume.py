@@ -113,6 +113,11 @@ class Volume:
         return np.array(self._native.origin)
 
     @property
+    def scale(self):
+        """World length of one unit of the float32 coordinates (a power of two; 1 for data of everyday extent)."""
+        return self._native.scale
+
+    @property
     def value_range(self):
         """The data's value range (the transfer function's default)."""
         return self._native.value_range

@@ -98,14 +98,43 @@ pub(crate) fn build_amr(
         ReconstructionName::Basis => Reconstruction::Basis,
         ReconstructionName::Nearest => Reconstruction::Nearest,
     };
+    let cell_size = a.cell_size.unwrap_or(data.cell_size);
+    if !(cell_size.is_finite() && cell_size > 0.0) {
+        return Err(SceneError::setting(
+            "amr.cell_size (--cell-size)",
+            format!("{cell_size} must be finite and > 0"),
+        ));
+    }
+    if let Some(o) = a.origin
+        && !o.iter().all(|v| v.is_finite())
+    {
+        return Err(SceneError::setting(
+            "amr.origin (--origin)",
+            format!("{o:?} must be finite"),
+        ));
+    }
+    // The frame's scale from the data's extent (cell coordinate 0 at the
+    // origin): cells of 10⁻²⁰ or 10²⁰ world units compute in a local unit
+    // about the data's size. Field values have no length unit and stay.
+    let reach = data
+        .cells
+        .iter()
+        .map(|c| {
+            let w = 2f64.powi(c[3].clamp(0, 62));
+            [c[0], c[1], c[2]].map(|v| (v as f64 + w).abs().max((v as f64).abs()))
+        })
+        .fold(0.0f64, |m, c| m.max(c[0]).max(c[1]).max(c[2]));
+    let extent = reach * cell_size as f64;
+    let scale = WorldFrame::fit([0.0; 3], [extent; 3]).scale;
     let frame = WorldFrame {
         origin: a.origin.unwrap_or(data.origin),
+        scale,
     };
     let cells = AmrCells {
         cells: data.cells,
         fields: data.fields,
         origin: Vec3::ZERO,
-        cell_size: a.cell_size.unwrap_or(data.cell_size),
+        cell_size: (cell_size as f64 / scale) as f32,
     };
     AmrVolume::new(
         cells,

@@ -9,10 +9,16 @@
 //!   which must all have the same extension — a directory of PySPH outputs,
 //!   say.
 //!
-//! Frames are ordered by the number in their name (then by name), and frame
-//! `i` is the `i`-th of that order. Any other path is a single frame (which
-//! may itself hold several frames; see `frame_count`). Each file of a
-//! sequence is one frame: its first, for multi-frame formats.
+//! A file's **frame number** is the last number in its name
+//! (`step_0007.npy` is frame 7, `dam_break_3d_01750.hdf5` frame 1750), and
+//! frames are ordered by it: frame N of a sequence is the file numbered N,
+//! never the N-th file, so a missing file is a missing frame, not a shift of
+//! every later one. Sequences that go together (positions and a
+//! per-particle attribute, say) pair files of the same number, and a number
+//! one of them lacks is an error naming it. Any other path is a single
+//! frame (which may itself hold several frames, numbered 0, 1, …; see
+//! `frame_numbers`). Each file of a sequence is one frame: its first, for
+//! multi-frame formats.
 
 use std::path::{Path, PathBuf};
 
@@ -86,7 +92,7 @@ pub fn expand(spec: &str, base: &Path) -> Result<Vec<PathBuf>, SceneError> {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
-        (last_number(&name), name)
+        (last_number(&name).unwrap_or(0), name)
     });
     if files.is_empty() {
         let what = if full.is_dir() {
@@ -170,9 +176,14 @@ fn wildcard(pattern: &str, name: &str) -> bool {
     p[i..].iter().all(|&c| c == '*')
 }
 
-/// The last run of digits in a file name, for numeric frame order.
-fn last_number(name: &str) -> u64 {
-    let digits: String = name
+/// The last run of digits in a file name before its extension (the `5` of
+/// `.hdf5` is no frame number): its frame number.
+fn last_number(name: &str) -> Option<usize> {
+    let stem = match name.rfind('.') {
+        Some(dot) if dot > 0 => &name[..dot],
+        _ => name,
+    };
+    let digits: String = stem
         .chars()
         .rev()
         .skip_while(|c| !c.is_ascii_digit())
@@ -181,7 +192,92 @@ fn last_number(name: &str) -> u64 {
         .into_iter()
         .rev()
         .collect();
-    digits.parse().unwrap_or(0)
+    digits.parse().ok()
+}
+
+/// The frame number of a file of a sequence: the last number in its name
+/// (`step_0007.npy` → 7, `dam_break_3d_01750.hdf5` → 1750).
+pub fn number_of(path: &Path) -> Option<usize> {
+    last_number(&path.file_name()?.to_string_lossy())
+}
+
+/// The files of sequence `spec` with their frame numbers (see
+/// [`number_of`]), in order. A file without a number, or two files with
+/// one number, is an error naming them.
+pub fn numbered(spec: &str, base: &Path) -> Result<Vec<(usize, PathBuf)>, SceneError> {
+    let mut out: Vec<(usize, PathBuf)> = Vec::new();
+    for f in expand(spec, base)? {
+        let n = number_of(&f).ok_or_else(|| {
+            SceneError::data(
+                &f,
+                format!(
+                    "is part of the sequence {spec} but has no number in its name, so it is no \
+                     numbered frame; give a pattern that leaves it out"
+                ),
+            )
+        })?;
+        if let Some((_, other)) = out.iter().find(|(m, _)| *m == n) {
+            return Err(SceneError::data(
+                &f,
+                format!(
+                    "has frame number {n}, like {} in the same sequence {spec}; give a pattern \
+                     that matches one of them",
+                    other.display()
+                ),
+            ));
+        }
+        out.push((n, f));
+    }
+    Ok(out)
+}
+
+/// The file of sequence `spec` numbered `n`; an error naming the file
+/// expected (for a printf pattern) or the pattern, and the numbers there are.
+pub fn file_numbered(spec: &str, base: &Path, n: usize) -> Result<PathBuf, SceneError> {
+    let files = numbered(spec, base)?;
+    if let Some((_, f)) = files.iter().find(|(m, _)| *m == n) {
+        return Ok(f.clone());
+    }
+    let expected = fill_pattern(&base.join(spec), n);
+    Err(SceneError::data(
+        expected.unwrap_or_else(|| base.join(spec)),
+        format!(
+            "frame {n} is missing: the sequence {spec} has frames {}",
+            list_numbers(&files.iter().map(|f| f.0).collect::<Vec<_>>())
+        ),
+    ))
+}
+
+/// `frame_%04d.npy` with `n` filled in; `None` when `path` is no printf
+/// pattern.
+pub fn fill_pattern(path: &Path, n: usize) -> Option<PathBuf> {
+    let name = path.file_name()?.to_string_lossy().into_owned();
+    let at = name.find('%')?;
+    let rest = &name[at + 1..];
+    let d = rest.find('d')?;
+    let spec = &rest[..d];
+    if !spec.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let width: usize = spec.trim_start_matches('0').parse().unwrap_or(0);
+    Some(path.with_file_name(format!("{}{:0width$}{}", &name[..at], n, &rest[d + 1..])))
+}
+
+/// `0, 1, 2, 4, …, 9` for messages.
+pub fn list_numbers(v: &[usize]) -> String {
+    let show: Vec<String> = if v.len() <= 8 {
+        v.iter().map(|n| n.to_string()).collect()
+    } else {
+        let mut s: Vec<String> = v[..4].iter().map(|n| n.to_string()).collect();
+        s.push("…".into());
+        s.extend(v[v.len() - 2..].iter().map(|n| n.to_string()));
+        s
+    };
+    if show.is_empty() {
+        "none".into()
+    } else {
+        show.join(", ")
+    }
 }
 
 /// Parses `A..B` (inclusive) into a frame range.
@@ -249,6 +345,13 @@ mod tests {
         let e = expand("h5", &dir).unwrap_err().to_string();
         assert!(e.contains(".hdf5") && e.contains(".npy"), "{e}");
         assert!(wildcard("a?c*", "abcdef") && !wildcard("a?c", "abcd"));
+        assert_eq!(number_of(Path::new("dam_break_3d_00250.hdf5")), Some(250));
+        assert_eq!(number_of(Path::new("run.0007.h5")), Some(7));
+        assert_eq!(number_of(Path::new("final.npy")), None);
+        assert_eq!(
+            fill_pattern(Path::new("d/f_%04d.png"), 12),
+            Some(PathBuf::from("d/f_0012.png"))
+        );
         assert_eq!(parse_range("3..7").unwrap(), 3..=7);
         assert!(parse_range("7..3").is_err() && parse_range("x").is_err());
         let _ = std::fs::remove_dir_all(&dir);

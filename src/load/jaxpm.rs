@@ -4,10 +4,9 @@
 
 use std::path::Path;
 
-use voxless_tets::LagrangianGrid;
+use voxless_scene::{ParticlesDesc, TetsDesc};
 
-use voxless_scene::TetsDesc;
-
+use super::tets::WorldGrid;
 use crate::SceneError;
 
 /// The Lagrangian grid of snapshot `t.snapshot` (default: the last) of the
@@ -17,8 +16,7 @@ pub(crate) fn grid(
     t: &TetsDesc,
     path: &Path,
     notes: &mut Vec<String>,
-) -> Result<LagrangianGrid, SceneError> {
-    use voxless_core::Vec3;
+) -> Result<WorldGrid, SceneError> {
     use voxless_io::{Hdf5Kind, hdf5_kind, jaxpm_snapshots, read_jaxpm};
 
     let kind = hdf5_kind(path)?;
@@ -93,11 +91,17 @@ pub(crate) fn grid(
         "JaxPM snapshot snap_{k}{scale}: N = {}, box L = {}{others}",
         snap.n, snap.box_size
     ));
-    Ok(LagrangianGrid {
+    let grid = WorldGrid {
         n: snap.n,
-        box_size: snap.box_size as f32,
-        positions: snap.positions.into_iter().map(Vec3::from_array).collect(),
-    })
+        box_size: snap.box_size,
+        positions: snap
+            .positions
+            .into_iter()
+            .map(|p| p.map(f64::from))
+            .collect(),
+    };
+    super::tets::check_grid(&grid, path)?;
+    Ok(grid)
 }
 
 /// Without the `hdf5` feature a JaxPM file is an error saying how to build
@@ -107,6 +111,59 @@ pub(crate) fn grid(
     _: &TetsDesc,
     path: &Path,
     _: &mut Vec<String>,
-) -> Result<LagrangianGrid, SceneError> {
+) -> Result<WorldGrid, SceneError> {
     Err(crate::formats::hdf5::unsupported(path))
+}
+
+/// A particle file that is a JaxPM run (`--particles run.h5` alone) is a
+/// tessellation of its last snapshot: the description to load it with.
+/// Particle settings that cannot apply to it are errors naming them.
+#[cfg(feature = "hdf5")]
+pub(crate) fn as_tessellation(
+    p: &ParticlesDesc,
+    base: &Path,
+) -> Result<Option<TetsDesc>, SceneError> {
+    use super::formats::ParticleFormat;
+    let Some(file) = &p.file else {
+        return Ok(None);
+    };
+    let path = base.join(file);
+    if p.materials.is_some()
+        || super::frames::is_sequence(file, base)
+        || ParticleFormat::detect(&path)? != Some(ParticleFormat::Hdf5)
+        || voxless_io::hdf5_kind(&path)? != voxless_io::Hdf5Kind::Jaxpm
+    {
+        return Ok(None);
+    }
+    let given = [
+        ("particles.attribute (--attribute)", p.attribute.is_some()),
+        ("particles.radius (--radius)", p.radius.is_some()),
+        ("particles.radii (--radii)", p.radii.is_some()),
+        ("particles.weights (--weights)", p.weights.is_some()),
+        ("particles.kernel (--kernel)", p.kernel.is_some()),
+        ("particles.species (--species)", p.species.is_some()),
+        ("particles.group (--group)", p.group.is_some()),
+        ("particles.part_type (--part-type)", p.part_type.is_some()),
+    ];
+    if let Some((field, _)) = given.iter().find(|g| g.1) {
+        return Err(SceneError::setting(
+            field,
+            format!(
+                "{} is a JaxPM run, rendered as a phase-space tessellation whose density comes \
+                 from the tets; this particle setting does not apply to it",
+                path.display()
+            ),
+        ));
+    }
+    Ok(Some(TetsDesc {
+        file: Some(file.clone()),
+        ..Default::default()
+    }))
+}
+
+/// Without the `hdf5` feature no file is read as a JaxPM run here (loading
+/// it as particles says how to build with HDF5).
+#[cfg(not(feature = "hdf5"))]
+pub(crate) fn as_tessellation(_: &ParticlesDesc, _: &Path) -> Result<Option<TetsDesc>, SceneError> {
+    Ok(None)
 }

@@ -10,21 +10,59 @@ use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
 
 use voxless_scene::{MaterialDesc, ParticlesDesc};
 
-use super::particles::{load_particles, range};
-use crate::SceneError;
+use super::particles::{FrameData, build_frame, frame_for, range, read_frame};
+use crate::{SceneError, WorldFrame};
 
 /// Loads every material of `p` at `frame`: the particle file filtered to
-/// each material's species, with the material's radius.
+/// each material's species, with the material's radius, all in one world
+/// frame (`world`, or the one the policy picks for all of them together).
 pub(crate) fn load_materials(
     p: &ParticlesDesc,
     mats: &[MaterialDesc],
     base: &Path,
     notes: &mut Vec<String>,
     frame: usize,
-) -> Result<MaterialVolume, SceneError> {
-    build_materials(p, mats, notes, &mut |desc, notes| {
-        load_particles(desc, base, notes, frame)
-    })
+    world: Option<&WorldFrame>,
+) -> Result<(MaterialVolume, WorldFrame), SceneError> {
+    // Every material's particles first, so the frame fits them all.
+    let mut read: Vec<(ParticlesDesc, FrameData)> = Vec::new();
+    for m in mats {
+        let desc = material_desc(p, m);
+        let mut fd = read_frame(&desc, base, frame)?;
+        notes.append(&mut fd.notes);
+        read.push((desc, fd));
+    }
+    let world = world.copied().unwrap_or_else(|| {
+        let reach = read
+            .iter()
+            .filter_map(|(d, fd)| fd.world_reach(d))
+            .reduce(|a, b| {
+                (
+                    std::array::from_fn(|i| a.0[i].min(b.0[i])),
+                    std::array::from_fn(|i| a.1[i].max(b.1[i])),
+                )
+            });
+        frame_for(reach)
+    });
+    let mut pending = read.into_iter();
+    let v = build_materials(p, mats, notes, &mut |desc, notes| {
+        let (_, fd) = pending.next().ok_or_else(|| {
+            SceneError::setting("particles.materials", "more materials than were read")
+        })?;
+        build_frame(fd, desc, &world, notes)
+    })?;
+    Ok((v, world))
+}
+
+/// The particle description of material `m` of `p`: its species, its radius
+/// (else the particles' radius).
+fn material_desc(p: &ParticlesDesc, m: &MaterialDesc) -> ParticlesDesc {
+    ParticlesDesc {
+        species: Some(m.species.clone()),
+        radius: m.radius.or(p.radius),
+        materials: None,
+        ..p.clone()
+    }
 }
 
 /// Builds one material's particles from its particle description (adding
@@ -50,12 +88,7 @@ pub(crate) fn build_materials(
     let mut out = Vec::with_capacity(mats.len());
     for (k, m) in mats.iter().enumerate() {
         let field = |key: &str| format!("particles.materials[{k}].{key}");
-        let desc = ParticlesDesc {
-            species: Some(m.species.clone()),
-            radius: m.radius.or(p.radius),
-            materials: None,
-            ..p.clone()
-        };
+        let desc = material_desc(p, m);
         let volume = volume_of(&desc, notes)?;
         let colormap = Colormap::preset(m.colormap.as_deref().unwrap_or("viridis"))?;
         let opacity = match &m.opacity_points {

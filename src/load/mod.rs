@@ -12,18 +12,18 @@ mod jaxpm;
 pub(crate) mod materials;
 pub(crate) mod particles;
 pub(crate) mod scale;
+pub(crate) mod spacing;
 pub(crate) mod table;
 pub(crate) mod tets;
 
 use std::path::Path;
 
-use voxless_core::Vec3;
 use voxless_io::IoError;
 use voxless_scene::SceneDesc;
 
 pub use amr::AmrArrays;
 pub(crate) use amr::build_amr;
-pub use particles::{default_radius, frame_count};
+pub use particles::{SUPPORT_PER_SPACING, default_radius, frame_count, frame_numbers};
 pub(crate) use particles::{positive, range};
 
 use crate::{AnyVolume, SceneError, WorldFrame};
@@ -37,8 +37,20 @@ pub struct Loaded {
 }
 
 /// Loads the data `desc` names (paths relative to `base`) at frame `frame`
-/// of a time series (0 for single frames).
+/// of a time series (0 for single frames), in the frame the placement
+/// policy picks for it (see [`WorldFrame::fit`]).
 pub fn load(desc: &SceneDesc, base: &Path, frame: usize) -> Result<Loaded, SceneError> {
+    load_in(desc, base, frame, None)
+}
+
+/// [`load`] in a given world frame (`None`: the one the policy picks) —
+/// how every frame of a time series lands in the frame of the first.
+pub fn load_in(
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+    world: Option<&WorldFrame>,
+) -> Result<Loaded, SceneError> {
     let mut notes = Vec::new();
     let sources = [
         desc.particles.is_some(),
@@ -51,23 +63,35 @@ pub fn load(desc: &SceneDesc, base: &Path, frame: usize) -> Result<Loaded, Scene
             "more than one data source ([particles], [amr], [tets]) is given; pick one",
         ));
     }
-    let mut world = WorldFrame::default();
-    let volume = match (&desc.particles, &desc.amr, &desc.tets) {
+    // `--particles run.h5` of a JaxPM run: its tessellation.
+    let jaxpm = match &desc.particles {
+        Some(p) => jaxpm::as_tessellation(p, base)?,
+        None => None,
+    };
+    let particles = if jaxpm.is_some() {
+        None
+    } else {
+        desc.particles.as_ref()
+    };
+    let tets = desc.tets.as_ref().or(jaxpm.as_ref());
+    let (volume, world) = match (particles, &desc.amr, tets) {
         (Some(p), _, _) if p.materials.is_some() => {
             let mats = p.materials.as_deref().unwrap_or_default();
-            AnyVolume::Materials(Box::new(materials::load_materials(
-                p, mats, base, &mut notes, frame,
-            )?))
+            let (v, f) = materials::load_materials(p, mats, base, &mut notes, frame, world)?;
+            (AnyVolume::Materials(Box::new(v)), f)
         }
-        (Some(p), _, _) => AnyVolume::Particles(Box::new(particles::load_particles(
-            p, base, &mut notes, frame,
-        )?)),
+        (Some(p), _, _) => {
+            let (v, f) = particles::load_particles(p, base, &mut notes, frame, world)?;
+            (AnyVolume::Particles(Box::new(v)), f)
+        }
         (_, Some(a), _) => {
             let (v, f) = amr::load_amr(a, base)?;
-            world = f;
-            AnyVolume::Amr(Box::new(v))
+            (AnyVolume::Amr(Box::new(v)), f)
         }
-        (_, _, Some(t)) => AnyVolume::Tets(Box::new(tets::load_tets(t, base, &mut notes)?)),
+        (_, _, Some(t)) => {
+            let (v, f) = tets::load_tets(t, base, &mut notes)?;
+            (AnyVolume::Tets(Box::new(v)), f)
+        }
         (None, None, None) => {
             return Err(SceneError::setting(
                 "scene",
@@ -82,11 +106,12 @@ pub fn load(desc: &SceneDesc, base: &Path, frame: usize) -> Result<Loaded, Scene
     })
 }
 
-/// Query points for `sample`: an N×3 `.npy` (float32/float64) or a CSV with
-/// x, y, z columns; non-finite coordinates are an error naming the point.
-pub fn read_points(path: &Path) -> Result<Vec<Vec3>, SceneError> {
+/// Query points for `sample`, in world coordinates (float64): an N×3
+/// `.npy` (float32/float64) or a CSV with x, y, z columns; non-finite
+/// coordinates are an error naming the point.
+pub fn read_points(path: &Path) -> Result<Vec<[f64; 3]>, SceneError> {
     let (points, _) = table::read_positions(path)?;
-    if let Some(i) = points.iter().position(|p| !p.is_finite()) {
+    if let Some(i) = points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
         return Err(SceneError::data(
             path,
             format!("point {i} has a non-finite coordinate"),

@@ -2,10 +2,17 @@
 //! arrays in memory, through one constructor that fills the data's own
 //! defaults (the radius from the particle spacing, SPH kernels for SPH
 //! files) — every failure a [`SceneError`] naming the file at fault.
+//!
+//! Positions are read in float64 and placed in the scene's [`WorldFrame`]
+//! (chosen from the first data read, see [`crate::frame`]) before they
+//! become float32; radii and the description's radius are world lengths and
+//! are divided by the frame's scale, and weights of the cubic spline (whose
+//! kernel is normalised per unit volume) by its cube, so densities stay in
+//! world units.
 
 use std::path::{Path, PathBuf};
 
-use voxless_core::{Aabb, Range1, Vec3};
+use voxless_core::{Range1, Vec3};
 use voxless_particles::{
     Classification, Kernel, ParticleData, ParticleError, ParticleSettings, ParticleVolume,
 };
@@ -13,8 +20,10 @@ use voxless_scene::{ClassificationName, KernelName, ParticlesDesc};
 use voxless_transfer::ControlPoints;
 
 use super::formats::{self, ParticleFormat, TableOptions};
+use super::spacing;
 use super::{frames, table as load};
-use crate::{SceneError, demo};
+use crate::frame::bounds_of;
+use crate::{SceneError, WorldFrame, demo};
 
 pub(crate) fn positive(field: &str, v: f32) -> Result<(), SceneError> {
     if v.is_finite() && v > 0.0 {
@@ -65,6 +74,10 @@ fn control_points(
 /// files that supplied each per-particle array, whether the SPH defaults
 /// (cubic spline, radii = h, weights = m) apply, and notes on what was read.
 pub(crate) struct FrameData {
+    /// World positions (float64).
+    pub positions: Vec<[f64; 3]>,
+    /// Radii, weights and attribute in world units; no positions yet
+    /// (see [`FrameData::place`]).
     pub data: ParticleData,
     pub main_file: PathBuf,
     pub files: Vec<(&'static str, PathBuf)>,
@@ -72,34 +85,89 @@ pub(crate) struct FrameData {
     pub notes: Vec<String>,
 }
 
-/// The file of `spec` for frame `frame`: the `frame`-th of a sequence, or the
-/// file itself (the same for every frame).
-fn frame_file(spec: &str, base: &Path, frame: usize) -> Result<PathBuf, SceneError> {
-    let files = frames::expand(spec, base)?;
-    if files.len() == 1 && !frames::is_sequence(spec, base) {
-        return Ok(files[0].clone());
+impl FrameData {
+    /// The kernel these particles get: the description's, or the cubic
+    /// spline of the SPH defaults.
+    pub fn kernel(&self, p: &ParticlesDesc) -> Kernel {
+        if self.sph_defaults {
+            Kernel::CubicSpline
+        } else {
+            kernel_of(p, p.kernel.unwrap_or(KernelName::Gaussian3))
+        }
     }
-    files.get(frame).cloned().ok_or_else(|| {
-        SceneError::data(
-            base.join(spec),
-            format!(
-                "frame {frame} requested, but the pattern matches {} files (frames 0..{})",
-                files.len(),
-                files.len() - 1
-            ),
-        )
-    })
+
+    /// The world box the particles' supports reach (positions grown by the
+    /// largest support the description or the radii give), for choosing a
+    /// frame; `None` for non-finite positions (reported when building).
+    pub fn world_reach(&self, p: &ParticlesDesc) -> Option<([f64; 3], [f64; 3])> {
+        let (lo, hi) = bounds_of(&self.positions)?;
+        let factor = self.kernel(p).support_factor() as f64;
+        let radius = match (p.radius, &self.data.radii) {
+            (Some(r), _) => r as f64,
+            (None, Some(r)) => r.iter().fold(0.0f32, |m, &v| m.max(v)) as f64,
+            (None, None) => 0.0,
+        };
+        let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+        // A support beyond the data's extent is refused when there are many
+        // particles (see `ParticleError::HugeRadius`): placing the frame
+        // around it would only blur the positions the error reports.
+        let refused = self.positions.len() > 1000 && factor * radius > extent;
+        let grow = if radius.is_finite() && !refused {
+            factor * radius
+        } else {
+            0.0
+        };
+        Some((lo.map(|v| v - grow), hi.map(|v| v + grow)))
+    }
+
+    /// The arrays with positions in `frame`'s local coordinates (radii and
+    /// weights stay in world units until [`build_particles`]).
+    pub fn place(
+        mut self,
+        frame: &WorldFrame,
+    ) -> (ParticleData, PathBuf, Vec<(&'static str, PathBuf)>) {
+        self.data.positions = self.positions.iter().map(|&q| frame.to_local(q)).collect();
+        (self.data, self.main_file, self.files)
+    }
 }
 
-/// The particle file of frame `frame` and the frame to read in it: the
-/// `frame`-th file (its first frame) of a sequence, else frame `frame` of
-/// the file itself (single-frame formats have the same data every frame).
+/// The frame for data reaching over the world box `reach` (see
+/// [`WorldFrame::fit`]).
+pub(crate) fn frame_for(reach: Option<([f64; 3], [f64; 3])>) -> WorldFrame {
+    reach.map_or_else(WorldFrame::default, |(lo, hi)| WorldFrame::fit(lo, hi))
+}
+
+/// The file of `spec` for frame number `frame` (see [`frames`]): the file
+/// numbered `frame` of a sequence, or the file itself (the same for every
+/// frame).
+fn frame_file(spec: &str, base: &Path, frame: usize) -> Result<PathBuf, SceneError> {
+    if frames::is_sequence(spec, base) {
+        frames::file_numbered(spec, base, frame)
+    } else {
+        Ok(base.join(spec))
+    }
+}
+
+/// The particle file of frame number `frame` and the frame to read in it:
+/// the file numbered `frame` (its first frame) of a sequence, else frame
+/// `frame` of the file itself, which must have it.
 fn locate(spec: &str, base: &Path, frame: usize) -> Result<(PathBuf, usize), SceneError> {
     if frames::is_sequence(spec, base) {
-        Ok((frame_file(spec, base, frame)?, 0))
-    } else {
-        Ok((base.join(spec), frame))
+        return Ok((frames::file_numbered(spec, base, frame)?, 0));
     }
+    let path = base.join(spec);
+    if frame > 0
+        && let Some(format) = ParticleFormat::detect(&path)?
+    {
+        let count = formats::frames_in(&path, format)?;
+        if frame >= count {
+            return Err(SceneError::data(
+                &path,
+                format!("frame {frame} was asked for, but the file holds frames 0..{count}"),
+            ));
+        }
+    }
+    Ok((path, frame))
 }
 
 /// The columns SPH output carries for smoothing lengths and masses, when
@@ -124,6 +192,7 @@ pub(crate) fn read_frame(
     let mut files: Vec<(&'static str, PathBuf)> = Vec::new();
     let mut notes = Vec::new();
     let mut sph_defaults = false;
+    let world_positions: Vec<[f64; 3]>;
     let (data, main_file) = match (&p.file, p.demo.unwrap_or(false)) {
         (Some(f), _) => {
             let (path, in_file) = locate(f, base, frame)?;
@@ -137,10 +206,8 @@ pub(crate) fn read_frame(
             let (positions, source, note) = load::open(&path, in_file, &select)?;
             notes.extend(note);
             let n = positions.len();
-            let mut data = ParticleData {
-                positions,
-                ..Default::default()
-            };
+            world_positions = positions;
+            let mut data = ParticleData::default();
             let (mut radii, mut weights) = (p.radii.clone(), p.weights.clone());
             if let Some((h, m)) = sph_columns(p, &source) {
                 sph_defaults = true;
@@ -181,7 +248,16 @@ pub(crate) fn read_frame(
             data.weights = per(&weights, "weights")?;
             (data, path)
         }
-        (None, true) => (demo::galaxy(120_000), PathBuf::from("<demo>")),
+        (None, true) => {
+            let mut g = demo::galaxy(120_000);
+            world_positions = g
+                .positions
+                .iter()
+                .map(|p| p.to_array().map(f64::from))
+                .collect();
+            g.positions.clear();
+            (g, PathBuf::from("<demo>"))
+        }
         (None, false) => {
             return Err(SceneError::setting(
                 "particles.file",
@@ -190,6 +266,7 @@ pub(crate) fn read_frame(
         }
     };
     Ok(FrameData {
+        positions: world_positions,
         data,
         main_file,
         files,
@@ -217,22 +294,35 @@ pub(crate) fn blame(
     SceneError::Particles { path, source }
 }
 
+/// Loads frame `frame` of the particles `p` names, in `world` (or the frame
+/// the policy picks for them), and returns the volume with its frame.
 pub(crate) fn load_particles(
     p: &ParticlesDesc,
     base: &Path,
     notes: &mut Vec<String>,
     frame: usize,
-) -> Result<ParticleVolume, SceneError> {
+    world: Option<&WorldFrame>,
+) -> Result<(ParticleVolume, WorldFrame), SceneError> {
     let mut fd = read_frame(p, base, frame)?;
     notes.append(&mut fd.notes);
-    let FrameData {
-        data,
-        main_file,
-        files,
-        sph_defaults,
-        ..
-    } = fd;
-    build_particles(data, p, sph_defaults, notes).map_err(|e| e.blame(main_file, &files))
+    let world = world
+        .copied()
+        .unwrap_or_else(|| frame_for(fd.world_reach(p)));
+    let v = build_frame(fd, p, &world, notes)?;
+    Ok((v, world))
+}
+
+/// A volume of read particles placed in `world`.
+pub(crate) fn build_frame(
+    fd: FrameData,
+    p: &ParticlesDesc,
+    world: &WorldFrame,
+    notes: &mut Vec<String>,
+) -> Result<ParticleVolume, SceneError> {
+    let sph_defaults = fd.sph_defaults;
+    let (data, main_file, files) = fd.place(world);
+    build_particles(data, p, sph_defaults, notes, world.scale)
+        .map_err(|e| e.blame(main_file, &files))
 }
 
 /// Why particle arrays cannot become a volume: a bad setting, or bad data
@@ -261,12 +351,15 @@ impl From<SceneError> for BuildError {
 /// A particle volume from arrays and the description's settings, with the
 /// data's defaults: the SPH cubic spline when `sph_defaults`, and a radius
 /// from the particle spacing when neither a radius nor radii are given
-/// (said in `notes`).
+/// (said in `notes`). Positions are local to a frame of scale `scale`;
+/// radii, weights and the description's radius are in world units and are
+/// converted here (see the module docs).
 pub(crate) fn build_particles(
     mut data: ParticleData,
     p: &ParticlesDesc,
     sph_defaults: bool,
     notes: &mut Vec<String>,
+    scale: f64,
 ) -> Result<ParticleVolume, BuildError> {
     super::scale::scale_arrays(&mut data, p)?;
     let kernel = if sph_defaults {
@@ -274,13 +367,19 @@ pub(crate) fn build_particles(
     } else {
         kernel_of(p, p.kernel.unwrap_or(KernelName::Gaussian3))
     };
+    let to_local = |r: f32| (r as f64 / scale) as f32;
+    localise(&mut data, kernel, scale);
+    if let Some(given) = p.radius {
+        positive("particles.radius (--radius)", given)?;
+    }
     let radius = match (p.radius, &data.radii) {
-        (Some(r), _) => r,
+        (Some(r), _) => to_local(r),
         (None, Some(_)) => 1.0,
         (None, None) => {
-            let r = default_radius(&data.positions, kernel);
+            let (r, how) = default_radius_with(&data.positions, kernel);
             notes.push(format!(
-                "no radius given: using {r:.4} ({} kernel, support = 2.5 × mean particle spacing)",
+                "no radius given: using {:.4e} ({} kernel, {how}; change with --radius)",
+                r as f64 * scale,
                 kernel.name()
             ));
             r
@@ -288,6 +387,7 @@ pub(crate) fn build_particles(
     };
     // The radius scale acts on the global radius too (radii were scaled above).
     let radius = radius * super::scale::scales(p)?.0;
+    check_resolvable(&data, radius * kernel.support_factor(), scale)?;
     let classification = match p.classification.unwrap_or(ClassificationName::Post) {
         ClassificationName::Post => Classification::Post,
         ClassificationName::Pre => Classification::Pre,
@@ -305,56 +405,172 @@ pub(crate) fn build_particles(
         attribute_range,
         classification,
     };
-    ParticleVolume::new(data, settings).map_err(BuildError::Data)
+    ParticleVolume::new(data, settings).map_err(|e| BuildError::Data(in_world_units(e, scale)))
 }
 
-/// Number of frames the scene's data source names: the files of a sequence
-/// (see [`frames`]), the frames of a multi-frame file (LAMMPS dump, XYZ,
-/// `.particles`), else 1.
-pub fn frame_count(desc: &voxless_scene::SceneDesc, base: &Path) -> Result<usize, SceneError> {
-    match &desc.particles {
-        Some(ParticlesDesc { file: Some(f), .. }) if frames::is_sequence(f, base) => {
-            Ok(frames::expand(f, base)?.len())
-        }
-        Some(ParticlesDesc { file: Some(f), .. }) => {
-            let path = base.join(f);
-            match ParticleFormat::detect(&path)? {
-                Some(format) => formats::frames_in(&path, format),
-                None => Ok(1),
+/// A particle error's lengths in world units (they are local to a frame of
+/// scale `scale`).
+fn in_world_units(e: ParticleError, scale: f64) -> ParticleError {
+    match e {
+        ParticleError::HugeRadius {
+            support,
+            extent,
+            count,
+        } => ParticleError::HugeRadius {
+            support: (support as f64 * scale) as f32,
+            extent: (extent as f64 * scale) as f32,
+            count,
+        },
+        other => other,
+    }
+}
+
+/// The frame numbers of the scene's data (see [`frames`]): the numbers of
+/// a sequence's files — over every sequence the particles pair (positions,
+/// attribute, radii, weights), so a number one of them lacks is found when
+/// that frame is loaded — the frames 0, 1, … of a multi-frame file (LAMMPS
+/// dump, XYZ, `.particles`), else just 0.
+pub fn frame_numbers(
+    desc: &voxless_scene::SceneDesc,
+    base: &Path,
+) -> Result<Vec<usize>, SceneError> {
+    let Some(p) = &desc.particles else {
+        return Ok(vec![0]);
+    };
+    let Some(f) = &p.file else {
+        return Ok(vec![0]);
+    };
+    if frames::is_sequence(f, base) {
+        let mut numbers = Vec::new();
+        let specs = [
+            Some(f),
+            p.attribute.as_ref(),
+            p.radii.as_ref(),
+            p.weights.as_ref(),
+        ];
+        for spec in specs.into_iter().flatten() {
+            if frames::is_sequence(spec, base) {
+                numbers.extend(frames::numbered(spec, base)?.into_iter().map(|(n, _)| n));
             }
         }
-        _ => Ok(1),
+        numbers.sort_unstable();
+        numbers.dedup();
+        return Ok(numbers);
+    }
+    let path = base.join(f);
+    let count = match ParticleFormat::detect(&path)? {
+        Some(format) => formats::frames_in(&path, format)?,
+        None => 1,
+    };
+    Ok((0..count.max(1)).collect())
+}
+
+/// Supports below what float32 resolves across the data's extent (one
+/// particle 10³⁸ away from the rest, say) would collapse the particles onto
+/// each other: an error naming the particle farthest from the rest.
+fn check_resolvable(data: &ParticleData, support: f32, scale: f64) -> Result<(), BuildError> {
+    let median = |v: &[f32]| {
+        let mut v = v.to_vec();
+        let mid = v.len() / 2;
+        v.select_nth_unstable_by(mid, f32::total_cmp);
+        v[mid]
+    };
+    let support = match &data.radii {
+        Some(r) if !r.is_empty() => support * median(r),
+        _ => support,
+    } as f64;
+    let mut b = voxless_core::Aabb::EMPTY;
+    data.positions.iter().for_each(|p| b.grow(*p));
+    let extent = (0..3)
+        .map(|a| (b.max[a] - b.min[a]) as f64)
+        .fold(0.0, f64::max);
+    // Non-finite positions are reported as such when the volume is built.
+    if data.positions.len() < 2 || !extent.is_finite() || !(support < extent * 1e-6) {
+        return Ok(());
+    }
+    let centre: [f32; 3] =
+        std::array::from_fn(|a| median(&data.positions.iter().map(|p| p[a]).collect::<Vec<_>>()));
+    let dist = |p: &Vec3| {
+        (0..3)
+            .map(|a| (p[a] - centre[a]).abs() as f64)
+            .fold(0.0, f64::max)
+    };
+    let (far, _) = data
+        .positions
+        .iter()
+        .enumerate()
+        .fold(
+            (0, -1.0),
+            |m, (i, p)| if dist(p) > m.1 { (i, dist(p)) } else { m },
+        );
+    Err(BuildError::Setting(SceneError::setting(
+        "particles (positions)",
+        format!(
+            "the particles' supports ({:.3e}) are too small for float32 to resolve across the \
+             data's extent ({:.3e}): particle {far} lies farthest from the rest; leave out \
+             outliers like it (or give a larger --radius)",
+            support * scale,
+            extent * scale
+        ),
+    )))
+}
+
+/// Number of frames of the scene's data ([`frame_numbers`]).
+pub fn frame_count(desc: &voxless_scene::SceneDesc, base: &Path) -> Result<usize, SceneError> {
+    Ok(frame_numbers(desc, base)?.len())
+}
+
+/// Radii and weights of `data` from world units into a frame of scale
+/// `scale` (see the module docs): radii ÷ scale, and for the cubic spline
+/// (normalised per unit volume) weights ÷ scale³.
+pub(crate) fn localise(data: &mut ParticleData, kernel: Kernel, scale: f64) {
+    if scale == 1.0 {
+        return;
+    }
+    if let Some(r) = &mut data.radii {
+        r.iter_mut().for_each(|v| *v = (*v as f64 / scale) as f32);
+    }
+    if kernel == Kernel::CubicSpline {
+        let per_volume = scale.powi(3);
+        let n = data.positions.len();
+        let w = data.weights.get_or_insert_with(|| vec![1.0; n]);
+        w.iter_mut()
+            .for_each(|v| *v = (*v as f64 / per_volume) as f32);
     }
 }
 
-/// Support radius 2.5× the mean particle spacing, converted to the kernel's
-/// radius parameter. The spacing is `(occupied volume / N)^(1/3)`, with the
-/// occupied volume counted on a coarse grid (about four particles per cell if
-/// the data were uniform), so clustered data — a thin disc in a big box — get
-/// the spacing where the particles actually are.
+/// Support radius per nearest-neighbour spacing of the default radius.
+pub const SUPPORT_PER_SPACING: f32 = 1.0;
+
+/// The default radius parameter of `kernel` for particles at `positions`:
+/// a support of [`SUPPORT_PER_SPACING`] × the median nearest-neighbour
+/// distance (see [`spacing`]), so neighbouring kernels overlap enough for
+/// a continuous field while single atoms stay visible. Particles without
+/// any spacing (one particle, or all at one point) get support 1: there is
+/// no length in the data to size them by, and a render frames them
+/// whatever their size.
 pub fn default_radius(positions: &[Vec3], kernel: Kernel) -> f32 {
-    let mut b = Aabb::EMPTY;
-    for p in positions {
-        b.grow(*p);
-    }
-    let n = positions.len();
-    let longest = b.extent().max_elem().max(1e-12);
-    let res = ((n as f32 / 4.0).cbrt().round() as usize).clamp(1, 128);
-    let cell = longest / res as f32;
-    let dims = b.extent().mul_elem(Vec3::splat(1.0 / cell));
-    let dim = |a: f32| (a.ceil() as usize).clamp(1, res);
-    let (nx, ny, nz) = (dim(dims.x), dim(dims.y), dim(dims.z));
-    let mut occupied = vec![false; nx * ny * nz];
-    for p in positions {
-        let q = (*p - b.min) * (1.0 / cell);
-        let (i, j, k) = (
-            (q.x as usize).min(nx - 1),
-            (q.y as usize).min(ny - 1),
-            (q.z as usize).min(nz - 1),
-        );
-        occupied[(k * ny + j) * nx + i] = true;
-    }
-    let count = occupied.iter().filter(|&&o| o).count().max(1);
-    let spacing = (count as f32 * cell * cell * cell / n as f32).cbrt();
-    2.5 * spacing / kernel.support_factor()
+    default_radius_with(positions, kernel).0
+}
+
+/// [`default_radius`] and how it was found, for the note.
+fn default_radius_with(positions: &[Vec3], kernel: Kernel) -> (f32, String) {
+    let (support, how) = match spacing::nearest_neighbour_spacing(positions) {
+        Some(d) => (
+            SUPPORT_PER_SPACING * d,
+            format!("support = {SUPPORT_PER_SPACING} × median nearest-neighbour distance"),
+        ),
+        None => (
+            1.0,
+            if positions.len() == 1 {
+                "one particle, so no spacing to size it by: support 1".to_string()
+            } else {
+                format!(
+                    "all {} particles lie at one point, so no spacing to size them by: support 1",
+                    positions.len()
+                )
+            },
+        ),
+    };
+    (support / kernel.support_factor(), how)
 }

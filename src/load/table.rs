@@ -3,7 +3,6 @@
 
 use std::path::{Path, PathBuf};
 
-use voxless_core::Vec3;
 use voxless_io::{ParticleTable, read_npy};
 
 use super::formats::{self, ParticleFormat, TableOptions};
@@ -36,21 +35,20 @@ fn is_npy(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("npy"))
 }
 
-/// Reads positions from an N×3 `.npy`, a CSV with x, y, z columns, or any
-/// other particle format (its first frame).
-pub fn read_positions(path: &Path) -> Result<(Vec<Vec3>, Source), SceneError> {
+/// Reads world positions (float64) from an N×3 `.npy`, a CSV with x, y, z
+/// columns, or any other particle format (its first frame).
+pub fn read_positions(path: &Path) -> Result<(Vec<[f64; 3]>, Source), SceneError> {
     let (p, s, _) = open(path, 0, &Selection::default())?;
     Ok((p, s))
 }
 
+/// World positions (float64), the rest of the table, and a note.
+pub type Opened = (Vec<[f64; 3]>, Source, Option<String>);
+
 /// Reads frame `frame` of the particle file at `path` in whichever format it
-/// is (see [`formats`]); returns the positions, the rest of the table, and a
-/// note on what part of the file was read, if worth one.
-pub fn open(
-    path: &Path,
-    frame: usize,
-    select: &Selection,
-) -> Result<(Vec<Vec3>, Source, Option<String>), SceneError> {
+/// is (see [`formats`]); returns the world positions (float64), the rest of
+/// the table, and a note on what part of the file was read, if worth one.
+pub fn open(path: &Path, frame: usize, select: &Selection) -> Result<Opened, SceneError> {
     let format = ParticleFormat::detect(path)?.unwrap_or(ParticleFormat::Csv);
     let formats::Table { mut table, note } =
         formats::read_table(path, format, frame, &select.options)?;
@@ -65,10 +63,7 @@ pub fn open(
         };
         return Err(SceneError::data(path, format!("no particles ({what})")));
     }
-    let positions = std::mem::take(&mut table.positions)
-        .into_iter()
-        .map(Vec3::from_array)
-        .collect();
+    let positions = std::mem::take(&mut table.positions);
     let source = Source {
         path: path.to_path_buf(),
         format,

@@ -1,5 +1,12 @@
 //! Phase-space tessellations: N³ positions in Lagrangian order from a
 //! `.npy` (or any particle file), a JaxPM `.h5` run, or memory.
+//!
+//! The periodic box `[0, L)³` keeps its corner at the world origin; only its
+//! scale is chosen by the placement policy ([`WorldFrame::fit`] on the box),
+//! so boxes of 10⁻¹² or 10³⁰ units compute in a local unit about their size.
+//! Without a particle mass the mean density is 1 (densities read as the
+//! overdensity 1 + δ), whatever the box size; a given mass is divided by the
+//! scale's cube so densities (mass over tet volume) stay in world units.
 
 use std::path::Path;
 
@@ -9,13 +16,20 @@ use voxless_tets::{LagrangianGrid, TetSettings, TetVolume};
 
 use super::formats::ParticleFormat;
 use super::particles::positive;
-use crate::SceneError;
+use crate::{SceneError, WorldFrame};
+
+/// Lagrangian positions in world units, before they are placed.
+pub(crate) struct WorldGrid {
+    pub n: usize,
+    pub box_size: f64,
+    pub positions: Vec<[f64; 3]>,
+}
 
 pub(crate) fn load_tets(
     t: &TetsDesc,
     base: &Path,
     notes: &mut Vec<String>,
-) -> Result<TetVolume, SceneError> {
+) -> Result<(TetVolume, WorldFrame), SceneError> {
     let file = t.file.as_ref().ok_or_else(|| {
         SceneError::setting(
             "tets.file",
@@ -37,13 +51,18 @@ pub(crate) fn load_tets(
             ));
         }
         let (positions, _) = super::table::read_positions(&path)?;
-        grid_of(positions, t)?
+        world_grid(positions, t, &path)?
     };
-    build_tets(&grid, t, &path)
+    build_world(&grid, t, &path)
 }
 
-/// The Lagrangian grid of `positions` with the description's N and L.
-pub(crate) fn grid_of(positions: Vec<Vec3>, t: &TetsDesc) -> Result<LagrangianGrid, SceneError> {
+/// The Lagrangian grid of world `positions` with the description's N and
+/// L, checked: N³ particles, all inside the periodic box.
+pub(crate) fn world_grid(
+    positions: Vec<[f64; 3]>,
+    t: &TetsDesc,
+    source: &Path,
+) -> Result<WorldGrid, SceneError> {
     let n = t.lagrangian.ok_or_else(|| {
         SceneError::setting(
             "tets.lagrangian",
@@ -53,15 +72,123 @@ pub(crate) fn grid_of(positions: Vec<Vec3>, t: &TetsDesc) -> Result<LagrangianGr
     let box_size = t.box_size.ok_or_else(|| {
         SceneError::setting("tets.box_size", "the periodic box size is needed (--box L)")
     })?;
-    Ok(LagrangianGrid {
+    let grid = WorldGrid {
         n,
-        box_size,
+        box_size: box_size as f64,
         positions,
-    })
+    };
+    check_grid(&grid, source)?;
+    Ok(grid)
 }
 
-/// A tessellation of `grid` with the description's mass and level of
-/// detail; errors name `source`.
+/// N³ particles inside `[0, L)³` (a hair of rounding past L allowed).
+pub(crate) fn check_grid(g: &WorldGrid, source: &Path) -> Result<(), SceneError> {
+    let count = g.positions.len();
+    if g.n.checked_pow(3) != Some(count) {
+        let cube = (count as f64).cbrt().round() as usize;
+        let hint = if cube >= 2 && cube.checked_pow(3) == Some(count) {
+            format!(" ({count} = {cube}³: use --lagrangian {cube})")
+        } else {
+            " (which is not N³ for any whole N)".to_string()
+        };
+        return Err(SceneError::data(
+            source,
+            format!(
+                "tets.lagrangian (--lagrangian) N = {} needs N³ = {} particles, but there are \
+                 {count}{hint}",
+                g.n,
+                g.n.checked_pow(3)
+                    .map_or("too many".to_string(), |c| c.to_string())
+            ),
+        ));
+    }
+    let l = g.box_size;
+    if !(l.is_finite() && l > 0.0) {
+        return Err(SceneError::setting(
+            "tets.box_size (--box)",
+            format!("the box size {l} must be finite and > 0"),
+        ));
+    }
+    let slack = 1e-5 * l;
+    let outside = |p: &[f64; 3]| p.iter().any(|&c| !(c >= -slack && c <= l + slack));
+    if let Some(i) = g.positions.iter().position(outside) {
+        let (lo, hi) = crate::frame::bounds_of(&g.positions).unwrap_or(([0.0; 3], [0.0; 3]));
+        let span_lo = lo.iter().fold(f64::INFINITY, |m, &v| m.min(v));
+        let span_hi = hi.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+        return Err(SceneError::data(
+            source,
+            format!(
+                "particle {i} at {:?} lies outside the periodic box [0, {l})³ (positions span \
+                 [{span_lo}, {span_hi}]); is the box size (--box) right?",
+                g.positions[i]
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A tessellation of world positions, placed in the frame its box picks.
+pub(crate) fn build_world(
+    g: &WorldGrid,
+    t: &TetsDesc,
+    source: &Path,
+) -> Result<(TetVolume, WorldFrame), SceneError> {
+    let frame = WorldFrame::fit([0.0; 3], [g.box_size; 3]);
+    let frame = WorldFrame {
+        origin: [0.0; 3],
+        scale: frame.scale,
+    };
+    let s = frame.scale;
+    let grid = LagrangianGrid {
+        n: g.n,
+        box_size: (g.box_size / s) as f32,
+        positions: g
+            .positions
+            .iter()
+            .map(|p| Vec3::new((p[0] / s) as f32, (p[1] / s) as f32, (p[2] / s) as f32))
+            .collect(),
+    };
+    // Without a mass, the mean density is 1 (densities read as 1 + δ, the
+    // overdensity), whatever the box size. A given mass is in world units:
+    // mass over local volume is density in world units when the mass is
+    // divided by scale³.
+    let n3 = (g.n as f64).powi(3);
+    let mass = match t.particle_mass {
+        None => (grid.box_size as f64).powi(3) / n3,
+        Some(m) => {
+            if !(m.is_finite() && m > 0.0) {
+                return Err(SceneError::setting(
+                    "tets.particle_mass (--particle-mass)",
+                    format!("{m} must be finite and > 0"),
+                ));
+            }
+            let local = m / s.powi(3);
+            let mean = local * n3 / (grid.box_size as f64).powi(3);
+            if !(1e-30..=1e30).contains(&mean) {
+                return Err(SceneError::setting(
+                    "tets.particle_mass (--particle-mass)",
+                    format!(
+                        "a mass of {m} per particle in a box of {} gives a mean density of \
+                         {:.3e}, beyond what float32 computes with; give the mass in other \
+                         units, or leave it out for a mean density of 1",
+                        g.box_size,
+                        m * n3 / g.box_size.powi(3)
+                    ),
+                ));
+            }
+            local
+        }
+    };
+    let local = TetsDesc {
+        particle_mass: Some(mass),
+        ..t.clone()
+    };
+    let v = build_tets(&grid, &local, source)?;
+    Ok((v, frame))
+}
+
+/// A tessellation of `grid` (local units) with the description's mass and
+/// level of detail; errors name `source`.
 pub(crate) fn build_tets(
     grid: &LagrangianGrid,
     t: &TetsDesc,
@@ -72,7 +199,7 @@ pub(crate) fn build_tets(
         ..Default::default()
     };
     if let Some(p) = t.lod_pixels {
-        positive("tets.lod_pixels", p)?;
+        positive("tets.lod_pixels (--lod)", p)?;
     }
     let levels = if t.lod_pixels.is_some() { 3 } else { 0 };
     let v = TetVolume::new(grid, &settings, levels).map_err(|e| SceneError::Tets {

@@ -78,11 +78,71 @@ fn elevation_raises_the_eye_and_stops_short_of_the_pole() {
     assert!((angle(again) - 60.0).abs() < 1e-3);
 }
 
+/// Whether every corner of `b` projects inside the image of `c` (aspect
+/// `aspect`).
+fn frames_every_corner(c: &Camera, b: &Aabb, aspect: f32) -> bool {
+    let Projection::Perspective { fov_y_deg } = c.projection else {
+        return false;
+    };
+    let ty = (fov_y_deg.to_radians() * 0.5).tan();
+    (0..8).all(|k| {
+        let p = Vec3::new(
+            if k & 1 == 1 { b.max.x } else { b.min.x },
+            if k & 2 == 2 { b.max.y } else { b.min.y },
+            if k & 4 == 4 { b.max.z } else { b.min.z },
+        ) - c.eye;
+        let depth = p.dot(c.forward);
+        depth > 0.0
+            && p.dot(c.right).abs() <= ty * aspect * depth * 1.0001
+            && p.dot(c.up).abs() <= ty * depth * 1.0001
+    })
+}
+
+#[test]
+fn default_view_is_a_three_quarter_view_that_honours_up_and_frames_the_data() {
+    // A dam-break-like box, long in x, z up.
+    let b = Aabb::new(Vec3::new(0.0, -0.5, 0.0), Vec3::new(2.0, 0.5, 0.6));
+    for aspect in [0.5f32, 1.0, 16.0 / 9.0] {
+        let c = camera(&CameraDesc::default(), &b, aspect).unwrap();
+        assert!(frames_every_corner(&c, &b, aspect), "aspect {aspect}");
+        // Up is +z, the long side runs left to right, the eye above.
+        assert!(c.up.z > 0.8, "{:?}", c.up);
+        assert!(c.right.x > 0.75, "{:?}", c.right);
+        let elevation = (c.eye - b.center()).normalized().z.asin().to_degrees();
+        assert!((elevation - 25.0).abs() < 0.1, "{elevation}");
+    }
+    // --up 0 1 0: the same view about y; the long side still across.
+    let y_up = CameraDesc {
+        up: Some([0.0, 1.0, 0.0]),
+        ..Default::default()
+    };
+    let c = camera(&y_up, &b, 1.5).unwrap();
+    assert!(c.up.y > 0.8 && c.right.x > 0.75, "{c:?}");
+    assert!(frames_every_corner(&c, &b, 1.5));
+    // A long vertical column seen with z up stays upright.
+    let column = Aabb::new(Vec3::ZERO, Vec3::new(0.1, 0.2, 5.0));
+    let c = camera(&CameraDesc::default(), &column, 1.0).unwrap();
+    assert!(frames_every_corner(&c, &column, 1.0) && c.up.z > 0.8);
+    // Bad up vectors name the flag.
+    for up in [[0.0; 3], [f32::NAN, 0.0, 1.0]] {
+        let e = camera(
+            &CameraDesc {
+                up: Some(up),
+                ..Default::default()
+            },
+            &b,
+            1.0,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("--up"), "{e}");
+    }
+}
+
 #[test]
 fn camera_applies_view_keys_and_rejects_bad_values() {
     let b = Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 1.0));
     let plain = camera(&CameraDesc::default(), &b, 1.5).unwrap();
-    assert_eq!(plain, Camera::framing(&b, 1.5), "defaults unchanged");
     let zoomed = camera(
         &CameraDesc {
             zoom: Some(2.0),

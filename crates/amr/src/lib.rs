@@ -30,6 +30,7 @@
 
 pub mod bricks;
 mod context;
+mod integral;
 pub mod regions;
 mod volume;
 

@@ -9,7 +9,7 @@ use voxless_core::{Aabb, IntervalQuery, Range1, Ray, Vec3, Volume};
 /// A multi-level grid over [0, 64)³ finest units: level-3 cells, some refined
 /// to 2, 1 and 0 (so level jumps of up to three occur where a refined cell
 /// touches an unrefined one), and a few holes.
-fn synthetic(seed: u64, holes: bool) -> Vec<[i32; 4]> {
+pub(crate) fn synthetic(seed: u64, holes: bool) -> Vec<[i32; 4]> {
     let mut rng = Lcg(seed);
     let mut out = Vec::new();
     fn refine(c: [i32; 4], rng: &mut Lcg, out: &mut Vec<[i32; 4]>, holes: bool) {
@@ -42,13 +42,13 @@ fn synthetic(seed: u64, holes: bool) -> Vec<[i32; 4]> {
     out
 }
 
-fn smooth(c: &[i32; 4]) -> f32 {
+pub(crate) fn smooth(c: &[i32; 4]) -> f32 {
     let w = (1 << c[3]) as f32;
     let p = [0, 1, 2].map(|a| c[a] as f32 + 0.5 * w);
     (p[0] * 0.11).sin() + (p[1] * 0.07).cos() * 2.0 + p[2] * 0.03
 }
 
-fn cells_with(cells: Vec<[i32; 4]>, f: impl Fn(&[i32; 4]) -> f32) -> AmrCells {
+pub(crate) fn cells_with(cells: Vec<[i32; 4]>, f: impl Fn(&[i32; 4]) -> f32) -> AmrCells {
     let v: Vec<f32> = cells.iter().map(&f).collect();
     let v2: Vec<f32> = cells.iter().map(|c| c[3] as f32).collect();
     AmrCells {

@@ -3,10 +3,7 @@
 use std::time::{Duration, Instant};
 
 use voxless_bvh::Bvh;
-use voxless_core::{
-    Aabb, Attribute, Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume,
-    quadrature_line_integral,
-};
+use voxless_core::{Aabb, Attribute, Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume};
 
 use crate::AmrError;
 use crate::bricks::{self, Brick};
@@ -81,6 +78,14 @@ pub struct AmrVolume {
     brick_bvh: Bvh,
     bounds: Aabb,
     stats: BuildStats,
+}
+
+/// `⌊x⌋` for |x| < 2³¹ without a libm call (`f32::floor` is one on
+/// baseline x86-64, and the reconstruction takes three per brick).
+#[inline]
+pub(crate) fn floor_i32(x: f32) -> i32 {
+    let i = x as i32;
+    i - (x < i as f32) as i32
 }
 
 /// Reconstructed values at a point.
@@ -207,7 +212,9 @@ impl AmrVolume {
         let region_bvh = Bvh::build_in_order(&region_bounds);
         let brick_bvh = Bvh::build(&brick_bounds);
         stats.bvh_build = t.elapsed();
-        let bounds = region_bvh.bounds();
+        // The data's domain is the cells, not the tents' half-cell margin
+        // around them: bounds, intervals and samples stop at the cells.
+        let bounds = brick_bounds.iter().fold(Aabb::EMPTY, |b, &x| b.union(x));
         Ok(AmrVolume {
             names,
             origin,
@@ -272,6 +279,10 @@ impl AmrVolume {
     ) {
         let start = out.len();
         let nf = self.values.len();
+        let t = self.bounds.clip_ray(ray, t);
+        if t.is_empty() {
+            return;
+        }
         bvh.ray_query(ray, t, |i, hit| {
             let r = remap.map_or(i as usize, |m| m[i as usize] as usize);
             let range = self.region_ranges[r * nf + self.settings.field];
@@ -303,12 +314,29 @@ impl AmrVolume {
         &self.region_bvh
     }
 
+    /// World position of unit coordinate 0.
+    pub fn origin(&self) -> Vec3 {
+        self.origin
+    }
+    /// World width of a finest cell.
+    pub fn cell_size(&self) -> f32 {
+        self.h
+    }
+
+    /// Values of `field`, in brick order.
+    pub(crate) fn field_values(&self, field: usize) -> &[f32] {
+        &self.values[field]
+    }
+
     fn to_units(&self, p: Vec3) -> Vec3 {
         (p - self.origin) * (1.0 / self.h)
     }
 
     /// The region containing `p` (world), if any.
     pub fn locate(&self, p: Vec3) -> Option<usize> {
+        if !self.bounds.contains(p) {
+            return None;
+        }
         let mut found = None;
         self.region_bvh.point_query(p, |i| {
             if found.is_none() {
@@ -342,9 +370,8 @@ impl AmrVolume {
             let mut empty = false;
             for a in 0..3 {
                 let t = (pu[a] - b.lower[a] as f32) / w - 0.5;
-                let i0 = t.floor();
-                let f = t - i0;
-                let i0 = i0 as i32;
+                let i0 = floor_i32(t);
+                let f = t - i0 as f32;
                 for (k, (i, weight, dw)) in [(i0, 1.0 - f, -1.0 / w), (i0 + 1, f, 1.0 / w)]
                     .into_iter()
                     .enumerate()
@@ -582,7 +609,7 @@ impl Volume for AmrVolume {
     fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
         match self.settings.reconstruction {
             Reconstruction::Nearest => self.nearest_line_integral(ray, t),
-            Reconstruction::Basis => quadrature_line_integral(self, ray, t),
+            Reconstruction::Basis => self.basis_line_integral(ray, t),
         }
     }
 }

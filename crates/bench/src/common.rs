@@ -75,7 +75,11 @@ pub fn read_dam_break(path: &Path) -> Result<ParticleData> {
         })
     };
     Ok(ParticleData {
-        positions: t.positions.iter().map(|p| Vec3::from_array(*p)).collect(),
+        positions: t
+            .positions
+            .iter()
+            .map(|p| Vec3::from_array(p.map(|c| c as f32)))
+            .collect(),
         radii: Some(column("h")?),
         weights: Some(column("m")?),
         attribute: Some(column("speed")?),

@@ -47,12 +47,21 @@ impl Camera {
         if !(eye.is_finite() && look_at.is_finite() && up.is_finite()) {
             return Err(CameraError("camera vectors must be finite".into()));
         }
-        let forward = (look_at - eye).normalized();
+        let mut forward = (look_at - eye).normalized();
+        if !(forward.is_finite() && forward.length_squared() > 0.5) && look_at != eye {
+            // The f32 length overflowed or underflowed (positions beyond
+            // ~1e19 or below ~1e-19 apart): normalise in f64 instead.
+            forward = unit_f64(look_at, eye);
+        }
         if forward.length_squared() == 0.0 {
             return Err(CameraError("camera eye and look-at point coincide".into()));
         }
-        let right = forward.cross(up).normalized();
-        if right.length_squared() < 0.5 {
+        let mut right = forward.cross(up).normalized();
+        if !(right.is_finite() && right.length_squared() > 0.5) {
+            // An up vector too long or too short for f32 squares.
+            right = forward.cross(unit_f64(up, Vec3::ZERO)).normalized();
+        }
+        if !(right.length_squared() >= 0.5) {
             return Err(CameraError(
                 "camera up vector is parallel to the view direction".into(),
             ));
@@ -74,8 +83,13 @@ impl Camera {
         })
     }
 
-    /// A default view of `bounds`: from the +z side, tilted, far enough that
+    /// A simple view of `bounds`: from the +z side, tilted, far enough that
     /// the bounding sphere fills the frame of a 30° perspective camera.
+    /// Never fails: bounds too large or too small for f32 arithmetic give
+    /// the same view directions with the eye computed in f64 (an empty or
+    /// degenerate box is viewed as a box of radius 1e-6 around its centre).
+    /// The `voxless` library's default view is a three-quarter view that
+    /// honours an up vector; this one serves tests and benchmarks.
     pub fn framing(bounds: &Aabb, aspect: f32) -> Camera {
         let center = bounds.center();
         let radius = (bounds.diagonal() * 0.5).max(1e-6);
@@ -85,13 +99,38 @@ impl Camera {
         let fit = half * aspect.min(1.0);
         let distance = radius / fit.atan().sin();
         let dir = Vec3::new(0.35, 0.45, 1.0).normalized();
-        Camera::look_at(
-            center + dir * distance,
-            center,
-            Vec3::new(0.0, 1.0, 0.0),
-            Projection::Perspective { fov_y_deg },
-        )
-        .expect("framing camera is well formed")
+        let projection = Projection::Perspective { fov_y_deg };
+        let up = Vec3::new(0.0, 1.0, 0.0);
+        Camera::look_at(center + dir * distance, center, up, projection).unwrap_or_else(|_| {
+            // Overflow in f32: the same view, its eye placed in f64.
+            let c = |a: usize| {
+                let (lo, hi) = (bounds.min[a] as f64, bounds.max[a] as f64);
+                if lo <= hi { 0.5 * lo + 0.5 * hi } else { 0.0 }
+            };
+            let diag = (0..3)
+                .map(|a| {
+                    (bounds.max[a] as f64 - bounds.min[a] as f64)
+                        .max(0.0)
+                        .powi(2)
+                })
+                .sum::<f64>()
+                .sqrt();
+            let dist = (0.5 * diag).max(1e-6) / (fit as f64).atan().sin();
+            let eye = Vec3::new(
+                (c(0) + dir.x as f64 * dist) as f32,
+                (c(1) + dir.y as f64 * dist) as f32,
+                (c(2) + dir.z as f64 * dist) as f32,
+            );
+            let forward = -dir;
+            let right = forward.cross(up).normalized();
+            Camera {
+                eye,
+                right,
+                up: right.cross(forward),
+                forward,
+                projection,
+            }
+        })
     }
 
     /// The ray through image position (`x`, `y`) in pixels (continuous, so the
@@ -114,6 +153,22 @@ impl Camera {
                 self.forward,
             ),
         }
+    }
+}
+
+/// The unit vector from `b` to `a`, computed in f64 (no overflow or
+/// underflow for any finite f32 inputs); zero when they coincide.
+fn unit_f64(a: Vec3, b: Vec3) -> Vec3 {
+    let d = [
+        a.x as f64 - b.x as f64,
+        a.y as f64 - b.y as f64,
+        a.z as f64 - b.z as f64,
+    ];
+    let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if l > 0.0 && l.is_finite() {
+        Vec3::new((d[0] / l) as f32, (d[1] / l) as f32, (d[2] / l) as f32)
+    } else {
+        Vec3::ZERO
     }
 }
 

@@ -228,16 +228,47 @@ impl Aabb {
     /// The parametric range where `ray` is inside this box, clipped to `t`;
     /// empty when the ray misses. Uses the slab method; a zero direction
     /// component yields ±inf, which the min/max chain handles.
+    ///
+    /// A ray parallel to an axis that lies exactly in a face plane meets the
+    /// box as if the box were half-open, `[min, max)` along that axis: in
+    /// the plane of `min` it is inside, in the plane of `max` outside. Boxes
+    /// that tile space (cells, bricks, regions) thus share such a ray
+    /// between them exactly once, with no gap and no double count.
+    #[inline]
     pub fn clip_ray(&self, ray: &Ray, t: Range1) -> Range1 {
         let inv = ray.inv_dir();
         let t0 = (self.min - ray.origin).mul_elem(inv);
         let t1 = (self.max - ray.origin).mul_elem(inv);
         let near = t0.min(t1);
         let far = t0.max(t1);
-        // NaN (0 * inf when the origin lies on a slab plane) is dropped by
-        // max/min, which keeps the test conservative.
+        // In the plane of `max`, t1 is 0·∞ = NaN and max/min drop it, so
+        // the axis reads as a miss (the half-open upper face). In the plane
+        // of `min` they would drop t0 and miss as well: that case is
+        // redone below, off the fast path.
         let lo = t.lo.max(near.x).max(near.y).max(near.z);
         let hi = t.hi.min(far.x).min(far.y).min(far.z);
+        if !(lo < hi) && (t0.x.is_nan() | t0.y.is_nan() | t0.z.is_nan()) {
+            return self.clip_ray_in_min_face(ray, t);
+        }
+        Range1::new(lo, hi)
+    }
+
+    /// [`Aabb::clip_ray`] for a ray in the plane of a `min` face.
+    #[cold]
+    fn clip_ray_in_min_face(&self, ray: &Ray, t: Range1) -> Range1 {
+        let (mut lo, mut hi) = (t.lo, t.hi);
+        for a in 0..3 {
+            let (o, d) = (ray.origin[a], ray.dir[a]);
+            if d == 0.0 {
+                if !(o >= self.min[a] && o < self.max[a]) {
+                    return Range1::EMPTY;
+                }
+                continue;
+            }
+            let (ta, tb) = ((self.min[a] - o) / d, (self.max[a] - o) / d);
+            lo = lo.max(ta.min(tb));
+            hi = hi.min(ta.max(tb));
+        }
         Range1::new(lo, hi)
     }
 }
@@ -257,7 +288,60 @@ impl Ray {
     pub fn at(&self, t: f32) -> Vec3 {
         self.origin + self.dir * t
     }
+    #[inline]
     pub fn inv_dir(&self) -> Vec3 {
         Vec3::new(1.0 / self.dir.x, 1.0 / self.dir.y, 1.0 / self.dir.z)
+    }
+}
+
+#[cfg(test)]
+mod clip_tests {
+    use super::*;
+
+    /// Unit boxes tiling a 3×3 slab of space along x and y.
+    fn tiles() -> Vec<Aabb> {
+        let mut out = Vec::new();
+        for j in 0..3 {
+            for i in 0..3 {
+                let lo = Vec3::new(i as f32, j as f32, 0.0);
+                out.push(Aabb::new(lo, lo + Vec3::new(1.0, 1.0, 4.0)));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn axis_rays_in_face_planes_meet_tiling_boxes_exactly_once() {
+        let all = Range1::new(f32::NEG_INFINITY, f32::INFINITY);
+        // Rays along z in the planes of shared faces, at shared edges, and
+        // in the interior: every point of [0, 3)² is covered once, so the
+        // total length inside the tiles is the slab's depth (4).
+        for (x, y) in [
+            (1.0, 0.5),
+            (0.5, 2.0),
+            (1.0, 1.0),
+            (2.0, 2.0),
+            (0.0, 0.0),
+            (1.5, 1.5),
+        ] {
+            let ray = Ray::new(Vec3::new(x, y, -1.0), Vec3::new(0.0, 0.0, 1.0));
+            let len: f32 = tiles()
+                .iter()
+                .map(|b| b.clip_ray(&ray, all))
+                .filter(|r| !r.is_empty())
+                .map(|r| r.span())
+                .sum();
+            assert_eq!(len, 4.0, "ray at ({x}, {y})");
+        }
+        // The far faces of the tiling are half-open: outside.
+        let ray = Ray::new(Vec3::new(3.0, 0.5, -1.0), Vec3::new(0.0, 0.0, 1.0));
+        assert!(tiles().iter().all(|b| b.clip_ray(&ray, all).is_empty()));
+        // Oblique rays are unaffected.
+        let b = Aabb::new(Vec3::ZERO, Vec3::splat(1.0));
+        let r = b.clip_ray(
+            &Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::new(1.0, 0.0, 0.0)),
+            all,
+        );
+        assert_eq!((r.lo, r.hi), (1.0, 2.0));
     }
 }

@@ -326,11 +326,7 @@ fn npy_table(a: NpyArray, path: &Path) -> Result<ParticleTable, IoError> {
             ),
         ));
     }
-    let positions = a
-        .data
-        .chunks_exact(3)
-        .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32])
-        .collect();
+    let positions = a.data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     Ok(ParticleTable {
         positions,
         ..Default::default()
@@ -348,9 +344,7 @@ fn csv_table(t: CsvTable, path: &Path) -> Result<ParticleTable, IoError> {
         })
     };
     let (x, y, z) = (col("x")?, col("y")?, col("z")?);
-    let positions = (0..t.rows())
-        .map(|i| [x[i] as f32, y[i] as f32, z[i] as f32])
-        .collect();
+    let positions = (0..t.rows()).map(|i| [x[i], y[i], z[i]]).collect();
     let columns = t
         .columns
         .iter()

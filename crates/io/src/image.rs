@@ -2,12 +2,13 @@
 //!
 //! Writers:
 //! - [`write_png_rgb8`]: 8-bit RGB PNG tagged as sRGB (an `sRGB` chunk), for
-//!   display-ready pictures.
+//!   display-ready pictures; [`write_jpeg_rgb8`]: the same as a JPEG.
 //! - [`write_exr_rgba`] and [`write_exr_gray`]: linear `f32` OpenEXR images
 //!   (ZIP-compressed scan lines), for lossless radiance or scalar maps.
 //!
 //! Readers ([`read_png_rgb8`], [`read_exr_gray`]) exist mainly for round-trip
-//! tests. All pixel buffers are row-major with row 0 at the top.
+//! tests. All pixel buffers are row-major with row 0 at the top. Files are
+//! written through a temporary file and renamed ([`crate::write_atomically`]).
 //!
 //! Readers check the image size the header declares against the file's
 //! length before decoding: lossless compression (deflate) shrinks data by at
@@ -20,9 +21,10 @@
 //! over the network without a file. The path functions open the file and
 //! call them; `name` labels the variants' errors as the path does.
 
-use std::fs::File;
-use std::io::{BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
+use std::io::{BufRead, BufReader, Read, Seek, SeekFrom, Write};
 use std::path::Path;
+
+use crate::atomic::write_atomically;
 
 use exr::prelude::{
     AnyChannel, AnyChannels, Encoding, FlatSamples, Image, ReadChannels, ReadLayers, SmallVec,
@@ -86,8 +88,47 @@ fn check_declared_size(
 pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), IoError> {
     // Check before creating the file, so a bad call leaves no empty file.
     check_buffer(path, width as usize, height as usize, 3, rgb.len(), "RGB")?;
-    let file = File::create(path).map_err(|e| IoError::io(path, e))?;
-    write_png_rgb8_to(BufWriter::new(file), path, width, height, rgb)
+    write_atomically(path, |out| write_png_rgb8_to(out, path, width, height, rgb))
+}
+
+/// Writes an 8-bit RGB baseline JPEG (quality 0–100; 90 is a good
+/// default), row 0 at the top: for pictures where size matters more than
+/// exactness. Sides are at most 65,535 pixels.
+pub fn write_jpeg_rgb8(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[u8],
+    quality: u8,
+) -> Result<(), IoError> {
+    check_buffer(path, width as usize, height as usize, 3, rgb.len(), "RGB")?;
+    write_atomically(path, |out| {
+        write_jpeg_rgb8_to(out, path, width, height, rgb, quality)
+    })
+}
+
+/// [`write_jpeg_rgb8`] into any writer; `name` labels errors.
+pub fn write_jpeg_rgb8_to<W: Write>(
+    out: W,
+    name: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[u8],
+    quality: u8,
+) -> Result<(), IoError> {
+    check_buffer(name, width as usize, height as usize, 3, rgb.len(), "RGB")?;
+    let (w, h) = match (u16::try_from(width), u16::try_from(height)) {
+        (Ok(w), Ok(h)) => (w, h),
+        _ => {
+            return Err(IoError::format(
+                name,
+                format!("a JPEG is at most 65535 pixels a side, not {width}×{height}"),
+            ));
+        }
+    };
+    jpeg_encoder::Encoder::new(out, quality.min(100))
+        .encode(rgb, w, h, jpeg_encoder::ColorType::Rgb)
+        .map_err(|e| IoError::format(name, format!("cannot encode JPEG: {e}")))
 }
 
 /// [`write_png_rgb8`] into any writer (a `Vec<u8>`, a socket), flushed at
@@ -255,18 +296,6 @@ impl<T: Seek> Seek for FromHere<T> {
 /// Creates the file `path`, lets `write` fill it, and removes it again when
 /// that fails, so a failed write leaves no truncated image behind (as the
 /// `exr` crate's own file writer does).
-fn write_file(
-    path: &Path,
-    write: impl FnOnce(BufWriter<File>) -> Result<(), IoError>,
-) -> Result<(), IoError> {
-    let file = File::create(path).map_err(|e| IoError::io(path, e))?;
-    let result = write(BufWriter::new(file));
-    if result.is_err() {
-        let _ = std::fs::remove_file(path);
-    }
-    result
-}
-
 /// Writes a linear `f32` RGBA OpenEXR image; `rgba` holds
 /// `width * height * 4` values, row 0 at the top.
 pub fn write_exr_rgba(
@@ -277,7 +306,7 @@ pub fn write_exr_rgba(
 ) -> Result<(), IoError> {
     // Check before creating the file, so a bad call leaves no empty file.
     check_buffer(path, width, height, 4, rgba.len(), "RGBA")?;
-    write_file(path, |out| {
+    write_atomically(path, |out| {
         write_exr_rgba_to(out, path, width, height, rgba)
     })
 }
@@ -316,7 +345,7 @@ pub fn write_exr_gray(
 ) -> Result<(), IoError> {
     // Check before creating the file, so a bad call leaves no empty file.
     check_buffer(path, width, height, 1, values.len(), "grayscale")?;
-    write_file(path, |out| {
+    write_atomically(path, |out| {
         write_exr_gray_to(out, path, width, height, values)
     })
 }

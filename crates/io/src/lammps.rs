@@ -104,26 +104,51 @@ struct FrameHeader {
     columns: Vec<String>,
 }
 
-/// Number of frames in a LAMMPS text dump.
+/// Number of complete frames in a LAMMPS text dump.
 ///
-/// Reads every frame header and skips the atom lines. Fails with
-/// [`IoError::Format`] if a header is malformed or a frame has fewer atom
-/// lines than its NUMBER OF ATOMS.
+/// Reads every frame header and skips the atom lines. A last frame the file
+/// ends inside (a dump still being written) is not counted; see
+/// [`lammps_frame_scan`] to learn about it. Fails with [`IoError::Format`]
+/// if a header is malformed, a frame before the last has fewer atom lines
+/// than its NUMBER OF ATOMS, or there is no complete frame.
 pub fn lammps_frames(path: &Path) -> Result<usize, IoError> {
+    Ok(lammps_frame_scan(path)?.0)
+}
+
+/// [`lammps_frames`] and, when the file ends inside a last frame (LAMMPS
+/// still writing it), why that frame is incomplete.
+pub fn lammps_frame_scan(path: &Path) -> Result<(usize, Option<IoError>), IoError> {
     count_frames(LineReader::open(path)?)
 }
 
 /// [`lammps_frames`] of the dump `reader` yields; `name` only labels errors,
 /// which read as [`lammps_frames`]'s for a file of that name.
 pub fn lammps_frames_from<R: Read>(reader: R, name: &Path) -> Result<usize, IoError> {
-    count_frames(LineReader::from_read(reader, name))
+    Ok(count_frames(LineReader::from_read(reader, name))?.0)
 }
 
-fn count_frames<R: BufRead>(mut lines: LineReader<R>) -> Result<usize, IoError> {
+fn count_frames<R: BufRead>(mut lines: LineReader<R>) -> Result<(usize, Option<IoError>), IoError> {
     let mut count = 0;
-    while let Some(header) = read_header(&mut lines, count)? {
-        skip_atoms(&mut lines, count, &header)?;
-        count += 1;
+    let mut partial = None;
+    loop {
+        // A frame the file ends inside is one still being written.
+        let header = match read_header(&mut lines, count) {
+            Ok(Some(h)) => h,
+            Ok(None) => break,
+            Err(e) if count > 0 && lines.at_end() => {
+                partial = Some(e);
+                break;
+            }
+            Err(e) => return Err(e),
+        };
+        match skip_atoms(&mut lines, count, &header) {
+            Ok(()) => count += 1,
+            Err(e) if count > 0 && lines.at_end() => {
+                partial = Some(e);
+                break;
+            }
+            Err(e) => return Err(e),
+        }
     }
     if count == 0 {
         return Err(IoError::format(
@@ -131,7 +156,7 @@ fn count_frames<R: BufRead>(mut lines: LineReader<R>) -> Result<usize, IoError> 
             "not a LAMMPS dump: the file holds no 'ITEM: TIMESTEP' frame",
         ));
     }
-    Ok(count)
+    Ok((count, partial))
 }
 
 /// Reads frame `frame` (0-based) of a LAMMPS text dump; see the module docs
@@ -534,14 +559,11 @@ fn read_atoms(
         }
     }
 
-    let mut positions: Vec<[f32; 3]> = raw_positions
+    let mut positions: Vec<[f64; 3]> = raw_positions
         .into_iter()
-        .map(|p| {
-            let p = match (scaled, &header.sim_box) {
-                (true, Some(b)) => b.unscale(p),
-                _ => p,
-            };
-            [p[0] as f32, p[1] as f32, p[2] as f32]
+        .map(|p| match (scaled, &header.sim_box) {
+            (true, Some(b)) => b.unscale(p),
+            _ => p,
         })
         .collect();
     if id_col.is_some() {

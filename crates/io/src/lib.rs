@@ -87,6 +87,7 @@ use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 pub mod amr;
+mod atomic;
 pub mod csv;
 pub mod format;
 #[cfg(feature = "hdf5")]
@@ -100,6 +101,7 @@ pub mod vtk;
 pub mod xyz;
 
 pub use amr::{AmrCellData, read_amrclaw, read_amrclaw_from, read_exabricks, read_exabricks_bytes};
+pub use atomic::write_atomically;
 pub use csv::{CsvTable, read_csv, read_csv_from};
 pub use format::{ParticleFormat, TableOptions};
 #[cfg(feature = "hdf5")]
@@ -109,9 +111,12 @@ pub use hdf5::{
 };
 pub use image::{
     read_exr_gray, read_exr_gray_from, read_png_rgb8, read_png_rgb8_from, write_exr_gray,
-    write_exr_gray_to, write_exr_rgba, write_exr_rgba_to, write_png_rgb8, write_png_rgb8_to,
+    write_exr_gray_to, write_exr_rgba, write_exr_rgba_to, write_jpeg_rgb8, write_jpeg_rgb8_to,
+    write_png_rgb8, write_png_rgb8_to,
 };
-pub use lammps::{lammps_frames, lammps_frames_from, read_lammps, read_lammps_from};
+pub use lammps::{
+    lammps_frame_scan, lammps_frames, lammps_frames_from, read_lammps, read_lammps_from,
+};
 pub use npy::{NpyArray, read_npy, read_npy_from, write_npy_f32, write_npy_f32_to};
 pub use particles_fmt::{
     particles_frames, particles_frames_from, read_particles_file, read_particles_from,
@@ -309,6 +314,11 @@ impl<R: BufRead> LineReader<R> {
         let start = self.buf.iter().position(|b| !b.is_ascii_whitespace());
         let rest = start.map_or(&[][..], |s| &self.buf[s..]);
         Ok(Some(rest.starts_with(prefix)))
+    }
+
+    /// Whether nothing is left to read (an I/O error counts as not).
+    pub(crate) fn at_end(&mut self) -> bool {
+        self.reader.fill_buf().is_ok_and(|b| b.is_empty())
     }
 
     /// Number of the line returned last (1-based; 0 before the first).

@@ -21,8 +21,7 @@
 //! or writer (a `Cursor` over bytes in memory, a socket); the path functions
 //! open the file and share their code.
 
-use std::fs::File;
-use std::io::{BufReader, BufWriter, ErrorKind, Read, Seek, Write};
+use std::io::{BufReader, ErrorKind, Read, Seek, Write};
 use std::path::Path;
 
 use crate::{IoError, checked_product, open_with_len, remaining_len};
@@ -179,8 +178,7 @@ fn read_npy_sized(reader: impl Read, file_len: u64, path: &Path) -> Result<NpyAr
 pub fn write_npy_f32(path: &Path, shape: &[usize], data: &[f32]) -> Result<(), IoError> {
     // Check before creating the file, so a bad call leaves no empty file.
     check_npy_shape(path, shape, data.len())?;
-    let file = File::create(path).map_err(|e| IoError::io(path, e))?;
-    write_npy_f32_to(BufWriter::new(file), path, shape, data)
+    crate::write_atomically(path, |out| write_npy_f32_to(out, path, shape, data))
 }
 
 /// [`write_npy_f32`] into any writer (a `Vec<u8>`, a socket): the same

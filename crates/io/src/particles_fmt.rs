@@ -215,7 +215,7 @@ pub fn read_particles_timestep_from<R: Read + Seek>(
                 f32::from_le_bytes(b)
             };
         }
-        positions.push([v[0], v[1], v[2]]);
+        positions.push([v[0] as f64, v[1] as f64, v[2] as f64]);
         attribute.push(v[3]);
     }
     Ok(ParticleTable {

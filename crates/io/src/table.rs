@@ -8,8 +8,10 @@
 /// Particles of one frame, in file order.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ParticleTable {
-    /// Positions, one per particle (world units of the file).
-    pub positions: Vec<[f32; 3]>,
+    /// Positions, one per particle (world units of the file), in float64 so
+    /// that data far from the origin (10⁹ + a small spread) keeps its
+    /// digits until the library recentres it.
+    pub positions: Vec<[f64; 3]>,
     /// Named per-particle columns, each `positions.len()` long, in the order
     /// the file lists them; derived columns (e.g. `speed` = |v|) come last.
     /// Vector quantities appear as their components (`vx`, `vy`, `vz`) and, for

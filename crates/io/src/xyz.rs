@@ -558,7 +558,7 @@ fn read_atoms(
                 ),
             ));
         }
-        positions.push([pos[0] as f32, pos[1] as f32, pos[2] as f32]);
+        positions.push([pos[0], pos[1], pos[2]]);
     }
 
     if layout.species.is_some() && n > 0 {

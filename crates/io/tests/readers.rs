@@ -356,7 +356,7 @@ fn lammps_real_melt_dump() {
         for p in &t.positions {
             for &c in p {
                 assert!(
-                    (-margin..=side + margin).contains(&f64::from(c)),
+                    (-margin..=side + margin).contains(&c),
                     "frame {frame}: {p:?} outside the box"
                 );
             }
@@ -365,7 +365,7 @@ fn lammps_real_melt_dump() {
             // "2 1 0.05 0.05 0" in the file.
             let expected = [0.05 * side, 0.05 * side, 0.0];
             for (&got, want) in t.positions[1].iter().zip(expected) {
-                assert!(close(f64::from(got), want, 1e-6), "{got} vs {want}");
+                assert!(close(got, want, 1e-6), "{got} vs {want}");
             }
         }
     }

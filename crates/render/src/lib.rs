@@ -45,10 +45,12 @@ pub mod scatter;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 mod tile;
+mod work;
 
-pub use march::{RayStats, march};
+pub use march::{MIN_STEP_ULPS, RayStats, march, min_step_at, step_in};
 pub use packet::{PACKET, WINDOW_STEPS};
 pub use scatter::{FreeFlight, LightSource, Noise, Scatter};
+pub use work::{WorkEstimate, estimate_work};
 
 use rayon::prelude::*;
 use voxless_core::{

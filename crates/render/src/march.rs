@@ -137,6 +137,30 @@ pub(crate) struct Segment {
 
 /// Walks the segments of a ray's intervals in order; resumable, so the
 /// packet path can take them a window at a time.
+/// The step through sampled interval `iv`: the settings' step, else the
+/// interval's nominal step over the sampling rate — but at least a
+/// millionth of the interval and [`MIN_STEP_ULPS`] units in the last place
+/// of its far end, so every step moves `t` (a step below f32's resolution
+/// at `t` would never reach the end of the interval).
+#[inline]
+pub fn step_in(iv: &Interval, settings: &RenderSettings) -> f32 {
+    settings
+        .step
+        .unwrap_or(iv.nominal_dt / settings.sampling_rate)
+        .max(iv.t.span() * 1e-6)
+        .max(min_step_at(iv.t.hi))
+}
+
+/// Smallest step [`step_in`] takes at distance `t` along a ray.
+pub const MIN_STEP_ULPS: f32 = 4.0;
+
+/// [`MIN_STEP_ULPS`] units in the last place at `t` (f32), and at least
+/// the smallest normal f32.
+#[inline]
+pub fn min_step_at(t: f32) -> f32 {
+    (MIN_STEP_ULPS * f32::EPSILON * t.abs()).max(f32::MIN_POSITIVE)
+}
+
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Cursor {
     k: usize,
@@ -197,11 +221,7 @@ impl Cursor {
                         reset: std::mem::take(&mut self.reset),
                     });
                 }
-                self.dt = settings
-                    .step
-                    .unwrap_or(iv.nominal_dt / settings.sampling_rate)
-                    .max(iv.t.span() * 1e-6)
-                    .max(f32::MIN_POSITIVE);
+                self.dt = step_in(iv, settings);
                 // Segment boundaries start at a random offset inside the first step.
                 let xi = rng.uniform(2 + self.k as u32);
                 self.start = iv.t.lo;

@@ -143,7 +143,8 @@ pub struct TetsDesc {
     pub box_size: Option<f32>,
     /// JaxPM snapshot K (the group `snap_<K>`; default: the last).
     pub snapshot: Option<usize>,
-    /// Mass per particle (default: total mass 1).
+    /// Mass per particle, world units (default: the mean density is 1, so
+    /// densities read as the overdensity 1 + δ).
     pub particle_mass: Option<f64>,
     /// exact (default) or kbuffer.
     pub mode: Option<TetModeName>,

@@ -60,7 +60,8 @@ impl Volumes {
         self.entries.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    /// The volume of `desc`'s data at `frame`, loading it (once, however
+    /// The volume of `desc`'s data at `frame` (the `frame`-th of the
+    /// series, whatever number its file carries), loading it (once, however
     /// many ask at the same time) when it is not kept. Blocks: call it off
     /// the async runtime.
     pub fn get(&self, desc: &SceneDesc, base: &Path, frame: usize) -> Result<Arc<Loaded>, String> {
@@ -77,7 +78,13 @@ impl Volumes {
             slot
         };
         slot.get_or_init(|| {
-            voxless::load(desc, base, frame)
+            // The page counts frames 0..frames; files of a sequence are
+            // numbered by their names (0, 250, … for PySPH outputs).
+            let number = voxless::frame_numbers(desc, base)
+                .ok()
+                .and_then(|n| n.get(frame).copied())
+                .unwrap_or(frame);
+            voxless::load(desc, base, number)
                 .map(|l| {
                     Arc::new(Loaded {
                         volume: l.volume,

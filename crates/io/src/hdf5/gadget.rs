@@ -49,20 +49,17 @@ pub fn read_gadget(path: &Path, part_type: u32) -> Result<ParticleTable, IoError
     // Positions.
     let coords_name = format!("{gname}/Coordinates");
     let ds = f.required_dataset(&group, "Coordinates", &coords_name)?;
-    let coords = f.read_f32(&ds, &coords_name)?;
-    if coords.shape.len() != 2 || coords.shape[1] != 3 {
+    // Float64 (cosmological boxes store coordinates in double precision).
+    let (shape, data) = f.read_f64(&ds, &coords_name)?;
+    if shape.len() != 2 || shape[1] != 3 {
         return Err(f.err(format!(
             "dataset {coords_name}: expected an N×3 array, found shape {}",
-            shape_text(&coords.shape)
+            shape_text(&shape)
         )));
     }
-    let n = coords.shape[0];
-    let positions = coords
-        .data
-        .chunks_exact(3)
-        .map(|p| [p[0], p[1], p[2]])
-        .collect();
-    drop(coords);
+    let n = shape[0];
+    let positions = data.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
+    drop(data);
     let mut table = ParticleTable {
         positions,
         ..ParticleTable::default()

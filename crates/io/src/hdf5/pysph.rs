@@ -61,14 +61,16 @@ pub fn read_pysph(path: &Path, group: &str) -> Result<ParticleTable, IoError> {
     for axis in ["x", "y", "z"] {
         let full = format!("{prefix}/{axis}");
         let ds = f.required_dataset(&arrays, axis, &full)?;
-        let values = f.read_f32(&ds, &full)?;
-        if values.shape.len() != 1 {
+        // Positions in float64, as stored: data far from the origin keeps
+        // its digits until the library recentres it.
+        let (shape, data) = f.read_f64(&ds, &full)?;
+        if shape.len() != 1 {
             return Err(f.err(format!(
                 "dataset {full}: expected a 1-D array, found shape {}",
-                super::shape_text(&values.shape)
+                super::shape_text(&shape)
             )));
         }
-        coords.push((full, values.data));
+        coords.push((full, data));
     }
     let n = coords[0].1.len();
     for (full, data) in &coords[1..] {

@@ -147,8 +147,12 @@ pub fn read_vtu_mesh_bytes(bytes: &[u8], name: &Path) -> Result<VtkMesh, IoError
     let mut cell_base = 0usize;
     for (p, piece) in doc.pieces.iter().enumerate() {
         let base = mesh.points.len();
-        mesh.points
-            .extend(read_points(&src, p, piece).map_err(err)?);
+        mesh.points.extend(
+            read_points(&src, p, piece)
+                .map_err(err)?
+                .into_iter()
+                .map(|q| q.map(|c| c as f32)),
+        );
         if mesh.points.len() > u32::MAX as usize {
             return Err(err(format!(
                 "{} points do not fit 32-bit tet indices",
@@ -191,7 +195,7 @@ fn no_piece(doc: &Document) -> String {
 }
 
 /// The positions of one piece.
-fn read_points(src: &Source, p: usize, piece: &xml::Piece) -> Result<Vec<[f32; 3]>, String> {
+fn read_points(src: &Source, p: usize, piece: &xml::Piece) -> Result<Vec<[f64; 3]>, String> {
     let spec = piece
         .points_array
         .as_ref()
@@ -208,10 +212,7 @@ fn read_points(src: &Source, p: usize, piece: &xml::Piece) -> Result<Vec<[f32; 3
             piece.points
         )
     })?;
-    Ok(values
-        .chunks_exact(3)
-        .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32])
-        .collect())
+    Ok(values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
 }
 
 /// The `TimeValue` field-data array, when present.

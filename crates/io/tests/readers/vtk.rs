@@ -58,7 +58,7 @@ fn vtk_points_every_encoding() {
         let path = vtk_dir().join(file.as_str().unwrap());
         let label = path.display().to_string();
         let t = read_vtk_points(&path).unwrap_or_else(|err| panic!("{err}"));
-        let flat: Vec<f32> = t.positions.iter().flatten().copied().collect();
+        let flat: Vec<f32> = t.positions.iter().flatten().map(|&c| c as f32).collect();
         assert_column(
             &format!("{label} positions"),
             &flat,
@@ -146,7 +146,8 @@ fn vtk_meshes_every_encoding() {
 
         // The points of a .vtu read as particles.
         let t = read_vtk_points(&path).unwrap();
-        assert_eq!(t.positions, mesh.points);
+        let points: Vec<[f32; 3]> = t.positions.iter().map(|p| p.map(|c| c as f32)).collect();
+        assert_eq!(points, mesh.points);
         assert_column(
             &format!("{label} phi as column"),
             column(&t, "phi"),
