@@ -53,9 +53,13 @@ impl Pose {
             .look_at
             .map(|p| frame.to_local(p))
             .unwrap_or(bounds.center());
-        let up =
-            c.up.map(Vec3::from_array)
-                .unwrap_or(Vec3::new(0.0, 1.0, 0.0));
+        // The up vector the camera was resolved with: the default (+z),
+        // or +y where an explicit eye looks straight along it.
+        let up = match c.up {
+            Some(u) => Vec3::from_array(u),
+            None if c.eye.is_some() && camera.forward.z.abs() > 0.999 => Vec3::new(0.0, 1.0, 0.0),
+            None => Vec3::from_array(crate::camera::DEFAULT_UP),
+        };
         let ortho_height = match camera.projection {
             Projection::Orthographic { half_height, .. } => Some(2.0 * half_height),
             Projection::Perspective { .. } => None,

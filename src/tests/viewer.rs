@@ -69,7 +69,7 @@ fn a_written_pose_resolves_to_the_same_camera() {
     let top = pose.orbit(0.0, 500.0);
     let up = (top.eye - top.look_at)
         .normalized()
-        .dot(Vec3::new(0.0, 1.0, 0.0));
+        .dot(pose.up.normalized());
     assert!(up < 1.0 && up > 0.999);
 }
 

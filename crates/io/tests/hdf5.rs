@@ -41,9 +41,16 @@ fn num(v: &Value) -> f64 {
         .unwrap_or_else(|| panic!("expected a number, found {v}"))
 }
 
+/// An expected position; expected.json holds them rounded to `f32`.
 fn triple(v: &Value) -> [f32; 3] {
     let a = v.as_array().expect("array");
     [num(&a[0]) as f32, num(&a[1]) as f32, num(&a[2]) as f32]
+}
+
+/// A read position rounded to `f32`, to compare with expected values that
+/// were written in single precision (the readers keep the file's `f64`).
+fn single(p: &[f64; 3]) -> [f32; 3] {
+    p.map(|x| x as f32)
 }
 
 /// `speed` is a float32 sqrt of float32 squares on both sides; allow an ulp.
@@ -68,12 +75,12 @@ fn check_table(table: &ParticleTable, exp: &Value, what: &str) {
         .collect();
     assert_eq!(table.column_names(), names, "{what}: columns");
     assert_eq!(
-        table.positions[0],
+        single(&table.positions[0]),
         triple(&exp["first_position"]),
         "{what}: first position"
     );
     assert_eq!(
-        *table.positions.last().unwrap(),
+        single(table.positions.last().unwrap()),
         triple(&exp["last_position"]),
         "{what}: last position"
     );
@@ -81,12 +88,12 @@ fn check_table(table: &ParticleTable, exp: &Value, what: &str) {
         let lo = table
             .positions
             .iter()
-            .map(|p| p[axis])
+            .map(|p| p[axis] as f32)
             .fold(f32::INFINITY, f32::min);
         let hi = table
             .positions
             .iter()
-            .map(|p| p[axis])
+            .map(|p| p[axis] as f32)
             .fold(f32::NEG_INFINITY, f32::max);
         assert_eq!(
             lo,
@@ -120,8 +127,22 @@ fn check_table(table: &ParticleTable, exp: &Value, what: &str) {
     }
 }
 
-/// Positions equal, exactly, to an N×3 `.npy` array rounded to `f32`.
-fn assert_positions_eq(got: &[[f32; 3]], want: &NpyArray, what: &str) {
+/// `f64` positions equal, after rounding to `f32`, an N×3 `.npy` array
+/// rounded to `f32` (the reference arrays are single precision).
+fn assert_positions_eq(got: &[[f64; 3]], want: &NpyArray, what: &str) {
+    assert_eq!(got.len() * 3, want.data.len(), "{what}: count");
+    for (i, (p, w)) in got.iter().zip(want.data.chunks_exact(3)).enumerate() {
+        assert_eq!(
+            single(p),
+            [w[0] as f32, w[1] as f32, w[2] as f32],
+            "{what}: particle {i}"
+        );
+    }
+}
+
+/// `f32` positions (JaxPM keeps the file's single precision) equal, exactly,
+/// to an N×3 `.npy` array rounded to `f32`.
+fn assert_positions_eq_f32(got: &[[f32; 3]], want: &NpyArray, what: &str) {
     assert_eq!(got.len() * 3, want.data.len(), "{what}: count");
     for (i, (p, w)) in got.iter().zip(want.data.chunks_exact(3)).enumerate() {
         assert_eq!(
@@ -466,7 +487,7 @@ fn real_jaxpm_matches_npy() {
     );
     let want = read_npy(&jax.join("npy_N64_a1/positions.npy")).unwrap();
     assert_eq!(want.shape, [64 * 64 * 64, 3]);
-    assert_positions_eq(&snap.positions, &want, "JaxPM N64 snap_3");
+    assert_positions_eq_f32(&snap.positions, &want, "JaxPM N64 snap_3");
     let small = jax.join("jaxpm_N32_L100.h5");
     for k in 0..4 {
         let snap = read_jaxpm(&small, k).unwrap();

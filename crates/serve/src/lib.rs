@@ -135,12 +135,13 @@ pub fn prepare(mut desc: SceneDesc, base: PathBuf) -> Result<Prepared, ServeErro
         }
         _ => Vec::new(),
     };
+    let framed = resolved.framed;
     let mut notes = loaded.notes.clone();
     notes.extend(resolved.notes);
     let kind = loaded.volume.kind();
     let app = app::App {
         base,
-        initial_bounds: loaded.volume.bounds(),
+        initial_bounds: framed,
         initial_frame: loaded.frame,
         frames,
         volumes,

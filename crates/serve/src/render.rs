@@ -121,7 +121,9 @@ fn run_job(
     };
     {
         let mut t = tab.lock().unwrap_or_else(|e| e.into_inner());
-        t.bounds = loaded.volume.bounds();
+        // What the default camera framed (the part of the data the
+        // transfer function shows), so camera moves start from that view.
+        t.bounds = resolved.framed;
         t.world = loaded.frame;
         let vr = resolved.settings.value_range;
         t.value_range = Some([vr.lo, vr.hi]);
