@@ -21,17 +21,37 @@ fn field(e: SceneError) -> String {
 #[cfg(feature = "clap")]
 #[test]
 fn clap_knows_the_names() {
-    let cmd = <SceneFlags as clap::Args>::augment_args(clap::Command::new("flags"));
-    let longs: Vec<String> = cmd
-        .get_arguments()
-        .filter_map(|a| a.get_long())
-        .map(|l| l.replace('-', "_"))
-        .collect();
-    assert_eq!(longs, SceneFlags::names());
+    use voxless::flags::{DataFlags, KindFlags, ViewFlags};
+    fn longs<T: clap::Args>() -> Vec<String> {
+        T::augment_args(clap::Command::new("flags"))
+            .get_arguments()
+            .filter_map(|a| a.get_long())
+            .map(|l| l.replace('-', "_"))
+            .collect()
+    }
+    assert_eq!(longs::<DataFlags>(), DataFlags::NAMES);
+    assert_eq!(longs::<KindFlags>(), KindFlags::NAMES);
+    assert_eq!(longs::<ViewFlags>(), ViewFlags::NAMES);
 }
 
 #[test]
 fn serde_knows_the_names() {
+    use voxless::flags::{DataFlags, KindFlags, ViewFlags};
+    // serde lists the names it knows when it refuses one.
+    fn listed<T: serde::de::DeserializeOwned + std::fmt::Debug>() -> BTreeSet<String> {
+        let err = toml::from_str::<T>("no_such_flag = 1")
+            .unwrap_err()
+            .to_string();
+        err.split('`')
+            .skip(3)
+            .step_by(2)
+            .map(str::to_string)
+            .collect()
+    }
+    let set = |names: &[&str]| names.iter().map(|n| n.to_string()).collect::<BTreeSet<_>>();
+    assert_eq!(listed::<DataFlags>(), set(DataFlags::NAMES));
+    assert_eq!(listed::<KindFlags>(), set(KindFlags::NAMES));
+    assert_eq!(listed::<ViewFlags>(), set(ViewFlags::NAMES));
     let names: BTreeSet<String> = SceneFlags::names().into_iter().collect();
     for n in [
         "box",
@@ -43,17 +63,18 @@ fn serde_knows_the_names() {
     ] {
         assert!(names.contains(n), "{n} missing from {names:?}");
     }
-    // serde lists the names it knows when it refuses one.
-    let err = toml::from_str::<SceneFlags>("no_such_flag = 1")
+    // One table: each name to its group; errors name the flag.
+    let f = flags("kernel = 'm4'\ntet_mode = 'kbuffer'\nfov = 40");
+    assert_eq!(f.data.kernel, Some(KernelName::CubicSpline));
+    assert_eq!(f.view.fov, Some(40.0));
+    let err = toml::from_str::<SceneFlags>("fov = 'wide'\nkernel = 'm4'")
         .unwrap_err()
         .to_string();
-    let listed: BTreeSet<String> = err
-        .split('`')
-        .skip(3)
-        .step_by(2)
-        .map(str::to_string)
-        .collect();
-    assert_eq!(listed, names, "{err}");
+    assert!(err.contains("fov:"), "{err}");
+    let err = toml::from_str::<SceneFlags>("colourmap = 'x'")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("unknown flag `colourmap`"), "{err}");
 }
 
 #[test]
@@ -93,6 +114,10 @@ fn flags_apply_by_the_clis_rules() {
         .unwrap();
     assert_eq!((d.image.width, d.image.height), (Some(64), Some(32)));
     assert_eq!(d.tets.as_ref().unwrap().box_size, Some(2.0));
+    assert_eq!(
+        SceneFlags::group_of("box"),
+        Some(voxless::flags::FlagGroup::Data)
+    );
     assert!(d.particles.is_none());
 }
 

@@ -404,3 +404,69 @@ fn projection_image_sizes_are_the_resolved_ones() {
     };
     assert!(voxless::projection::image_size(&bad).is_err());
 }
+
+/// Data of any scale (a rescaled frame): the same image in world units —
+/// a column density scales as mass / length² — and Σ pixels × pixel area
+/// the world mass, along an axis, off axis and through a slab.
+#[test]
+fn projections_do_not_depend_on_the_units() {
+    let make = |s: f64| {
+        let mut rng = voxless::core::SmallRng(5);
+        let pos: Vec<[f64; 3]> = (0..300)
+            .map(|_| {
+                [
+                    rng.f() as f64 * s,
+                    rng.f() as f64 * 0.5 * s,
+                    rng.f() as f64 * 0.3 * s,
+                ]
+            })
+            .collect();
+        let mut arrays = ParticleArrays::from_f64(&pos);
+        arrays.radii = Some(vec![(0.06 * s) as f32; 300]);
+        arrays.weights = Some(vec![1.0; 300]);
+        let desc = ParticlesDesc {
+            kernel: Some(KernelName::CubicSpline),
+            ..Default::default()
+        };
+        AnyVolume::from_particles(arrays, &desc).unwrap()
+    };
+    let one = make(1.0);
+    for s in [1e-9, 1e12] {
+        let scaled = make(s);
+        assert!(scaled.frame.scale != 1.0, "{s}: the frame should rescale");
+        for desc in [
+            ProjectionDesc::default(),
+            ProjectionDesc {
+                normal: Some([1.0, 0.5, 0.7]),
+                ..Default::default()
+            },
+            ProjectionDesc {
+                axis: Some(0),
+                center: Some([0.5, 0.25, 0.15]),
+                depth: Some(0.1),
+                ..Default::default()
+            },
+        ] {
+            let at = |d: &ProjectionDesc, k: f64| ProjectionDesc {
+                center: d.center.map(|c| c.map(|v| v * k)),
+                depth: d.depth.map(|v| v * k),
+                ..d.clone()
+            };
+            let (a, va) = project(&one, &desc, 40, 30);
+            let (b, vb) = project(&scaled, &at(&desc, s), 40, 30);
+            let peak = a.iter().cloned().fold(0.0f32, f32::max) as f64;
+            for (x, y) in a.iter().zip(&b) {
+                let y = *y as f64 * s * s;
+                assert!(
+                    (*x as f64 - y).abs() <= 1e-4 * peak,
+                    "{s} {desc:?}: {x} vs {y}"
+                );
+            }
+            if desc.depth.is_none() {
+                let (ma, mb) = (mass(&a, &va, 40, 30), mass(&b, &vb, 40, 30));
+                assert!((ma - 300.0).abs() <= 1e-3 * 300.0, "{ma}");
+                assert!((mb - 300.0).abs() <= 1e-3 * 300.0, "{s}: {mb}");
+            }
+        }
+    }
+}
