@@ -112,6 +112,11 @@ pub struct RenderSettings {
     /// Tessellations: the k-buffer (first `k` events exact, the rest in
     /// depth layers) instead of sorting every event.
     pub event_budget: Option<EventBudget>,
+    /// Tessellations: blocks smaller than this many pixels are drawn from
+    /// coarser levels of detail, when the volume has them (`None`: the
+    /// volume's own setting). Progressive renders set it for the coarse
+    /// image.
+    pub lod_pixels: Option<f32>,
     /// The SIMD backend of the volume's packet path (`Auto`: the best the
     /// CPU has); every backend gives the same image.
     pub simd: Simd,
@@ -143,6 +148,7 @@ impl RenderSettings {
             scatter: None,
             frame: 0,
             event_budget: None,
+            lod_pixels: None,
             simd: Simd::Auto,
         }
     }
@@ -187,6 +193,7 @@ pub fn prepare<'a, P: Prepare>(
         is_visible: &is_visible,
         attribute_color: &attribute_color,
         event_budget: settings.event_budget,
+        lod_pixels: settings.lod_pixels,
         simd: settings.simd,
     })
 }
