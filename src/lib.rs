@@ -22,12 +22,15 @@
 //! - **Rendering** ([`AnyVolume::render`], [`AnyVolume::render_passes`]),
 //!   **projecting** ([`AnyVolume::project`]) and **sampling**
 //!   ([`AnyVolume::sample_points`]) report progress and stop when their
-//!   [`Control`]'s [`CancelToken`] is cancelled.
+//!   [`Control`]'s [`CancelToken`] is cancelled. [`ProjectionView`] places
+//!   a projection (along an axis or an off-axis normal) in the world.
 //! - **Interactive front-ends** move a camera [`Pose`] and write it back
 //!   into the description ([`pose`]), render a coarse image first and then
 //!   pass by pass ([`render_progressive`]), draw a [`field_histogram`]
 //!   under the transfer function, and save the view as a scene file that
 //!   `voxless render` reproduces ([`save`]).
+//! - **Flags**: every front-end's options by one set of rules
+//!   ([`SceneFlags`]: the CLI's flags, the Python package's keywords).
 //!
 //! Volumes are immutable after they are built and `Sync`: one volume serves
 //! several renders at once, each with its own camera and transfer function.
@@ -57,6 +60,7 @@ mod camera;
 mod columns;
 pub mod demo;
 mod error;
+pub mod flags;
 mod frame;
 pub mod histogram;
 pub mod load;
@@ -65,17 +69,21 @@ pub mod output;
 pub mod parallel;
 pub mod pose;
 pub mod progressive;
+pub mod projection;
 mod resolve;
 pub mod save;
 mod scene;
 pub mod series;
+mod view;
 mod volume;
 
 pub use error::{Error, SceneError};
+pub use flags::SceneFlags;
 pub use frame::WorldFrame;
 pub use load::AmrArrays;
 pub use load::{Loaded, frame_count, frame_numbers, load, read_points, read_scene};
 pub use memory::ParticleArrays;
+pub use projection::{ProjectionDesc, ProjectionView};
 pub use resolve::{
     Resolved, VolumeKind, VolumeSummary, resolve, resolve_in, resolve_summary, resolve_with,
     transfer_function, transfer_function_at,

@@ -6,7 +6,9 @@
 //!
 //! 1. optionally a **coarse** image: the same camera and settings at a
 //!    reduced resolution (at most a pixel budget, aspect kept) and 1 spp —
-//!    the browser scales it up; then
+//!    the browser scales it up — with tessellations drawn from their
+//!    coarser levels of detail where blocks are small on screen (a
+//!    tessellation's cost is its tets, not its pixels); then
 //! 2. the **full** image pass by pass (the film of [`AnyVolume::render_passes`]),
 //!    handing each stage to the caller, who shows it and says whether to go
 //!    on.
@@ -45,13 +47,28 @@ impl Stage {
 /// `settings` at a resolution of at most `max_pixels` pixels (aspect ratio
 /// kept, at least 1×1) and 1 spp: the coarse stage of a progressive render.
 /// Settings already within the budget keep their size.
+///
+/// Tessellations in the coarse image use their levels of detail: blocks
+/// (8³ Lagrangian cells) smaller on screen than the image's larger side
+/// are drawn from a grid subsampled once per halving below it. A
+/// tessellation's render costs its tets whatever the image size, so
+/// without this the coarse image would cost nearly what the full one does;
+/// tying the threshold to the image keeps the detail drawn, and the cost
+/// per pixel, about the same as the budget grows. (On the 64³ run at 96²:
+/// 0.44 s for every tet, 0.07 s this way; see docs/benchmarks.md.)
 pub fn coarse_settings(settings: &RenderSettings, max_pixels: u64) -> RenderSettings {
     let (w, h) = (settings.width as f64, settings.height as f64);
     let scale = ((max_pixels.max(1) as f64) / (w * h)).sqrt().min(1.0);
+    let (width, height) = (
+        ((w * scale).floor() as u32).max(1),
+        ((h * scale).floor() as u32).max(1),
+    );
+    let side = width.max(height) as f32;
     RenderSettings {
-        width: ((w * scale).floor() as u32).max(1),
-        height: ((h * scale).floor() as u32).max(1),
+        width,
+        height,
         spp: 1,
+        lod_pixels: Some(settings.lod_pixels.map_or(side, |p| p.max(side))),
         ..settings.clone()
     }
 }

@@ -143,45 +143,7 @@ impl Scene {
     /// smaller than a pixel), or only values the transfer function makes
     /// transparent.
     pub fn check_visible(&self, film: &Film, image: &Image) -> Result<(), SceneError> {
-        let alpha = image.pixels.iter().fold(0f32, |m, p| m.max(p[3]));
-        if alpha >= 0.5 / 255.0 {
-            return Ok(());
-        }
-        let st = &self.settings;
-        let seen = film.stats().values;
-        let (lo, hi) = self.world_bounds();
-        let point = |p: [f64; 3]| format!("[{:.4e}, {:.4e}, {:.4e}]", p[0], p[1], p[2]);
-        let (lo, hi) = (point(lo), point(hi));
-        let zero = !(seen.hi > 0.0 || seen.lo < 0.0 || st.log_scale);
-        let why = if seen.is_empty() || zero {
-            format!(
-                "no ray meets any of the field: the camera does not see the data's bounds \
-                 {lo}..{hi}, or the field there is zero or far thinner than a pixel \
-                 (check --eye/--look-at, --clip, the radius, or outliers far from the rest)"
-            )
-        } else {
-            let unit = if st.log_scale { "log10 of " } else { "" };
-            let shown = |v: f32| {
-                if st.log_scale {
-                    v.max(f32::MIN_POSITIVE).log10()
-                } else {
-                    v
-                }
-            };
-            format!(
-                "{unit}the field along the rays lies in [{:.4e}, {:.4e}], which the transfer \
-                 function (value range [{:.4e}, {:.4e}]) leaves transparent; give a \
-                 --value-range covering it, another --opacity, or a larger --opacity-scale",
-                shown(seen.lo),
-                shown(seen.hi),
-                st.value_range.lo,
-                st.value_range.hi
-            )
-        };
-        Err(SceneError::setting(
-            "image",
-            format!("the image would be empty: {why}"),
-        ))
+        check_visible(&self.settings, self.world_bounds(), film, image)
     }
 
     /// Column density `∫ value dt` per pixel centre in world units (the
@@ -261,4 +223,50 @@ impl Scene {
             .map_err(|source| particles::blame(main_file, &files, source))?;
         Ok(())
     }
+}
+
+/// See [`Scene::check_visible`]: `bounds` are the data's world bounds.
+pub(crate) fn check_visible(
+    st: &RenderSettings,
+    (lo, hi): ([f64; 3], [f64; 3]),
+    film: &Film,
+    image: &Image,
+) -> Result<(), SceneError> {
+    let alpha = image.pixels.iter().fold(0f32, |m, p| m.max(p[3]));
+    if alpha >= 0.5 / 255.0 {
+        return Ok(());
+    }
+    let seen = film.stats().values;
+    let point = |p: [f64; 3]| format!("[{:.4e}, {:.4e}, {:.4e}]", p[0], p[1], p[2]);
+    let (lo, hi) = (point(lo), point(hi));
+    let zero = !(seen.hi > 0.0 || seen.lo < 0.0 || st.log_scale);
+    let why = if seen.is_empty() || zero {
+        format!(
+            "no ray meets any of the field: the camera does not see the data's bounds \
+             {lo}..{hi}, or the field there is zero or far thinner than a pixel \
+             (check --eye/--look-at, --clip, the radius, or outliers far from the rest)"
+        )
+    } else {
+        let unit = if st.log_scale { "log10 of " } else { "" };
+        let shown = |v: f32| {
+            if st.log_scale {
+                v.max(f32::MIN_POSITIVE).log10()
+            } else {
+                v
+            }
+        };
+        format!(
+            "{unit}the field along the rays lies in [{:.4e}, {:.4e}], which the transfer \
+             function (value range [{:.4e}, {:.4e}]) leaves transparent; give a \
+             --value-range covering it, another --opacity, or a larger --opacity-scale",
+            shown(seen.lo),
+            shown(seen.hi),
+            st.value_range.lo,
+            st.value_range.hi
+        )
+    };
+    Err(SceneError::setting(
+        "image",
+        format!("the image would be empty: {why}"),
+    ))
 }

@@ -166,24 +166,42 @@ impl AnyVolume {
         })
     }
 
-    /// This rank's share of a decomposed projection: the part of each
-    /// pixel's line integral inside the half-open box `owned`; a
-    /// tessellation (which holds each tet in one box only) projects its
-    /// tets whole.
+    /// This rank's share of a decomposed projection over the part `t` of
+    /// every pixel's line (`None`: the whole line): the part of each line
+    /// integral inside the half-open box `owned`; a tessellation (which
+    /// holds each tet in one box only) projects its tets whole.
     pub(crate) fn project_part(
         &self,
         camera: &Camera,
         width: u32,
         height: u32,
         owned: &Aabb,
+        t: Option<Range1>,
         control: &Control,
     ) -> Result<Vec<f32>, Cancelled> {
-        match self {
-            AnyVolume::Tets(_) => self.project(camera, width, height, control),
+        match (self, t) {
+            (AnyVolume::Tets(_), None) => self.project(camera, width, height, control),
+            (AnyVolume::Tets(_), Some(t)) => self.project_in(camera, width, height, t, control),
             _ => with_volume!(self, v => {
-                voxless_render::project_in(v, camera, width, height, Some(owned), control)
+                let all = Range1::new(f32::NEG_INFINITY, f32::INFINITY);
+                let t = t.unwrap_or(all);
+                voxless_render::project_in(v, camera, width, height, Some(owned), t, control)
             }),
         }
+    }
+
+    /// [`AnyVolume::project`] over the part `t` of every pixel's line (one
+    /// line integral per pixel; the volume's whole-image path integrates
+    /// whole lines).
+    pub fn project_in(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        t: Range1,
+        control: &Control,
+    ) -> Result<Vec<f32>, Cancelled> {
+        with_volume!(self, v => voxless_render::project_per_pixel_in(v, camera, width, height, t, control))
     }
 
     /// The integral of the field over all space, when the data kind knows it

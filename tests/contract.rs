@@ -38,6 +38,7 @@ fn check_kind<P: Prepare + voxless_core::Volume>(name: &str, v: &P, contract: &C
         is_visible: &visible,
         attribute_color: &color,
         event_budget: None,
+        lod_pixels: None,
         simd: Default::default(),
     });
     // A prepared context hands out fewer intervals, never different samples

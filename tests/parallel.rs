@@ -635,3 +635,46 @@ fn a_time_series_by_space_renders_as_one_process() {
         assert!(d <= 1.0 / 255.0, "frame {f}: render differs by {d}");
     }
 }
+
+/// Off-axis projections (a normal, a north, a slab of given depth) of
+/// particles, AMR cells and a tessellation over 3 ranks equal one process's
+/// `ProjectionView::project`.
+#[test]
+fn off_axis_slab_projections_equal_one_process() {
+    let dir = Scratch::new("parallel-off-axis");
+    let particles = particle_files(&dir, 3000);
+    let amr = amr_files(&dir);
+    let tets = tets_files(&dir);
+    for (what, desc, depth) in [
+        ("particles", particles, 0.3),
+        ("amr", amr, 0.8),
+        ("tets", tets, 4.0),
+    ] {
+        let one = Scene::open(&desc, &dir.0, 0).unwrap();
+        let projection = voxless::ProjectionDesc {
+            normal: Some([0.3, -0.5, 0.8]),
+            north: Some([0.0, 0.0, 1.0]),
+            depth: Some(depth),
+            ..Default::default()
+        };
+        let view =
+            voxless::ProjectionView::new(&projection, &one.volume.bounds(), &one.frame).unwrap();
+        let (w, h) = (one.settings.width, one.settings.height);
+        let want = view.project(&one.volume, w, h, &Control::new()).unwrap();
+        let mut got = run_local(3, |comm| {
+            let s = DistributedScene::open(comm, &desc, &dir.0, 0, Purpose::Project).unwrap();
+            let view =
+                voxless::ProjectionView::new(&projection, &s.summary.bounds, &s.frame).unwrap();
+            s.project_view(comm, &view, w, h, &Control::new()).unwrap()
+        });
+        let got = got.remove(0).unwrap();
+        let top = want.iter().fold(0.0f64, |m, &v| m.max(v.abs() as f64));
+        assert!(top > 0.0, "{what}: an empty projection tests nothing");
+        let worst = want
+            .iter()
+            .zip(&got)
+            .map(|(&a, &b)| (a as f64 - b as f64).abs() / top)
+            .fold(0.0, f64::max);
+        assert!(worst <= 1e-5, "{what}: projection differs by {worst:e}");
+    }
+}

@@ -15,10 +15,10 @@ mod view;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::{Parser, Subcommand, ValueEnum};
 use voxless::output::OutputKind;
-use voxless::{Camera, Control, ParticlesDesc, Scene};
+use voxless::{Control, ParticlesDesc, ProjectionDesc, ProjectionView, Scene};
 
 use args::{DataArgs, KindArgs, SceneArgs, ViewArgs};
 use progress::Progress;
@@ -98,15 +98,34 @@ enum Command {
         #[command(flatten)]
         data: DataArgs,
     },
-    /// Column density ∫Φ dt per pixel, orthographic down an axis, covering the
-    /// data bounds: float32 H×W .npy (or .exr), row 0 at the top.
+    /// Column density ∫Φ dt per pixel, orthographic down an axis (or along
+    /// --normal), covering the data bounds: float32 H×W .npy (or .exr), row 0
+    /// at the top.
     Project {
-        /// View axis (looking down −axis).
-        #[arg(long, value_enum, default_value_t = Axis::Z)]
-        axis: Axis,
+        /// View axis (looking down −axis; default z).
+        #[arg(long, value_enum, conflicts_with = "normal")]
+        axis: Option<Axis>,
         /// Override the bounds covered: x0 y0 z0 x1 y1 z1 (default: the data's).
         #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], allow_negative_numbers = true)]
         bounds: Option<Vec<f64>>,
+        /// Off-axis: look along this direction (image right = north × normal).
+        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+        normal: Option<Vec<f64>>,
+        /// The image's up direction with --normal (default: yt's rule, so that
+        /// --normal 0 0 1 equals --axis z).
+        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, requires = "normal")]
+        north: Option<Vec<f64>>,
+        /// World position of the image centre (default: the bounds' centre).
+        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+        center: Option<Vec<f64>>,
+        /// World width (and height; default: the width) the image covers
+        /// (default: the bounds' extent across the view).
+        #[arg(long, num_args = 1..=2, value_names = ["W", "H"])]
+        width: Option<Vec<f64>>,
+        /// Integrate only over a slab this thick centred on the image plane
+        /// (default: the whole line).
+        #[arg(long)]
+        depth: Option<f64>,
         /// Output .npy (float32 H×W) or .exr (one channel "Y").
         #[arg(short, long)]
         output: PathBuf,
@@ -298,6 +317,11 @@ fn run(cli: Cli) -> Result<()> {
         Command::Project {
             axis,
             bounds,
+            normal,
+            north,
+            center,
+            width,
+            depth,
             output,
             size,
             frame,
@@ -320,7 +344,8 @@ fn run(cli: Cli) -> Result<()> {
                 &[],
             )?;
             let s = resolve(&desc, &base, frame.unwrap_or(0))?;
-            project(&s, axis, bounds, &output)
+            let projection = projection_desc(axis, bounds, normal, north, center, width, depth);
+            project(&s, &projection, &output)
         }
         Command::Serve {
             port,
@@ -339,28 +364,38 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
-fn project(s: &Scene, axis: Axis, bounds: Option<Vec<f64>>, output: &Path) -> Result<()> {
-    let axis_index = axis as usize;
-    let b = match bounds {
-        Some(v) => s.frame.box_to_local([v[0], v[1], v[2], v[3], v[4], v[5]]),
-        None => s.volume.bounds(),
-    };
-    let camera = Camera::axis_projection(&b, axis_index).context("--bounds")?;
+/// The projection the `project` flags describe.
+fn projection_desc(
+    axis: Option<Axis>,
+    bounds: Option<Vec<f64>>,
+    normal: Option<Vec<f64>>,
+    north: Option<Vec<f64>>,
+    center: Option<Vec<f64>>,
+    width: Option<Vec<f64>>,
+    depth: Option<f64>,
+) -> ProjectionDesc {
+    let v3 = |v: Option<Vec<f64>>| v.map(|v| [v[0], v[1], v[2]]);
+    ProjectionDesc {
+        axis: axis.map(|a| a as usize),
+        normal: v3(normal),
+        north: v3(north),
+        center: v3(center),
+        width: width.map(|w| [w[0], *w.get(1).unwrap_or(&w[0])]),
+        bounds: bounds.map(|v| [v[0], v[1], v[2], v[3], v[4], v[5]]),
+        depth,
+    }
+}
+
+fn project(s: &Scene, projection: &ProjectionDesc, output: &Path) -> Result<()> {
+    let view = ProjectionView::new(projection, &s.volume.bounds(), &s.frame)?;
     let (w, h) = (s.settings.width, s.settings.height);
     let progress = Progress::new("projecting", 1);
     let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
     let t = Instant::now();
-    let column = s.project(&camera, w, h, &Control::new().with_progress(&report))?;
+    let column = view.project(&s.volume, w, h, &Control::new().with_progress(&report))?;
     progress.finish();
     out::write_gray(output, w, h, &column)?;
-    let (u, v) = match axis_index {
-        0 => (1, 2),
-        1 => (0, 2),
-        _ => (0, 1),
-    };
-    let extent = |a: usize| s.frame.length_to_world(b.extent()[a]);
-    let pixel_area = extent(u) / w as f64 * (extent(v) / h as f64);
-    let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * pixel_area;
+    let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * view.pixel_area(w, h);
     let mass = s
         .total_mass()
         .map(|m| format!(", exact ∫ field dV = {m:.6e}"))

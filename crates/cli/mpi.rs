@@ -6,14 +6,14 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use voxless::output::OutputKind;
 use voxless::parallel::{
     Comm, CommExt, DistributedScene, FramePlan, MpiComm, Purpose, available_bytes, frame_plan,
     peak_rss_bytes, ranks_on_this_node,
 };
 use voxless::render::colorbar::ColorbarSpec;
-use voxless::{Camera, Control, Image, Scene, SceneDesc};
+use voxless::{Control, Image, ProjectionDesc, ProjectionView, Scene, SceneDesc};
 
 use crate::args::{SceneArgs, ViewArgs};
 use crate::progress::Progress;
@@ -50,6 +50,11 @@ pub fn main(cli: Cli) -> ! {
         Command::Project {
             axis,
             bounds,
+            normal,
+            north,
+            center,
+            width,
+            depth,
             output,
             size,
             frame,
@@ -65,7 +70,9 @@ pub fn main(cli: Cli) -> ! {
         .scene()
         .and_then(|(desc, base)| {
             let f = frame.unwrap_or(0);
-            project(&comm, &desc, &base, f, axis as usize, bounds, &output)
+            let projection =
+                crate::projection_desc(axis, bounds, normal, north, center, width, depth);
+            project(&comm, &desc, &base, f, &projection, &output)
         }),
         Command::Sample {
             points,
@@ -584,8 +591,7 @@ fn project(
     desc: &SceneDesc,
     base: &Path,
     frame: usize,
-    axis: usize,
-    bounds: Option<Vec<f64>>,
+    projection: &ProjectionDesc,
     output: &Path,
 ) -> Result<()> {
     out::check(
@@ -596,11 +602,7 @@ fn project(
         &[],
     )?;
     let s = open(comm, desc, base, frame, Purpose::Project)?;
-    let b = match bounds {
-        Some(v) => s.frame.box_to_local([v[0], v[1], v[2], v[3], v[4], v[5]]),
-        None => s.summary.bounds,
-    };
-    let camera = Camera::axis_projection(&b, axis).context("--bounds")?;
+    let view = ProjectionView::new(projection, &s.summary.bounds, &s.frame)?;
     let (w, h) = (s.settings.width, s.settings.height);
     let progress = comm.is_root().then(|| Progress::new("projecting", 1));
     let report = |d: u64, total: u64| {
@@ -609,23 +611,16 @@ fn project(
         }
     };
     let t = Instant::now();
-    let column = s.project(comm, &camera, w, h, &Control::new().with_progress(&report))?;
+    let column = s.project_view(comm, &view, w, h, &Control::new().with_progress(&report))?;
     if let Some(p) = &progress {
         p.finish();
     }
     let secs = t.elapsed().as_secs_f64();
-    let (u, v) = match axis {
-        0 => (1, 2),
-        1 => (0, 2),
-        _ => (0, 1),
-    };
-    let extent = |a: usize| s.frame.length_to_world(b.extent()[a]);
-    let pixel_area = extent(u) / w as f64 * (extent(v) / h as f64);
     agree(
         comm,
         column.map_or(Ok(()), |c| {
             out::write_gray(output, w, h, &c)?;
-            let integral: f64 = c.iter().map(|&x| x as f64).sum::<f64>() * pixel_area;
+            let integral: f64 = c.iter().map(|&x| x as f64).sum::<f64>() * view.pixel_area(w, h);
             eprintln!(
                 "projected {w}×{h} on {} ranks in {secs:.2}s → {} (Σ column × pixel area = \
                  {integral:.6e})",

@@ -1,5 +1,5 @@
 //! View options of the render commands: the colour bar, turntables, and
-//! the parsers that check the camera flags before anything is loaded.
+//! the parser of the turntable's frame count.
 
 use std::path::Path;
 use std::time::Instant;
@@ -10,25 +10,6 @@ use voxless::render::colorbar::{ColorbarSpec, draw_colorbar};
 use voxless::{Control, Scene, SceneDesc};
 
 use crate::progress::Progress;
-
-/// An angle in degrees: any finite number.
-pub fn degrees(s: &str) -> Result<f32, String> {
-    match s.trim().parse::<f32>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        Ok(_) => Err(format!("{s} is not a finite angle (degrees)")),
-        Err(_) => Err(format!("'{s}' is not a number of degrees")),
-    }
-}
-
-/// A zoom factor: finite and > 0.
-pub fn zoom(s: &str) -> Result<f32, String> {
-    match s.trim().parse::<f32>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!(
-            "'{s}' is not a zoom factor: it must be a finite number > 0 (2 = twice as close)"
-        )),
-    }
-}
 
 /// A turntable's frame count: at least 1.
 pub fn frame_count(s: &str) -> Result<u32, String> {

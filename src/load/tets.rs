@@ -215,6 +215,10 @@ pub(crate) fn particle_mass(
     Ok(mass)
 }
 
+/// Levels of detail past this many would subsample the 8³-cell blocks below
+/// one cell.
+const MAX_LOD_LEVELS: usize = 3;
+
 /// A tessellation of `grid` (local units) with the description's mass and
 /// level of detail; errors name `source`.
 pub(crate) fn build_tets(
@@ -229,7 +233,15 @@ pub(crate) fn build_tets(
     if let Some(p) = t.lod_pixels {
         positive("tets.lod_pixels (--lod)", p)?;
     }
-    let levels = if t.lod_pixels.is_some() { 3 } else { 0 };
+    if let Some(l) = t.lod_levels.filter(|&l| l > MAX_LOD_LEVELS) {
+        return Err(SceneError::setting(
+            "tets.lod_levels",
+            format!("{l} is more than {MAX_LOD_LEVELS} (each level halves N)"),
+        ));
+    }
+    let levels = t
+        .lod_levels
+        .unwrap_or(if t.lod_pixels.is_some() { 3 } else { 0 });
     let v = TetVolume::new(grid, &settings, levels).map_err(|e| SceneError::Tets {
         path: source.to_path_buf(),
         source: e,

@@ -214,7 +214,34 @@ impl DistributedScene {
         height: u32,
         control: &Control,
     ) -> Result<Option<Vec<f32>>, ParallelError> {
-        let local = render::project(self, comm, camera, width, height, control)?;
+        self.project_over(comm, camera, None, width, height, control)
+    }
+
+    /// The column densities of a projection view (an axis or a normal, a
+    /// slab; see [`crate::ProjectionView`]) in world units, as
+    /// [`crate::ProjectionView::project`] gives them for one process: on
+    /// rank 0 the image, `None` on the others.
+    pub fn project_view(
+        &self,
+        comm: &dyn Comm,
+        view: &crate::ProjectionView,
+        width: u32,
+        height: u32,
+        control: &Control,
+    ) -> Result<Option<Vec<f32>>, ParallelError> {
+        self.project_over(comm, &view.camera, view.t_range, width, height, control)
+    }
+
+    fn project_over(
+        &self,
+        comm: &dyn Comm,
+        camera: &Camera,
+        t: Option<voxless_core::Range1>,
+        width: u32,
+        height: u32,
+        control: &Control,
+    ) -> Result<Option<Vec<f32>>, ParallelError> {
+        let local = render::project(self, comm, camera, width, height, t, control)?;
         // In world units, as [`crate::Scene::project`] gives them.
         let s = self.frame.scale;
         Ok(local.map(|c| {

@@ -1,7 +1,7 @@
 //! Render, project and sample a [`DistributedScene`]: each rank works on its
 //! box, then the images composite by direct send and rank 0 collects them.
 
-use voxless_core::{Camera, Control, Image, Prepare, Vec3};
+use voxless_core::{Camera, Control, Image, Prepare, Range1, Vec3};
 use voxless_parallel::composite::{self, OwnedTiles};
 use voxless_parallel::{Comm, CommExt, Reader, TileGrid, Writer};
 use voxless_render::{Job, PixelRequest};
@@ -110,12 +110,13 @@ pub(crate) fn project(
     camera: &Camera,
     width: u32,
     height: u32,
+    t: Option<Range1>,
     control: &Control,
 ) -> Result<Option<Vec<f32>>, ParallelError> {
     let owned = s.decomposition.box_of(comm.rank());
     let values = match &s.part {
         Some(v) => v
-            .project_part(camera, width, height, &owned, control)
+            .project_part(camera, width, height, &owned, t, control)
             .map_err(ParallelError::from),
         None => Ok(vec![0.0; (width * height) as usize]),
     };

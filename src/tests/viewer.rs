@@ -221,3 +221,58 @@ fn progressive_ends_on_the_render_and_the_coarse_image_is_small() {
     let p = budget.pixels(48 * 32);
     assert!((16..=48 * 32 / 4).contains(&p));
 }
+
+/// A 32³ lattice in a box of 32, displaced by a wave (so that the density
+/// varies and coarser levels of detail differ from the full mesh).
+fn tessellation(desc: &crate::TetsDesc) -> AnyVolume {
+    let n = 32;
+    let positions: Vec<Vec3> = (0..n * n * n)
+        .map(|c| {
+            let (i, j, k) = ((c / (n * n)) as f32, ((c / n) % n) as f32, (c % n) as f32);
+            let wave = 0.3 * (i * std::f32::consts::TAU / n as f32).sin();
+            Vec3::new(i + 0.5 + wave, j + 0.5, k + 0.5)
+        })
+        .collect();
+    AnyVolume::from_tessellation(positions, n, n as f32, desc)
+        .unwrap()
+        .volume
+}
+
+#[test]
+fn coarse_images_of_tessellations_draw_from_their_levels_of_detail() {
+    let mut desc = SceneDesc::default();
+    small(&mut desc);
+    let plain = tessellation(&Default::default());
+    let levels = tessellation(&crate::TetsDesc {
+        lod_levels: Some(3),
+        ..Default::default()
+    });
+    let r = resolve(&plain, &desc, Path::new(".")).unwrap();
+    let coarse = coarse_settings(&r.settings, 24 * 16);
+    // 24×16: blocks smaller than 24 pixels use coarser levels.
+    assert_eq!((coarse.width, coarse.height), (24, 16));
+    assert_eq!(coarse.lod_pixels, Some(24.0));
+    let render = |v: &AnyVolume, s| v.render(&r.camera, &r.tf, s, &Control::new()).unwrap();
+    // Levels of detail unused leave the image as it was.
+    assert_eq!(render(&levels, &r.settings), render(&plain, &r.settings));
+    // Without levels the coarse settings draw the full mesh; with them the
+    // coarse image draws coarser levels: close, not equal.
+    let full = render(&plain, &coarse);
+    let lod = render(&levels, &coarse);
+    let diff: f64 = (full.pixels.iter().zip(&lod.pixels))
+        .map(|(a, b)| ((a[0] - b[0]).abs() + (a[3] - b[3]).abs()) as f64)
+        .sum::<f64>()
+        / full.pixels.len() as f64;
+    assert!(diff > 0.0 && diff < 0.05, "mean |Δ| {diff}");
+    // The render's threshold is the volume's own `lod_pixels` (`--lod`)
+    // through a different door: the same image.
+    let own = tessellation(&crate::TetsDesc {
+        lod_pixels: Some(24.0),
+        ..Default::default()
+    });
+    let own_settings = crate::RenderSettings {
+        lod_pixels: None,
+        ..coarse.clone()
+    };
+    assert_eq!(render(&own, &own_settings), lod);
+}

@@ -35,6 +35,10 @@ pub struct PrepareQuery<'a> {
     pub attribute_color: &'a (dyn Fn(f32) -> Vec3 + Sync),
     /// Tessellations: the k-buffer instead of exact event sorting.
     pub event_budget: Option<EventBudget>,
+    /// Tessellations: draw Lagrangian blocks smaller than this many pixels
+    /// on screen from coarser levels of detail, when the mesh has them
+    /// (overrides the volume's own threshold; coarse previews use it).
+    pub lod_pixels: Option<f32>,
     /// The SIMD backend of packet paths ([`Simd::Auto`]: the best the CPU
     /// has).
     pub simd: Simd,
@@ -47,6 +51,7 @@ impl PrepareQuery<'static> {
             is_visible: &|_| true,
             attribute_color: &|_| Vec3::ZERO,
             event_budget: None,
+            lod_pixels: None,
             simd: Simd::Auto,
         }
     }

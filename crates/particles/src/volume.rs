@@ -14,6 +14,7 @@ use crate::kernel::{CubicFamily, Family, GaussianFamily, Kernel};
 mod exact;
 mod packet;
 mod part;
+mod splat;
 
 pub use part::{FieldStatistics, RANGE_PROBES, check_data, median, probe_stride, support_box};
 
@@ -116,7 +117,9 @@ pub struct ParticleVolume {
     packed: Vec<Packed>,
     bvh: Bvh,
     grid: MacroGrid,
-    value_range: Range1,
+    /// Φ's range (its maximum over a sample of particle centres), probed on
+    /// first use: renders need it, projections and samples do not.
+    value_range: std::sync::OnceLock<Range1>,
     attribute_range: Option<Range1>,
     nominal_dt: f32,
 }
@@ -256,7 +259,7 @@ impl ParticleVolume {
             packed: Vec::new(),
             bvh,
             grid: MacroGrid::with_cell_size(Aabb::EMPTY, 1.0, 1),
-            value_range: Range1::new(0.0, 0.0),
+            value_range: std::sync::OnceLock::new(),
             attribute_range,
             nominal_dt: 1.0,
         };
@@ -469,18 +472,23 @@ impl ParticleVolume {
         }
         self.grid = grid;
 
-        // Φ's range for normalisation: max over the probes' centres.
+        // Φ's range depends on the radii and weights just derived: a part
+        // takes the whole set's, a whole volume probes it on first use.
         self.value_range = match whole {
-            Some(w) => w.value_range,
-            None => {
-                let probes: Vec<usize> = self.probes().collect();
-                let max = probes
-                    .par_iter()
-                    .map(|&j| self.density_exact(self.positions[j]))
-                    .reduce(|| 0.0, f32::max);
-                Range1::new(0.0, max)
-            }
+            Some(w) => std::sync::OnceLock::from(w.value_range),
+            None => std::sync::OnceLock::new(),
         };
+    }
+
+    /// Φ's range for normalisation: max over the probes' centres (in input
+    /// order, with canonical sums, so a decomposed set finds the same).
+    fn probe_value_range(&self) -> Range1 {
+        let probes: Vec<usize> = self.probes().collect();
+        let max = probes
+            .par_iter()
+            .map(|&j| self.density_exact(self.positions[j]))
+            .reduce(|| 0.0, f32::max);
+        Range1::new(0.0, max)
     }
 
     /// Φ alone.
@@ -643,7 +651,7 @@ impl Volume for ParticleVolume {
     }
 
     fn value_range(&self) -> Range1 {
-        self.value_range
+        *self.value_range.get_or_init(|| self.probe_value_range())
     }
 
     fn attribute_range(&self) -> Option<Range1> {
@@ -679,6 +687,19 @@ impl Volume for ParticleVolume {
 
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
         self.grid.intervals(ray, t, self.nominal_dt, query, out);
+    }
+
+    /// Orthographic views: every particle's chord added to the pixels its
+    /// support covers ([`splat`]); the same image as the per-pixel path up
+    /// to summation order.
+    fn project_image(
+        &self,
+        camera: &voxless_core::Camera,
+        width: u32,
+        height: u32,
+        control: &voxless_core::Control,
+    ) -> Option<Result<Vec<f32>, voxless_core::Cancelled>> {
+        self.splat_projection(camera, width, height, control)
     }
 
     /// Exact: the closed-form chord integral of every particle the ray

@@ -112,6 +112,11 @@ pub struct RenderSettings {
     /// Tessellations: the k-buffer (first `k` events exact, the rest in
     /// depth layers) instead of sorting every event.
     pub event_budget: Option<EventBudget>,
+    /// Tessellations: blocks smaller than this many pixels are drawn from
+    /// coarser levels of detail, when the volume has them (`None`: the
+    /// volume's own setting). Progressive renders set it for the coarse
+    /// image.
+    pub lod_pixels: Option<f32>,
     /// The SIMD backend of the volume's packet path (`Auto`: the best the
     /// CPU has); every backend gives the same image.
     pub simd: Simd,
@@ -193,6 +198,7 @@ impl RenderSettings {
             scatter: None,
             frame: 0,
             event_budget: None,
+            lod_pixels: None,
             simd: Simd::Auto,
             domain: None,
         }
@@ -238,6 +244,7 @@ pub fn prepare<'a, P: Prepare>(
         is_visible: &is_visible,
         attribute_color: &attribute_color,
         event_budget: settings.event_budget,
+        lod_pixels: settings.lod_pixels,
         simd: settings.simd,
     })
 }
@@ -540,10 +547,25 @@ pub fn project_per_pixel<V: Volume>(
     height: u32,
     control: &Control,
 ) -> Result<Vec<f32>, Cancelled> {
-    project_in(volume, camera, width, height, None, control)
+    let all = Range1::new(f32::NEG_INFINITY, f32::INFINITY);
+    project_per_pixel_in(volume, camera, width, height, all, control)
 }
 
-/// [`project_per_pixel`] restricted to the half-open box `domain` (see
+/// [`project_per_pixel`] over the part `t` of every pixel's line (a slab of
+/// an orthographic view: `t` is the distance along the view direction from
+/// the image plane through the eye).
+pub fn project_per_pixel_in<V: Volume>(
+    volume: &V,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    t_range: Range1,
+    control: &Control,
+) -> Result<Vec<f32>, Cancelled> {
+    project_in(volume, camera, width, height, None, t_range, control)
+}
+
+/// [`project_per_pixel_in`] restricted to the half-open box `domain` (see
 /// [`own_range`]): the part of each line integral inside it, so the
 /// projections of the boxes of a decomposition add up to the whole one.
 pub fn project_in<V: Volume>(
@@ -552,6 +574,7 @@ pub fn project_in<V: Volume>(
     width: u32,
     height: u32,
     domain: Option<&Aabb>,
+    t_range: Range1,
     control: &Control,
 ) -> Result<Vec<f32>, Cancelled> {
     let done = std::sync::atomic::AtomicU64::new(0);
@@ -565,7 +588,9 @@ pub fn project_in<V: Volume>(
             let row: Vec<f32> = (0..width)
                 .map(|x| {
                     let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5, width, height);
-                    let t = bounds.clip_ray(&ray, own_range(domain, &ray));
+                    let own = own_range(domain, &ray);
+                    let t = Range1::new(own.lo.max(t_range.lo), own.hi.min(t_range.hi));
+                    let t = bounds.clip_ray(&ray, t);
                     if t.is_empty() {
                         0.0
                     } else {

@@ -156,6 +156,10 @@ pub struct TetsDesc {
     /// smaller than this many pixels are drawn from a 2^r-subsampled grid.
     /// Off by default.
     pub lod_pixels: Option<f32>,
+    /// Coarser levels of detail built at load, each halving N (default: 3
+    /// when `lod_pixels` is set, else none). Interactive viewers build them
+    /// for their coarse images; each level costs 1/8 of the one before.
+    pub lod_levels: Option<usize>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]

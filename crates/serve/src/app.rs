@@ -6,7 +6,8 @@ use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock};
 
-use voxless::{AnyVolume, SceneDesc, WorldFrame};
+use voxless::autorange::Probe;
+use voxless::{AnyVolume, Resolved, SceneDesc, SceneError, WorldFrame};
 
 /// A loaded volume, where its coordinates sit in the world, and the notes
 /// its loading made.
@@ -14,6 +15,43 @@ pub struct Loaded {
     pub volume: AnyVolume,
     pub frame: WorldFrame,
     pub notes: Vec<String>,
+    /// The field probe the default value range, opacity and framing come
+    /// from, with the clip box it was taken in: probing the data costs
+    /// more than a coarse image, and camera moves do not change it.
+    probe: Mutex<Option<KeptProbe>>,
+}
+
+/// A probe and the world clip box (if any) it was taken in.
+type KeptProbe = (Option<[f64; 6]>, Arc<Probe>);
+
+impl Loaded {
+    pub fn new(loaded: voxless::Loaded) -> Loaded {
+        Loaded {
+            volume: loaded.volume,
+            frame: loaded.frame,
+            notes: loaded.notes,
+            probe: Mutex::new(None),
+        }
+    }
+
+    /// [`voxless::resolve_in`] of `desc` for this volume, probing the field
+    /// once per clip box.
+    pub fn resolve(&self, desc: &SceneDesc, base: &Path) -> Result<Resolved, SceneError> {
+        let clip = desc.render.clip;
+        let probe = {
+            let mut kept = self.probe.lock().unwrap_or_else(|e| e.into_inner());
+            match kept.as_ref() {
+                Some((c, p)) if *c == clip => p.clone(),
+                _ => {
+                    let local = clip.map(|c| self.frame.box_to_local(c));
+                    let p = Arc::new(Probe::of(&self.volume, local.as_ref()));
+                    *kept = Some((clip, p.clone()));
+                    p
+                }
+            }
+        };
+        voxless::resolve_with(&self.volume, &self.frame, desc, base, Some(&probe), None)
+    }
 }
 
 /// The outcome of one load, shared by everyone who asked for it.
@@ -84,19 +122,24 @@ impl Volumes {
                 .ok()
                 .and_then(|n| n.get(frame).copied())
                 .unwrap_or(frame);
-            voxless::load(desc, base, number)
-                .map(|l| {
-                    Arc::new(Loaded {
-                        volume: l.volume,
-                        frame: l.frame,
-                        notes: l.notes,
-                    })
-                })
+            // Tessellations get their coarser levels of detail: the coarse
+            // images draw from them (a tessellation's render costs its
+            // tets, whatever the image size).
+            let mut desc = desc.clone();
+            if let Some(t) = desc.tets.as_mut() {
+                t.lod_levels.get_or_insert(COARSE_LOD_LEVELS);
+            }
+            voxless::load(&desc, base, number)
+                .map(|l| Arc::new(Loaded::new(l)))
                 .map_err(|e| e.to_string())
         })
         .clone()
     }
 }
+
+/// Levels of detail a tessellation is loaded with for the coarse images
+/// (the coarsest holds 1/512 of the tets; the three together 1/7 more memory).
+const COARSE_LOD_LEVELS: usize = 3;
 
 /// Everything the tabs share.
 pub struct App {
@@ -158,4 +201,48 @@ pub fn preset_names(text: &str, path: &Path) -> Result<Vec<String>, String> {
         return Ok(vec![m.name]);
     }
     Ok(names)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use voxless::{ParticleArrays, ParticlesDesc, Vec3};
+
+    /// The kept probe gives what probing afresh gives: the same camera and
+    /// settings as `voxless::resolve_in`, after camera moves and a changed
+    /// clip box.
+    #[test]
+    fn a_kept_probe_resolves_as_a_fresh_one() {
+        let positions = (0..400)
+            .map(|i| {
+                let t = i as f32 * 0.37;
+                Vec3::new(t.sin() * 2.0, (t * 1.3).cos(), (t * 0.7).sin() * 0.5)
+            })
+            .collect();
+        let arrays = ParticleArrays {
+            positions,
+            ..Default::default()
+        };
+        let loaded =
+            Loaded::new(AnyVolume::from_particles(arrays, &ParticlesDesc::default()).unwrap());
+        let base = Path::new(".");
+        let mut desc = SceneDesc::default();
+        desc.image.width = Some(32);
+        desc.image.height = Some(24);
+        let mut views = vec![desc.clone()];
+        desc.camera.eye = Some([5.0, 1.0, 2.0]);
+        desc.camera.look_at = Some([0.0, 0.0, 0.0]);
+        views.push(desc.clone());
+        desc.render.clip = Some([-1.0, -1.0, -1.0, 1.0, 1.0, 1.0]);
+        views.push(desc.clone());
+        desc.camera.eye = Some([0.0, 6.0, 1.0]);
+        views.push(desc);
+        for d in &views {
+            let kept = loaded.resolve(d, base).unwrap();
+            let fresh = voxless::resolve_in(&loaded.volume, &loaded.frame, d, base).unwrap();
+            assert_eq!(kept.camera, fresh.camera);
+            assert_eq!(kept.settings, fresh.settings);
+            assert_eq!(kept.framed, fresh.framed);
+        }
+    }
 }

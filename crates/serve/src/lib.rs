@@ -116,7 +116,7 @@ pub fn prepare(mut desc: SceneDesc, base: PathBuf) -> Result<Prepared, ServeErro
         .map_err(|message| voxless::SceneError::setting("scene", message))?;
     // Resolve once now: a setting the data cannot honour is an error at
     // start, not in the page.
-    let resolved = voxless::resolve_in(&loaded.volume, &loaded.frame, &desc, &base)?;
+    let resolved = loaded.resolve(&desc, &base)?;
     let colormap_file = match &desc.transfer.colormap_file {
         Some(f) => {
             let path = base.join(f);

@@ -115,7 +115,7 @@ fn run_job(
     if !outbox.is_current(seq) {
         return;
     }
-    let resolved = match voxless::resolve_in(&loaded.volume, &loaded.frame, &job.desc, &app.base) {
+    let resolved = match loaded.resolve(&job.desc, &app.base) {
         Ok(r) => r,
         Err(e) => return fail(e.to_string()),
     };
@@ -370,7 +370,8 @@ pub fn frame_png(app: &App, width: Option<u32>, height: Option<u32>) -> Result<V
         desc.image.height = Some(h);
     }
     let loaded = app.volumes.get(&desc, &app.base, frame)?;
-    let resolved = voxless::resolve_in(&loaded.volume, &loaded.frame, &desc, &app.base)
+    let resolved = loaded
+        .resolve(&desc, &app.base)
         .map_err(|e| e.to_string())?;
     let film = loaded
         .volume

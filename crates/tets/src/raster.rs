@@ -238,13 +238,17 @@ pub struct Frame {
     /// Per tile (row-major), the overlapping blocks as `level << 28 | block`.
     pub bins: Vec<Vec<u32>>,
     /// Per level, per tet, inclusive pixel rect `[x0, x1, y0, y1]`
-    /// (`x0 > x1` when off screen).
+    /// (`x0 > x1` when off screen or in a block not drawn at that level;
+    /// empty for a level no block is drawn at).
     rects: Vec<Vec<[u16; 4]>>,
     /// Blocks drawn at each level (for statistics).
     pub blocks_per_level: Vec<usize>,
 }
 
 const LEVEL_SHIFT: u32 = 28;
+
+/// The rectangle of a tet with no pixel (or of a block not drawn).
+const OFF_SCREEN: [u16; 4] = [1, 0, 1, 0];
 
 impl Frame {
     /// `lod`: blocks whose screen box is smaller than this many pixels use a
@@ -297,19 +301,10 @@ impl Frame {
         let tile_size = tile_size.max(1);
         let screen = Screen::new(camera, width, height);
         let levels: Vec<&TetMesh> = std::iter::once(mesh).chain(mesh.lod.iter()).collect();
-        let rects = levels
-            .iter()
-            .map(|m| {
-                m.tets
-                    .par_iter()
-                    .map(|t| match screen.tet_rect_padded(&t.v, pad) {
-                        Some((x0, x1, y0, y1)) => [x0 as u16, x1 as u16, y0 as u16, y1 as u16],
-                        None => [1, 0, 1, 0],
-                    })
-                    .collect()
-            })
-            .collect();
-        // Level per Lagrangian block from its level-0 screen size.
+        // Level per Lagrangian block from its level-0 screen size: the
+        // largest of its pieces (a block that wraps around the periodic box
+        // is drawn as pieces shifted by whole boxes; their union would span
+        // the box).
         let nlag = mesh
             .blocks
             .iter()
@@ -318,16 +313,17 @@ impl Frame {
             .unwrap_or(0) as usize;
         let mut level_of = vec![0usize; nlag];
         if let (Some(threshold), true) = (lod, levels.len() > 1) {
-            let mut boxes = vec![Aabb::EMPTY; nlag];
+            let mut sizes = vec![0.0f32; nlag];
             for b in &mesh.blocks {
-                boxes[b.lagrangian as usize] = boxes[b.lagrangian as usize].union(b.bounds);
-            }
-            for (l, b) in level_of.iter_mut().zip(&boxes) {
-                let size = match screen.pixel_rect(&corners(b)) {
+                let size = match screen.pixel_rect(&corners(&b.bounds)) {
                     Some((x0, x1, y0, y1)) => (x1 - x0).max(y1 - y0) as f32 + 1.0,
-                    None if b.is_empty() => 0.0,
+                    None if b.bounds.is_empty() => 0.0,
                     None => f32::INFINITY, // off screen: culled anyway
                 };
+                let s = &mut sizes[b.lagrangian as usize];
+                *s = s.max(size);
+            }
+            for (l, &size) in level_of.iter_mut().zip(&sizes) {
                 if size < threshold {
                     let r = 1 + (threshold / size.max(1e-3)).log2().floor() as usize;
                     *l = r.min(levels.len() - 1);
@@ -338,6 +334,10 @@ impl Frame {
         let tiles_y = height.div_ceil(tile_size);
         let mut bins = vec![Vec::new(); (tiles_x * tiles_y) as usize];
         let mut blocks_per_level = vec![0; levels.len()];
+        // Blocks drawn, per level: only their tets get rectangles, so a
+        // coarse level of detail costs what it draws, not what the finest
+        // level holds.
+        let mut drawn: Vec<Vec<usize>> = vec![Vec::new(); levels.len()];
         for (r, m) in levels.iter().enumerate() {
             for (i, b) in m.blocks.iter().enumerate() {
                 if level_of.get(b.lagrangian as usize).copied().unwrap_or(0) != r {
@@ -345,6 +345,7 @@ impl Frame {
                 }
                 if let Some((x0, x1, y0, y1)) = screen.pixel_rect_padded(&corners(&b.bounds), pad) {
                     blocks_per_level[r] += 1;
+                    drawn[r].push(i);
                     for y in y0 / tile_size..=y1 / tile_size {
                         for x in x0 / tile_size..=x1 / tile_size {
                             bins[(y * tiles_x + x) as usize]
@@ -354,6 +355,36 @@ impl Frame {
                 }
             }
         }
+        let rects = levels
+            .iter()
+            .zip(&drawn)
+            .map(|(m, blocks)| {
+                if blocks.is_empty() {
+                    return Vec::new();
+                }
+                let per_block: Vec<(usize, Vec<[u16; 4]>)> = blocks
+                    .par_iter()
+                    .map(|&i| {
+                        let range = &m.blocks[i].tets;
+                        let rects = m.tets[range.start as usize..range.end as usize]
+                            .iter()
+                            .map(|t| match screen.tet_rect_padded(&t.v, pad) {
+                                Some((x0, x1, y0, y1)) => {
+                                    [x0 as u16, x1 as u16, y0 as u16, y1 as u16]
+                                }
+                                None => OFF_SCREEN,
+                            })
+                            .collect();
+                        (range.start as usize, rects)
+                    })
+                    .collect();
+                let mut all = vec![OFF_SCREEN; m.tets.len()];
+                for (start, rects) in per_block {
+                    all[start..start + rects.len()].copy_from_slice(&rects);
+                }
+                all
+            })
+            .collect();
         Frame {
             screen,
             tile_size,
@@ -365,7 +396,8 @@ impl Frame {
         }
     }
 
-    /// How many tets (of all levels) have a rectangle on screen.
+    /// How many tets (of the blocks drawn, at their levels) have a
+    /// rectangle on screen.
     pub fn tet_count(&self) -> usize {
         self.rects
             .iter()

@@ -227,10 +227,12 @@ impl Volume for TetVolume {
     }
 }
 
-/// A tessellation prepared for one render: the k-buffer budget, if any.
+/// A tessellation prepared for one render: the k-buffer budget, if any,
+/// and the level-of-detail threshold (the render's, else the volume's).
 pub struct TetContext<'a> {
     volume: &'a TetVolume,
     budget: Option<EventBudget>,
+    lod_pixels: Option<f32>,
 }
 
 impl Prepare for TetVolume {
@@ -240,6 +242,7 @@ impl Prepare for TetVolume {
         TetContext {
             volume: self,
             budget: query.event_budget,
+            lod_pixels: query.lod_pixels.or(self.lod_pixels),
         }
     }
 }
@@ -266,7 +269,7 @@ impl Volume for TetContext<'_> {
             &view.camera,
             view.width,
             view.height,
-            self.volume.lod_pixels,
+            self.lod_pixels,
             self.budget,
         )))
     }

@@ -151,7 +151,7 @@ impl ParticleVolume {
     pub fn statistics(&self) -> FieldStatistics {
         FieldStatistics {
             median_support: self.nominal_dt * 8.0,
-            value_range: self.value_range,
+            value_range: voxless_core::Volume::value_range(self),
         }
     }
 }
@@ -160,6 +160,6 @@ impl ParticleVolume {
     /// Sets the density range (a part of a decomposed set takes the whole
     /// set's, known only once every part is built).
     pub fn set_value_range(&mut self, range: voxless_core::Range1) {
-        self.value_range = range;
+        self.value_range = std::sync::OnceLock::from(range);
     }
 }
