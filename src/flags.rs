@@ -44,7 +44,7 @@ pub struct DataFlags {
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
     pub attribute: Option<String>,
     /// Global radius parameter, world units (support for gaussian3, std-dev for
-    /// gaussian, h for cubic-spline). Default: a support of the median
+    /// gaussian, smoothing length h for the SPH kernels). Default: a support of the median
     /// nearest-neighbour distance (printed).
     #[cfg_attr(
         feature = "clap",
@@ -54,7 +54,7 @@ pub struct DataFlags {
     /// Per-particle radii: a column name, or .npy with N values.
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
     pub radii: Option<String>,
-    /// Per-particle weights (masses for cubic-spline): a column name or .npy
+    /// Per-particle weights (masses for the SPH kernels): a column name or .npy
     /// (default 1).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
     pub weights: Option<String>,
@@ -74,7 +74,9 @@ pub struct DataFlags {
     /// type number or element symbol).
     #[cfg_attr(feature = "clap", arg(long, value_name = "T", help_heading = "Particles", value_parser = species))]
     pub species: Option<Species>,
-    /// RBF kernel (default gaussian3; SPH files: cubic-spline).
+    /// RBF kernel (default gaussian3; SPH files: cubic-spline). The SPH
+    /// kernels take h as radius: cubic-spline and wendland-c2/c4/c6 reach 2h,
+    /// quartic-spline 2.5h, quintic-spline 3h.
     #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = "Particles"))]
     pub kernel: Option<KernelName>,
     /// Global density scale κ of the gaussian kernel (default 1).

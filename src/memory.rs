@@ -128,7 +128,14 @@ impl ParticleArrays {
             }
         }
         let kernel = match desc.kernel {
-            Some(voxless_scene::KernelName::CubicSpline) => 2.0,
+            Some(
+                voxless_scene::KernelName::CubicSpline
+                | voxless_scene::KernelName::WendlandC2
+                | voxless_scene::KernelName::WendlandC4
+                | voxless_scene::KernelName::WendlandC6,
+            ) => 2.0,
+            Some(voxless_scene::KernelName::QuarticSpline) => 2.5,
+            Some(voxless_scene::KernelName::QuinticSpline) => 3.0,
             Some(voxless_scene::KernelName::Gaussian) => desc.sigma.unwrap_or(2.0) as f64,
             _ => 1.0,
         };

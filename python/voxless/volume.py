@@ -231,11 +231,13 @@ class Particles(Volume):
     ``positions`` N×3: float32 is used as it is; float64 (or any other
     numeric type) is recentred on its bounding box's centre in float64
     before it becomes float32, so data far from the origin keeps its digits.
-    ``radii``, ``weights`` (masses for the cubic spline), ``attribute``
+    ``radii``, ``weights`` (masses for the SPH kernels), ``attribute``
     (colour) and ``types`` (species numbers) are per-particle arrays of N
     values (a scalar is repeated). Data flags: ``radius`` (one radius; the
     default is estimated from the spacing), ``kernel`` (``"gaussian3"``,
-    ``"gaussian"``, ``"cubic-spline"``: radius h, support 2h), ``kappa``,
+    ``"gaussian"``, or an SPH kernel with radius h: ``"cubic-spline"`` and
+    ``"wendland-c2"``/``"-c4"``/``"-c6"`` with support 2h,
+    ``"quartic-spline"`` 2.5h, ``"quintic-spline"`` 3h), ``kappa``,
     ``sigma``, ``cluster``, ``classification``, ``attribute_range``,
     ``species`` (keep only these ``types``); ``materials`` a list of
     ``[[particles.materials]]`` tables. Any other keyword is a view flag

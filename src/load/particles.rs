@@ -6,8 +6,8 @@
 //! Positions are read in float64 and placed in the scene's [`WorldFrame`]
 //! (chosen from the first data read, see [`crate::frame`]) before they
 //! become float32; radii and the description's radius are world lengths and
-//! are divided by the frame's scale, and weights of the cubic spline (whose
-//! kernel is normalised per unit volume) by its cube, so densities stay in
+//! are divided by the frame's scale, and weights of the SPH kernels (whose
+//! kernels are normalised per unit volume) by its cube, so densities stay in
 //! world units.
 
 use std::path::{Path, PathBuf};
@@ -55,6 +55,11 @@ pub(crate) fn kernel_of(p: &ParticlesDesc, name: KernelName) -> Kernel {
             sigma: p.sigma.unwrap_or(2.0),
         },
         KernelName::CubicSpline => Kernel::CubicSpline,
+        KernelName::QuarticSpline => Kernel::QuarticSpline,
+        KernelName::QuinticSpline => Kernel::QuinticSpline,
+        KernelName::WendlandC2 => Kernel::WendlandC2,
+        KernelName::WendlandC4 => Kernel::WendlandC4,
+        KernelName::WendlandC6 => Kernel::WendlandC6,
     }
 }
 
@@ -582,7 +587,7 @@ pub fn frame_count(desc: &voxless_scene::SceneDesc, base: &Path) -> Result<usize
 }
 
 /// Radii and weights of `data` from world units into a frame of scale
-/// `scale` (see the module docs): radii ÷ scale, and for the cubic spline
+/// `scale` (see the module docs): radii ÷ scale, and for the SPH kernels
 /// (normalised per unit volume) weights ÷ scale³.
 pub(crate) fn localise(data: &mut ParticleData, kernel: Kernel, scale: f64) {
     if scale == 1.0 {
@@ -591,7 +596,7 @@ pub(crate) fn localise(data: &mut ParticleData, kernel: Kernel, scale: f64) {
     if let Some(r) = &mut data.radii {
         r.iter_mut().for_each(|v| *v = (*v as f64 / scale) as f32);
     }
-    if kernel == Kernel::CubicSpline {
+    if kernel.is_sph() {
         let per_volume = scale.powi(3);
         let n = data.positions.len();
         let w = data.weights.get_or_insert_with(|| vec![1.0; n]);

@@ -9,11 +9,18 @@
 //! | `gaussian3` | `w·exp(−½(3d/r)²)` | `d ≤ r` |
 //! | `gaussian` | `κ·w·exp(−d²/2r²)` | `d ≤ σr` |
 //! | `cubic-spline` | `w·M4(d/h)/(πh³)`, `h = r` | `d ≤ 2h` |
+//! | `quartic-spline` | `w·M5(d/h)/(20πh³)`, `h = r` | `d ≤ 2.5h` |
+//! | `quintic-spline` | `w·M6(d/h)/(120πh³)`, `h = r` | `d ≤ 3h` |
+//! | `wendland-c2`, `-c4`, `-c6` | `w·σ·w(d/h)/h³`, `h = r` | `d ≤ 2h` |
 //!
 //! `M4(q) = 1 − 1.5q² + 0.75q³` for `q < 1`, `0.25(2 − q)³` for `1 ≤ q < 2`,
 //! 0 beyond: the standard SPH cubic spline, normalised so that
 //! `∫ M4(|x|/h)/(πh³) dx = 1`; with `w` = mass, `Φ = Σ m W` is the SPH
-//! density estimate.
+//! density estimate. The SPH kernels (the cubic spline and those of
+//! [`sph`]: M5, M6, Wendland C2/C4/C6) all take the smoothing length `h` in
+//! PHANTOM's convention as the radius and are normalised to 1 per unit
+//! weight; [`sph`] gives their formulas and how to convert the smoothing
+//! lengths of SWIFT, Gadget and GIZMO.
 //!
 //! `gaussian3` is the attribute-aware RBF paper's eq. 1–2 (a Gaussian of
 //! standard deviation r/3 truncated at three deviations); `gaussian` is the
@@ -25,6 +32,10 @@
 use voxless_core::Vec3;
 use voxless_core::simd::Lanes;
 
+pub mod sph;
+
+pub use sph::{Sph, SphFamily};
+
 /// The kernel family and its global parameters.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Kernel {
@@ -35,10 +46,67 @@ pub enum Kernel {
         sigma: f32,
     },
     CubicSpline,
+    /// The M5 quartic B-spline (support 2.5h).
+    QuarticSpline,
+    /// The M6 quintic B-spline (support 3h).
+    QuinticSpline,
+    /// Wendland C2 (support 2h).
+    WendlandC2,
+    /// Wendland C4 (support 2h).
+    WendlandC4,
+    /// Wendland C6 (support 2h).
+    WendlandC6,
 }
 
 /// Names accepted on the command line and in scenes.
-pub const KERNEL_NAMES: &[&str] = &["gaussian3", "gaussian", "cubic-spline"];
+pub const KERNEL_NAMES: &[&str] = &[
+    "gaussian3",
+    "gaussian",
+    "cubic-spline",
+    "quartic-spline",
+    "quintic-spline",
+    "wendland-c2",
+    "wendland-c4",
+    "wendland-c6",
+];
+
+/// `$body` with `$F` the [`Family`] type that evaluates `$kernel`: one
+/// dispatch on the kernel, then a loop monomorphised per family.
+macro_rules! with_family {
+    ($kernel:expr, $F:ident => $body:expr) => {
+        match $kernel {
+            $crate::kernel::Kernel::CubicSpline => {
+                type $F = $crate::kernel::CubicFamily;
+                $body
+            }
+            $crate::kernel::Kernel::QuarticSpline => {
+                type $F = $crate::kernel::SphFamily<$crate::kernel::sph::M5>;
+                $body
+            }
+            $crate::kernel::Kernel::QuinticSpline => {
+                type $F = $crate::kernel::SphFamily<$crate::kernel::sph::M6>;
+                $body
+            }
+            $crate::kernel::Kernel::WendlandC2 => {
+                type $F = $crate::kernel::SphFamily<$crate::kernel::sph::C2>;
+                $body
+            }
+            $crate::kernel::Kernel::WendlandC4 => {
+                type $F = $crate::kernel::SphFamily<$crate::kernel::sph::C4>;
+                $body
+            }
+            $crate::kernel::Kernel::WendlandC6 => {
+                type $F = $crate::kernel::SphFamily<$crate::kernel::sph::C6>;
+                $body
+            }
+            $crate::kernel::Kernel::Gaussian3 | $crate::kernel::Kernel::Gaussian { .. } => {
+                type $F = $crate::kernel::GaussianFamily;
+                $body
+            }
+        }
+    };
+}
+pub(crate) use with_family;
 
 impl Kernel {
     pub fn name(&self) -> &'static str {
@@ -46,7 +114,31 @@ impl Kernel {
             Kernel::Gaussian3 => "gaussian3",
             Kernel::Gaussian { .. } => "gaussian",
             Kernel::CubicSpline => "cubic-spline",
+            Kernel::QuarticSpline => "quartic-spline",
+            Kernel::QuinticSpline => "quintic-spline",
+            Kernel::WendlandC2 => "wendland-c2",
+            Kernel::WendlandC4 => "wendland-c4",
+            Kernel::WendlandC6 => "wendland-c6",
         }
+    }
+
+    /// The kernels of [`sph`] by value; `None` for the Gaussians and the
+    /// cubic spline (which keeps its own, older code path).
+    pub fn sph(&self) -> Option<Sph> {
+        match self {
+            Kernel::QuarticSpline => Some(Sph::M5),
+            Kernel::QuinticSpline => Some(Sph::M6),
+            Kernel::WendlandC2 => Some(Sph::C2),
+            Kernel::WendlandC4 => Some(Sph::C4),
+            Kernel::WendlandC6 => Some(Sph::C6),
+            _ => None,
+        }
+    }
+
+    /// An SPH kernel: radius = smoothing length, normalised to 1 per unit
+    /// volume (so weights are masses and scale with the frame's volume).
+    pub fn is_sph(&self) -> bool {
+        *self == Kernel::CubicSpline || self.sph().is_some()
     }
 
     /// Support radius divided by the radius parameter.
@@ -55,17 +147,24 @@ impl Kernel {
             Kernel::Gaussian3 => 1.0,
             Kernel::Gaussian { sigma, .. } => sigma,
             Kernel::CubicSpline => 2.0,
+            k => k.sph().map_or(1.0, |s| s.support() as f32),
         }
     }
 
     /// The packed per-particle constants `(shape, amplitude)` for radius `r`
     /// and weight `w`: Gaussians evaluate `amp·exp(−shape·d²)`, the cubic
-    /// spline `amp·M4(d·shape)`.
+    /// spline `amp·M4(d·shape)`, the other SPH kernels `amp·w(d·shape)`.
     pub fn pack(&self, r: f32, w: f32) -> (f32, f32) {
         match *self {
             Kernel::Gaussian3 => (4.5 / (r * r), w),
             Kernel::Gaussian { kappa, .. } => (0.5 / (r * r), kappa * w),
             Kernel::CubicSpline => (1.0 / r, w / (std::f32::consts::PI * r * r * r)),
+            k => {
+                // σ·w/h³ in f64, then rounded once.
+                let sigma = k.sph().map_or(1.0, |s| s.sigma());
+                let r = r as f64;
+                (1.0 / r as f32, (sigma * w as f64 / (r * r * r)) as f32)
+            }
         }
     }
 
@@ -76,7 +175,8 @@ impl Kernel {
             Kernel::Gaussian { kappa, sigma } => {
                 kappa as f64 * gaussian_ball_integral(r, sigma as f64)
             }
-            Kernel::CubicSpline => 1.0,
+            // Normalised per unit weight by construction (tested).
+            _ => 1.0,
         }
     }
 }
@@ -126,7 +226,7 @@ impl Family for GaussianFamily {
 /// `q = |d|/h` in f64: near the support edge `2 − q` cancels, and an f32 `q`
 /// would cost ~1e-5 relative accuracy there.
 #[inline(always)]
-fn cubic_q(d: Vec3, inv_h: f32) -> (f64, f64) {
+pub(crate) fn cubic_q(d: Vec3, inv_h: f32) -> (f64, f64) {
     let dist = ((d.x as f64).powi(2) + (d.y as f64).powi(2) + (d.z as f64).powi(2)).sqrt();
     (dist, dist * inv_h as f64)
 }
@@ -249,6 +349,17 @@ impl Kernel {
                     norm * voxless_core::simpson(f, a, b, 256)
                 }
             }
+            k => {
+                let Some(s) = k.sph() else { return 0.0 };
+                let norm = s.sigma() / (r * r * r);
+                if a <= -l && b >= l {
+                    // Full chord: σ/h² · F(b/h) from the kernel's table.
+                    norm * r * s.projected(b2 / (r * r))
+                } else {
+                    let f = |u: f64| s.w((b2 + u * u).sqrt() / r);
+                    norm * voxless_core::simpson(f, a, b, 256)
+                }
+            }
         }
     }
 }
@@ -257,23 +368,25 @@ impl Kernel {
 /// squared distance `b²` from its centre, per unit weight, with the
 /// particle's constants computed once: for projections that add a particle
 /// to many pixels. Equals [`Kernel::chord_integral`] over the full chord to
-/// ~1e-7 of the peak: the cubic spline's projected kernel is read from a
-/// table in `q² = b²/h²` (no square root per pixel), sampled from the table
-/// in `q` that `chord_integral` reads.
+/// ~1e-7 of the peak: the SPH kernels' projected kernel is read from a
+/// table in `q² = b²/h²` (no square root per pixel); the cubic spline's is
+/// sampled from the table in `q` that `chord_integral` reads, the others'
+/// are [`Sph::column_table`], which `chord_integral` reads too.
 #[derive(Clone, Copy, Debug)]
 pub struct Column {
     kernel: Kernel,
     r: f64,
     support2: f64,
-    /// Cubic spline: `1/(πh²)`, the table's scale, and `(N − 1)/4h²`, which
-    /// maps `b²` to a table position.
+    /// SPH kernels: `σ/h²` (`1/(πh²)` for the cubic spline), the table's
+    /// scale, and `(N − 1)/(Q h)²` with `Q` the support factor, which maps
+    /// `b²` to a table position.
     scale: f64,
     to_index: f64,
     table: &'static [f32; PROJ_Q2_TABLE],
 }
 
 /// Entries of the projected-M4 table over `q² ∈ [0, 4]`.
-const PROJ_Q2_TABLE: usize = 8193;
+const PROJ_Q2_TABLE: usize = sph::COLUMN_TABLE;
 
 /// [`projected_m4`] tabulated over `q²` (linear interpolation in `q²`).
 fn projected_m4_q2_table() -> &'static [f32; PROJ_Q2_TABLE] {
@@ -292,28 +405,34 @@ static NO_TABLE: [f32; PROJ_Q2_TABLE] = [0.0; PROJ_Q2_TABLE];
 impl Kernel {
     /// The full column of a particle of radius `r` (see [`Column`]).
     pub fn column(&self, r: f64) -> Column {
-        let support = self.support_factor() as f64 * r;
-        let table = match self {
-            Kernel::CubicSpline => projected_m4_q2_table(),
-            _ => &NO_TABLE,
+        let factor = self.support_factor() as f64;
+        let support = factor * r;
+        let (table, scale) = match self.sph() {
+            _ if *self == Kernel::CubicSpline => (
+                projected_m4_q2_table(),
+                1.0 / (std::f64::consts::PI * r * r),
+            ),
+            Some(s) => (s.column_table(), s.sigma() / (r * r)),
+            None => (&NO_TABLE, 0.0),
         };
         Column {
             kernel: *self,
             r,
             support2: support * support,
-            scale: 1.0 / (std::f64::consts::PI * r * r),
-            to_index: 1.0 / (r * r) * (0.25 * (PROJ_Q2_TABLE - 1) as f64),
+            scale,
+            // For the cubic spline (N − 1)/4 is exact, as before.
+            to_index: 1.0 / (r * r) * ((PROJ_Q2_TABLE - 1) as f64 / (factor * factor)),
             table,
         }
     }
 }
 
 impl Column {
-    /// The cubic spline's column at `b2` inside the support, from the table.
+    /// An SPH kernel's column at `b2` inside the support, from the table.
     #[inline(always)]
-    fn m4(&self, b2: f64) -> f64 {
-        // (b2 / 4h²).min(1) · (N − 1), with the power-of-two factors (exact)
-        // folded into one constant.
+    fn tabled(&self, b2: f64) -> f64 {
+        // (b2 / (Qh)²).min(1) · (N − 1), with the constant factors folded
+        // into one.
         const LAST: f64 = (PROJ_Q2_TABLE - 1) as f64;
         let x = (b2 * self.to_index).min(LAST);
         let i = (x as usize).min(PROJ_Q2_TABLE - 2);
@@ -329,9 +448,11 @@ impl Column {
         if b2 >= self.support2 {
             return 0.0;
         }
-        match self.kernel {
-            Kernel::CubicSpline => self.m4(b2),
-            k => k.chord_integral(b2, self.r, f64::NEG_INFINITY, f64::INFINITY),
+        if self.kernel.is_sph() {
+            self.tabled(b2)
+        } else {
+            self.kernel
+                .chord_integral(b2, self.r, f64::NEG_INFINITY, f64::INFINITY)
         }
     }
 
@@ -353,21 +474,18 @@ impl Column {
             return;
         }
         let (out, u) = (&mut out[first..last], &u[first..last]);
-        match self.kernel {
-            Kernel::CubicSpline => {
-                for (s, &x) in out.iter_mut().zip(u) {
-                    let du = x - a;
-                    let b2 = du * du + dv2;
-                    if b2 < self.support2 {
-                        *s += weight * self.m4(b2);
-                    }
+        if self.kernel.is_sph() {
+            for (s, &x) in out.iter_mut().zip(u) {
+                let du = x - a;
+                let b2 = du * du + dv2;
+                if b2 < self.support2 {
+                    *s += weight * self.tabled(b2);
                 }
             }
-            _ => {
-                for (s, &x) in out.iter_mut().zip(u) {
-                    let du = x - a;
-                    *s += weight * self.at(du * du + dv2);
-                }
+        } else {
+            for (s, &x) in out.iter_mut().zip(u) {
+                let du = x - a;
+                *s += weight * self.at(du * du + dv2);
             }
         }
     }

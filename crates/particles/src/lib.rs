@@ -2,8 +2,10 @@
 //!
 //! Every particle `i` has a centre `cᵢ`, a radius parameter `rᵢ`, a weight
 //! `wᵢ` and optionally a scalar attribute `sᵢ`. Its kernel `φᵢ` (see
-//! [`kernel`] for the three families and their formulas) has compact support
-//! `Rᵢ = support_factor·rᵢ`. The reconstructed fields are
+//! [`kernel`] for the Gaussians and the SPH kernels — the cubic, quartic and
+//! quintic splines and Wendland C2/C4/C6, whose radius is the smoothing
+//! length `h` and whose weights are masses — and their formulas) has compact
+//! support `Rᵢ = support_factor·rᵢ`. The reconstructed fields are
 //!
 //! - the density `Φ(x) = Σᵢ φᵢ(x)` (attribute-aware RBF paper, eq. 3), which
 //!   drives opacity, and its exact gradient `∇Φ = Σᵢ ∇φᵢ`;
@@ -65,5 +67,7 @@ pub use volume::{
 
 #[cfg(test)]
 mod packet_tests;
+#[cfg(test)]
+mod sph_tests;
 #[cfg(test)]
 mod tests;

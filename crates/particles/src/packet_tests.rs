@@ -19,13 +19,18 @@ use voxless_core::{Attribute, Control, Image, Ray, Sample, SampleBatch, SmallRng
 use voxless_render::{Light, RenderSettings, render};
 use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
 
-const KERNELS: [Kernel; 3] = [
+const KERNELS: [Kernel; 8] = [
     Kernel::Gaussian3,
     Kernel::Gaussian {
         kappa: 1.5,
         sigma: 2.0,
     },
     Kernel::CubicSpline,
+    Kernel::QuarticSpline,
+    Kernel::QuinticSpline,
+    Kernel::WendlandC2,
+    Kernel::WendlandC4,
+    Kernel::WendlandC6,
 ];
 
 /// Particles in the unit cube, radii 0.05–0.12, weights 0.5–1.5 and (if

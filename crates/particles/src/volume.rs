@@ -9,7 +9,7 @@ use voxless_core::{
 use voxless_transfer::{ControlPoints, TransferFunction};
 
 use crate::error::ParticleError;
-use crate::kernel::{CubicFamily, Family, GaussianFamily, Kernel};
+use crate::kernel::{Family, Kernel, with_family};
 
 mod exact;
 mod packet;
@@ -512,12 +512,11 @@ impl ParticleVolume {
             &[]
         };
         // Dispatch on the kernel family once; the loop below is monomorphised.
-        match (self.settings.kernel, gradient) {
-            (Kernel::CubicSpline, false) => self.eval::<CubicFamily, false>(colors, p),
-            (Kernel::CubicSpline, true) => self.eval::<CubicFamily, true>(colors, p),
-            (_, false) => self.eval::<GaussianFamily, false>(colors, p),
-            (_, true) => self.eval::<GaussianFamily, true>(colors, p),
-        }
+        with_family!(self.settings.kernel, F => if gradient {
+            self.eval::<F, true>(colors, p)
+        } else {
+            self.eval::<F, false>(colors, p)
+        })
     }
 
     #[inline]

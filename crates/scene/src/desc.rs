@@ -53,14 +53,15 @@ pub struct ParticlesDesc {
     /// (case-insensitive).
     pub attribute: Option<String>,
     /// Global radius parameter (support radius for gaussian3, standard
-    /// deviation for gaussian, smoothing length h for cubic-spline).
+    /// deviation for gaussian, smoothing length h for the SPH kernels).
     pub radius: Option<f32>,
     /// Per-particle radii: `.npy` with N values or a column name.
     pub radii: Option<String>,
-    /// Per-particle weights (masses for cubic-spline): `.npy` or a column
-    /// name.
+    /// Per-particle weights (masses for the SPH kernels): `.npy` or a
+    /// column name.
     pub weights: Option<String>,
-    /// gaussian3 (default), gaussian, cubic-spline.
+    /// gaussian3 (default), gaussian, or an SPH kernel: cubic-spline,
+    /// quartic-spline, quintic-spline, wendland-c2, wendland-c4, wendland-c6.
     pub kernel: Option<KernelName>,
     pub kappa: Option<f32>,
     pub sigma: Option<f32>,

@@ -53,6 +53,16 @@ choice! {
         Gaussian = "gaussian",
         /// The SPH M4 cubic spline (radius = smoothing length h, support 2h).
         CubicSpline = "cubic-spline" | "cubic" | "m4",
+        /// The SPH M5 quartic spline (radius = h, support 2.5h).
+        QuarticSpline = "quartic-spline" | "quartic" | "m5",
+        /// The SPH M6 quintic spline (radius = h, support 3h).
+        QuinticSpline = "quintic-spline" | "quintic" | "m6",
+        /// Wendland C2 (radius = h, support 2h as in PHANTOM).
+        WendlandC2 = "wendland-c2",
+        /// Wendland C4 (radius = h, support 2h as in PHANTOM).
+        WendlandC4 = "wendland-c4",
+        /// Wendland C6 (radius = h, support 2h as in PHANTOM).
+        WendlandC6 = "wendland-c6",
     }
 }
 

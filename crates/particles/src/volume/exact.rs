@@ -9,7 +9,7 @@
 use voxless_core::Vec3;
 
 use super::{FieldSample, ParticleVolume};
-use crate::kernel::{CubicFamily, Family, GaussianFamily, Kernel};
+use crate::kernel::{Family, with_family};
 
 /// One particle's contribution: value, attribute × value, colour × value,
 /// gradient, and the key that orders it (centre, then the terms).
@@ -43,12 +43,12 @@ impl ParticleVolume {
         } else {
             &[]
         };
-        let mut terms = match (self.settings.kernel, gradient) {
-            (Kernel::CubicSpline, false) => self.terms::<CubicFamily, false>(colors, p),
-            (Kernel::CubicSpline, true) => self.terms::<CubicFamily, true>(colors, p),
-            (_, false) => self.terms::<GaussianFamily, false>(colors, p),
-            (_, true) => self.terms::<GaussianFamily, true>(colors, p),
-        };
+        // Every kernel through its own family, as `field_with` dispatches.
+        let mut terms = with_family!(self.settings.kernel, F => if gradient {
+            self.terms::<F, true>(colors, p)
+        } else {
+            self.terms::<F, false>(colors, p)
+        });
         terms.sort_unstable_by(|a, b| {
             a.key.cmp(&b.key).then_with(|| {
                 let bits = |t: &Term| {

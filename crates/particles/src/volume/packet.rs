@@ -37,7 +37,7 @@ use voxless_core::simd::{LANES, Lanes, Simd, WithLanes, dispatch};
 use voxless_core::{Aabb, Sample, SampleBatch, Vec3};
 
 use super::{FieldSample, ParticleVolume, to_sample};
-use crate::kernel::{CubicFamily, Family, GaussianFamily, Kernel};
+use crate::kernel::{Family, with_family};
 
 /// Adds `x` to lanes `j..j + 8` of a padded buffer.
 #[inline(always)]
@@ -323,16 +323,11 @@ impl ParticleVolume {
             &[]
         };
         // Dispatch on the kernel family once; the pass is monomorphised.
-        match (self.settings.kernel, gradient) {
-            (Kernel::CubicSpline, false) => {
-                self.batch::<CubicFamily, false>(colors, simd, batch, out)
-            }
-            (Kernel::CubicSpline, true) => {
-                self.batch::<CubicFamily, true>(colors, simd, batch, out)
-            }
-            (_, false) => self.batch::<GaussianFamily, false>(colors, simd, batch, out),
-            (_, true) => self.batch::<GaussianFamily, true>(colors, simd, batch, out),
-        }
+        with_family!(self.settings.kernel, F => if gradient {
+            self.batch::<F, true>(colors, simd, batch, out)
+        } else {
+            self.batch::<F, false>(colors, simd, batch, out)
+        })
     }
 
     fn batch<F: Family, const GRAD: bool>(
