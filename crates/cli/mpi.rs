@@ -111,9 +111,10 @@ pub fn main(cli: Cli) -> ! {
     std::process::exit(code)
 }
 
-/// Every rank's outcome of a step only some ranks take (rank 0 writing a
-/// file): an error anywhere is an error everywhere.
-fn agree(comm: &MpiComm, local: Result<()>) -> Result<()> {
+/// Every rank's outcome of a step that can fail on some ranks only (rank 0
+/// writing a file, a rank's frame failing to load): an error anywhere is an
+/// error everywhere, with its message.
+fn agree<T>(comm: &MpiComm, local: Result<T>) -> Result<T> {
     let local = local.map_err(|e| crate::describe(&e));
     comm.agree(local)?.map_err(anyhow::Error::msg)
 }
@@ -370,47 +371,8 @@ fn frame_bytes(desc: &SceneDesc, base: &Path, frame: usize) -> u64 {
         .sum()
 }
 
-/// The frames numbered in `range` (A..B) and their output files, checked,
-/// as one process picks them (see `crate::sequence`).
-fn series_frames(
-    comm: &MpiComm,
-    desc: &SceneDesc,
-    base: &Path,
-    range: &str,
-    output: &Path,
-) -> Result<(Vec<usize>, Vec<PathBuf>)> {
-    let range = voxless::frames::parse_range(range)?;
-    let numbers = voxless::frame_numbers(desc, base)?;
-    let frames: Vec<usize> = numbers
-        .iter()
-        .copied()
-        .filter(|n| range.contains(n))
-        .collect();
-    if frames.is_empty() {
-        bail!(
-            "--frames {}..{}: no frame is numbered in that range; the data has frames {}",
-            range.start(),
-            range.end(),
-            voxless::frames::list_numbers(&numbers)
-        );
-    }
-    if comm.is_root() && (range.start() < &numbers[0] || range.end() > &numbers[numbers.len() - 1])
-    {
-        eprintln!(
-            "note: --frames {}..{} reaches past the data, whose frames in that range are {}",
-            range.start(),
-            range.end(),
-            voxless::frames::list_numbers(&frames)
-        );
-    }
-    let outputs = frames
-        .iter()
-        .map(|&f| out::frame_path(output, f))
-        .collect::<Result<Vec<_>>>()?;
-    out::check(&outputs, OutputKind::Image, desc, base, &[])?;
-    Ok((frames, outputs))
-}
-
+/// A time series under `mpirun`: the frames one process would pick
+/// ([`crate::sequence::frames_and_outputs`]), rendered across the ranks.
 fn sequence(
     comm: &MpiComm,
     desc: &SceneDesc,
@@ -419,7 +381,8 @@ fn sequence(
     output: &Path,
     colorbar: bool,
 ) -> Result<()> {
-    let (frames, outputs) = series_frames(comm, desc, base, range, output)?;
+    let (frames, outputs) =
+        crate::sequence::frames_and_outputs(desc, base, range, output, comm.is_root())?;
     let k = comm.size();
     let per_rank =
         available_bytes().map_or(0, |a| a / ranks_on_this_node().unwrap_or(k).max(1) as u64);
@@ -466,18 +429,12 @@ fn by_frame(
     let k = comm.size();
     let t = Instant::now();
     let first = Scene::open_series(desc, base, frames).map_err(anyhow::Error::from);
-    let (mut scene, series) = match comm.agree(first.map_err(|e| crate::describe(&e)))? {
-        Ok(s) => s,
-        Err(e) => bail!(e),
-    };
+    let (mut scene, series) = agree(comm, first)?;
     if comm.is_root() {
         crate::report_loaded(&scene, t);
     }
     let work = scene.check_work(desc).map_err(anyhow::Error::from);
-    let note = match comm.agree(work.map_err(|e| crate::describe(&e)))? {
-        Ok(n) => n,
-        Err(e) => bail!(e),
-    };
+    let note = agree(comm, work)?;
     if let (true, Some(note)) = (comm.is_root(), note) {
         eprintln!("note: {note}");
     }
@@ -499,10 +456,7 @@ fn by_frame(
             })(),
             None => Ok(None),
         };
-        let rendered = match comm.agree(rendered.map_err(|e| crate::describe(&e)))? {
-            Ok(r) => r,
-            Err(e) => bail!(e),
-        };
+        let rendered = agree(comm, rendered)?;
         // Every image to rank 0.
         let mut send = vec![Vec::new(); k];
         if let Some(img) = &rendered {
@@ -656,10 +610,7 @@ fn sample(
     } else {
         Ok(Vec::new())
     };
-    let pts = match comm.agree(read.map_err(|e| crate::describe(&e)))? {
-        Ok(p) => p,
-        Err(e) => bail!(e),
-    };
+    let pts = agree(comm, read)?;
     let local: Vec<voxless::Vec3> = pts.iter().map(|&p| s.frame.to_local(p)).collect();
     let cols = s.sample_columns(gradient);
     let t = Instant::now();

@@ -1,7 +1,7 @@
 //! Time series: frames A..B by their numbers, rendered to numbered images
 //! with one progress bar and defaults held over the whole series.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Result, bail};
@@ -22,34 +22,7 @@ pub fn render(
     output: &Path,
     colorbar: bool,
 ) -> Result<()> {
-    let range = voxless::frames::parse_range(range)?;
-    let numbers = voxless::frame_numbers(desc, base)?;
-    let frames: Vec<usize> = numbers
-        .iter()
-        .copied()
-        .filter(|n| range.contains(n))
-        .collect();
-    if frames.is_empty() {
-        bail!(
-            "--frames {}..{}: no frame is numbered in that range; the data has frames {}",
-            range.start(),
-            range.end(),
-            voxless::frames::list_numbers(&numbers)
-        );
-    }
-    if range.start() < &numbers[0] || range.end() > &numbers[numbers.len() - 1] {
-        eprintln!(
-            "note: --frames {}..{} reaches past the data, whose frames in that range are {}",
-            range.start(),
-            range.end(),
-            voxless::frames::list_numbers(&frames)
-        );
-    }
-    let outputs = frames
-        .iter()
-        .map(|&f| out::frame_path(output, f))
-        .collect::<Result<Vec<_>>>()?;
-    out::check(&outputs, OutputKind::Image, desc, base, &[])?;
+    let (frames, outputs) = frames_and_outputs(desc, base, range, output, true)?;
     let t = Instant::now();
     let (mut scene, series) = Scene::open_series(desc, base, &frames)?;
     crate::report_loaded(&scene, t);
@@ -84,4 +57,46 @@ pub fn render(
         outputs[outputs.len() - 1].display()
     );
     Ok(())
+}
+
+/// The frames numbered in `range` (A..B, inclusive) and their numbered
+/// output paths, checked before any work; an error when no frame is in the
+/// range, and (with `note`) a note when the range reaches past the data.
+/// One process and `mpirun` (its root notes) select frames alike.
+pub(crate) fn frames_and_outputs(
+    desc: &SceneDesc,
+    base: &Path,
+    range: &str,
+    output: &Path,
+    note: bool,
+) -> Result<(Vec<usize>, Vec<PathBuf>)> {
+    let range = voxless::frames::parse_range(range)?;
+    let numbers = voxless::frame_numbers(desc, base)?;
+    let frames: Vec<usize> = numbers
+        .iter()
+        .copied()
+        .filter(|n| range.contains(n))
+        .collect();
+    if frames.is_empty() {
+        bail!(
+            "--frames {}..{}: no frame is numbered in that range; the data has frames {}",
+            range.start(),
+            range.end(),
+            voxless::frames::list_numbers(&numbers)
+        );
+    }
+    if note && (range.start() < &numbers[0] || range.end() > &numbers[numbers.len() - 1]) {
+        eprintln!(
+            "note: --frames {}..{} reaches past the data, whose frames in that range are {}",
+            range.start(),
+            range.end(),
+            voxless::frames::list_numbers(&frames)
+        );
+    }
+    let outputs = frames
+        .iter()
+        .map(|&f| out::frame_path(output, f))
+        .collect::<Result<Vec<_>>>()?;
+    out::check(&outputs, OutputKind::Image, desc, base, &[])?;
+    Ok((frames, outputs))
 }
