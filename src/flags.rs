@@ -337,6 +337,22 @@ pub struct ViewFlags {
     /// Render only what lies inside this box, world coordinates (default: all).
     #[cfg_attr(feature = "clap", arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], help_heading = "Render", allow_negative_numbers = true))]
     pub clip: Option<Vec<f64>>,
+    /// An opaque triangle mesh drawn with the volume: .ply, .obj, .stl or
+    /// .vtp, in the data's coordinates (repeat for more; colours and
+    /// fields in a scene file's [[meshes]]).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "FILE", help_heading = "Surfaces"))]
+    pub mesh: Vec<PathBuf>,
+    /// Ambient occlusion on mesh and iso-surface hits: N rays per hit.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "N", help_heading = "Surfaces"))]
+    pub ao: Option<u32>,
+    /// How far ambient-occlusion rays look, world units (default: a tenth
+    /// of the data's diagonal).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "D", help_heading = "Surfaces"))]
+    pub ao_distance: Option<f64>,
+    /// Draw the volume and meshes again, mirrored about the plane x, y or z
+    /// = the data's lower face, or AXIS=VALUE (repeat for more axes).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "AXIS[=AT]", help_heading = "Surfaces"))]
+    pub mirror: Vec<String>,
 }
 
 /// An angle in degrees: any finite number.
@@ -473,6 +489,10 @@ impl ViewFlags {
         "linear",
         "no_packets",
         "clip",
+        "mesh",
+        "ao",
+        "ao_distance",
+        "mirror",
     ];
 }
 
@@ -783,6 +803,9 @@ impl SceneFlags {
             r.packets = Some(false);
         }
         set(&mut r.clip, fixed("clip", &self.view.clip)?);
+        set(&mut r.ao, self.view.ao);
+        set(&mut r.ao_distance, self.view.ao_distance);
+        crate::surfaces::apply_flags(&self.view.mesh, &self.view.mirror, d, cwd)?;
         let lighting = self.view.light_pos.is_some()
             || self.view.light_intensity.is_some()
             || self.view.ambient.is_some()

@@ -74,6 +74,7 @@ mod resolve;
 pub mod save;
 mod scene;
 pub mod series;
+mod surfaces;
 mod view;
 mod volume;
 

@@ -305,6 +305,7 @@ pub fn resolve_summary(
             ));
         }
     }
+    crate::surfaces::resolve(desc, base, frame, &volume.bounds, &mut settings, &mut notes)?;
     // The default view frames what the transfer function shows (the whole
     // bounds with iso-surfaces, whose visibility the probe cannot tell).
     let mut framed_box = bounds;
@@ -325,6 +326,11 @@ pub fn resolve_summary(
                 lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
             ));
         }
+    }
+    // Mirror instances belong in the picture.
+    for m in &settings.mirrors {
+        let (p, q) = (m.point(framed_box.min), m.point(framed_box.max));
+        framed_box = framed_box.union(Aabb::new(p.min(q), p.max(q)));
     }
     let camera = camera(
         &desc.camera,

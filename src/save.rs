@@ -46,6 +46,9 @@ pub fn with_absolute_paths(desc: &SceneDesc, base: &Path) -> SceneDesc {
     if let Some(t) = &mut d.tets {
         t.file.iter_mut().for_each(abs);
     }
+    for m in &mut d.meshes {
+        abs(&mut m.file);
+    }
     d.transfer.colormap_file.iter_mut().for_each(abs);
     d
 }

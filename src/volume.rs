@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use voxless_amr::AmrVolume;
 use voxless_core::{Aabb, Camera, Cancelled, Control, Image, Range1, Vec3, Volume};
 use voxless_particles::{MaterialVolume, ParticleVolume};
-use voxless_render::{Film, Job, RenderSettings};
+use voxless_render::{Film, RenderSettings};
 use voxless_tets::TetVolume;
 use voxless_transfer::TransferFunction;
 
@@ -111,21 +111,7 @@ impl AnyVolume {
         control: &Control,
         on_pass: &mut dyn FnMut(&Film) -> bool,
     ) -> Result<Film, Cancelled> {
-        with_volume!(self, v => {
-            let prepared = voxless_render::prepare(v, tf, settings);
-            let job = Job::new(&prepared, camera, tf, settings);
-            let mut film = job.film();
-            let per = job.tiles_per_pass();
-            let total = per * settings.spp as u64;
-            while film.passes() < settings.spp {
-                let s = film.passes();
-                job.pass(&mut film, s, &control.part(s as u64 * per, total))?;
-                if !on_pass(&film) {
-                    break;
-                }
-            }
-            Ok(film)
-        })
+        with_volume!(self, v => voxless_render::render_film(v, camera, tf, settings, control, on_pass))
     }
 
     /// The samples a render with these settings will take (see

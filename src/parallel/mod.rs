@@ -444,6 +444,20 @@ fn refuse_what_boxes_cannot_do(desc: &SceneDesc) -> Result<(), SceneError> {
             ),
         ));
     }
+    if !desc.meshes.is_empty() || !desc.instances.is_empty() || desc.render.ao.is_some() {
+        return Err(SceneError::setting(
+            if !desc.meshes.is_empty() {
+                "meshes (--mesh)"
+            } else if !desc.instances.is_empty() {
+                "instances (--mirror)"
+            } else {
+                "render.ao (--ao)"
+            },
+            format!(
+                "surfaces and mirror instances are not rendered on more than one rank yet:                  {why}; render them with one rank"
+            ),
+        ));
+    }
     if let Some(t) = &desc.tets {
         refuse_what_boxes_cannot_do_for_tets(t)?;
     }

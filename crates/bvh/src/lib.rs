@@ -283,6 +283,72 @@ impl Bvh {
         }
     }
 
+    /// Closest-hit traversal: nodes front to back along `ray` (the nearer
+    /// child first), calling `test(prim, t_max)` for each leaf the ray
+    /// crosses before the current `t_max`; a `Some(t)` answer (a hit at `t`,
+    /// which must be `< t_max`) shrinks `t_max`, so subtrees behind the
+    /// nearest hit so far are never opened. Returns the final `t_max`
+    /// (`t.hi` when nothing was hit).
+    pub fn ray_closest(
+        &self,
+        ray: &Ray,
+        t: Range1,
+        mut test: impl FnMut(u32, f32) -> Option<f32>,
+    ) -> f32 {
+        let mut t_max = t.hi;
+        if self.nodes.is_empty() {
+            return t_max;
+        }
+        let inv = ray.inv_dir();
+        // Stack entries carry the entry distance of their box, so a subtree
+        // queued before a closer hit was found is dropped when popped.
+        let mut stack = [(0u32, 0f32); STACK];
+        let mut sp = 0;
+        let mut i = 0usize;
+        let Some(first) = slab(&self.nodes[0], ray, inv, t.lo, t_max) else {
+            return t_max;
+        };
+        let mut entry = first;
+        loop {
+            if entry < t_max {
+                let node = &self.nodes[i];
+                if node.is_leaf() {
+                    if let Some(h) = test(node.index, t_max) {
+                        t_max = t_max.min(h);
+                    }
+                } else {
+                    let (l, r) = (i + 1, i + node.index as usize);
+                    let tl = slab(&self.nodes[l], ray, inv, t.lo, t_max);
+                    let tr = slab(&self.nodes[r], ray, inv, t.lo, t_max);
+                    match (tl, tr) {
+                        (Some(a), Some(b)) => {
+                            // Descend into the nearer child, keep the other.
+                            let (near, far) = if a <= b { ((l, a), (r, b)) } else { ((r, b), (l, a)) };
+                            stack[sp] = (far.0 as u32, far.1);
+                            sp += 1;
+                            (i, entry) = near;
+                            continue;
+                        }
+                        (Some(a), None) => {
+                            (i, entry) = (l, a);
+                            continue;
+                        }
+                        (None, Some(b)) => {
+                            (i, entry) = (r, b);
+                            continue;
+                        }
+                        (None, None) => {}
+                    }
+                }
+            }
+            if sp == 0 {
+                return t_max;
+            }
+            sp -= 1;
+            (i, entry) = (stack[sp].0 as usize, stack[sp].1);
+        }
+    }
+
     /// Checks the invariants listed in the crate docs against `prims` (the
     /// boxes the tree was built or last refitted with).
     pub fn validate(&self, prims: &[Aabb]) -> Result<(), InvalidBvh> {
@@ -394,3 +460,26 @@ fn split_position(keys: &[(u64, u32)]) -> usize {
 
 #[cfg(test)]
 mod tests;
+
+/// Where `ray` enters `node`'s box within `[t_lo, t_hi]` (slab test with a
+/// precomputed inverse direction); `None` when it misses.
+#[inline(always)]
+fn slab(node: &Node, ray: &Ray, inv: Vec3, t_lo: f32, t_hi: f32) -> Option<f32> {
+    let mut lo = t_lo;
+    let mut hi = t_hi;
+    for a in 0..3 {
+        if ray.dir[a] == 0.0 {
+            // Parallel to the slab: inside it (faces included) or a miss;
+            // no 0·∞ products.
+            if ray.origin[a] < node.min[a] || ray.origin[a] > node.max[a] {
+                return None;
+            }
+            continue;
+        }
+        let t0 = (node.min[a] - ray.origin[a]) * inv[a];
+        let t1 = (node.max[a] - ray.origin[a]) * inv[a];
+        lo = lo.max(t0.min(t1));
+        hi = hi.min(t0.max(t1));
+    }
+    (lo <= hi).then_some(lo)
+}

@@ -152,3 +152,37 @@ fn box_query_equals_brute_force_and_keeps_point_query_order() {
         assert_eq!(filtered, by_point);
     }
 }
+
+#[test]
+fn ray_closest_finds_the_nearest_box_entry() {
+    // The "hit" of a primitive is where the ray enters its box: the closest
+    // traversal must return the smallest such entry, as a scan over all
+    // boxes does, while opening fewer leaves than there are boxes hit.
+    let prims = random_boxes(5000, 11, 0.03);
+    let bvh = Bvh::build(&prims);
+    let mut rng = Lcg(5);
+    let (mut opened, mut crossed) = (0usize, 0usize);
+    for _ in 0..300 {
+        let o = rng.v() * 3.0 - Vec3::ONE;
+        let d = (rng.v() - Vec3::splat(0.5)).normalized();
+        let ray = Ray::new(o, d);
+        let t = Range1::new(0.0, 10.0);
+        let want = prims
+            .iter()
+            .map(|b| b.clip_ray(&ray, t))
+            .filter(|r| !r.is_empty())
+            .map(|r| r.lo)
+            .fold(t.hi, f32::min);
+        crossed += prims
+            .iter()
+            .filter(|b| !b.clip_ray(&ray, t).is_empty())
+            .count();
+        let got = bvh.ray_closest(&ray, t, |i, t_max| {
+            opened += 1;
+            let r = prims[i as usize].clip_ray(&ray, Range1::new(t.lo, t_max));
+            (!r.is_empty() && r.lo < t_max).then_some(r.lo)
+        });
+        assert_eq!(got, want);
+    }
+    assert!(opened < crossed, "opened {opened} of {crossed}");
+}

@@ -2,7 +2,7 @@
 //! every hot loop runs on it; reductions that need more (sums over many particles)
 //! widen locally.
 
-use std::ops::{Add, AddAssign, Div, Index, Mul, Neg, Sub};
+use std::ops::{Add, AddAssign, Div, Index, IndexMut, Mul, Neg, Sub};
 
 /// A 3-vector (point, direction or colour).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -76,6 +76,16 @@ impl Index<usize> for Vec3 {
             0 => &self.x,
             1 => &self.y,
             _ => &self.z,
+        }
+    }
+}
+
+impl IndexMut<usize> for Vec3 {
+    fn index_mut(&mut self, i: usize) -> &mut f32 {
+        match i {
+            0 => &mut self.x,
+            1 => &mut self.y,
+            _ => &mut self.z,
         }
     }
 }

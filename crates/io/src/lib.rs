@@ -96,6 +96,7 @@ pub mod image;
 pub mod lammps;
 pub mod npy;
 pub mod particles_fmt;
+pub mod surface;
 pub mod table;
 pub mod vtk;
 pub mod xyz;
@@ -125,6 +126,7 @@ pub use particles_fmt::{
     particles_frames, particles_frames_from, read_particles_file, read_particles_from,
     read_particles_timestep_from,
 };
+pub use surface::{SurfaceFormat, SurfaceMesh, read_surface, read_surface_bytes};
 pub use table::ParticleTable;
 pub use vtk::{
     VtkMesh, read_vtk_points, read_vtk_points_bytes, read_vtu_mesh, read_vtu_mesh_bytes,

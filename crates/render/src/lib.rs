@@ -26,6 +26,10 @@
 //! progress per finished tile and stops between tiles once its
 //! [`Control`]'s token is cancelled, leaving the film as it was.
 //!
+//! **Surfaces.** Triangle meshes ([`Surfaces`]) are opaque: a ray's
+//! volume ends at its nearest mesh hit, and the volume is composited over
+//! the shaded surface, with optional ambient occlusion (module [`surface`]).
+//!
 //! **Preparation.** Integrators work on the volume [`prepare`]d for the
 //! transfer function and settings (see [`voxless_core::Prepare`]), so the
 //! volume itself stays immutable and can serve several renders at once.
@@ -39,17 +43,22 @@ pub mod bluenoise;
 pub mod colorbar;
 pub mod font;
 mod march;
+pub mod mirror;
 mod packet;
 pub mod sampling;
 pub mod scatter;
+pub mod surface;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 mod tile;
 mod work;
 
+pub use mirror::Mirrored;
 pub use march::{MIN_STEP_ULPS, RayStats, march, min_step_at, own_range, step_in};
 pub use packet::{PACKET, WINDOW_STEPS};
 pub use scatter::{FreeFlight, LightSource, Noise, Scatter};
+pub use surface::AmbientOcclusion;
+pub use voxless_mesh::{Mesh, MeshError, Paint, Surfaces};
 pub use work::{WorkEstimate, estimate_work};
 
 use rayon::prelude::*;
@@ -123,6 +132,14 @@ pub struct RenderSettings {
     /// A render of one box of a domain decomposition: only the samples in
     /// the box are composited (see [`Domain`]).
     pub domain: Option<Domain>,
+    /// Opaque triangle meshes drawn with the volume: each ray's volume
+    /// integral ends at its nearest mesh hit (module [`surface`]).
+    pub surfaces: Option<Surfaces>,
+    /// Ambient occlusion on mesh and iso-surface hits.
+    pub ao: Option<AmbientOcclusion>,
+    /// Mirror instances: the volume and the meshes drawn again, reflected
+    /// about these planes (one per axis; see [`mirror`]).
+    pub mirrors: Vec<voxless_core::Mirror>,
 }
 
 /// One box of a domain decomposition, for a render that composites only
@@ -201,6 +218,9 @@ impl RenderSettings {
             lod_pixels: None,
             simd: Simd::Auto,
             domain: None,
+            surfaces: None,
+            ao: None,
+            mirrors: Vec::new(),
         }
     }
 
@@ -259,11 +279,47 @@ pub fn render<P: Prepare>(
     settings: &RenderSettings,
     control: &Control,
 ) -> Result<Image, Cancelled> {
-    let prepared = prepare(volume, tf, settings);
-    let job = Job::new(&prepared, camera, tf, settings);
-    let mut film = job.film();
-    job.run(&mut film, control)?;
+    let film = render_film(volume, camera, tf, settings, control, &mut |_| true)?;
     Ok(film.resolve())
+}
+
+/// Prepares `volume` (with its mirror instances, when the settings have
+/// mirrors) and renders pass by pass into a film: after each pass
+/// `on_pass(&film)` sees it and returns whether to go on. Returns the film
+/// with the passes done; progress is reported in tiles over all passes.
+pub fn render_film<P: Prepare>(
+    volume: &P,
+    camera: &Camera,
+    tf: &TransferFunction,
+    settings: &RenderSettings,
+    control: &Control,
+    on_pass: &mut dyn FnMut(&Film) -> bool,
+) -> Result<Film, Cancelled> {
+    let prepared = prepare(volume, tf, settings);
+    if settings.mirrors.is_empty() {
+        run_film(&Job::new(&prepared, camera, tf, settings), control, on_pass)
+    } else {
+        let mirrored = Mirrored::new(&prepared, &settings.mirrors);
+        run_film(&Job::new(&mirrored, camera, tf, settings), control, on_pass)
+    }
+}
+
+fn run_film<V: Volume>(
+    job: &Job<V>,
+    control: &Control,
+    on_pass: &mut dyn FnMut(&Film) -> bool,
+) -> Result<Film, Cancelled> {
+    let mut film = job.film();
+    let per = job.tiles_per_pass();
+    let total = per * job.settings.spp as u64;
+    while film.passes() < job.settings.spp {
+        let s = film.passes();
+        job.pass(&mut film, s, &control.part(s as u64 * per, total))?;
+        if !on_pass(&film) {
+            break;
+        }
+    }
+    Ok(film)
 }
 
 /// One render's fixed inputs, over an already prepared volume: renders
@@ -613,5 +669,7 @@ pub fn project_in<V: Volume>(
 mod scatter_tests;
 #[cfg(test)]
 mod seam_tests;
+#[cfg(test)]
+mod surface_tests;
 #[cfg(test)]
 mod tests;

@@ -17,6 +17,7 @@ use voxless_core::{
 use voxless_transfer::TransferFunction;
 
 use crate::sampling::PixelRng;
+use crate::surface::iso_visibility;
 use crate::{Light, RenderSettings};
 
 /// Emission–absorption along one ray; returns premultiplied linear RGBA.
@@ -72,7 +73,7 @@ pub(crate) fn march_intervals<V: Volume>(
     stats: &mut RayStats,
 ) -> [f32; 4] {
     let gradient = ctx.needs_gradient();
-    let mut state = RayState::new(spans.cells, alpha0);
+    let mut state = RayState::new(spans.cells, alpha0, *rng);
     // Only constant pieces and no iso-surfaces (a tessellation's usual
     // ray): each piece (the part owned) composited whole, without cursor or
     // iso bookkeeping — the same arithmetic as `feed`, in a tight loop.
@@ -518,6 +519,8 @@ pub(crate) struct RayState {
     span: Range1,
     /// The end of the last constant interval (or the span's start).
     last_end: f32,
+    /// The pixel sample's random stream (ambient-occlusion rays).
+    rng: PixelRng,
 }
 
 /// Constant pieces and gaps this many ulps of `t` long or shorter are
@@ -527,8 +530,9 @@ const ROUNDING: f32 = 4.0;
 impl RayState {
     /// The state at the start of a ray whose samples are cut to `span`,
     /// with opacity `alpha0` already in front of it (and no colour).
-    pub fn new(span: Range1, alpha0: f32) -> Self {
+    pub fn new(span: Range1, alpha0: f32, rng: PixelRng) -> Self {
         RayState {
+            rng,
             acc: Accumulator {
                 color: Vec3::ZERO,
                 alpha: alpha0,
@@ -603,8 +607,10 @@ impl RayState {
                         volume.sample_with_gradient(ph)
                     };
                     let (hs, g) = hit.unwrap_or((s, gradient));
-                    let c = ctx.colour_of(&hs, settings.normalize(iso)) * iso_shade(ray, g, ctx);
                     self.stats.iso_hits += 1;
+                    let seen = iso_visibility(volume, ph, g, ray, ctx, &self.rng, self.stats.iso_hits as u32);
+                    let c = ctx.colour_of(&hs, settings.normalize(iso))
+                        * (iso_shade(ray, g, ctx) * seen);
                     if self
                         .acc
                         .add(c, settings.iso_opacity, settings.early_termination)
@@ -693,9 +699,11 @@ impl RayState {
         for &iso in &settings.iso {
             if (v0 - iso) * (v1 - iso) < 0.0 || (v1 == iso && v0 != iso) {
                 let g = volume.gradient(ray.at(t));
-                let c = ctx.colour_of(&Sample::scalar(iso), settings.normalize(iso))
-                    * iso_shade(ray, g, ctx);
                 self.stats.iso_hits += 1;
+                let seen =
+                    iso_visibility(volume, ray.at(t), g, ray, ctx, &self.rng, self.stats.iso_hits as u32);
+                let c = ctx.colour_of(&Sample::scalar(iso), settings.normalize(iso))
+                    * (iso_shade(ray, g, ctx) * seen);
                 if self
                     .acc
                     .add(c, settings.iso_opacity, settings.early_termination)

@@ -85,7 +85,7 @@ pub(crate) fn render_tile<V: Volume>(
                         r,
                         cursor: spans.cursor(&input.rngs[r]),
                         next: None,
-                        state: RayState::new(spans.cells, input.alpha0[r]),
+                        state: RayState::new(spans.cells, input.alpha0[r], input.rngs[r]),
                         done: spans.is_empty(),
                     };
                     if !p.done {

@@ -101,14 +101,41 @@ pub(crate) fn path<V: Volume>(
         return [0.0; 4];
     };
     let albedo = ctx.colour_of(&s, settings.normalize(s.value));
-    // The shadow ray, from the scattering point towards the light.
-    let p = ray.at(t);
+    let (_, lit) = light_at(volume, ray.at(t), ctx, sc, (x, y), sample, scratch);
+    let light = sc.ambient + (1.0 - sc.ambient) * sc.intensity * lit;
+    let c = albedo * light;
+    [c.x, c.y, c.z, 1.0]
+}
+
+/// The direction towards the light from `p`, and whether the light reaches
+/// `p` (1) or a mesh or a scattering event in the volume blocks it (0): one
+/// shadow ray, its free flight drawn with the second noise dimension of
+/// sample `sample` of `pixel`.
+pub(crate) fn light_at<V: Volume>(
+    volume: &V,
+    p: Vec3,
+    ctx: &Ctx,
+    sc: &Scatter,
+    (x, y): (u32, u32),
+    sample: u32,
+    scratch: &mut Vec<Interval>,
+) -> (Vec3, f32) {
+    let settings = ctx.settings;
+    let pixel = y as u64 * settings.width as u64 + x as u64;
+    let index = settings.frame as u64 * settings.spp.max(1) as u64 + sample as u64;
+    let srng = PixelRng::new(settings.seed ^ SHADOW_SALT, pixel, sample);
+    let xi = match sc.noise {
+        Noise::Blue => bluenoise::value(x, y, index, 1),
+        Noise::White => PixelRng::new(settings.seed, pixel, sample).uniform(DELTA_DIMS - 2),
+    };
     let (dir, t_max) = match sc.light {
         LightSource::Directional(d) => (d.normalized(), f32::INFINITY),
         LightSource::Point(q) => ((q - p).normalized(), (q - p).length()),
     };
     let shadow = Ray::new(p, dir);
-    let srng = PixelRng::new(settings.seed ^ SHADOW_SALT, pixel, sample);
+    if crate::surface::blocked(settings, &shadow, Range1::new(0.0, t_max)) {
+        return (dir, 0.0);
+    }
     scratch.clear();
     let shadow_span = region(volume, settings).clip_ray(&shadow, Range1::new(0.0, t_max));
     let blocked = !shadow_span.is_empty() && {
@@ -129,13 +156,11 @@ pub(crate) fn path<V: Volume>(
             ctx,
             sc.method,
             &srng,
-            xi(1),
+            xi,
         )
         .is_some()
     };
-    let light = sc.ambient + (1.0 - sc.ambient) * sc.intensity * if blocked { 0.0 } else { 1.0 };
-    let c = albedo * light;
-    [c.x, c.y, c.z, 1.0]
+    (dir, if blocked { 0.0 } else { 1.0 })
 }
 
 /// Extinction at a sample.

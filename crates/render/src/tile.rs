@@ -8,7 +8,8 @@ use voxless_core::{IntervalLists, IntervalQuery, Range1, Ray, TileRays, Volume};
 use crate::march::{Ctx, RaySpans, RayStats, march_intervals, region};
 use crate::packet::{self, PacketScratch};
 use crate::sampling::PixelRng;
-use crate::{Job, Tile, pixel_ray, scatter};
+use crate::{Job, Tile, pixel_ray, scatter, surface};
+use voxless_mesh::Hit;
 
 /// Buffers reused across the tiles a thread renders.
 #[derive(Default)]
@@ -21,6 +22,7 @@ struct Scratch {
     lists: IntervalLists,
     shadow: Vec<voxless_core::Interval>,
     packet: PacketScratch,
+    hits: Vec<Option<Hit>>,
 }
 
 thread_local! {
@@ -56,8 +58,11 @@ fn render_with<V: Volume>(
 ) -> Vec<[f32; 4]> {
     let (volume, settings, tf) = (job.volume, job.settings, job.tf);
     let region = region(volume, settings);
-    // 1. The tile's rays, the part of each inside the (clipped) volume, and
-    // where its samples lie.
+    let ctx = Ctx::new(tf, settings, volume.classified());
+    // 1. The tile's rays, their nearest mesh hits, the part of each inside
+    // the (clipped) volume and in front of its hit, and where its samples
+    // lie.
+    s.hits.clear();
     s.rays.clear();
     s.rngs.clear();
     s.spans.clear();
@@ -66,19 +71,23 @@ fn render_with<V: Volume>(
     for y in tile.y..tile.y + tile.h {
         for x in tile.x..tile.x + tile.w {
             let (rng, ray) = pixel_ray(job.camera, settings, x, y, sample);
-            let mut spans = RaySpans::new(&region, settings, &ray, f32::INFINITY);
+            let mut hit = surface::nearest(&ctx, &ray);
+            let t_max = hit.map_or(f32::INFINITY, |h| h.t);
+            let mut spans = RaySpans::new(&region, settings, &ray, t_max);
             let a0 = match alpha0 {
                 Some(a) => a[s.rays.len()],
                 None => 0.0,
             };
             if !a0.is_finite() {
                 spans.span = Range1::EMPTY;
+                hit = None;
             }
             s.spans.push(spans.span);
             s.ray_spans.push(spans);
             s.alpha0.push(a0.max(0.0));
             s.rays.push(ray);
             s.rngs.push(rng);
+            s.hits.push(hit);
         }
     }
     // 2. Their visible intervals: the whole tile at once where the volume
@@ -115,7 +124,6 @@ fn render_with<V: Volume>(
         }
     }
     // 3. Integrate.
-    let ctx = Ctx::new(tf, settings, volume.classified());
     let n = s.rays.len();
     let mut out = Vec::with_capacity(n);
     if let Some(sc) = &settings.scatter {
@@ -161,6 +169,26 @@ fn render_with<V: Volume>(
                 &ctx,
                 stats,
             ));
+        }
+    }
+    // 4. The volume in front of each mesh hit over the shaded surface (not
+    // in a box of a decomposition, which composites only its own samples).
+    if settings.surfaces.is_some() && settings.domain.is_none() {
+        for r in 0..n {
+            if let Some(hit) = &s.hits[r] {
+                let pixel = (tile.x + r as u32 % tile.w, tile.y + r as u32 / tile.w);
+                let back = surface::shade_hit(
+                    volume,
+                    hit,
+                    &s.rays[r],
+                    &ctx,
+                    &s.rngs[r],
+                    pixel,
+                    sample,
+                    &mut s.shadow,
+                );
+                out[r] = surface::over(out[r], back);
+            }
         }
     }
     out

@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::enums::{
-    ClassificationName, FreeFlightName, KernelName, NoiseName, ProjectionName, ReconstructionName,
+    AxisName, ClassificationName, FreeFlightName, KernelName, NoiseName, ProjectionName, ReconstructionName,
     Species, TetModeName,
 };
 
@@ -24,6 +24,41 @@ pub struct SceneDesc {
     #[serde(default)]
     pub render: RenderDesc,
     pub light: Option<LightDesc>,
+    /// Opaque triangle meshes drawn with the volume (`[[meshes]]`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub meshes: Vec<MeshDesc>,
+    /// Instances (`[[instances]]`): the volume and its meshes drawn again,
+    /// mirrored about a plane, without copying data.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub instances: Vec<InstanceDesc>,
+}
+
+/// A triangle mesh: `.ply`, `.obj`, `.stl` or `.vtp` (polygons), in the
+/// data's coordinates. Paths are relative to the scene file.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MeshDesc {
+    pub file: String,
+    /// sRGB colour in [0, 1] (default light grey 0.8 0.8 0.8).
+    pub color: Option<[f32; 3]>,
+    /// Colour by this per-vertex field (PLY vertex property, VTP point
+    /// data) through `colormap` instead.
+    pub field: Option<String>,
+    /// Colormap of `field` (default viridis).
+    pub colormap: Option<String>,
+    /// Range of `field` mapped to the colormap (default: the field's).
+    pub range: Option<[f32; 2]>,
+}
+
+/// One mirror instance: everything reflected about the plane
+/// `axis = at` (default: the data's lower face along `axis`). The data's
+/// own side of the plane is drawn as it is; the other side shows its
+/// mirror image.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InstanceDesc {
+    pub mirror: AxisName,
+    pub at: Option<f64>,
 }
 
 /// A particle data source. Paths are relative to the scene file.
@@ -244,6 +279,11 @@ pub struct RenderDesc {
     /// Particles: march rays in packets that share one BVH traversal per
     /// pass (default true); false samples point by point. Same image.
     pub packets: Option<bool>,
+    /// Ambient occlusion: this many rays per mesh or iso-surface hit.
+    pub ao: Option<u32>,
+    /// How far ambient-occlusion rays look (default a tenth of the data's
+    /// diagonal).
+    pub ao_distance: Option<f64>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]

@@ -163,3 +163,12 @@ impl std::fmt::Display for Species {
         f.write_str(&self.0)
     }
 }
+
+choice! {
+    /// A coordinate axis.
+    pub enum AxisName {
+        X = "x",
+        Y = "y",
+        Z = "z",
+    }
+}

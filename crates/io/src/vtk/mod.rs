@@ -40,7 +40,10 @@
 //! file and call them.
 
 mod data;
+mod polys;
 mod xml;
+
+pub use polys::read_vtp_surface_bytes;
 
 use std::path::Path;
 

@@ -109,6 +109,10 @@ pub(super) struct Piece {
     pub points_array: Option<ArraySpec>,
     /// The arrays of `<Cells>` (connectivity, offsets, types).
     pub cell_arrays: Vec<ArraySpec>,
+    /// `NumberOfPolys` of a PolyData piece.
+    pub polys: usize,
+    /// The arrays of a PolyData `<Polys>` (connectivity, offsets).
+    pub poly_arrays: Vec<ArraySpec>,
 }
 
 /// Encoding of the `AppendedData` section.
@@ -152,6 +156,7 @@ enum Dest {
     CellData,
     Points,
     Cells,
+    Polys,
     FieldData,
     Ignored,
 }
@@ -280,6 +285,7 @@ fn open(
             doc.pieces.push(Piece {
                 points: count_attr(attrs, "NumberOfPoints", "Piece")?,
                 cells: count_attr(attrs, "NumberOfCells", "Piece")?,
+                polys: count_attr(attrs, "NumberOfPolys", "Piece")?,
                 ..Piece::default()
             });
         }
@@ -290,6 +296,7 @@ fn open(
                 "CellData" if in_piece => Dest::CellData,
                 "Points" if in_piece => Dest::Points,
                 "Cells" if in_piece => Dest::Cells,
+                "Polys" if in_piece => Dest::Polys,
                 "FieldData" if stack.len() == 3 => Dest::FieldData,
                 _ => Dest::Ignored,
             };
@@ -404,6 +411,7 @@ fn close(
         (Dest::CellData, Some(p)) => p.cell_data.push(spec),
         (Dest::Points, Some(p)) if p.points_array.is_none() => p.points_array = Some(spec),
         (Dest::Cells, Some(p)) => p.cell_arrays.push(spec),
+        (Dest::Polys, Some(p)) => p.poly_arrays.push(spec),
         _ => {}
     }
 }

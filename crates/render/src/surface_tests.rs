@@ -1,0 +1,181 @@
+//! Meshes beside a volume and ambient occlusion, against brute force.
+
+use super::*;
+use voxless_core::{Aabb, Interval, IntervalQuery, Ray, Sample};
+use voxless_transfer::{Colormap, OpacityMap};
+
+use crate::march::Ctx;
+use crate::surface::occlusion;
+
+voxless_core::prepare_as_self!(Blob);
+
+/// A smooth Gaussian blob in [−1, 1]³, value in [0, 1].
+struct Blob;
+
+impl Volume for Blob {
+    fn bounds(&self) -> Aabb {
+        Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0))
+    }
+    fn value_range(&self) -> Range1 {
+        Range1::new(0.0, 1.0)
+    }
+    fn sample(&self, p: Vec3) -> Option<Sample> {
+        let q = p - Vec3::new(0.2, -0.1, 0.0);
+        self.bounds()
+            .contains(p)
+            .then(|| Sample::scalar((-q.length_squared() / 0.35).exp()))
+    }
+    fn intervals(&self, ray: &Ray, t: Range1, _: &IntervalQuery, out: &mut Vec<Interval>) {
+        let c = self.bounds().clip_ray(ray, t);
+        if !c.is_empty() {
+            out.push(Interval::sampled(c, Range1::new(0.0, 1.0), 0.02));
+        }
+    }
+}
+
+fn tf() -> TransferFunction {
+    TransferFunction::new(
+        Colormap::preset("viridis").unwrap(),
+        OpacityMap::preset("linear").unwrap(),
+    )
+}
+
+/// A square of side `2·half` centred at `c`, spanned by `u` and `v`.
+fn square(c: Vec3, u: Vec3, v: Vec3, half: f32) -> Mesh {
+    let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+    Mesh {
+        positions: corners
+            .iter()
+            .map(|&(a, b)| (c + u * (a * half) + v * (b * half)).to_array())
+            .collect(),
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+        fields: Vec::new(),
+    }
+}
+
+fn surfaces(meshes: &[Mesh]) -> Surfaces {
+    let paint = Paint::Solid([0.9, 0.5, 0.2]);
+    let list: Vec<(&Mesh, &Paint)> = meshes.iter().map(|m| (m, &paint)).collect();
+    Surfaces::new(&list, None).unwrap()
+}
+
+#[test]
+fn a_mesh_leaves_exactly_the_volume_in_front_of_it() {
+    let camera = Camera::framing(&Blob.bounds(), 1.0);
+    // A plane through the blob, facing the camera: behind it the volume
+    // must not show, in front of it all of it.
+    let centre = Vec3::new(0.0, 0.0, 0.0) + camera.forward * 0.15;
+    let plane = square(centre, camera.right, camera.up, 3.0);
+    let tf = tf();
+    let size = 48;
+    let mut s = RenderSettings::for_volume(&Blob, size, size);
+    s.opacity_scale = 3.0;
+    s.step = Some(0.002);
+    s.early_termination = 1.0;
+    s.surfaces = Some(surfaces(&[plane]));
+    let image = render(&Blob, &camera, &tf, &s, &Control::new()).unwrap();
+    let colour = Vec3::new(0.9, 0.5, 0.2);
+    let mut worst = 0.0f32;
+    for y in 0..size {
+        for x in 0..size {
+            let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5, size, size);
+            // The plane along this ray, then a fine Riemann sum of the
+            // emission–absorption integral up to it.
+            let t_hit = (centre - ray.origin).dot(camera.forward) / ray.dir.dot(camera.forward);
+            let span = Blob.bounds().clip_ray(&ray, Range1::new(0.0, t_hit));
+            let (mut c, mut trans) = (Vec3::ZERO, 1.0f32);
+            if !span.is_empty() {
+                let n = 20_000;
+                let dt = span.span() / n as f32;
+                for i in 0..n {
+                    let t = span.lo + (i as f32 + 0.5) * dt;
+                    let v = Blob.sample(ray.at(t)).map_or(0.0, |s| s.value);
+                    let a = 1.0 - (-tf.opacity(v) * s.opacity_scale * dt).exp();
+                    c += tf.color(v) * (trans * a);
+                    trans *= 1.0 - a;
+                }
+            }
+            // The surface behind: headlight, ambient 0.2.
+            let shade = 0.2 + 0.8 * camera.forward.dot(ray.dir).abs();
+            let want = c + colour * (shade * trans);
+            let got = image.pixels[(y * size + x) as usize];
+            for k in 0..3 {
+                worst = worst.max((got[k] - want[k]).abs());
+            }
+            assert!((got[3] - 1.0).abs() < 1e-6);
+        }
+    }
+    assert!(worst < 2e-3, "largest difference {worst}");
+}
+
+fn ctx_settings(surfaces: Surfaces) -> RenderSettings {
+    let mut s = RenderSettings::for_volume(&Blob, 8, 8);
+    s.surfaces = Some(surfaces);
+    s.ao = Some(AmbientOcclusion {
+        rays: 64,
+        distance: 10.0,
+    });
+    s
+}
+
+#[test]
+fn occlusion_of_an_open_plane_is_0_and_inside_a_closed_box_is_1() {
+    let tf = tf();
+    let floor = square(Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0), 5.0);
+    let s = ctx_settings(surfaces(&[floor]));
+    let ctx = Ctx::new(&tf, &s, false);
+    let rng = |p: u64| sampling::PixelRng::new(1, p, 0);
+    for p in 0..50 {
+        let at = Vec3::new(p as f32 * 0.05 - 1.0, 0.3, 0.0);
+        assert_eq!(occlusion(&Blob, at, Vec3::new(0.0, 0.0, 1.0), &ctx, &rng(p), 0), 0.0);
+    }
+    // The six faces of [−1, 1]³.
+    let e = [Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 0.0, 1.0)];
+    let faces: Vec<Mesh> = (0..3)
+        .flat_map(|a| {
+            [-1.0f32, 1.0].map(|side| square(e[a] * side, e[(a + 1) % 3], e[(a + 2) % 3], 1.0))
+        })
+        .collect();
+    let s = ctx_settings(surfaces(&faces));
+    let ctx = Ctx::new(&tf, &s, false);
+    for p in 0..50 {
+        let at = Vec3::new(0.3, -0.2, p as f32 * 0.03 - 0.75);
+        let n = Vec3::new(0.3, 0.5, p as f32 - 25.0).normalized();
+        assert_eq!(occlusion(&Blob, at, n, &ctx, &rng(p), 0), 1.0);
+    }
+}
+
+#[test]
+fn ambient_occlusion_only_darkens_and_is_deterministic() {
+    let camera = Camera::framing(&Blob.bounds(), 1.0);
+    let tf = tf();
+    let floor = square(
+        Vec3::ZERO + camera.forward * 0.5,
+        camera.right,
+        camera.up,
+        3.0,
+    );
+    let mut s = RenderSettings::for_volume(&Blob, 40, 40);
+    s.volume = false;
+    s.iso = vec![0.5];
+    s.surfaces = Some(surfaces(&[floor]));
+    let plain = render(&Blob, &camera, &tf, &s, &Control::new()).unwrap();
+    s.ao = Some(AmbientOcclusion {
+        rays: 4,
+        distance: 1.0,
+    });
+    let a = render(&Blob, &camera, &tf, &s, &Control::new()).unwrap();
+    let b = render(&Blob, &camera, &tf, &s, &Control::new()).unwrap();
+    assert_eq!(a.pixels, b.pixels);
+    let mut darker = 0;
+    for (p, q) in plain.pixels.iter().zip(&a.pixels) {
+        for k in 0..3 {
+            assert!(q[k] <= p[k] + 1e-6);
+        }
+        if q[0] < p[0] - 1e-3 {
+            darker += 1;
+        }
+    }
+    // The floor around the blob's iso-surface is occluded by it.
+    assert!(darker > 20, "{darker} pixels darker");
+}
