@@ -167,7 +167,7 @@ fn load_mesh(m: &MeshDesc, base: &Path, frame: &WorldFrame) -> Result<(Mesh, Pai
     let positions = table
         .positions
         .iter()
-        .map(|p| frame.to_local(p.map(|c| c as f64)).to_array())
+        .map(|p| frame.to_local(*p).to_array())
         .collect();
     let mesh = Mesh {
         positions,

@@ -1,3 +1,4 @@
 mod camera;
 mod scene;
 mod viewer;
+mod surfaces;

@@ -16,7 +16,9 @@ use crate::IoError;
 /// A triangle mesh as read from a file.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SurfaceMesh {
-    pub positions: Vec<[f32; 3]>,
+    /// Vertex positions in float64, so that a mesh far from the origin
+    /// keeps its digits until the library moves it into the data's frame.
+    pub positions: Vec<[f64; 3]>,
     pub triangles: Vec<[u32; 3]>,
     /// Per-vertex scalar fields, by name.
     pub fields: Vec<(String, Vec<f32>)>,
@@ -201,7 +203,7 @@ fn read_ply(bytes: &[u8]) -> Result<SurfaceMesh, String> {
     };
     mesh.positions = vertices
         .iter()
-        .map(|v| [v.0[x] as f32, v.0[y] as f32, v.0[z] as f32])
+        .map(|v| [v.0[x], v.0[y], v.0[z]])
         .collect();
     for (i, n) in names.iter().enumerate() {
         if i != x && i != y && i != z {
@@ -246,7 +248,7 @@ fn read_obj(bytes: &[u8]) -> Result<SurfaceMesh, String> {
             m.mesh
                 .positions
                 .chunks_exact(3)
-                .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32]),
+                .map(|c| [c[0], c[1], c[2]]),
         );
         mesh.triangles.extend(
             m.mesh
@@ -261,7 +263,7 @@ fn read_obj(bytes: &[u8]) -> Result<SurfaceMesh, String> {
 fn read_stl(bytes: &[u8]) -> Result<SurfaceMesh, String> {
     let m = stl_io::read_stl(&mut Cursor::new(bytes)).map_err(|e| format!("STL: {e}"))?;
     Ok(SurfaceMesh {
-        positions: m.vertices.iter().map(|v| v.0).collect(),
+        positions: m.vertices.iter().map(|v| v.0.map(f64::from)).collect(),
         triangles: m
             .faces
             .iter()

@@ -24,7 +24,7 @@ fn area(m: &SurfaceMesh) -> f64 {
     m.triangles
         .iter()
         .map(|t| {
-            let [a, b, c] = t.map(|v| m.positions[v as usize].map(|x| x as f64));
+            let [a, b, c] = t.map(|v| m.positions[v as usize]);
             let (u, v) = (
                 [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
                 [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
