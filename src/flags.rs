@@ -340,18 +340,30 @@ pub struct ViewFlags {
     /// An opaque triangle mesh drawn with the volume: .ply, .obj, .stl or
     /// .vtp, in the data's coordinates (repeat for more; colours and
     /// fields in a scene file's [[meshes]]).
-    #[cfg_attr(feature = "clap", arg(long, value_name = "FILE", help_heading = "Surfaces"))]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "FILE", help_heading = "Surfaces")
+    )]
     pub mesh: Vec<PathBuf>,
     /// Ambient occlusion on mesh and iso-surface hits: N rays per hit.
-    #[cfg_attr(feature = "clap", arg(long, value_name = "N", help_heading = "Surfaces"))]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "N", help_heading = "Surfaces")
+    )]
     pub ao: Option<u32>,
     /// How far ambient-occlusion rays look, world units (default: a tenth
     /// of the data's diagonal).
-    #[cfg_attr(feature = "clap", arg(long, value_name = "D", help_heading = "Surfaces"))]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "D", help_heading = "Surfaces")
+    )]
     pub ao_distance: Option<f64>,
     /// Draw the volume and meshes again, mirrored about the plane x, y or z
     /// = the data's lower face, or AXIS=VALUE (repeat for more axes).
-    #[cfg_attr(feature = "clap", arg(long, value_name = "AXIS[=AT]", help_heading = "Surfaces"))]
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "AXIS[=AT]", help_heading = "Surfaces")
+    )]
     pub mirror: Vec<String>,
 }
 

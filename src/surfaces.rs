@@ -76,18 +76,11 @@ pub(crate) fn resolve(
 ) -> Result<(), SceneError> {
     settings.mirrors = mirrors(&desc.instances, frame, bounds)?;
     if !desc.meshes.is_empty() {
-        let mut loaded = Vec::with_capacity(desc.meshes.len());
-        for m in &desc.meshes {
-            loaded.push(load_mesh(m, base, frame)?);
-        }
-        let list: Vec<(&Mesh, &Paint)> = loaded.iter().map(|(m, p)| (m, p)).collect();
-        let surfaces = Surfaces::new(&list, None).map_err(|e| {
-            SceneError::setting("meshes", format!("cannot be drawn together: {e}"))
-        })?;
+        let surfaces = cached_surfaces(&desc.meshes, base, frame)?;
         notes.push(format!(
             "{} mesh{} with {} triangles drawn with the volume",
-            loaded.len(),
-            if loaded.len() == 1 { "" } else { "es" },
+            desc.meshes.len(),
+            if desc.meshes.len() == 1 { "" } else { "es" },
             surfaces.triangle_count()
         ));
         settings.surfaces = Some(surfaces);
@@ -128,6 +121,57 @@ pub(crate) fn resolve(
     Ok(())
 }
 
+/// What the last built surfaces were made from: the mesh entries, where
+/// their paths start, the frame, and each file's modification time.
+type SurfaceKey = (
+    Vec<MeshDesc>,
+    std::path::PathBuf,
+    [f64; 4],
+    Vec<Option<std::time::SystemTime>>,
+);
+
+/// The scene's meshes merged into [`Surfaces`], reused while nothing they
+/// were built from changed: a viewer resolves the scene on every camera
+/// move, and a million-triangle mesh takes a second to read and index.
+fn cached_surfaces(
+    meshes: &[MeshDesc],
+    base: &Path,
+    frame: &WorldFrame,
+) -> Result<Surfaces, SceneError> {
+    static LAST: std::sync::Mutex<Option<(SurfaceKey, Surfaces)>> = std::sync::Mutex::new(None);
+    let o = frame.origin;
+    let key: SurfaceKey = (
+        meshes.to_vec(),
+        base.to_path_buf(),
+        [o[0], o[1], o[2], frame.scale],
+        meshes
+            .iter()
+            .map(|m| {
+                std::fs::metadata(base.join(&m.file))
+                    .and_then(|md| md.modified())
+                    .ok()
+            })
+            .collect(),
+    );
+    if let Ok(last) = LAST.lock()
+        && let Some((k, s)) = last.as_ref()
+        && *k == key
+    {
+        return Ok(s.clone());
+    }
+    let mut loaded = Vec::with_capacity(meshes.len());
+    for m in meshes {
+        loaded.push(load_mesh(m, base, frame)?);
+    }
+    let list: Vec<(&Mesh, &Paint)> = loaded.iter().map(|(m, p)| (m, p)).collect();
+    let surfaces = Surfaces::new(&list)
+        .map_err(|e| SceneError::setting("meshes", format!("cannot be drawn together: {e}")))?;
+    if let Ok(mut last) = LAST.lock() {
+        *last = Some((key, surfaces.clone()));
+    }
+    Ok(surfaces)
+}
+
 /// The mirror planes in local coordinates: one per axis at most.
 fn mirrors(
     instances: &[InstanceDesc],
@@ -144,7 +188,10 @@ fn mirrors(
         if out.iter().any(|m| m.axis == axis) {
             return Err(SceneError::setting(
                 "instances (--mirror)",
-                format!("two mirrors about the {} axis; give each axis once", i.mirror.name()),
+                format!(
+                    "two mirrors about the {} axis; give each axis once",
+                    i.mirror.name()
+                ),
             ));
         }
         let plane = match i.at {
@@ -217,7 +264,11 @@ fn load_mesh(m: &MeshDesc, base: &Path, frame: &WorldFrame) -> Result<(Mesh, Pai
                 values
                     .iter()
                     .map(|&v| {
-                        let x = if v.is_finite() { ((v - lo) / span).clamp(0.0, 1.0) } else { 0.0 };
+                        let x = if v.is_finite() {
+                            ((v - lo) / span).clamp(0.0, 1.0)
+                        } else {
+                            0.0
+                        };
                         cmap.linear(x).to_array()
                     })
                     .collect(),

@@ -47,12 +47,28 @@ fn render(s: &Scratch, tag: &str, scale: f64, shift: f64, extra: &[&str]) -> Vec
     let pos = s.str(&format!("p{tag}.npy"));
     let mesh = s.str(&format!("m{tag}.ply"));
     let mut args = vec![
-        "render", "--particles", &pos, "--radius", &radius, "--size", "64", "48", "--mesh", &mesh,
-        "--orbit", "30", "--elevation", "25", "-o", &out,
+        "render",
+        "--particles",
+        &pos,
+        "--radius",
+        &radius,
+        "--size",
+        "64",
+        "48",
+        "--mesh",
+        &mesh,
+        "--orbit",
+        "30",
+        "--elevation",
+        "25",
+        "-o",
+        &out,
     ];
     args.extend_from_slice(extra);
     ok(&args);
-    voxless_io::read_png_rgb8(std::path::Path::new(&out)).unwrap().2
+    voxless_io::read_png_rgb8(std::path::Path::new(&out))
+        .unwrap()
+        .2
 }
 
 fn max_diff(a: &[u8], b: &[u8]) -> u8 {
@@ -67,19 +83,39 @@ fn meshes_ao_and_mirrors_change_the_image_in_any_units() {
         write_f64(&s.path("plain.npy"), &blob(1.0, 0.0));
         let out = s.str("plain.png");
         ok(&[
-            "render", "--particles", &pos, "--radius", "0.1", "--size", "64", "48", "--orbit",
-            "30", "--elevation", "25", "-o", &out,
+            "render",
+            "--particles",
+            &pos,
+            "--radius",
+            "0.1",
+            "--size",
+            "64",
+            "48",
+            "--orbit",
+            "30",
+            "--elevation",
+            "25",
+            "-o",
+            &out,
         ]);
-        voxless_io::read_png_rgb8(std::path::Path::new(&out)).unwrap().2
+        voxless_io::read_png_rgb8(std::path::Path::new(&out))
+            .unwrap()
+            .2
     };
     let mesh = render(&s, "a", 1.0, 0.0, &[]);
-    assert!(max_diff(&plain, &mesh) > 20, "--mesh does not change the image");
+    assert!(
+        max_diff(&plain, &mesh) > 20,
+        "--mesh does not change the image"
+    );
     let ao = render(&s, "b", 1.0, 0.0, &["--ao", "4"]);
     assert!(max_diff(&mesh, &ao) > 5, "--ao does not change the image");
     // Occlusion only darkens.
     assert!(mesh.iter().zip(&ao).all(|(m, a)| a <= m));
     let mirrored = render(&s, "c", 1.0, 0.0, &["--mirror", "x"]);
-    assert!(max_diff(&mesh, &mirrored) > 20, "--mirror does not change the image");
+    assert!(
+        max_diff(&mesh, &mirrored) > 20,
+        "--mirror does not change the image"
+    );
     // The same scene in other units and far from the origin.
     for (tag, scale, shift) in [("d", 1e6, 0.0), ("e", 1.0, 1e7), ("f", 1e-6, 0.0)] {
         let far = render(&s, tag, scale, shift, &["--ao", "4"]);
@@ -93,7 +129,16 @@ fn bad_surface_settings_are_named() {
     let pos = s.str("p.npy");
     write_positions(&s.path("p.npy"), 200, 1);
     let out = s.str("o.png");
-    let base = ["render", "--particles", &pos, "--size", "16", "16", "-o", &out];
+    let base = [
+        "render",
+        "--particles",
+        &pos,
+        "--size",
+        "16",
+        "16",
+        "-o",
+        &out,
+    ];
     let with = |extra: &[&str]| {
         let mut a = base.to_vec();
         a.extend_from_slice(extra);

@@ -1,4 +1,4 @@
 mod camera;
 mod scene;
-mod viewer;
 mod surfaces;
+mod viewer;

@@ -15,7 +15,10 @@ fn cloud(mirrored: bool, desc: &ParticlesDesc) -> AnyVolume {
         .map(|_| Vec3::new(0.3 + 0.7 * rng.f(), rng.f() * 0.6, rng.f() * 0.5))
         .collect();
     if mirrored {
-        let copies: Vec<Vec3> = positions.iter().map(|p| Vec3::new(-p.x, p.y, p.z)).collect();
+        let copies: Vec<Vec3> = positions
+            .iter()
+            .map(|p| Vec3::new(-p.x, p.y, p.z))
+            .collect();
         positions.extend(copies);
     }
     let attribute = Some(positions.iter().map(|p| p.y).collect());
@@ -67,7 +70,10 @@ fn a_mirrored_render_equals_the_render_of_mirrored_data() {
             .zip(&b.pixels)
             .flat_map(|(x, y)| (0..4).map(move |k| (x[k] - y[k]).abs()))
             .fold(0.0f32, f32::max);
-        assert!(worst <= 1.0 / 255.0, "packets {packets}: largest difference {worst}");
+        assert!(
+            worst <= 1.0 / 255.0,
+            "packets {packets}: largest difference {worst}"
+        );
         // The mirror image is there: the left half is not empty.
         let left: f32 = a
             .pixels
@@ -95,12 +101,18 @@ fn scene_meshes_are_loaded_and_bad_ones_named() {
         ..Default::default()
     }];
     let scene = Scene::with_volume(v, &d, &dir).unwrap();
-    assert_eq!(scene.settings.surfaces.as_ref().unwrap().triangle_count(), 1);
+    assert_eq!(
+        scene.settings.surfaces.as_ref().unwrap().triangle_count(),
+        1
+    );
     // A field the mesh does not have names the file and the fields it has.
     d.meshes[0].field = Some("q".into());
     let v = cloud(false, &ParticlesDesc::default());
     let e = Scene::with_volume(v, &d, &dir).err().unwrap().to_string();
-    assert!(e.contains("tri.ply") && e.contains("'q'") && e.contains("p"), "{e}");
+    assert!(
+        e.contains("tri.ply") && e.contains("'q'") && e.contains("p"),
+        "{e}"
+    );
     // Ambient occlusion with nothing to shade is refused by name.
     let mut d = desc(true);
     d.render.ao = Some(2);

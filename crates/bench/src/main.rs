@@ -3,7 +3,7 @@
 //! integrator `voxless render` uses), not through copies of it.
 //!
 //! ```sh
-//! cargo run --release -p voxless-bench -- bvh|frame|packets|amr|tets|parallel|serve [flags]
+//! cargo run --release -p voxless-bench -- bvh|frame|packets|amr|tets|parallel|serve|surfaces [flags]
 //! ```
 //!
 //! Every benchmark reports a ratio against a baseline measured in the same
@@ -28,6 +28,8 @@
 //!   and the inputs of the per-rank memory measurements ([`parallel`]).
 //! - `serve`: `voxless serve` as a client sees it — camera move to the
 //!   first coarse image and to the converged image ([`serve`]).
+//! - `surfaces`: the dam break with a 10⁶-triangle mesh and with ambient
+//!   occlusion, against the volume alone ([`surfaces`]).
 //!
 //! Variants the library does not offer (an AMR volume that hands out every
 //! interval, a tessellation with every block in every tile) are small
@@ -41,6 +43,7 @@ mod frame;
 mod packets;
 mod parallel;
 mod serve;
+mod surfaces;
 mod tets;
 
 use anyhow::Result;
@@ -81,6 +84,9 @@ enum Which {
     /// and → converged 1024² image, on the dam break and the 64³
     /// tessellation.
     Serve(serve::ServeArgs),
+    /// Frame time of the dam break with a 10⁶-triangle mesh and with 2
+    /// ambient-occlusion rays, against the volume alone.
+    Surfaces(surfaces::SurfacesArgs),
 }
 
 fn main() {
@@ -116,5 +122,6 @@ fn run(which: Which) -> Result<()> {
         Which::Tets(o) => tets::run(o),
         Which::Parallel(o) => parallel::run(o),
         Which::Serve(o) => serve::run(o),
+        Which::Surfaces(o) => surfaces::run(o),
     }
 }

@@ -323,7 +323,11 @@ impl Bvh {
                     match (tl, tr) {
                         (Some(a), Some(b)) => {
                             // Descend into the nearer child, keep the other.
-                            let (near, far) = if a <= b { ((l, a), (r, b)) } else { ((r, b), (l, a)) };
+                            let (near, far) = if a <= b {
+                                ((l, a), (r, b))
+                            } else {
+                                ((r, b), (l, a))
+                            };
                             stack[sp] = (far.0 as u32, far.1);
                             sp += 1;
                             (i, entry) = near;

@@ -85,7 +85,11 @@ fn check(mesh: &SurfaceMesh) -> Result<(), String> {
             ));
         }
     }
-    if let Some(i) = mesh.positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+    if let Some(i) = mesh
+        .positions
+        .iter()
+        .position(|p| !p.iter().all(|c| c.is_finite()))
+    {
         return Err(format!("vertex {i} has a non-finite coordinate"));
     }
     Ok(())
@@ -201,10 +205,7 @@ fn read_ply(bytes: &[u8]) -> Result<SurfaceMesh, String> {
     let (Some(x), Some(y), Some(z)) = (col("x"), col("y"), col("z")) else {
         return Err("PLY vertex element has no x, y and z properties".into());
     };
-    mesh.positions = vertices
-        .iter()
-        .map(|v| [v.0[x], v.0[y], v.0[z]])
-        .collect();
+    mesh.positions = vertices.iter().map(|v| [v.0[x], v.0[y], v.0[z]]).collect();
     for (i, n) in names.iter().enumerate() {
         if i != x && i != y && i != z {
             mesh.fields
@@ -234,7 +235,6 @@ fn read_obj(bytes: &[u8]) -> Result<SurfaceMesh, String> {
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     // Materials are not used: a missing .mtl is no error.
     let (models, _) = tobj::load_obj_buf(&mut BufReader::new(Cursor::new(bytes)), &opts, |_| {
@@ -244,12 +244,8 @@ fn read_obj(bytes: &[u8]) -> Result<SurfaceMesh, String> {
     let mut mesh = SurfaceMesh::default();
     for m in &models {
         let base = mesh.positions.len() as u32;
-        mesh.positions.extend(
-            m.mesh
-                .positions
-                .chunks_exact(3)
-                .map(|c| [c[0], c[1], c[2]]),
-        );
+        mesh.positions
+            .extend(m.mesh.positions.chunks_exact(3).map(|c| [c[0], c[1], c[2]]));
         mesh.triangles.extend(
             m.mesh
                 .indices

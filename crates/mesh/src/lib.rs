@@ -9,16 +9,16 @@
 //! - [`Surfaces`] is what a render uses: every mesh of a scene merged, with
 //!   a colour per vertex ([`Paint`]), smooth normals per triangle corner
 //!   (area weighted over the faces around the vertex, creases sharper than
-//!   40° kept, so a box stays flat-shaded), a BVH over the
-//!   triangles' boxes, and an optional [`Mirror`] instance. It is an `Arc`
-//!   handle: cloning is free, equality is identity.
+//!   40° kept, so a box stays flat-shaded) and a BVH over the
+//!   triangles' boxes. It is an `Arc` handle: cloning is free, equality is
+//!   identity.
 //! - Rays ask for the [`Surfaces::nearest`] hit (closest-hit BVH traversal,
 //!   front to back, pruning behind the nearest hit so far) or whether
 //!   anything is hit at all ([`Surfaces::occluded`], for shadow and
 //!   ambient-occlusion rays). Triangles are tested watertight
 //!   ([`triangle`]): no ray slips between two triangles that share an edge.
-//! - A mirror instance is traced by reflecting the ray, not the triangles:
-//!   the nearest of the two hits wins, its normal reflected back.
+//! - Instances (mirror images) are the caller's: it reflects the ray, asks,
+//!   and reflects the hit's normal back (see `voxless-render`).
 //!
 //! Invariants: every triangle's indices are in range and every vertex is
 //! finite (checked when building); hit normals are unit length and face the
@@ -31,7 +31,7 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use voxless_bvh::Bvh;
-use voxless_core::{Aabb, Mirror, Range1, Ray, Vec3};
+use voxless_core::{Aabb, Range1, Ray, Vec3};
 
 use triangle::{RayFrame, intersect};
 
@@ -75,7 +75,11 @@ impl Mesh {
             return Err(MeshError::Empty);
         }
         let n = self.positions.len();
-        if let Some(i) = self.positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        if let Some(i) = self
+            .positions
+            .iter()
+            .position(|p| !p.iter().all(|c| c.is_finite()))
+        {
             return Err(MeshError::NonFinite(i));
         }
         for (t, tri) in self.triangles.iter().enumerate() {
@@ -104,7 +108,11 @@ impl Mesh {
         self.fields
             .iter()
             .find(|(n, _)| n == name)
-            .or_else(|| self.fields.iter().find(|(n, _)| n.eq_ignore_ascii_case(name)))
+            .or_else(|| {
+                self.fields
+                    .iter()
+                    .find(|(n, _)| n.eq_ignore_ascii_case(name))
+            })
             .map(|(_, f)| f.as_slice())
     }
 
@@ -147,7 +155,6 @@ struct Geometry {
     colors: Vec<Vec3>,
     triangles: Vec<[u32; 3]>,
     bvh: Bvh,
-    mirror: Option<Mirror>,
 }
 
 /// Every mesh of a scene, ready for rays (see the crate docs).
@@ -162,26 +169,20 @@ impl PartialEq for Surfaces {
 
 impl std::fmt::Debug for Surfaces {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "Surfaces({} triangles{})",
-            self.triangle_count(),
-            if self.0.mirror.is_some() { ", mirrored" } else { "" }
-        )
+        write!(f, "Surfaces({} triangles)", self.triangle_count())
     }
 }
 
 impl Surfaces {
     /// Merges `meshes` (each validated; a per-vertex paint must have one
     /// colour per vertex), computes vertex normals and builds the BVH.
-    pub fn new(meshes: &[(&Mesh, &Paint)], mirror: Option<Mirror>) -> Result<Surfaces, MeshError> {
+    pub fn new(meshes: &[(&Mesh, &Paint)]) -> Result<Surfaces, MeshError> {
         let mut g = Geometry {
             positions: Vec::new(),
             normals: Vec::new(),
             colors: Vec::new(),
             triangles: Vec::new(),
             bvh: Bvh::default(),
-            mirror,
         };
         for (mesh, paint) in meshes {
             mesh.validate()?;
@@ -192,9 +193,10 @@ impl Surfaces {
             g.positions
                 .extend(mesh.positions.iter().map(|p| Vec3::from_array(*p)));
             match paint {
-                Paint::Solid(c) => g
-                    .colors
-                    .extend(std::iter::repeat_n(Vec3::from_array(*c), mesh.positions.len())),
+                Paint::Solid(c) => g.colors.extend(std::iter::repeat_n(
+                    Vec3::from_array(*c),
+                    mesh.positions.len(),
+                )),
                 Paint::PerVertex(cs) => {
                     if cs.len() != mesh.positions.len() {
                         return Err(MeshError::FieldLength {
@@ -206,11 +208,8 @@ impl Surfaces {
                     g.colors.extend(cs.iter().map(|c| Vec3::from_array(*c)));
                 }
             }
-            g.triangles.extend(
-                mesh.triangles
-                    .iter()
-                    .map(|t| t.map(|v| v + base as u32)),
-            );
+            g.triangles
+                .extend(mesh.triangles.iter().map(|t| t.map(|v| v + base as u32)));
         }
         g.normals = corner_normals(&g.positions, &g.triangles);
         let boxes: Vec<Aabb> = g
@@ -232,20 +231,9 @@ impl Surfaces {
         self.0.triangles.len()
     }
 
-    pub fn mirror(&self) -> Option<Mirror> {
-        self.0.mirror
-    }
-
-    /// The box around every triangle and its mirror image.
+    /// The box around every triangle.
     pub fn bounds(&self) -> Aabb {
-        let b = self.0.bvh.bounds();
-        match self.0.mirror {
-            Some(m) if !b.is_empty() => {
-                let (p, q) = (m.point(b.min), m.point(b.max));
-                b.union(Aabb::new(p.min(q), p.max(q)))
-            }
-            _ => b,
-        }
+        self.0.bvh.bounds()
     }
 
     /// Bytes held (geometry and BVH).
@@ -257,29 +245,8 @@ impl Surfaces {
             + g.bvh.memory_bytes()
     }
 
-    /// The nearest hit strictly inside `t`, on the meshes or their mirror
-    /// image.
+    /// The nearest hit strictly inside `t`.
     pub fn nearest(&self, ray: &Ray, t: Range1) -> Option<Hit> {
-        let mut best = self.nearest_one(ray, t);
-        if let Some(m) = self.0.mirror {
-            let t2 = Range1::new(t.lo, best.map_or(t.hi, |h| h.t));
-            if let Some(h) = self.nearest_one(&m.ray(ray), t2) {
-                best = Some(Hit {
-                    normal: m.vector(h.normal),
-                    ..h
-                });
-            }
-        }
-        best
-    }
-
-    /// Whether anything is hit strictly inside `t` (shadow and occlusion
-    /// rays): stops at the first triangle found.
-    pub fn occluded(&self, ray: &Ray, t: Range1) -> bool {
-        self.any_one(ray, t) || self.0.mirror.is_some_and(|m| self.any_one(&m.ray(ray), t))
-    }
-
-    fn nearest_one(&self, ray: &Ray, t: Range1) -> Option<Hit> {
         let g = &self.0;
         let frame = RayFrame::new(ray);
         let mut best: Option<(u32, triangle::TriangleHit)> = None;
@@ -293,7 +260,11 @@ impl Surfaces {
         let tri = g.triangles[i as usize];
         let [a, b, c] = tri.map(|v| g.positions[v as usize]);
         let geometric = (b - a).cross(c - a).normalized();
-        let facing = if geometric.dot(ray.dir) > 0.0 { -1.0 } else { 1.0 };
+        let facing = if geometric.dot(ray.dir) > 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
         let ng = geometric * facing;
         let w = h.weights;
         let mix = |v: &[Vec3]| {
@@ -318,7 +289,9 @@ impl Surfaces {
         })
     }
 
-    fn any_one(&self, ray: &Ray, t: Range1) -> bool {
+    /// Whether anything is hit strictly inside `t` (shadow and occlusion
+    /// rays): stops at the first triangle found.
+    pub fn occluded(&self, ray: &Ray, t: Range1) -> bool {
         let g = &self.0;
         let frame = RayFrame::new(ray);
         let mut hit = false;
@@ -332,8 +305,8 @@ impl Surfaces {
         hit
     }
 
-    /// Every hit along `ray` inside `t`, nearest first, on the meshes only
-    /// (not the mirror image): what tests count crossings with.
+    /// Every hit along `ray` inside `t`, nearest first: what tests count
+    /// crossings with.
     pub fn all_hits(&self, ray: &Ray, t: Range1) -> Vec<f32> {
         let g = &self.0;
         let frame = RayFrame::new(ray);

@@ -42,7 +42,7 @@ fn lattice_cube(n: u32) -> Mesh {
 }
 
 fn surfaces(m: &Mesh) -> Surfaces {
-    Surfaces::new(&[(m, &Paint::Solid([1.0; 3]))], None).unwrap()
+    Surfaces::new(&[(m, &Paint::Solid([1.0; 3]))]).unwrap()
 }
 
 /// Möller–Trumbore in f64: the reference distance.
@@ -51,7 +51,11 @@ fn reference_t(ray: &Ray, a: Vec3, b: Vec3, c: Vec3) -> Option<f64> {
     let (o, d, a, b, c) = (f(ray.origin), f(ray.dir), f(a), f(b), f(c));
     let sub = |p: [f64; 3], q: [f64; 3]| [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
     let cross = |p: [f64; 3], q: [f64; 3]| {
-        [p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0]]
+        [
+            p[1] * q[2] - p[2] * q[1],
+            p[2] * q[0] - p[0] * q[2],
+            p[0] * q[1] - p[1] * q[0],
+        ]
     };
     let dot = |p: [f64; 3], q: [f64; 3]| p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
     let (e1, e2) = (sub(b, a), sub(c, a));
@@ -74,7 +78,8 @@ fn nearest_hit_equals_brute_force_over_all_triangles() {
     for i in 0..3000u32 {
         let c = rng.v();
         for _ in 0..3 {
-            m.positions.push((c + (rng.v() - Vec3::splat(0.5)) * 0.08).to_array());
+            m.positions
+                .push((c + (rng.v() - Vec3::splat(0.5)) * 0.08).to_array());
         }
         m.triangles.push([3 * i, 3 * i + 1, 3 * i + 2]);
     }
@@ -94,7 +99,10 @@ fn nearest_hit_equals_brute_force_over_all_triangles() {
             if let Some(h) = intersect(&frame, a, b, c, t)
                 && want.is_none_or(|w| h.t < w.0)
             {
-                want = Some((h.t, reference_t(&ray, a, b, c).expect("reference misses a hit")));
+                want = Some((
+                    h.t,
+                    reference_t(&ray, a, b, c).expect("reference misses a hit"),
+                ));
             }
         }
         let got = s.nearest(&ray, t);
@@ -145,7 +153,11 @@ fn rays_through_edges_and_vertices_cross_a_closed_mesh_exactly_twice() {
         }
     }
     // Oblique rays with exact (dyadic) directions through lattice points.
-    let dirs = [Vec3::new(1.0, 0.5, 0.25), Vec3::new(-0.5, 1.0, 0.5), Vec3::new(0.25, -0.25, 1.0)];
+    let dirs = [
+        Vec3::new(1.0, 0.5, 0.25),
+        Vec3::new(-0.5, 1.0, 0.5),
+        Vec3::new(0.25, -0.25, 1.0),
+    ];
     for d in dirs {
         for i in 1..2 * n {
             for j in 1..2 * n {
@@ -178,49 +190,13 @@ fn occlusion_inside_a_closed_box_and_over_an_open_plane() {
 }
 
 #[test]
-fn a_mirror_instance_is_the_mirrored_mesh() {
-    let mut m = lattice_cube(1);
-    for p in &mut m.positions {
-        p[0] += 0.5; // the cube [0.5, 1.5] × [0, 1]²
-    }
-    let mirror = Mirror {
-        axis: 0,
-        plane: 0.0,
-    };
-    let inst = Surfaces::new(&[(&m, &Paint::Solid([1.0; 3]))], Some(mirror)).unwrap();
-    let mut both = m.clone();
-    let k = m.positions.len() as u32;
-    both.positions
-        .extend(m.positions.iter().map(|p| [-p[0], p[1], p[2]]));
-    both.triangles
-        .extend(m.triangles.iter().map(|t| [t[0] + k, t[2] + k, t[1] + k]));
-    let explicit = surfaces(&both);
-    assert_eq!(inst.bounds(), explicit.bounds());
-    let mut rng = SmallRng(9);
-    let t = Range1::new(0.0, 100.0);
-    let mut hits = 0;
-    for _ in 0..2000 {
-        let o = (rng.v() - Vec3::splat(0.5)) * 8.0;
-        let target = Vec3::new(rng.f() * 3.0 - 1.5, rng.f(), rng.f());
-        let d = (target - o).normalized();
-        let ray = Ray::new(o, d);
-        let (a, b) = (inst.nearest(&ray, t), explicit.nearest(&ray, t));
-        assert_eq!(a.is_some(), b.is_some());
-        if let (Some(a), Some(b)) = (a, b) {
-            hits += 1;
-            assert!((a.t - b.t).abs() <= 1e-5 * b.t.max(1.0), "{a:?} vs {b:?}");
-            assert!((a.normal - b.normal).length() < 1e-4, "{a:?} vs {b:?}");
-        }
-        assert_eq!(inst.occluded(&ray, t), explicit.occluded(&ray, t));
-    }
-    assert!(hits > 100);
-}
-
-#[test]
 fn bad_meshes_are_named() {
     let mut m = lattice_cube(1);
     m.triangles.push([0, 1, 99]);
-    assert!(matches!(m.validate(), Err(MeshError::Index { vertex: 99, .. })));
+    assert!(matches!(
+        m.validate(),
+        Err(MeshError::Index { vertex: 99, .. })
+    ));
     let mut m = lattice_cube(1);
     m.positions[3][1] = f32::NAN;
     assert_eq!(m.validate(), Err(MeshError::NonFinite(3)));

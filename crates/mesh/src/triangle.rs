@@ -50,7 +50,11 @@ impl RayFrame {
         }
         let (dx, dy, dz) = (d[kx] as f64, d[ky] as f64, d[kz] as f64);
         RayFrame {
-            origin: [ray.origin.x as f64, ray.origin.y as f64, ray.origin.z as f64],
+            origin: [
+                ray.origin.x as f64,
+                ray.origin.y as f64,
+                ray.origin.z as f64,
+            ],
             kx,
             ky,
             kz,

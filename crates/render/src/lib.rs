@@ -53,8 +53,8 @@ pub mod testing;
 mod tile;
 mod work;
 
-pub use mirror::Mirrored;
 pub use march::{MIN_STEP_ULPS, RayStats, march, min_step_at, own_range, step_in};
+pub use mirror::Mirrored;
 pub use packet::{PACKET, WINDOW_STEPS};
 pub use scatter::{FreeFlight, LightSource, Noise, Scatter};
 pub use surface::AmbientOcclusion;

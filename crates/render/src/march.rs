@@ -608,7 +608,15 @@ impl RayState {
                     };
                     let (hs, g) = hit.unwrap_or((s, gradient));
                     self.stats.iso_hits += 1;
-                    let seen = iso_visibility(volume, ph, g, ray, ctx, &self.rng, self.stats.iso_hits as u32);
+                    let seen = iso_visibility(
+                        volume,
+                        ph,
+                        g,
+                        ray,
+                        ctx,
+                        &self.rng,
+                        self.stats.iso_hits as u32,
+                    );
                     let c = ctx.colour_of(&hs, settings.normalize(iso))
                         * (iso_shade(ray, g, ctx) * seen);
                     if self
@@ -700,8 +708,15 @@ impl RayState {
             if (v0 - iso) * (v1 - iso) < 0.0 || (v1 == iso && v0 != iso) {
                 let g = volume.gradient(ray.at(t));
                 self.stats.iso_hits += 1;
-                let seen =
-                    iso_visibility(volume, ray.at(t), g, ray, ctx, &self.rng, self.stats.iso_hits as u32);
+                let seen = iso_visibility(
+                    volume,
+                    ray.at(t),
+                    g,
+                    ray,
+                    ctx,
+                    &self.rng,
+                    self.stats.iso_hits as u32,
+                );
                 let c = ctx.colour_of(&Sample::scalar(iso), settings.normalize(iso))
                     * (iso_shade(ray, g, ctx) * seen);
                 if self

@@ -141,7 +141,8 @@ impl<V: Volume> Volume for Mirrored<'_, V> {
             .map(|(s, g)| (s, self.vector(f, g)))
     }
     fn sample_in(&self, p: Vec3, interval: &Interval) -> Option<Sample> {
-        self.inner.sample_in(self.point(self.fold_of(p), p), interval)
+        self.inner
+            .sample_in(self.point(self.fold_of(p), p), interval)
     }
     fn sample_with_gradient_in(&self, p: Vec3, interval: &Interval) -> Option<(Sample, Vec3)> {
         let f = self.fold_of(p);

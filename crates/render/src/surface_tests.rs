@@ -5,7 +5,7 @@ use voxless_core::{Aabb, Interval, IntervalQuery, Ray, Sample};
 use voxless_transfer::{Colormap, OpacityMap};
 
 use crate::march::Ctx;
-use crate::surface::occlusion;
+use crate::surface::{self, occlusion};
 
 voxless_core::prepare_as_self!(Blob);
 
@@ -56,7 +56,7 @@ fn square(c: Vec3, u: Vec3, v: Vec3, half: f32) -> Mesh {
 fn surfaces(meshes: &[Mesh]) -> Surfaces {
     let paint = Paint::Solid([0.9, 0.5, 0.2]);
     let list: Vec<(&Mesh, &Paint)> = meshes.iter().map(|m| (m, &paint)).collect();
-    Surfaces::new(&list, None).unwrap()
+    Surfaces::new(&list).unwrap()
 }
 
 #[test]
@@ -121,16 +121,28 @@ fn ctx_settings(surfaces: Surfaces) -> RenderSettings {
 #[test]
 fn occlusion_of_an_open_plane_is_0_and_inside_a_closed_box_is_1() {
     let tf = tf();
-    let floor = square(Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0), 5.0);
+    let floor = square(
+        Vec3::ZERO,
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        5.0,
+    );
     let s = ctx_settings(surfaces(&[floor]));
     let ctx = Ctx::new(&tf, &s, false);
     let rng = |p: u64| sampling::PixelRng::new(1, p, 0);
     for p in 0..50 {
         let at = Vec3::new(p as f32 * 0.05 - 1.0, 0.3, 0.0);
-        assert_eq!(occlusion(&Blob, at, Vec3::new(0.0, 0.0, 1.0), &ctx, &rng(p), 0), 0.0);
+        assert_eq!(
+            occlusion(&Blob, at, Vec3::new(0.0, 0.0, 1.0), &ctx, &rng(p), 0),
+            0.0
+        );
     }
     // The six faces of [−1, 1]³.
-    let e = [Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 0.0, 1.0)];
+    let e = [
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(0.0, 0.0, 1.0),
+    ];
     let faces: Vec<Mesh> = (0..3)
         .flat_map(|a| {
             [-1.0f32, 1.0].map(|side| square(e[a] * side, e[(a + 1) % 3], e[(a + 2) % 3], 1.0))
@@ -178,4 +190,59 @@ fn ambient_occlusion_only_darkens_and_is_deterministic() {
     }
     // The floor around the blob's iso-surface is occluded by it.
     assert!(darker > 20, "{darker} pixels darker");
+}
+
+#[test]
+fn a_mirror_instance_of_a_mesh_is_the_mirrored_mesh() {
+    // A box [0.5, 1.5]×[0, 1]×[0, 1] of 12 triangles, and its reflection
+    // about x = 0 written out (winding flipped).
+    let e = [
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(0.0, 0.0, 1.0),
+    ];
+    let c = Vec3::new(1.0, 0.5, 0.5);
+    let faces: Vec<Mesh> = (0..3)
+        .flat_map(|a| {
+            [-0.5f32, 0.5].map(|side| square(c + e[a] * side, e[(a + 1) % 3], e[(a + 2) % 3], 0.5))
+        })
+        .collect();
+    let flipped: Vec<Mesh> = faces
+        .iter()
+        .map(|m| Mesh {
+            positions: m.positions.iter().map(|p| [-p[0], p[1], p[2]]).collect(),
+            triangles: m.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect(),
+            fields: Vec::new(),
+        })
+        .collect();
+    let tf = tf();
+    let mut inst = RenderSettings::for_volume(&Blob, 8, 8);
+    inst.surfaces = Some(surfaces(&faces));
+    inst.mirrors = vec![voxless_core::Mirror {
+        axis: 0,
+        plane: 0.0,
+    }];
+    let mut explicit = RenderSettings::for_volume(&Blob, 8, 8);
+    explicit.surfaces = Some(surfaces(&[faces, flipped].concat()));
+    let (a, b) = (Ctx::new(&tf, &inst, false), Ctx::new(&tf, &explicit, false));
+    let mut rng = voxless_core::SmallRng(9);
+    let mut hits = 0;
+    for _ in 0..2000 {
+        let o = (rng.v() - Vec3::splat(0.5)) * 8.0;
+        let target = Vec3::new(rng.f() * 3.0 - 1.5, rng.f(), rng.f());
+        let ray = Ray::new(o, (target - o).normalized());
+        let (p, q) = (surface::nearest(&a, &ray), surface::nearest(&b, &ray));
+        assert_eq!(p.is_some(), q.is_some());
+        if let (Some(p), Some(q)) = (p, q) {
+            hits += 1;
+            assert!((p.t - q.t).abs() <= 1e-5 * q.t.max(1.0), "{p:?} vs {q:?}");
+            assert!((p.normal - q.normal).length() < 1e-4, "{p:?} vs {q:?}");
+        }
+        let t = Range1::new(0.0, 100.0);
+        assert_eq!(
+            surface::blocked(&inst, &ray, t),
+            surface::blocked(&explicit, &ray, t)
+        );
+    }
+    assert!(hits > 500, "{hits} hits");
 }

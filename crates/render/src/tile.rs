@@ -174,7 +174,7 @@ fn render_with<V: Volume>(
     // 4. The volume in front of each mesh hit over the shaded surface (not
     // in a box of a decomposition, which composites only its own samples).
     if settings.surfaces.is_some() && settings.domain.is_none() {
-        for r in 0..n {
+        for (r, px) in out.iter_mut().enumerate() {
             if let Some(hit) = &s.hits[r] {
                 let pixel = (tile.x + r as u32 % tile.w, tile.y + r as u32 / tile.w);
                 let back = surface::shade_hit(
@@ -187,7 +187,7 @@ fn render_with<V: Volume>(
                     sample,
                     &mut s.shadow,
                 );
-                out[r] = surface::over(out[r], back);
+                *px = surface::over(*px, back);
             }
         }
     }

@@ -5,8 +5,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::enums::{
-    AxisName, ClassificationName, FreeFlightName, KernelName, NoiseName, ProjectionName, ReconstructionName,
-    Species, TetModeName,
+    AxisName, ClassificationName, FreeFlightName, KernelName, NoiseName, ProjectionName,
+    ReconstructionName, Species, TetModeName,
 };
 
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]

@@ -156,7 +156,10 @@ fn vtp_polys() {
 fn bad_files_name_the_problem() {
     let bad = ascii_ply().replace("4 4 5 6 7\n", "4 4 5 6 70\n");
     let e = read_surface_bytes(bad.as_bytes(), Path::new("cube.ply")).unwrap_err();
-    assert!(e.to_string().contains("cube.ply") && e.to_string().contains("70"), "{e}");
+    assert!(
+        e.to_string().contains("cube.ply") && e.to_string().contains("70"),
+        "{e}"
+    );
     let e = read_surface_bytes(b"ply\nformat ascii 1.0\n", Path::new("x.ply")).unwrap_err();
     assert!(e.to_string().starts_with("x.ply"), "{e}");
     let e = read_surface_bytes(b"v 0 0 0\n", Path::new("x.obj")).unwrap_err();

@@ -30,7 +30,8 @@ pub fn read_vtp_surface_bytes(bytes: &[u8], name: &Path) -> Result<SurfaceMesh, 
     let mut point_arrays = Arrays::default();
     for (p, piece) in doc.pieces.iter().enumerate() {
         let base = mesh.positions.len();
-        mesh.positions.extend(read_points(&src, p, piece).map_err(err)?);
+        mesh.positions
+            .extend(read_points(&src, p, piece).map_err(err)?);
         if mesh.positions.len() > u32::MAX as usize {
             return Err(err(format!(
                 "{} points do not fit 32-bit indices",
