@@ -186,7 +186,7 @@ fn particle_volume(
         None => arrays.clone(),
     };
     let scale = arrays.frame.scale;
-    load::particles::build_particles(arrays.into_data(), desc, false, notes, scale)
+    load::particles::build_particles(arrays.into_data(), desc, None, notes, scale)
         .map_err(|e| e.blame(PathBuf::from("positions"), &array_files()))
 }
 

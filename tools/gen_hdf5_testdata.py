@@ -287,12 +287,16 @@ def write_swift(expected):
         h.attrs["Code"] = np.bytes_("SWIFT")
         units = f.create_group("Units")
         units.attrs["Unit length in cgs (U_L)"] = np.array([3.08567758e24])
+        scheme = f.create_group("HydroScheme")
+        scheme.attrs["Kernel function"] = np.bytes_("Quintic spline (M6)")
+        scheme.attrs["Kernel target N_ngb"] = np.array([57.0])
         for gname, datasets in (("PartType0", gas), ("PartType1", dm)):
             g = f.create_group(gname)
             for name, data in datasets.items():
                 g.create_dataset(name, data=data)
     expected["swift"] = {
         "file": "swift_snapshot.hdf5",
+        "kernel": "Quintic spline (M6)",
         "time": 0.75,
         "domain": [[0.0, 0.0, 0.0], [float(v) for v in box]],
         "part_types": ["PartType0", "PartType1"],

@@ -13,6 +13,7 @@ pub(crate) mod materials;
 pub(crate) mod particles;
 pub(crate) mod scale;
 pub(crate) mod spacing;
+mod sph;
 pub(crate) mod table;
 pub(crate) mod tets;
 

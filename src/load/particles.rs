@@ -86,7 +86,8 @@ pub(crate) struct FrameData {
     pub data: ParticleData,
     pub main_file: PathBuf,
     pub files: Vec<(&'static str, PathBuf)>,
-    pub sph_defaults: bool,
+    /// The kernel of the SPH defaults (SPH data and no kernel given).
+    pub sph_defaults: Option<Kernel>,
     pub notes: Vec<String>,
     /// When only a share of the rows was read (see [`read_frame_share`]):
     /// the first row and the file's particle count.
@@ -97,11 +98,8 @@ impl FrameData {
     /// The kernel these particles get: the description's, or the cubic
     /// spline of the SPH defaults.
     pub fn kernel(&self, p: &ParticlesDesc) -> Kernel {
-        if self.sph_defaults {
-            Kernel::CubicSpline
-        } else {
-            kernel_of(p, p.kernel.unwrap_or(KernelName::Gaussian3))
-        }
+        self.sph_defaults
+            .unwrap_or_else(|| kernel_of(p, p.kernel.unwrap_or(KernelName::Gaussian3)))
     }
 
     /// The world box the particles' supports reach (positions grown by the
@@ -218,7 +216,7 @@ pub(crate) fn read_frame_share(
     let mut rows = None;
     let mut files: Vec<(&'static str, PathBuf)> = Vec::new();
     let mut notes = Vec::new();
-    let mut sph_defaults = false;
+    let mut sph_defaults = None;
     let world_positions: Vec<[f64; 3]>;
     let (data, main_file) = match (&p.file, p.demo.unwrap_or(false)) {
         (Some(f), _) => {
@@ -238,18 +236,25 @@ pub(crate) fn read_frame_share(
             world_positions = positions;
             let mut data = ParticleData::default();
             let (mut radii, mut weights) = (p.radii.clone(), p.weights.clone());
+            let mut h_scale = None;
             if let Some((h, m)) = sph_columns(p, &source) {
-                sph_defaults = true;
+                let (kernel, factor, said) = super::sph::convention(&source.table);
+                sph_defaults = Some(kernel);
                 let mut used = Vec::new();
                 if radii.is_none() && p.radius.is_none() {
-                    used.push(format!("radii = {h}"));
+                    used.push(if factor == 1.0 {
+                        format!("radii = {h}")
+                    } else {
+                        format!("radii = {factor:.6} × {h}")
+                    });
                     radii = Some(h);
+                    h_scale = Some(factor);
                 }
                 if weights.is_none() {
                     used.push(format!("weights = {m}"));
                     weights = Some(m);
                 }
-                used.insert(0, "cubic-spline kernel".into());
+                used.insert(0, said);
                 notes.push(format!(
                     "SPH data and no kernel given: {} (override with --kernel, --radii, --weights)",
                     used.join(", ")
@@ -274,6 +279,12 @@ pub(crate) fn read_frame_share(
             };
             data.attribute = per(&p.attribute, "attribute")?;
             data.radii = per(&radii, "radii")?;
+            // The file's smoothing lengths in voxless's h (same support).
+            if let (Some(f), Some(r)) = (h_scale, data.radii.as_mut())
+                && f != 1.0
+            {
+                r.iter_mut().for_each(|v| *v *= f);
+            }
             data.weights = per(&weights, "weights")?;
             (data, path)
         }
@@ -387,7 +398,7 @@ impl From<SceneError> for BuildError {
 pub(crate) fn build_particles(
     mut data: ParticleData,
     p: &ParticlesDesc,
-    sph_defaults: bool,
+    sph_defaults: Option<Kernel>,
     notes: &mut Vec<String>,
     scale: f64,
 ) -> Result<ParticleVolume, BuildError> {
@@ -411,15 +422,12 @@ pub(crate) fn build_particles(
 pub(crate) fn prepare_arrays(
     data: &mut ParticleData,
     p: &ParticlesDesc,
-    sph_defaults: bool,
+    sph_defaults: Option<Kernel>,
     scale: f64,
 ) -> Result<Kernel, SceneError> {
     super::scale::scale_arrays(data, p)?;
-    let kernel = if sph_defaults {
-        Kernel::CubicSpline
-    } else {
-        kernel_of(p, p.kernel.unwrap_or(KernelName::Gaussian3))
-    };
+    let kernel =
+        sph_defaults.unwrap_or_else(|| kernel_of(p, p.kernel.unwrap_or(KernelName::Gaussian3)));
     localise(data, kernel, scale);
     Ok(kernel)
 }

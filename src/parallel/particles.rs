@@ -52,7 +52,7 @@ struct Rows {
     total: usize,
     main_file: PathBuf,
     files: Vec<(&'static str, PathBuf)>,
-    sph_defaults: bool,
+    sph_defaults: Option<voxless_particles::Kernel>,
     notes: Vec<String>,
 }
 
@@ -575,7 +575,7 @@ fn npy_rows(
         total,
         main_file: path,
         files,
-        sph_defaults: false,
+        sph_defaults: None,
         notes: Vec::new(),
     }))
 }

@@ -39,7 +39,7 @@ pub struct SurfacesArgs {
 }
 
 pub fn run(o: SurfacesArgs) -> Result<()> {
-    if o.repeats == 0 || o.size.iter().any(|&s| s == 0) {
+    if o.repeats == 0 || o.size.contains(&0) {
         bail!("--repeats and --size must be > 0");
     }
     let d = o.dam_break.to_string_lossy().into_owned();

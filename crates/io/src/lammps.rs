@@ -582,6 +582,7 @@ fn read_atoms(
         time: header.timestep.map(|t| t as f64),
         domain: header.sim_box.map(|b| (b.lo, b.hi)),
         rows: None,
+        sph: None,
     };
     table.derive_speed("vx", "vy", "vz");
     Ok(table)

@@ -127,7 +127,7 @@ pub use particles_fmt::{
     read_particles_timestep_from,
 };
 pub use surface::{SurfaceFormat, SurfaceMesh, read_surface, read_surface_bytes};
-pub use table::ParticleTable;
+pub use table::{ParticleTable, SphCode, SphConvention};
 pub use vtk::{
     VtkMesh, read_vtk_points, read_vtk_points_bytes, read_vtu_mesh, read_vtu_mesh_bytes,
 };

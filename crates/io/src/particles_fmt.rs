@@ -224,5 +224,6 @@ pub fn read_particles_timestep_from<R: Read + Seek>(
         time: None,
         domain: None,
         rows: None,
+        sph: None,
     })
 }

@@ -24,6 +24,28 @@ pub struct ParticleTable {
     /// When only part of the file's particles was read (one rank's share of
     /// a parallel run): the first row read and the file's particle count.
     pub rows: Option<(usize, usize)>,
+    /// Which SPH code wrote the file and the kernel it records, when the
+    /// format says (SWIFT and Gadget-4 snapshots): how its smoothing
+    /// lengths relate to a kernel's support.
+    pub sph: Option<SphConvention>,
+}
+
+/// The SPH code behind a snapshot's smoothing lengths.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SphCode {
+    /// `SmoothingLengths` = h_S with support `γ h_S` (γ per kernel).
+    Swift,
+    /// `SmoothingLengths` = the support radius H.
+    Gadget,
+}
+
+/// What a snapshot says about its kernel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SphConvention {
+    pub code: SphCode,
+    /// The kernel's name as the file writes it (SWIFT's `HydroScheme`
+    /// attribute `Kernel function`, e.g. "Quintic spline (M6)").
+    pub kernel: Option<String>,
 }
 
 impl ParticleTable {

@@ -570,6 +570,7 @@ fn read_atoms(
         time: layout.time,
         domain: layout.domain(),
         rows: None,
+        sph: None,
     };
     if let Some([x, y, z]) = &layout.velocity {
         table.derive_speed(x, y, z);

@@ -213,6 +213,14 @@ fn swift_tiny_snapshot() {
     );
     let dm = read_gadget(&path, 1).unwrap();
     assert!(dm.column("Masses").unwrap().iter().all(|&m| m == 0.25));
+    // The kernel SWIFT records, for the smoothing-length convention.
+    assert_eq!(
+        gas.sph,
+        Some(voxless_io::SphConvention {
+            code: voxless_io::SphCode::Swift,
+            kernel: Some(exp["kernel"].as_str().unwrap().to_string()),
+        })
+    );
 
     let text = message_naming(read_gadget(&path, 4).unwrap_err(), &path);
     assert!(
@@ -229,6 +237,8 @@ fn gadget4_tiny_snapshot_with_scalar_header() {
     check_table(&table, &exp["PartType1"], "PartType1");
     assert_eq!(table.time, Some(0.5));
     assert_eq!(table.domain, Some(([0.0; 3], [10.0; 3])));
+    // No HydroScheme and no SWIFT code: Gadget's support-radius convention.
+    assert_eq!(table.sph.map(|s| s.code), Some(voxless_io::SphCode::Gadget));
     let text = message_naming(read_gadget(&path, 0).unwrap_err(), &path);
     assert!(text.contains("present: PartType1"), "{text}");
 }

@@ -5,7 +5,7 @@
 
 use voxless_core::Vec3;
 use voxless_parallel::{Comm, CommExt, Reader, Writer};
-use voxless_particles::{Kernel, median, probe_stride};
+use voxless_particles::{median, probe_stride};
 use voxless_scene::{KernelName, ParticlesDesc};
 
 use super::Rows;
@@ -52,11 +52,9 @@ pub(super) fn world_reach(
     }
     // The largest radius as f32 folds it (NaN passed over), then widened.
     let max_radius = most(6) as f32 as f64;
-    let kernel = if rows.sph_defaults {
-        Kernel::CubicSpline
-    } else {
-        kernel_of(p, p.kernel.unwrap_or(KernelName::Gaussian3))
-    };
+    let kernel = rows
+        .sph_defaults
+        .unwrap_or_else(|| kernel_of(p, p.kernel.unwrap_or(KernelName::Gaussian3)));
     let factor = kernel.support_factor() as f64;
     let radius = match (p.radius, &rows.data.radii) {
         (Some(r), _) => r as f64,

@@ -12,7 +12,7 @@
 use std::path::Path;
 
 use super::{Hdf5File, is_numeric, name_list, numbered, shape_text};
-use crate::{IoError, ParticleTable};
+use crate::{IoError, ParticleTable, SphCode, SphConvention};
 
 /// Reads particle type `part_type` (the group `PartType<part_type>`) of a
 /// SWIFT or Gadget-4 snapshot.
@@ -146,6 +146,37 @@ pub fn read_gadget_share(
             table.domain = Some(([0.0; 3], upper));
         }
     }
+    table.sph = Some(convention(&f, root, header.as_ref())?);
     table.derive_speed("vx", "vy", "vz");
     Ok(table)
+}
+
+/// SWIFT (a `HydroScheme` group, or `Header` `Code` naming it; the kernel
+/// from `HydroScheme` `Kernel function`) or else Gadget.
+fn convention(
+    f: &Hdf5File,
+    root: &hdf5_metno::Group,
+    header: Option<&hdf5_metno::Group>,
+) -> Result<SphConvention, IoError> {
+    let scheme = f.child_group(root, "HydroScheme");
+    let code_says_swift = match header {
+        Some(h) => f
+            .attr_text(h, "group Header", "Code")?
+            .is_some_and(|c| c.to_ascii_uppercase().contains("SWIFT")),
+        None => false,
+    };
+    if scheme.is_none() && !code_says_swift {
+        return Ok(SphConvention {
+            code: SphCode::Gadget,
+            kernel: None,
+        });
+    }
+    let kernel = match &scheme {
+        Some(s) => f.attr_text(s, "group HydroScheme", "Kernel function")?,
+        None => None,
+    };
+    Ok(SphConvention {
+        code: SphCode::Swift,
+        kernel,
+    })
 }

@@ -500,6 +500,43 @@ impl<'p> Hdf5File<'p> {
         Ok(Some(values))
     }
 
+    /// The text of the string attribute `name` of `loc` (fixed or variable
+    /// length, ASCII or UTF-8), when present; `None` for other types.
+    pub(crate) fn attr_text(
+        &self,
+        loc: &h5::Location,
+        owner: &str,
+        name: &str,
+    ) -> Result<Option<String>, IoError> {
+        use h5::types::{FixedAscii, FixedUnicode, VarLenAscii, VarLenUnicode};
+        if !loc.attr_names().is_ok_and(|n| n.iter().any(|a| a == name)) {
+            return Ok(None);
+        }
+        let attr = loc
+            .attr(name)
+            .map_err(|e| self.h5err(&format!("{owner} attribute {name}"), e))?;
+        let Ok(desc) = attr.dtype().and_then(|t| t.to_descriptor()) else {
+            return Ok(None);
+        };
+        let text = match desc {
+            TypeDescriptor::VarLenUnicode => attr
+                .read_raw::<VarLenUnicode>()
+                .map(|v| v.first().map(|s| s.as_str().to_string())),
+            TypeDescriptor::VarLenAscii => attr
+                .read_raw::<VarLenAscii>()
+                .map(|v| v.first().map(|s| s.as_str().to_string())),
+            TypeDescriptor::FixedAscii(_) => attr
+                .read_raw::<FixedAscii<256>>()
+                .map(|v| v.first().map(|s| s.as_str().to_string())),
+            TypeDescriptor::FixedUnicode(_) => attr
+                .read_raw::<FixedUnicode<256>>()
+                .map(|v| v.first().map(|s| s.as_str().to_string())),
+            _ => return Ok(None),
+        };
+        text.map(|t| t.map(|s| s.trim_end_matches('\0').trim().to_string()))
+            .map_err(|e| self.h5err(&format!("{owner} attribute {name}"), e))
+    }
+
     /// The first value of the numeric attribute `name` of `loc`, when present
     /// and non-empty.
     pub(crate) fn attr_scalar(

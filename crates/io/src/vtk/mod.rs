@@ -108,6 +108,7 @@ pub fn read_vtk_points_bytes(bytes: &[u8], name: &Path) -> Result<ParticleTable,
         time,
         domain: None,
         rows: None,
+        sph: None,
     };
     arrays.to_columns(&mut table.columns, None);
     if let Some([x, y, z]) = arrays.velocity_names() {
