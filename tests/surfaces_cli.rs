@@ -39,13 +39,15 @@ fn blob(scale: f64, shift: f64) -> Vec<[f64; 3]> {
         .collect()
 }
 
-fn render(s: &Scratch, tag: &str, scale: f64, shift: f64, extra: &[&str]) -> Vec<u8> {
+/// The blob (and, with `mesh`, the floor) in units `scale`, offset
+/// `shift`, rendered with `extra` flags.
+fn render(s: &Scratch, tag: &str, scale: f64, shift: f64, mesh: bool, extra: &[&str]) -> Vec<u8> {
     write_f64(&s.path(&format!("p{tag}.npy")), &blob(scale, shift));
     write_floor(&s.path(&format!("m{tag}.ply")), scale, shift);
     let radius = format!("{}", 0.1 * scale);
     let out = s.str(&format!("{tag}.png"));
     let pos = s.str(&format!("p{tag}.npy"));
-    let mesh = s.str(&format!("m{tag}.ply"));
+    let floor = s.str(&format!("m{tag}.ply"));
     let mut args = vec![
         "render",
         "--particles",
@@ -55,8 +57,6 @@ fn render(s: &Scratch, tag: &str, scale: f64, shift: f64, extra: &[&str]) -> Vec
         "--size",
         "64",
         "48",
-        "--mesh",
-        &mesh,
         "--orbit",
         "30",
         "--elevation",
@@ -64,6 +64,9 @@ fn render(s: &Scratch, tag: &str, scale: f64, shift: f64, extra: &[&str]) -> Vec
         "-o",
         &out,
     ];
+    if mesh {
+        args.extend(["--mesh", floor.as_str()]);
+    }
     args.extend_from_slice(extra);
     ok(&args);
     voxless_io::read_png_rgb8(std::path::Path::new(&out))
@@ -78,47 +81,24 @@ fn max_diff(a: &[u8], b: &[u8]) -> u8 {
 #[test]
 fn meshes_ao_and_mirrors_change_the_image_in_any_units() {
     let s = Scratch::new("surfaces");
-    let plain = {
-        let pos = s.str("plain.npy");
-        write_f64(&s.path("plain.npy"), &blob(1.0, 0.0));
-        let out = s.str("plain.png");
-        ok(&[
-            "render",
-            "--particles",
-            &pos,
-            "--radius",
-            "0.1",
-            "--size",
-            "64",
-            "48",
-            "--orbit",
-            "30",
-            "--elevation",
-            "25",
-            "-o",
-            &out,
-        ]);
-        voxless_io::read_png_rgb8(std::path::Path::new(&out))
-            .unwrap()
-            .2
-    };
-    let mesh = render(&s, "a", 1.0, 0.0, &[]);
+    let plain = render(&s, "plain", 1.0, 0.0, false, &[]);
+    let mesh = render(&s, "a", 1.0, 0.0, true, &[]);
     assert!(
         max_diff(&plain, &mesh) > 20,
         "--mesh does not change the image"
     );
-    let ao = render(&s, "b", 1.0, 0.0, &["--ao", "4"]);
+    let ao = render(&s, "b", 1.0, 0.0, true, &["--ao", "4"]);
     assert!(max_diff(&mesh, &ao) > 5, "--ao does not change the image");
     // Occlusion only darkens.
     assert!(mesh.iter().zip(&ao).all(|(m, a)| a <= m));
-    let mirrored = render(&s, "c", 1.0, 0.0, &["--mirror", "x"]);
+    let mirrored = render(&s, "c", 1.0, 0.0, true, &["--mirror", "x"]);
     assert!(
         max_diff(&mesh, &mirrored) > 20,
         "--mirror does not change the image"
     );
     // The same scene in other units and far from the origin.
     for (tag, scale, shift) in [("d", 1e6, 0.0), ("e", 1.0, 1e7), ("f", 1e-6, 0.0)] {
-        let far = render(&s, tag, scale, shift, &["--ao", "4"]);
+        let far = render(&s, tag, scale, shift, true, &["--ao", "4"]);
         assert!(max_diff(&ao, &far) <= 2, "x{scale} +{shift}: image differs");
     }
 }

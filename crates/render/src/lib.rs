@@ -672,4 +672,6 @@ mod seam_tests;
 #[cfg(test)]
 mod surface_tests;
 #[cfg(test)]
+mod test_volumes;
+#[cfg(test)]
 mod tests;

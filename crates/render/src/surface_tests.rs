@@ -1,37 +1,13 @@
 //! Meshes beside a volume and ambient occlusion, against brute force.
 
 use super::*;
-use voxless_core::{Aabb, Interval, IntervalQuery, Ray, Sample};
+use voxless_core::Ray;
 use voxless_transfer::{Colormap, OpacityMap};
 
 use crate::march::Ctx;
 use crate::surface::{self, occlusion};
 
-voxless_core::prepare_as_self!(Blob);
-
-/// A smooth Gaussian blob in [−1, 1]³, value in [0, 1].
-struct Blob;
-
-impl Volume for Blob {
-    fn bounds(&self) -> Aabb {
-        Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0))
-    }
-    fn value_range(&self) -> Range1 {
-        Range1::new(0.0, 1.0)
-    }
-    fn sample(&self, p: Vec3) -> Option<Sample> {
-        let q = p - Vec3::new(0.2, -0.1, 0.0);
-        self.bounds()
-            .contains(p)
-            .then(|| Sample::scalar((-q.length_squared() / 0.35).exp()))
-    }
-    fn intervals(&self, ray: &Ray, t: Range1, _: &IntervalQuery, out: &mut Vec<Interval>) {
-        let c = self.bounds().clip_ray(ray, t);
-        if !c.is_empty() {
-            out.push(Interval::sampled(c, Range1::new(0.0, 1.0), 0.02));
-        }
-    }
-}
+use crate::test_volumes::Blob;
 
 fn tf() -> TransferFunction {
     TransferFunction::new(
