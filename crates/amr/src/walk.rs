@@ -66,49 +66,10 @@ impl NodeMask {
     }
 }
 
-/// A walk's pending far children: node, and the part of the ray in it.
-/// Deep enough for any tree this crate builds (cuts halve boxes of at most
-/// 2^22 doubled units per axis, about 66 levels); deeper trees spill to
-/// the heap.
-struct Stack {
-    inline: [(u32, f32, f32); 64],
-    len: usize,
-    spill: Vec<(u32, f32, f32)>,
-}
-
-impl Stack {
-    #[inline]
-    fn new() -> Self {
-        Stack {
-            inline: [(0, 0.0, 0.0); 64],
-            len: 0,
-            spill: Vec::new(),
-        }
-    }
-    #[inline]
-    fn push(&mut self, e: (u32, f32, f32)) {
-        if self.len < self.inline.len() {
-            self.inline[self.len] = e;
-            self.len += 1;
-        } else {
-            self.spill.push(e);
-        }
-    }
-    #[inline]
-    fn pop(&mut self) -> Option<(u32, f32, f32)> {
-        if let Some(e) = self.spill.pop() {
-            return Some(e);
-        }
-        if self.len == 0 {
-            return None;
-        }
-        self.len -= 1;
-        Some(self.inline[self.len])
-    }
-    #[inline]
-    fn is_empty(&self) -> bool {
-        self.len == 0 && self.spill.is_empty()
-    }
+thread_local! {
+    /// A walk's pending far children (node, and the part of the ray in
+    /// it), kept between walks so that none allocates or clears a stack.
+    static STACK: std::cell::Cell<Vec<(u32, f32, f32)>> = const { std::cell::Cell::new(Vec::new()) };
 }
 
 impl RegionTree {
@@ -179,8 +140,24 @@ impl RegionTree {
         if !(t.lo < t.hi) {
             return None;
         }
+        // Taken out of the thread-local (not borrowed) for the walk.
+        let mut stack = STACK.take();
+        stack.clear();
+        let rest = self.walk_with(ray, t, mask, &mut leaf, &mut stack);
+        STACK.set(stack);
+        rest
+    }
+
+    #[inline]
+    fn walk_with(
+        &self,
+        ray: &Ray,
+        t: Range1,
+        mask: Option<&NodeMask>,
+        leaf: &mut impl FnMut(u32, Range1) -> bool,
+        stack: &mut Vec<(u32, f32, f32)>,
+    ) -> Option<f32> {
         let inv = ray.inv_dir();
-        let mut stack = Stack::new();
         let (mut i, mut lo, mut hi) = (0usize, t.lo, t.hi);
         loop {
             let n = self.nodes[i];

@@ -5,8 +5,9 @@
 //! depth, each with the region its interval came from; at two samples per
 //! finest cell, consecutive samples of a ray mostly share a region. The
 //! batch is cut into such runs, and each run is reconstructed with its
-//! region's bricks in the outer loop: a brick's stencil set-up constants
-//! and the region's brick list are read once for the whole run, and the
+//! region's bricks in the outer loop: a brick's stencil constants
+//! ([`BrickGrid`]) and the region's brick list are read once for the whole
+//! run, and the
 //! run's samples, a fraction of a cell apart, read the same few cells while
 //! they are in cache. Every sample still adds its bricks' terms in the
 //! region's brick order with the arithmetic of [`AmrVolume::reconstruct`],
@@ -19,7 +20,7 @@
 
 use voxless_core::{Interval, Sample, SampleBatch, Vec3};
 
-use super::recon::{BasisSums, brick_sums};
+use super::recon::{BasisSums, BrickGrid, brick_sums};
 use super::{AmrVolume, Reconstruction};
 
 /// Samples per run at most (a run of one region longer than this is cut).
@@ -78,9 +79,9 @@ impl AmrVolume {
         let sums = &mut run.sums[..n];
         sums.fill(BasisSums::default());
         for &b in self.regions.bricks_of(run.region) {
-            let brick = &self.bricks[b as usize];
+            let grid = BrickGrid::new(&self.bricks[b as usize]);
             for (s, &pu) in sums.iter_mut().zip(&run.pu[..n]) {
-                brick_sums(brick, pu, gradient, fields, s);
+                brick_sums(&grid, pu, gradient, fields, s);
             }
         }
         for s in sums.iter() {

@@ -41,7 +41,8 @@ impl AmrVolume {
         let fields = self.basis_fields(field);
         let mut sums = BasisSums::default();
         for &b in self.regions.bricks_of(region) {
-            brick_sums(&self.bricks[b as usize], pu, gradient, fields, &mut sums);
+            let grid = BrickGrid::new(&self.bricks[b as usize]);
+            brick_sums(&grid, pu, gradient, fields, &mut sums);
         }
         self.finish(&sums, gradient, fields.1.is_some())
     }
@@ -103,8 +104,8 @@ impl AmrVolume {
         let two_fields = color_field != field;
         let mut terms = SortedTerms::default();
         for &b in self.regions.bricks_of(region) {
-            let b = &self.bricks[b as usize];
-            let Some(st) = Stencil::new(b, pu, gradient) else {
+            let grid = BrickGrid::new(&self.bricks[b as usize]);
+            let Some(st) = Stencil::new(&grid, pu, gradient) else {
                 continue;
             };
             for kz in 0..2 {
@@ -120,7 +121,7 @@ impl AmrVolume {
                         if h <= 0.0 && !gradient {
                             continue;
                         }
-                        let cell = st.cell(b, kx, ky, kz);
+                        let cell = st.cell(&grid, kx, ky, kz);
                         let d = if gradient {
                             [
                                 dwt[0][kx] * wt[1][ky] * wt[2][kz],
@@ -196,44 +197,74 @@ pub(super) struct BasisSums {
     sdv: [f64; 3],
 }
 
+/// What the stencil needs of a brick, read once for all the samples a
+/// batch reconstructs with it.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct BrickGrid {
+    /// Lower corner, finest units.
+    lower: [f32; 3],
+    /// `1 / cell width`: widths are powers of two, so multiplying by it is
+    /// exact division.
+    inv_w: f32,
+    /// Last cell index per axis.
+    last: [i32; 3],
+    /// Strides of y and z in the brick-ordered values, and the brick's
+    /// first value.
+    sx: usize,
+    sxy: usize,
+    base: usize,
+}
+
+impl BrickGrid {
+    #[inline(always)]
+    pub fn new(b: &Brick) -> Self {
+        BrickGrid {
+            lower: b.lower.map(|l| l as f32),
+            inv_w: 1.0 / b.width() as f32,
+            last: b.size.map(|n| n - 1),
+            sx: b.size[0] as usize,
+            sxy: (b.size[0] * b.size[1]) as usize,
+            base: b.offset as usize,
+        }
+    }
+}
+
 /// One brick's tent stencil at a point, per axis: the two cells whose
 /// centres lie within one cell width (indices clamped into the brick), their
 /// weights and the weights' derivatives (both zero for a cell outside the
 /// brick).
 pub(super) struct Stencil {
-    c: [[i32; 2]; 3],
+    c: [[usize; 2]; 3],
     w: [[f32; 2]; 3],
     dw: [[f32; 2]; 3],
     inside: [[bool; 2]; 3],
 }
 
 impl Stencil {
-    /// The stencil of brick `b` at unit-space point `pu`; `None` when no
+    /// The stencil of brick `g` at unit-space point `pu`; `None` when no
     /// cell of the brick reaches it (and, with `gradient`, no derivative
     /// either).
     #[inline(always)]
-    pub fn new(b: &Brick, pu: Vec3, gradient: bool) -> Option<Stencil> {
-        // Widths are powers of two: multiplying by the reciprocal is exact.
-        let inv_w = 1.0 / b.width() as f32;
+    pub fn new(g: &BrickGrid, pu: Vec3, gradient: bool) -> Option<Stencil> {
         let mut st = Stencil {
             c: [[0; 2]; 3],
             w: [[0.0; 2]; 3],
             dw: [[0.0; 2]; 3],
             inside: [[false; 2]; 3],
         };
-        for a in 0..3 {
-            let t = (pu[a] - b.lower[a] as f32) * inv_w - 0.5;
+        for (a, p) in [pu.x, pu.y, pu.z].into_iter().enumerate() {
+            let t = (p - g.lower[a]) * g.inv_w - 0.5;
             let i0 = floor_i32(t);
             let f = t - i0 as f32;
-            let last = b.size[a] - 1;
+            let last = g.last[a];
             let in0 = i0 >= 0 && i0 <= last;
             let in1 = i0 + 1 >= 0 && i0 < last;
             st.inside[a] = [in0, in1];
-            st.c[a] = [i0.clamp(0, last), (i0 + 1).clamp(0, last)];
+            st.c[a] = [i0.clamp(0, last) as usize, (i0 + 1).clamp(0, last) as usize];
             st.w[a] = [if in0 { 1.0 - f } else { 0.0 }, if in1 { f } else { 0.0 }];
             st.dw[a] = [
-                if in0 { -inv_w } else { 0.0 },
-                if in1 { inv_w } else { 0.0 },
+                if in0 { -g.inv_w } else { 0.0 },
+                if in1 { g.inv_w } else { 0.0 },
             ];
             if st.w[a][0] <= 0.0
                 && st.w[a][1] <= 0.0
@@ -247,14 +278,13 @@ impl Stencil {
 
     /// Index into the brick-ordered values of corner `(kx, ky, kz)`.
     #[inline(always)]
-    pub fn cell(&self, b: &Brick, kx: usize, ky: usize, kz: usize) -> usize {
-        let local = (self.c[2][kz] * b.size[1] + self.c[1][ky]) * b.size[0] + self.c[0][kx];
-        b.offset as usize + local as usize
+    pub fn cell(&self, g: &BrickGrid, kx: usize, ky: usize, kz: usize) -> usize {
+        g.base + self.c[2][kz] * g.sxy + self.c[1][ky] * g.sx + self.c[0][kx]
     }
 }
 
-/// Adds brick `b`'s terms at unit-space point `pu` to `s`: the values of
-/// `fields` (the opacity field, and the colour field when it differs).
+/// Adds the terms of brick `g` at unit-space point `pu` to `s`: the values
+/// of `fields` (the opacity field, and the colour field when it differs).
 ///
 /// The tents factor per axis, `Ĥ = hx·hy·hz`, so the eight-cell sums are
 /// nested linear interpolations — x within each of the four rows, then y,
@@ -265,35 +295,25 @@ impl Stencil {
 /// multiplied by zero).
 #[inline(always)]
 pub(super) fn brick_sums(
-    b: &Brick,
+    g: &BrickGrid,
     pu: Vec3,
     gradient: bool,
     fields: (&[f32], Option<&[f32]>),
     s: &mut BasisSums,
 ) {
-    let Some(st) = Stencil::new(b, pu, gradient) else {
+    let Some(st) = Stencil::new(g, pu, gradient) else {
         return;
     };
     let [[wx0, wx1], [wy0, wy1], [wz0, wz1]] = st.w;
     let (wx0, wx1, wy0, wy1) = (wx0 as f64, wx1 as f64, wy0 as f64, wy1 as f64);
     let (wz0, wz1) = (wz0 as f64, wz1 as f64);
-    let (sx, sxy) = (b.size[0] as usize, (b.size[0] * b.size[1]) as usize);
-    let base = b.offset as usize;
     let [[x0, x1], [y0, y1], [z0, z1]] = st.c;
-    let (x0, x1, y0, y1, z0, z1) = (
-        x0 as usize,
-        x1 as usize,
-        y0 as usize,
-        y1 as usize,
-        z0 as usize,
-        z1 as usize,
-    );
     // The four rows along x, (ky, kz) = (0, 0), (1, 0), (0, 1), (1, 1).
     let rows = [
-        base + z0 * sxy + y0 * sx,
-        base + z0 * sxy + y1 * sx,
-        base + z1 * sxy + y0 * sx,
-        base + z1 * sxy + y1 * sx,
+        g.base + z0 * g.sxy + y0 * g.sx,
+        g.base + z0 * g.sxy + y1 * g.sx,
+        g.base + z1 * g.sxy + y0 * g.sx,
+        g.base + z1 * g.sxy + y1 * g.sx,
     ];
     let lerp = |v: &[f32]| lerp_rows(v, &rows, [x0, x1], [wx0, wx1], [wy0, wy1]);
     let (r, p0, p1) = lerp(fields.0);
