@@ -15,6 +15,8 @@
 //!
 //! Optional hooks with correct defaults let a kind go faster without a second
 //! renderer: [`Volume::sample_batch`] (a packet of samples at once),
+//! [`Volume::intervals_chunk`] (a ray's intervals front to back, a chunk at
+//! a time, so nothing is found behind where a ray turns opaque),
 //! [`Volume::tile_view`] (the intervals of a whole screen tile at once) and
 //! [`Volume::project_image`] (a whole column-density image at once).
 
