@@ -330,8 +330,8 @@ pub struct ViewFlags {
     /// Map the value linearly (default except for tessellations).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Transfer function"))]
     pub linear: bool,
-    /// Sample particles point by point instead of in ray packets (same
-    /// image, slower; for comparisons).
+    /// Sample particles and AMR cells point by point instead of in ray
+    /// packets (same image; for comparisons).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Render"))]
     pub no_packets: bool,
     /// Render only what lies inside this box, world coordinates (default: all).

@@ -1,57 +1,49 @@
-//! [`AmrContext`]: an AMR volume prepared for one transfer function — the
-//! regions it can see and a BVH over only those (TF space skipping,
-//! ExaBricks §4.1), so rays skip hidden regions without visiting them.
-//! The volume itself stays untouched, so several contexts (different
-//! transfer functions) can render it at once.
+//! [`AmrContext`]: an AMR volume prepared for one transfer function — a
+//! mask over the region tree marking the subtrees that hold a region it
+//! can see (TF space skipping, ExaBricks §4.1), so rays walk past hidden
+//! regions without visiting them. The volume itself stays untouched, so
+//! several contexts (different transfer functions) can render it at once.
 
 use std::time::{Duration, Instant};
 
-use voxless_bvh::Bvh;
 use voxless_core::{
     Aabb, Camera, Cancelled, Control, Interval, IntervalQuery, Prepare, PrepareQuery, Range1, Ray,
-    Sample, Vec3, Volume,
+    Sample, SampleBatch, Vec3, Volume,
 };
 
 use crate::AmrVolume;
+use crate::walk::NodeMask;
 
 pub struct AmrContext<'a> {
     volume: &'a AmrVolume,
-    /// The visible regions; `None` when every region is visible (then the
-    /// volume's own tree serves).
-    visible: Option<(Vec<u32>, Bvh)>,
+    /// The subtrees holding a visible region; `None` when every region is
+    /// visible.
+    visible: Option<NodeMask>,
+    visible_count: usize,
     selected_in: Duration,
 }
 
 impl<'a> AmrContext<'a> {
     /// Selects the regions whose range of the opacity field `is_visible`
-    /// accepts and builds a BVH over them.
+    /// accepts and marks the subtrees of the region tree holding them (one
+    /// sweep over the tree: no tree is built per transfer function).
     pub fn new(volume: &'a AmrVolume, is_visible: &dyn Fn(Range1) -> bool) -> Self {
         let t = Instant::now();
-        let ids = volume.visible_regions(is_visible);
-        let visible = (ids.len() < volume.regions().len()).then(|| {
-            let boxes: Vec<Aabb> = ids
-                .iter()
-                .map(|&r| volume.region_bounds(r as usize))
-                .collect();
-            // Regions keep the k-d order of the full tree: already coherent.
-            let bvh = Bvh::build_in_order(&boxes);
-            (ids, bvh)
-        });
+        let (visible, visible_count) = volume.visible_mask(is_visible);
         AmrContext {
             volume,
             visible,
+            visible_count,
             selected_in: t.elapsed(),
         }
     }
 
     /// How many regions the transfer function can see.
     pub fn visible_region_count(&self) -> usize {
-        self.visible
-            .as_ref()
-            .map_or(self.volume.regions().len(), |v| v.0.len())
+        self.visible_count
     }
 
-    /// How long selecting the regions and building their BVH took.
+    /// How long selecting the regions and marking the tree took.
     pub fn selected_in(&self) -> Duration {
         self.selected_in
     }
@@ -94,17 +86,32 @@ impl Volume for AmrContext<'_> {
     fn sample_with_gradient_in(&self, p: Vec3, iv: &Interval) -> Option<(Sample, Vec3)> {
         self.volume.sample_with_gradient_in(p, iv)
     }
-    /// Only the visible regions' tree is traversed.
+    fn packet_sampling(&self) -> bool {
+        self.volume.packet_sampling()
+    }
+    fn sample_batch(
+        &self,
+        batch: &SampleBatch,
+        gradient: bool,
+        out: &mut Vec<(Option<Sample>, Vec3)>,
+    ) {
+        self.volume.sample_batch(batch, gradient, out)
+    }
+    /// Only the subtrees holding visible regions are walked.
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
-        match &self.visible {
-            Some((ids, bvh)) => self
-                .volume
-                .region_intervals(bvh, Some(ids), ray, t, query, out),
-            None => {
-                self.volume
-                    .region_intervals(self.volume.region_bvh(), None, ray, t, query, out)
-            }
-        }
+        self.volume
+            .region_intervals(self.visible.as_ref(), ray, t, query, out, usize::MAX);
+    }
+    fn intervals_chunk(
+        &self,
+        ray: &Ray,
+        t: Range1,
+        query: &IntervalQuery,
+        out: &mut Vec<Interval>,
+        max: usize,
+    ) -> Option<f32> {
+        self.volume
+            .region_intervals(self.visible.as_ref(), ray, t, query, out, max)
     }
     fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
         self.volume.line_integral(ray, t)

@@ -11,10 +11,12 @@
 //! fully filled, ≤ 32 cells per axis, from a k-d tree), then the space covered
 //! by the bricks' supports is cut into [`regions::Region`]s, each knowing the
 //! bricks active inside it, the value range of every field there, and its
-//! finest cell width. A BVH over the regions hands out ray intervals; a
-//! render's prepared [`AmrContext`] holds a second BVH over only the regions
-//! its transfer function can see (the volume itself is never changed, so
-//! several transfer functions can render it at once).
+//! finest cell width. The k-d tree the regions were cut by hands out ray
+//! intervals, walked front to back so a ray that turns opaque stops the
+//! walk; a render's prepared [`AmrContext`] masks the subtrees holding no
+//! region its transfer function can see (the volume itself is never
+//! changed, so several transfer functions can render it at once). A BVH
+//! over the regions serves point location.
 //!
 //! **Reconstruction.** *Basis* (default): every cell carries a tent
 //! `Ĥ(p) = Π_axes max(0, 1 − |c − p|/w)` around its centre `c`, and
@@ -33,6 +35,7 @@ mod context;
 mod integral;
 pub mod regions;
 mod volume;
+mod walk;
 
 pub use bricks::Brick;
 pub use context::AmrContext;
@@ -84,3 +87,5 @@ pub enum AmrError {
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod walk_tests;

@@ -9,6 +9,11 @@
 //! face lies strictly inside, every fragment covers the whole box and the box
 //! becomes a region with those bricks.
 //!
+//! The cuts themselves are kept as a k-d tree ([`Regions::tree`]): its
+//! leaves are the regions, and its children are separated by their parent's
+//! plane, so a ray walks it front to back by visiting the near child first
+//! (see `crate::walk`).
+//!
 //! Coordinates are doubled finest units, so half-cell offsets of level-0
 //! bricks stay integral.
 
@@ -27,12 +32,28 @@ pub struct Region {
     pub bricks: std::ops::Range<u32>,
 }
 
+/// One node of the k-d tree the regions were cut by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KdNode {
+    /// Cut at `at` (doubled finest units) across `axis`: the left child
+    /// (`< at`) is the next node, the right child (`>= at`) lies `right`
+    /// nodes after this one.
+    Inner { axis: u8, at: i64, right: u32 },
+    /// A region (its index).
+    Leaf(u32),
+    /// A part of the box no brick's support reaches.
+    Hole,
+}
+
 /// All regions and, flat, their brick lists (one allocation for millions
-/// of regions instead of one each).
+/// of regions instead of one each), and the k-d tree that cut them.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Regions {
     pub regions: Vec<Region>,
     pub brick_ids: Vec<u32>,
+    /// Depth first, left child first: the regions in the order its leaves
+    /// come (the order of `regions`). Empty when there are no regions.
+    pub tree: Vec<KdNode>,
 }
 
 impl Regions {
@@ -75,22 +96,68 @@ pub fn build(bricks: &[Brick]) -> Regions {
         }
     }
     let ids: Vec<u32> = (0..frags.len() as u32).collect();
-    // Parallel branches return their pieces; they are joined once here, so
-    // millions of regions are not copied up through every parallel level.
-    let pieces = subdivide(lo, hi, ids, &frags);
-    let mut out = Regions {
-        regions: Vec::with_capacity(pieces.iter().map(|p| p.regions.len()).sum()),
-        brick_ids: Vec::with_capacity(pieces.iter().map(|p| p.brick_ids.len()).sum()),
+    // Parallel branches return their pieces (and the cuts above them, in
+    // tree order); they are joined once here, so millions of regions are
+    // not copied up through every parallel level.
+    let parts = subdivide(lo, hi, ids, &frags);
+    let pieces = || {
+        parts.iter().filter_map(|p| match p {
+            Part::Piece(r) => Some(r),
+            Part::Cut { .. } => None,
+        })
     };
-    for part in pieces {
-        let offset = out.brick_ids.len() as u32;
-        out.brick_ids.extend(part.brick_ids);
-        out.regions.extend(part.regions.into_iter().map(|mut r| {
-            r.bricks = r.bricks.start + offset..r.bricks.end + offset;
-            r
-        }));
+    let mut out = Regions {
+        regions: Vec::with_capacity(pieces().map(|p| p.regions.len()).sum()),
+        brick_ids: Vec::with_capacity(pieces().map(|p| p.brick_ids.len()).sum()),
+        tree: Vec::with_capacity(parts.iter().map(Part::nodes).sum()),
+    };
+    for part in parts {
+        match part {
+            Part::Cut { axis, at, left } => out.tree.push(KdNode::Inner {
+                axis,
+                at,
+                right: 1 + left as u32,
+            }),
+            Part::Piece(piece) => {
+                let offset = out.brick_ids.len() as u32;
+                let first = out.regions.len() as u32;
+                out.brick_ids.extend(piece.brick_ids);
+                out.regions.extend(piece.regions.into_iter().map(|mut r| {
+                    r.bricks = r.bricks.start + offset..r.bricks.end + offset;
+                    r
+                }));
+                // A piece's tree is relative (child offsets), only its
+                // leaves' region numbers move.
+                out.tree.extend(piece.tree.into_iter().map(|n| match n {
+                    KdNode::Leaf(r) => KdNode::Leaf(r + first),
+                    n => n,
+                }));
+            }
+        }
     }
     out
+}
+
+/// What the parallel top of the subdivision returns, in tree order: the
+/// cuts it made itself and the pieces below [`GRAIN`] built sequentially.
+enum Part {
+    /// A cut whose left subtree is the next `left` tree nodes.
+    Cut {
+        axis: u8,
+        at: i64,
+        left: usize,
+    },
+    Piece(Regions),
+}
+
+impl Part {
+    /// Tree nodes this part holds.
+    fn nodes(&self) -> usize {
+        match self {
+            Part::Cut { .. } => 1,
+            Part::Piece(r) => r.tree.len(),
+        }
+    }
 }
 
 /// The fragment face strictly inside `(lo, hi)` closest to the centre,
@@ -126,6 +193,7 @@ fn split_plane(
 }
 
 fn push_leaf(lo: [i64; 3], hi: [i64; 3], ids: &[u32], out: &mut Regions) {
+    out.tree.push(KdNode::Leaf(out.regions.len() as u32));
     let first = out.brick_ids.len();
     out.brick_ids.extend_from_slice(ids);
     out.brick_ids[first..].sort_unstable();
@@ -138,17 +206,17 @@ fn push_leaf(lo: [i64; 3], hi: [i64; 3], ids: &[u32], out: &mut Regions) {
 
 /// The top of the recursion: big nodes own their id lists and split in
 /// parallel; below [`GRAIN`] the rest runs in [`subdivide_in`] on one stack.
-fn subdivide(lo: [i64; 3], hi: [i64; 3], ids: Vec<u32>, frags: &[Fragment]) -> Vec<Regions> {
+fn subdivide(lo: [i64; 3], hi: [i64; 3], ids: Vec<u32>, frags: &[Fragment]) -> Vec<Part> {
     let mut out = Regions::default();
     if ids.len() <= GRAIN {
         let mut stack = ids;
         let len = stack.len();
         subdivide_in(lo, hi, 0, len, &mut stack, frags, &mut out);
-        return vec![out];
+        return vec![Part::Piece(out)];
     }
     let Some((axis, x)) = split_plane(&lo, &hi, &ids, frags) else {
         push_leaf(lo, hi, &ids, &mut out);
-        return vec![out];
+        return vec![Part::Piece(out)];
     };
     let (mut left_hi, mut right_lo) = (hi, lo);
     left_hi[axis] = x;
@@ -164,12 +232,20 @@ fn subdivide(lo: [i64; 3], hi: [i64; 3], ids: Vec<u32>, frags: &[Fragment]) -> V
         .filter(|&i| frags[i as usize].1[axis] > x)
         .collect();
     drop(ids);
-    let (mut a, b) = rayon::join(
+    let (a, b) = rayon::join(
         || subdivide(lo, left_hi, left, frags),
         || subdivide(right_lo, hi, right, frags),
     );
-    a.extend(b);
-    a
+    let left = a.iter().map(Part::nodes).sum();
+    let mut parts = Vec::with_capacity(1 + a.len() + b.len());
+    parts.push(Part::Cut {
+        axis: axis as u8,
+        at: x,
+        left,
+    });
+    parts.extend(a);
+    parts.extend(b);
+    parts
 }
 
 /// Sequential recursion over `stack[start..start + len]`. Children's id lists
@@ -185,7 +261,8 @@ fn subdivide_in(
     out: &mut Regions,
 ) {
     if len == 0 {
-        return; // a hole: no brick reaches here
+        out.tree.push(KdNode::Hole); // no brick reaches here
+        return;
     }
     let Some((axis, x)) = split_plane(&lo, &hi, &stack[start..start + len], frags) else {
         push_leaf(lo, hi, &stack[start..start + len], out);
@@ -194,6 +271,14 @@ fn subdivide_in(
     let (mut left_hi, mut right_lo) = (hi, lo);
     left_hi[axis] = x;
     right_lo[axis] = x;
+    // The cut's node; its right child's offset is known once the left
+    // subtree is written.
+    let node = out.tree.len();
+    out.tree.push(KdNode::Inner {
+        axis: axis as u8,
+        at: x,
+        right: 0,
+    });
     let top = stack.len();
     for i in start..start + len {
         let id = stack[i];
@@ -203,6 +288,10 @@ fn subdivide_in(
     }
     subdivide_in(lo, left_hi, top, stack.len() - top, stack, frags, out);
     stack.truncate(top);
+    let offset = (out.tree.len() - node) as u32;
+    if let KdNode::Inner { right, .. } = &mut out.tree[node] {
+        *right = offset;
+    }
     for i in start..start + len {
         let id = stack[i];
         if frags[id as usize].1[axis] > x {

@@ -1,13 +1,24 @@
-//! [`AmrVolume`]: construction, reconstruction and the `Volume` impl.
+//! [`AmrVolume`]: construction, intervals and the `Volume` impl; the
+//! reconstruction ([`recon`]), its packet form ([`batch`]), the exact
+//! nearest-reconstruction answers ([`nearest`]) and the cell-location
+//! baseline ([`locator`]) live beside it.
+
+mod batch;
+mod locator;
+mod nearest;
+mod recon;
 
 use std::time::{Duration, Instant};
 
 use voxless_bvh::Bvh;
-use voxless_core::{Aabb, Attribute, Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume};
+use voxless_core::{Aabb, Interval, IntervalQuery, Range1, Ray, Sample, SampleBatch, Vec3, Volume};
 
 use crate::AmrError;
 use crate::bricks::{self, Brick};
 use crate::regions::{self, Region, Regions};
+use crate::walk::{NodeMask, RegionTree};
+
+pub use locator::CellLocator;
 
 /// Cells and fields as read from a file.
 #[derive(Clone, Debug, Default)]
@@ -71,29 +82,15 @@ pub struct AmrVolume {
     /// Finest cell width per region, finest units.
     region_finest: Vec<i32>,
     field_ranges: Vec<Range1>,
-    /// All regions, for point location and intervals (a prepared
-    /// [`crate::AmrContext`] has its own tree over the visible ones).
+    /// The k-d tree the regions were cut by: ray intervals, front to back
+    /// (a prepared [`crate::AmrContext`] masks the subtrees it cannot see).
+    tree: RegionTree,
+    /// All regions, for point location and exact line integrals.
     region_bvh: Bvh,
     /// Brick boxes, for nearest-cell lookups and exact projections.
     brick_bvh: Bvh,
     bounds: Aabb,
     stats: BuildStats,
-}
-
-/// `⌊x⌋` for |x| < 2³¹ without a libm call (`f32::floor` is one on
-/// baseline x86-64, and the reconstruction takes three per brick).
-#[inline]
-pub(crate) fn floor_i32(x: f32) -> i32 {
-    let i = x as i32;
-    i - (x < i as f32) as i32
-}
-
-/// Reconstructed values at a point.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct Recon {
-    value: f32,
-    color: f32,
-    gradient: Vec3,
 }
 
 impl AmrVolume {
@@ -211,6 +208,13 @@ impl AmrVolume {
         // Regions come out of the k-d subdivision depth first: already coherent.
         let region_bvh = Bvh::build_in_order(&region_bounds);
         let brick_bvh = Bvh::build(&brick_bounds);
+        // Cut planes through the same mapping as the region boxes, so the
+        // walk's intervals are the boxes' to the bit.
+        let tree = RegionTree::new(&regions.tree, &region_bounds, |axis, at| {
+            let mut v = [0.0f64; 3];
+            v[axis] = at as f64 * 0.5;
+            to_world(v, v).min[axis]
+        });
         stats.bvh_build = t.elapsed();
         // The data's domain is the cells, not the tents' half-cell margin
         // around them: bounds, intervals and samples stop at the cells.
@@ -227,6 +231,7 @@ impl AmrVolume {
             region_ranges,
             region_finest,
             field_ranges,
+            tree,
             region_bvh,
             brick_bvh,
             bounds,
@@ -245,6 +250,10 @@ impl AmrVolume {
     }
     pub fn regions(&self) -> &[Region] {
         &self.regions.regions
+    }
+    /// The regions with their brick lists and the k-d tree that cut them.
+    pub fn region_set(&self) -> &Regions {
+        &self.regions
     }
     /// The bricks active in region `r`.
     pub fn region_bricks(&self, r: usize) -> &[u32] {
@@ -266,12 +275,49 @@ impl AmrVolume {
         self.field_ranges[field]
     }
 
-    /// The intervals of the regions `bvh` holds (region `remap[i]` for leaf
-    /// `i`, or `i` itself), in increasing `t`.
+    /// The intervals of the regions `ray` crosses within `t` that `mask`
+    /// (all when `None`) and `query` accept, front to back, stopping after
+    /// `max`; returns where the rest begins (see
+    /// [`Volume::intervals_chunk`]).
     pub(crate) fn region_intervals(
         &self,
-        bvh: &Bvh,
-        remap: Option<&[u32]>,
+        mask: Option<&NodeMask>,
+        ray: &Ray,
+        t: Range1,
+        query: &IntervalQuery,
+        out: &mut Vec<Interval>,
+        max: usize,
+    ) -> Option<f32> {
+        let nf = self.values.len();
+        let t = self.bounds.clip_ray(ray, t);
+        if t.is_empty() || max == 0 {
+            return None;
+        }
+        let mut left = max;
+        self.tree.walk(ray, t, mask, |r, hit| {
+            let r = r as usize;
+            let range = self.region_ranges[r * nf + self.settings.field];
+            if !(query.is_visible)(range) {
+                return true;
+            }
+            // Two samples per finest cell at sampling rate 1: adaptive
+            // sampling (ExaBricks §4.2).
+            let dt = 0.5 * self.region_finest[r] as f32 * self.h;
+            out.push(Interval {
+                hint: r as u32,
+                ..Interval::sampled(hit, range, dt)
+            });
+            left -= 1;
+            left > 0
+        })
+    }
+
+    /// The same intervals as [`AmrVolume::region_intervals`] found the
+    /// way the walk replaced: every region the region BVH hits, then
+    /// sorted. The reference the walk is tested against.
+    #[cfg(test)]
+    pub(crate) fn region_intervals_sorted(
+        &self,
         ray: &Ray,
         t: Range1,
         query: &IntervalQuery,
@@ -283,8 +329,8 @@ impl AmrVolume {
         if t.is_empty() {
             return;
         }
-        bvh.ray_query(ray, t, |i, hit| {
-            let r = remap.map_or(i as usize, |m| m[i as usize] as usize);
+        self.region_bvh.ray_query(ray, t, |r, hit| {
+            let r = r as usize;
             let range = self.region_ranges[r * nf + self.settings.field];
             if hit.hi > hit.lo && (query.is_visible)(range) {
                 out.push(Interval {
@@ -296,18 +342,30 @@ impl AmrVolume {
         out[start..].sort_unstable_by(|a, b| a.t.lo.total_cmp(&b.t.lo));
     }
 
-    /// The regions whose range of the opacity field `is_visible` accepts.
-    pub(crate) fn visible_regions(&self, is_visible: &dyn Fn(Range1) -> bool) -> Vec<u32> {
+    /// The mask of the tree's subtrees holding a region whose range of the
+    /// opacity field `is_visible` accepts (`None`: all of them).
+    /// Also returns how many regions it accepts.
+    pub(crate) fn visible_mask(
+        &self,
+        is_visible: &dyn Fn(Range1) -> bool,
+    ) -> (Option<NodeMask>, usize) {
         let nf = self.values.len();
         let f = self.settings.field;
-        (0..self.regions.regions.len() as u32)
-            .filter(|&r| is_visible(self.region_ranges[r as usize * nf + f]))
-            .collect()
+        let seen: Vec<bool> = (0..self.regions.regions.len())
+            .map(|r| is_visible(self.region_ranges[r * nf + f]))
+            .collect();
+        let count = seen.iter().filter(|&&v| v).count();
+        let mask = (count < seen.len()).then(|| self.tree.mask(|r| seen[r as usize]));
+        (mask, count)
     }
 
     /// How many regions a transfer function accepting `is_visible` sees.
     pub fn visible_region_count(&self, is_visible: &dyn Fn(Range1) -> bool) -> usize {
-        self.visible_regions(is_visible).len()
+        let nf = self.values.len();
+        let f = self.settings.field;
+        (0..self.regions.regions.len())
+            .filter(|&r| is_visible(self.region_ranges[r * nf + f]))
+            .count()
     }
 
     pub(crate) fn region_bvh(&self) -> &Bvh {
@@ -346,162 +404,6 @@ impl AmrVolume {
         found
     }
 
-    /// Basis (or nearest) values of `field` and the colour field at `p`
-    /// (world) using only region `region`'s bricks.
-    fn reconstruct(&self, p: Vec3, region: usize, field: usize, gradient: bool) -> Option<Recon> {
-        let mut sums = BasisSums::default();
-        self.reconstruct_into(p, region, field, gradient, &mut sums)
-    }
-
-    /// [`AmrVolume::reconstruct`] with the cells' terms added in an order
-    /// fixed by the terms themselves rather than by the bricks, so any set
-    /// of cells holding every cell whose basis reaches `p` gives the same
-    /// bits (a part of a decomposed volume, for `sample`).
-    fn reconstruct_exact(
-        &self,
-        p: Vec3,
-        region: usize,
-        field: usize,
-        gradient: bool,
-    ) -> Option<Recon> {
-        let mut terms = SortedTerms::default();
-        self.reconstruct_into(p, region, field, gradient, &mut terms)
-    }
-
-    fn reconstruct_into<S: BasisSink>(
-        &self,
-        p: Vec3,
-        region: usize,
-        field: usize,
-        gradient: bool,
-        sink: &mut S,
-    ) -> Option<Recon> {
-        let pu = self.to_units(p);
-        let color_field = self.settings.color_field.unwrap_or(field);
-        if self.settings.reconstruction == Reconstruction::Nearest {
-            return self.nearest(pu, region, field, color_field);
-        }
-        let (v0, v1) = (&self.values[field], &self.values[color_field]);
-        // Without a separate colour field its sum is the value's: skip it.
-        let two_fields = color_field != field;
-        for &b in self.regions.bricks_of(region) {
-            let b = &self.bricks[b as usize];
-            let w = b.width() as f32;
-            // Per axis: the two cells whose centres are within one width of
-            // p, their tent weights, and the weights' derivatives along p.
-            let mut idx = [[0i32; 2]; 3];
-            let mut wt = [[0.0f32; 2]; 3];
-            let mut dwt = [[0.0f32; 2]; 3];
-            let mut empty = false;
-            for a in 0..3 {
-                let t = (pu[a] - b.lower[a] as f32) / w - 0.5;
-                let i0 = floor_i32(t);
-                let f = t - i0 as f32;
-                for (k, (i, weight, dw)) in [(i0, 1.0 - f, -1.0 / w), (i0 + 1, f, 1.0 / w)]
-                    .into_iter()
-                    .enumerate()
-                {
-                    let inside = i >= 0 && i < b.size[a];
-                    idx[a][k] = i;
-                    wt[a][k] = if inside { weight } else { 0.0 };
-                    dwt[a][k] = if inside { dw } else { 0.0 };
-                }
-                if wt[a][0] <= 0.0
-                    && wt[a][1] <= 0.0
-                    && (!gradient || (dwt[a][0] == 0.0 && dwt[a][1] == 0.0))
-                {
-                    empty = true;
-                    break;
-                }
-            }
-            if empty {
-                continue;
-            }
-            for kz in 0..2 {
-                for ky in 0..2 {
-                    for kx in 0..2 {
-                        let h = wt[0][kx] * wt[1][ky] * wt[2][kz];
-                        let inside = (0..3).all(|a| {
-                            let i = idx[a][[kx, ky, kz][a]];
-                            i >= 0 && i < b.size[a]
-                        });
-                        if !inside || (h <= 0.0 && !gradient) {
-                            continue;
-                        }
-                        let local = (idx[2][kz] * b.size[1] + idx[1][ky]) * b.size[0] + idx[0][kx];
-                        let cell = b.offset as usize + local as usize;
-                        let d = if gradient {
-                            [
-                                dwt[0][kx] * wt[1][ky] * wt[2][kz],
-                                wt[0][kx] * dwt[1][ky] * wt[2][kz],
-                                wt[0][kx] * wt[1][ky] * dwt[2][kz],
-                            ]
-                        } else {
-                            [0.0; 3]
-                        };
-                        let c = if two_fields { v1[cell] } else { 0.0 };
-                        sink.add(h, v0[cell], c, d, gradient);
-                    }
-                }
-            }
-        }
-        let BasisSums {
-            sw,
-            sv,
-            sc,
-            sdw,
-            sdv,
-        } = sink.sums(gradient);
-        if sw <= 0.0 {
-            return None;
-        }
-        let value = sv / sw;
-        let mut g = Vec3::ZERO;
-        if gradient {
-            // Quotient rule; divide by h to go from unit to world coordinates.
-            let q = |a: usize| ((sw * sdv[a] - sv * sdw[a]) / (sw * sw) / self.h as f64) as f32;
-            g = Vec3::new(q(0), q(1), q(2));
-        }
-        Some(Recon {
-            value: value as f32,
-            color: if two_fields {
-                (sc / sw) as f32
-            } else {
-                value as f32
-            },
-            gradient: g,
-        })
-    }
-
-    fn nearest(&self, pu: Vec3, region: usize, field: usize, color_field: usize) -> Option<Recon> {
-        for &b in self.regions.bricks_of(region) {
-            if let Some(cell) = self.cell_in_brick(pu, b as usize) {
-                return Some(Recon {
-                    value: self.values[field][cell],
-                    color: self.values[color_field][cell],
-                    gradient: Vec3::ZERO,
-                });
-            }
-        }
-        None
-    }
-
-    /// Index (into the brick-ordered values) of the cell of brick `b`
-    /// containing unit-space point `pu`.
-    fn cell_in_brick(&self, pu: Vec3, b: usize) -> Option<usize> {
-        let b = &self.bricks[b];
-        let w = b.width() as f32;
-        let mut i = [0i32; 3];
-        for a in 0..3 {
-            let x = ((pu[a] - b.lower[a] as f32) / w).floor();
-            if !(x >= 0.0 && x < b.size[a] as f32) {
-                return None;
-            }
-            i[a] = x as i32;
-        }
-        Some(b.offset as usize + ((i[2] * b.size[1] + i[1]) * b.size[0] + i[0]) as usize)
-    }
-
     /// All fields at `p` (world): values, and gradients when asked, using the
     /// volume's reconstruction. `None` outside the data. The cells' terms are
     /// added in an order fixed by the terms, so the bits do not depend on
@@ -515,75 +417,6 @@ impl AmrVolume {
                     .map(|x| (x.value, x.gradient))
             })
             .collect()
-    }
-
-    fn to_sample(&self, r: Recon) -> Sample {
-        Sample {
-            value: r.value,
-            attribute: match self.settings.color_field {
-                Some(_) => Attribute::Scalar(r.color),
-                None => Attribute::None,
-            },
-        }
-    }
-
-    /// Exact `∫ value dt` with nearest reconstruction: every cell's value times
-    /// the length of the ray inside it (3D DDA through each brick the ray hits).
-    fn nearest_line_integral(&self, ray: &Ray, t: Range1) -> f64 {
-        let field = &self.values[self.settings.field];
-        let mut sum = 0.0f64;
-        self.brick_bvh.ray_query(ray, t, |bi, hit| {
-            let b = &self.bricks[bi as usize];
-            let w = b.width() as f64 * self.h as f64;
-            let lower =
-                [0, 1, 2].map(|a| self.origin[a] as f64 + b.lower[a] as f64 * self.h as f64);
-            let o = [0, 1, 2].map(|a| ray.origin[a] as f64);
-            let d = [0, 1, 2].map(|a| ray.dir[a] as f64);
-            let (t0, t1) = (hit.lo as f64, hit.hi as f64);
-            // Start cell at the midpoint-nudged entry, then step cell faces.
-            let entry = t0 + (t1 - t0) * 1e-9;
-            let mut i = [0i32; 3];
-            let mut t_next = [f64::INFINITY; 3];
-            let mut t_delta = [f64::INFINITY; 3];
-            let mut step = [0i32; 3];
-            for a in 0..3 {
-                let x = (o[a] + d[a] * entry - lower[a]) / w;
-                i[a] = (x.floor() as i32).clamp(0, b.size[a] - 1);
-                if d[a] > 0.0 {
-                    step[a] = 1;
-                    t_next[a] = (lower[a] + (i[a] + 1) as f64 * w - o[a]) / d[a];
-                    t_delta[a] = w / d[a];
-                } else if d[a] < 0.0 {
-                    step[a] = -1;
-                    t_next[a] = (lower[a] + i[a] as f64 * w - o[a]) / d[a];
-                    t_delta[a] = -w / d[a];
-                }
-            }
-            let mut t_cur = t0;
-            loop {
-                let a = if t_next[0] <= t_next[1] && t_next[0] <= t_next[2] {
-                    0
-                } else if t_next[1] <= t_next[2] {
-                    1
-                } else {
-                    2
-                };
-                let t_exit = t_next[a].min(t1);
-                let cell =
-                    b.offset as usize + ((i[2] * b.size[1] + i[1]) * b.size[0] + i[0]) as usize;
-                sum += field[cell] as f64 * (t_exit - t_cur).max(0.0);
-                t_cur = t_exit;
-                if t_exit >= t1 {
-                    break;
-                }
-                i[a] += step[a];
-                if i[a] < 0 || i[a] >= b.size[a] {
-                    break;
-                }
-                t_next[a] += t_delta[a];
-            }
-        });
-        sum
     }
 }
 
@@ -626,13 +459,40 @@ impl Volume for AmrVolume {
             .map(|x| (self.to_sample(x), x.gradient))
     }
 
+    /// The packet path reconstructs a whole batch region by region
+    /// ([`batch`]).
+    fn packet_sampling(&self) -> bool {
+        true
+    }
+
+    fn sample_batch(
+        &self,
+        batch: &SampleBatch,
+        gradient: bool,
+        out: &mut Vec<(Option<Sample>, Vec3)>,
+    ) {
+        self.sample_batch_in(batch, gradient, out);
+    }
+
     /// One interval per visible region the ray crosses, in order; the step is
     /// half the region's finest cell width (two samples per finest cell at
-    /// sampling rate 1: adaptive sampling, ExaBricks §4.2). Every region is
-    /// traversed here; a prepared [`crate::AmrContext`] traverses only the
-    /// visible ones.
+    /// sampling rate 1: adaptive sampling, ExaBricks §4.2). The regions are
+    /// found by a front-to-back walk of the region tree; a prepared
+    /// [`crate::AmrContext`] skips the subtrees its transfer function
+    /// cannot see.
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
-        self.region_intervals(&self.region_bvh, None, ray, t, query, out);
+        self.region_intervals(None, ray, t, query, out, usize::MAX);
+    }
+
+    fn intervals_chunk(
+        &self,
+        ray: &Ray,
+        t: Range1,
+        query: &IntervalQuery,
+        out: &mut Vec<Interval>,
+        max: usize,
+    ) -> Option<f32> {
+        self.region_intervals(None, ray, t, query, out, max)
     }
 
     fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
@@ -640,138 +500,5 @@ impl Volume for AmrVolume {
             Reconstruction::Nearest => self.nearest_line_integral(ray, t),
             Reconstruction::Basis => self.basis_line_integral(ray, t),
         }
-    }
-}
-
-/// The reconstruction that the regions replace: cell location through a BVH
-/// over every cell's support, then the same basis sum (Wald et al.'s method).
-/// The baseline for benchmarks and a cross-check in tests.
-pub struct CellLocator {
-    cells: Vec<[i32; 4]>,
-    values: Vec<f32>,
-    bvh: Bvh,
-    origin: Vec3,
-    h: f32,
-}
-
-impl CellLocator {
-    pub fn new(cells: &AmrCells, field: usize) -> CellLocator {
-        let (o, h) = (cells.origin, cells.cell_size);
-        let boxes: Vec<Aabb> = cells
-            .cells
-            .iter()
-            .map(|c| {
-                let w = (1i64 << c[3]) as f32;
-                let lo = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) - Vec3::splat(0.5 * w);
-                Aabb::new(o + lo * h, o + (lo + Vec3::splat(2.0 * w)) * h)
-            })
-            .collect();
-        CellLocator {
-            cells: cells.cells.clone(),
-            values: cells.fields[field].1.clone(),
-            bvh: Bvh::build(&boxes),
-            origin: o,
-            h,
-        }
-    }
-
-    /// Basis-reconstructed value at `p` (world), `None` where no tent reaches.
-    pub fn sample(&self, p: Vec3) -> Option<f32> {
-        let pu = (p - self.origin) * (1.0 / self.h);
-        let (mut sw, mut sv) = (0.0f64, 0.0f64);
-        self.bvh.point_query(p, |i| {
-            let c = self.cells[i as usize];
-            let w = (1i64 << c[3]) as f32;
-            let mut h = 1.0f32;
-            for a in 0..3 {
-                let centre = c[a] as f32 + 0.5 * w;
-                h *= (1.0 - (centre - pu[a]).abs() / w).max(0.0);
-            }
-            sw += h as f64;
-            sv += h as f64 * self.values[i as usize] as f64;
-        });
-        (sw > 0.0).then(|| (sv / sw) as f32)
-    }
-}
-
-impl AmrVolume {
-    /// `∫ value dV` of the opacity field when it is known exactly: with
-    /// nearest reconstruction, Σ value × cell volume (what a projection over
-    /// the full bounds must conserve). `None` for basis reconstruction.
-    pub fn exact_integral(&self) -> Option<f64> {
-        if self.settings.reconstruction != Reconstruction::Nearest {
-            return None;
-        }
-        let field = &self.values[self.settings.field];
-        let h3 = (self.h as f64).powi(3);
-        Some(
-            self.bricks
-                .iter()
-                .map(|b| {
-                    let w3 = (b.width() as f64).powi(3) * h3;
-                    let start = b.offset as usize;
-                    field[start..start + b.cell_count()]
-                        .iter()
-                        .map(|&v| v as f64)
-                        .sum::<f64>()
-                        * w3
-                })
-                .sum(),
-        )
-    }
-}
-
-/// The sums of the basis reconstruction: Σ weight, Σ weight × value (and
-/// colour), and their derivatives.
-#[derive(Clone, Copy, Debug, Default)]
-struct BasisSums {
-    sw: f64,
-    sv: f64,
-    sc: f64,
-    sdw: [f64; 3],
-    sdv: [f64; 3],
-}
-
-/// Where [`AmrVolume::reconstruct_into`] puts each cell's term: weight `h`,
-/// value `v`, colour value `c` and the weight's derivatives `d`.
-trait BasisSink {
-    fn add(&mut self, h: f32, v: f32, c: f32, d: [f32; 3], gradient: bool);
-    fn sums(&mut self, gradient: bool) -> BasisSums;
-}
-
-impl BasisSink for BasisSums {
-    #[inline(always)]
-    fn add(&mut self, h: f32, v: f32, c: f32, d: [f32; 3], gradient: bool) {
-        let v = v as f64;
-        self.sw += h as f64;
-        self.sv += h as f64 * v;
-        self.sc += h as f64 * c as f64;
-        if gradient {
-            for (a, &da) in d.iter().enumerate() {
-                self.sdw[a] += da as f64;
-                self.sdv[a] += da as f64 * v;
-            }
-        }
-    }
-    fn sums(&mut self, _: bool) -> BasisSums {
-        *self
-    }
-}
-
-/// Collects the terms, then adds them sorted by their bits.
-#[derive(Default)]
-struct SortedTerms(Vec<[f32; 6]>);
-
-impl BasisSink for SortedTerms {
-    fn add(&mut self, h: f32, v: f32, c: f32, d: [f32; 3], _: bool) {
-        self.0.push([h, v, c, d[0], d[1], d[2]]);
-    }
-    fn sums(&mut self, gradient: bool) -> BasisSums {
-        self.0.sort_unstable_by_key(|t| t.map(f32::to_bits));
-        let mut s = BasisSums::default();
-        for t in &self.0 {
-            s.add(t[0], t[1], t[2], [t[3], t[4], t[5]], gradient);
-        }
-        s
     }
 }

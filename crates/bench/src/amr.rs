@@ -11,8 +11,9 @@
 //!   (validate, brick build, region build with metadata, BVH build), median of
 //!   `--repeats`; the wall time of the whole `new` is the baseline the phases
 //!   are a share of. Then a transfer-function change: a new
-//!   `AmrContext::new` (the regions the TF can see and a BVH over them; what
-//!   `voxless_render::render` prepares per frame) with a TF whose opacity is
+//!   `AmrContext::new` (the regions the TF can see and a mask of the region
+//!   tree's subtrees holding them; what `voxless_render::render` prepares
+//!   per frame) with a TF whose opacity is
 //!   zero below the median of the regions' (normalised) maxima, so it hides
 //!   about half the regions, against `new`.
 //! - **Reconstruction** (Table 3): the same points reconstructed through
@@ -36,9 +37,9 @@
 //!   Adaptive sampling on: the default step, half the finest cell width of
 //!   each region; off: `settings.step` = half the finest cell width of the
 //!   whole volume. TF space skipping on: the context `AmrContext::new` builds
-//!   for the TF (what `voxless_render::render` prepares) leaves the regions
-//!   the TF makes invisible out of the interval BVH; off: a context with
-//!   every region in it. The contexts are built before the timer starts.
+//!   for the TF (what `voxless_render::render` prepares) masks the subtrees
+//!   of the region tree without a visible region, so the walk skips them;
+//!   off: a context with every region in it. The contexts are built before the timer starts.
 //!   Either context still drops intervals whose range the TF makes
 //!   invisible, so "off" does not sample them; the two extra "none" rows
 //!   wrap the volume so that every interval is handed out and sampled (no
@@ -268,7 +269,7 @@ pub fn run(o: AmrArgs) -> Result<()> {
              table (opacity 0 below the cut), median of {repeats}\n"
         );
         println!(
-            "| data set | TF cut | adaptive sampling | TF space skipping | regions in BVH | step \
+            "| data set | TF cut | adaptive sampling | TF space skipping | regions walked | step \
              | samples / pixel | frame s | speedup vs (off, off) | max abs diff vs (off, off) |"
         );
         println!("|---|---:|---|---|---:|---|---:|---:|---:|---:|");

@@ -297,6 +297,7 @@ pub fn check_contract<V: Volume>(volume: &V, c: &Contract) -> Vec<String> {
         rays: &batch_rays,
         offsets: &offsets,
         t: &batch_t,
+        hints: None,
     };
     for gradient in [false, true] {
         let mut out = Vec::new();

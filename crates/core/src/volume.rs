@@ -15,6 +15,8 @@
 //!
 //! Optional hooks with correct defaults let a kind go faster without a second
 //! renderer: [`Volume::sample_batch`] (a packet of samples at once),
+//! [`Volume::intervals_chunk`] (a ray's intervals front to back, a chunk at
+//! a time, so nothing is found behind where a ray turns opaque),
 //! [`Volume::tile_view`] (the intervals of a whole screen tile at once) and
 //! [`Volume::project_image`] (a whole column-density image at once).
 
@@ -227,6 +229,31 @@ pub trait Volume: Send + Sync {
     /// clears), in increasing `t`, non-overlapping.
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>);
 
+    /// [`Volume::intervals`] a chunk at a time, front to back: appends the
+    /// first intervals of `ray` within `t` to `out` — stopping after `max`
+    /// of them where the volume can — and returns where the rest begins,
+    /// `None` once everything is given. Asking again from there
+    /// (`Range1::new(rest, t.hi)`) appends the next ones, and the chunks
+    /// together are exactly the list [`Volume::intervals`] gives for `t`
+    /// (a returned `rest` lies past the start of what was asked for).
+    ///
+    /// Integrators ask for the next chunk only while a ray is not opaque,
+    /// so a volume that finds its intervals in order (AMR: a front-to-back
+    /// walk of its region tree) does no work behind the point where a ray
+    /// terminates. The default gives the whole list at once.
+    fn intervals_chunk(
+        &self,
+        ray: &Ray,
+        t: Range1,
+        query: &IntervalQuery,
+        out: &mut Vec<Interval>,
+        max: usize,
+    ) -> Option<f32> {
+        let _ = max;
+        self.intervals(ray, t, query, out);
+        None
+    }
+
     /// A faster way to get the intervals of every ray of a screen tile at
     /// once, prepared for one camera and image size (tessellations: each
     /// tet rasterised once per tile, every pixel's crossings sorted). `None`
@@ -269,6 +296,10 @@ pub struct SampleBatch<'a> {
     /// The samples of ray `r` are `t[offsets[r]..offsets[r + 1]]`, increasing.
     pub offsets: &'a [u32],
     pub t: &'a [f32],
+    /// Per sample (in the order of `t`), the [`Interval::hint`] of the
+    /// interval it lies in, when the caller knows it: a volume may use it
+    /// as [`Volume::sample_in`] does. `None`: unknown.
+    pub hints: Option<&'a [u32]>,
 }
 
 impl SampleBatch<'_> {
@@ -359,6 +390,16 @@ impl<V: Volume + ?Sized> Volume for &V {
     }
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
         (**self).intervals(ray, t, query, out)
+    }
+    fn intervals_chunk(
+        &self,
+        ray: &Ray,
+        t: Range1,
+        query: &IntervalQuery,
+        out: &mut Vec<Interval>,
+        max: usize,
+    ) -> Option<f32> {
+        (**self).intervals_chunk(ray, t, query, out, max)
     }
     fn tile_view(&self, view: &View) -> Option<Box<dyn TileIntervals + '_>> {
         (**self).tile_view(view)

@@ -96,6 +96,7 @@ impl Packet {
             rays: &self.rays,
             offsets: &self.offsets,
             t: &self.t,
+            hints: None,
         }
     }
 

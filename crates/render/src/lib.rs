@@ -41,6 +41,7 @@
 
 pub mod bluenoise;
 pub mod colorbar;
+mod cursor;
 pub mod font;
 mod march;
 pub mod mirror;
@@ -53,7 +54,8 @@ pub mod testing;
 mod tile;
 mod work;
 
-pub use march::{MIN_STEP_ULPS, RayStats, march, min_step_at, own_range, step_in};
+pub use cursor::{MIN_STEP_ULPS, min_step_at, step_in};
+pub use march::{RayStats, march, own_range};
 pub use mirror::Mirrored;
 pub use packet::{PACKET, WINDOW_STEPS};
 pub use scatter::{FreeFlight, LightSource, Noise, Scatter};
@@ -228,7 +230,7 @@ impl RenderSettings {
     /// gives them opacity, or an iso-value lies in `r`. Space skipping drops
     /// what this rejects.
     pub fn is_visible(&self, tf: &TransferFunction, r: Range1) -> bool {
-        (self.volume && tf.max_opacity(self.normalize(r.lo), self.normalize(r.hi)) > 0.0)
+        (self.volume && tf.any_opacity(self.normalize(r.lo), self.normalize(r.hi)))
             || self.iso.iter().any(|&v| r.contains(v))
     }
 
@@ -665,6 +667,8 @@ pub fn project_in<V: Volume>(
     Ok(rows.into_iter().flatten().flatten().collect())
 }
 
+#[cfg(test)]
+mod cursor_tests;
 #[cfg(test)]
 mod scatter_tests;
 #[cfg(test)]

@@ -3,7 +3,8 @@
 //! scattering) shares, so they place and integrate samples identically:
 //!
 //! 1. the ray's span inside the volume (and clip box) and the volume's
-//!    visible intervals along it ([`crate::tile`] gets them per tile);
+//!    visible intervals along it, asked for a chunk at a time as the ray
+//!    goes ([`RayIntervals`]; a tile view gives whole lists per tile);
 //! 2. [`Cursor`]: the sample segments inside those intervals, in order — the
 //!    cells of a lattice of step `dt` fixed on the ray (offset by one random
 //!    number per pixel sample: jitter), each sampled at its midpoint; a
@@ -16,12 +17,14 @@ use voxless_core::{
 };
 use voxless_transfer::TransferFunction;
 
+use crate::cursor::{Cursor, RayIntervals, Segment};
 use crate::sampling::PixelRng;
 use crate::surface::iso_visibility;
 use crate::{Light, RenderSettings};
 
 /// Emission–absorption along one ray; returns premultiplied linear RGBA.
 /// (Renders get their intervals per tile; this is the one-ray entry.)
+/// `scratch` holds the ray's intervals (as many as were asked for).
 pub fn march<V: Volume>(
     volume: &V,
     ray: &Ray,
@@ -36,36 +39,38 @@ pub fn march<V: Volume>(
         return [0.0; 4];
     }
     let visible = |r: Range1| settings.is_visible(tf, r);
-    volume.intervals(
-        ray,
-        spans.span,
-        &IntervalQuery {
-            is_visible: &visible,
-        },
-        scratch,
-    );
+    let query = IntervalQuery {
+        is_visible: &visible,
+    };
+    let mut ivs = RayIntervals::with_buffer(std::mem::take(scratch));
+    ivs.start(spans.span);
     let ctx = Ctx::new(tf, settings, volume.classified());
-    march_intervals(
+    let rgba = march_intervals(
         volume,
         ray,
-        scratch,
+        &mut ivs,
+        &query,
         &spans,
         0.0,
         rng,
         &ctx,
         &mut RayStats::default(),
-    )
+    );
+    *scratch = ivs.list;
+    rgba
 }
 
-/// Emission–absorption along `ray` over its `intervals` (within
-/// `spans.span`), starting from opacity `alpha0` (0 for a whole ray; a
-/// render of one box of a decomposition continues what the boxes in front
-/// of it composited); what the ray saw is added to `stats`.
+/// Emission–absorption along `ray` over its intervals `ivs` (within
+/// `spans.span`; asked of the volume as the ray goes unless complete),
+/// starting from opacity `alpha0` (0 for a whole ray; a render of one box
+/// of a decomposition continues what the boxes in front of it composited);
+/// what the ray saw is added to `stats`.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn march_intervals<V: Volume>(
     volume: &V,
     ray: &Ray,
-    intervals: &[Interval],
+    ivs: &mut RayIntervals,
+    query: &IntervalQuery,
     spans: &RaySpans,
     alpha0: f32,
     rng: &PixelRng,
@@ -74,13 +79,19 @@ pub(crate) fn march_intervals<V: Volume>(
 ) -> [f32; 4] {
     let gradient = ctx.needs_gradient();
     let mut state = RayState::new(spans.cells, alpha0, *rng);
+    // The first chunk: every interval for volumes that hand them out at
+    // once, which the fast path below needs.
+    ivs.fetch(volume, ray, query);
     // Only constant pieces and no iso-surfaces (a tessellation's usual
     // ray): each piece (the part owned) composited whole, without cursor or
     // iso bookkeeping — the same arithmetic as `feed`, in a tight loop.
-    if ctx.settings.iso.is_empty() && intervals.iter().all(|iv| iv.kind == IntervalKind::Constant) {
+    if ctx.settings.iso.is_empty()
+        && ivs.is_complete()
+        && ivs.list.iter().all(|iv| iv.kind == IntervalKind::Constant)
+    {
         if ctx.settings.volume {
             let own = spans.own;
-            for iv in intervals {
+            for iv in &ivs.list {
                 let len = iv.t.hi.min(own.hi) - iv.t.lo.max(own.lo);
                 if len > 0.0
                     && state.composite(&Sample::scalar(iv.value_range.lo), len, Vec3::ZERO, ctx)
@@ -92,8 +103,8 @@ pub(crate) fn march_intervals<V: Volume>(
         return state.rgba();
     }
     let mut cursor = spans.cursor(rng);
-    while let Some(seg) = cursor.next(intervals, ctx.settings) {
-        let iv = &intervals[seg.interval as usize];
+    while let Some(seg) = cursor.next_in(ivs, volume, ray, query, ctx.settings) {
+        let iv = &ivs.list[seg.interval as usize];
         let p = ray.at(seg.t);
         let (sample, g) = if let Some(v) = iv.constant_value() {
             (Some(Sample::scalar(v)), Vec3::ZERO)
@@ -106,6 +117,7 @@ pub(crate) fn march_intervals<V: Volume>(
             (volume.sample_in(p, iv), Vec3::ZERO)
         };
         if state.feed(volume, ray, iv, seg, sample, g, ctx) {
+            // Opaque: the intervals behind are never asked for.
             stats.merge(&state.stats);
             return state.rgba();
         }
@@ -173,233 +185,6 @@ impl RaySpans {
     /// A cursor over this ray's segments.
     pub fn cursor(&self, rng: &PixelRng) -> Cursor {
         Cursor::new(self.cells, self.own, rng)
-    }
-}
-
-/// One sample: the midpoint `t` of a segment of length `len` in interval
-/// `interval` of the ray's list; `reset` when the segment does not start
-/// where the previous one ended (a gap: the previous sample no longer
-/// brackets iso-surface crossings; next to a constant interval the gap is
-/// zero).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Segment {
-    pub t: f32,
-    pub len: f32,
-    pub interval: u32,
-    pub reset: bool,
-}
-
-/// The step through sampled interval `iv`: the settings' step, else the
-/// interval's nominal step over the sampling rate — but at least a
-/// millionth of the interval and [`MIN_STEP_ULPS`] units in the last place
-/// of its far end, so every step moves `t` (a step below f32's resolution
-/// at `t` would never reach the end of the interval).
-#[inline]
-pub fn step_in(iv: &Interval, settings: &RenderSettings) -> f32 {
-    settings
-        .step
-        .unwrap_or(iv.nominal_dt / settings.sampling_rate)
-        .max(iv.t.span() * 1e-6)
-        .max(min_step_at(iv.t.hi))
-}
-
-/// Smallest step [`step_in`] takes at distance `t` along a ray.
-pub const MIN_STEP_ULPS: f32 = 4.0;
-
-/// [`MIN_STEP_ULPS`] units in the last place at `t` (f32), and at least
-/// the smallest normal f32.
-#[inline]
-pub fn min_step_at(t: f32) -> f32 {
-    (MIN_STEP_ULPS * f32::EPSILON * t.abs()).max(f32::MIN_POSITIVE)
-}
-
-/// Walks the segments of a ray's intervals in order; resumable, so the
-/// packet path can take them a window at a time.
-///
-/// **The sample lattice.** Sampled intervals are cut into the cells of a
-/// lattice fixed on the ray: boundaries at `t = (n + ξ)·dt` for integers
-/// `n`, with `ξ` one random number per pixel sample and `dt` the interval's
-/// step. A cell is sampled at its midpoint, with its length as the segment
-/// length, when that midpoint lies in one of the intervals. Cells are cut
-/// only where the lattice must end: at the ray's span (the volume's bounds
-/// and the clip box), where the step changes, and next to constant
-/// intervals — never at the seams between intervals of one step (macrocell
-/// or region boundaries) nor at the edges of skipped space, which depend on
-/// how the data is organised rather than on the field. So the samples of a
-/// ray depend on the field, the camera, the pixel and the sample index only,
-/// and a domain decomposition that renders the samples whose midpoints lie
-/// in its box ([`own_range`]) takes exactly the samples of the one-process
-/// render.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Cursor {
-    /// The interval the next segment is looked for in.
-    k: usize,
-    /// Lattice index of the next cell.
-    n: i64,
-    dt: f32,
-    /// The lattice offset in steps, in `[0, 1)`.
-    xi: f64,
-    /// Cells are cut to this span (the ray inside the bounds and clip box).
-    span: Range1,
-    /// Only segments whose midpoints lie in `[own.lo, own.hi)` are returned.
-    own: Range1,
-    /// Cuts of the current run of same-step intervals.
-    run_lo: f32,
-    run_hi: f32,
-    /// Whether `dt`, `n` and `run_lo` belong to interval `k`'s run.
-    open: bool,
-    /// Where the last returned segment ended.
-    prev_end: f32,
-}
-
-impl Cursor {
-    /// A cursor for a ray whose part inside the volume is `span`, returning
-    /// the segments whose midpoints lie in `own` (half-open; everything for
-    /// a one-process render), with the lattice offset drawn from `rng`.
-    pub fn new(span: Range1, own: Range1, rng: &PixelRng) -> Self {
-        Cursor {
-            k: 0,
-            n: 0,
-            dt: 0.0,
-            xi: rng.uniform(2) as f64,
-            span,
-            own,
-            run_lo: span.lo,
-            run_hi: span.hi,
-            open: false,
-            prev_end: span.lo,
-        }
-    }
-
-    /// The step of the current interval (valid after the first `next`).
-    pub fn dt(&self) -> f32 {
-        self.dt
-    }
-
-    /// Boundary `n` of the lattice (computed from `n`, never accumulated, so
-    /// it does not depend on where the walk started).
-    #[inline]
-    fn boundary(&self, n: i64) -> f32 {
-        ((n as f64 + self.xi) * self.dt as f64) as f32
-    }
-
-    /// The first lattice cell that can hold a midpoint at or after `t`.
-    #[inline]
-    fn cell_before(&self, t: f32) -> i64 {
-        ((t as f64 / self.dt as f64 - self.xi).floor() as i64).saturating_sub(1)
-    }
-
-    /// Whether interval `nx` goes on with the current run's lattice.
-    #[inline]
-    fn continues(&self, nx: &Interval, settings: &RenderSettings) -> bool {
-        nx.constant_value().is_none() && Self::step_of(nx, settings).to_bits() == self.dt.to_bits()
-    }
-
-    /// The step of sampled interval `iv` ([`step_in`]: its floors keep the
-    /// lattice representable in `f32` at this `t` and bound the cells per
-    /// interval, so a tiny step can never hang a render; they depend on the
-    /// interval's extent only where the step is below a millionth of it).
-    #[inline]
-    fn step_of(iv: &Interval, settings: &RenderSettings) -> f32 {
-        step_in(iv, settings)
-    }
-
-    #[inline]
-    pub fn next(&mut self, intervals: &[Interval], settings: &RenderSettings) -> Option<Segment> {
-        loop {
-            let iv = intervals.get(self.k)?;
-            if iv.t.lo >= self.own.hi {
-                // Every later midpoint lies beyond what this render owns.
-                return None;
-            }
-            if iv.constant_value().is_some() {
-                // Constant: one segment, the whole interval (the part owned),
-                // no jitter.
-                self.k += 1;
-                self.open = false;
-                let lo = iv.t.lo.max(self.own.lo);
-                let hi = iv.t.hi.min(self.own.hi);
-                if hi <= lo {
-                    continue;
-                }
-                return Some(self.emit(lo, hi, self.k - 1));
-            }
-            if !self.open {
-                self.dt = Self::step_of(iv, settings);
-                // A new run starts at the span for the first interval, else
-                // where this interval starts (the step changed, or a
-                // constant interval ended).
-                self.run_lo = if self.k == 0 { self.span.lo } else { iv.t.lo };
-                self.n = self.cell_before(self.run_lo);
-                // The run goes on while the next intervals are sampled with
-                // the same step; its cells end with the last of them (at the
-                // span when that is the ray's last interval).
-                let mut last = self.k;
-                while intervals
-                    .get(last + 1)
-                    .is_some_and(|nx| self.continues(nx, settings))
-                {
-                    last += 1;
-                }
-                self.run_hi = if last + 1 == intervals.len() {
-                    self.span.hi
-                } else {
-                    intervals[last].t.hi.min(self.span.hi)
-                };
-                self.open = true;
-            }
-            let continues = intervals
-                .get(self.k + 1)
-                .is_some_and(|nx| self.continues(nx, settings));
-            let run_hi = self.run_hi;
-            // Skip the cells before this interval and before what is owned
-            // without walking them (a gap of skipped space can be long).
-            self.n = self
-                .n
-                .max(self.cell_before(iv.t.lo.max(self.own.lo).max(self.run_lo)));
-            loop {
-                let b0 = self.boundary(self.n).max(self.run_lo);
-                let b1 = self.boundary(self.n + 1).min(run_hi);
-                if b0 >= run_hi {
-                    break;
-                }
-                if b1 <= b0 {
-                    self.n += 1;
-                    continue;
-                }
-                let m = b0 + 0.5 * (b1 - b0);
-                if m >= iv.t.hi {
-                    break;
-                }
-                self.n += 1;
-                if m < iv.t.lo || m < self.own.lo {
-                    continue;
-                }
-                if m >= self.own.hi {
-                    return None;
-                }
-                return Some(Segment {
-                    t: m,
-                    ..self.emit(b0, b1, self.k)
-                });
-            }
-            // This interval is done; a run that goes on keeps its lattice.
-            self.open = continues;
-            self.k += 1;
-        }
-    }
-
-    /// The segment `[lo, hi)` of interval `k`, sampled at its midpoint.
-    #[inline]
-    fn emit(&mut self, lo: f32, hi: f32, k: usize) -> Segment {
-        let reset = lo != self.prev_end;
-        self.prev_end = hi;
-        Segment {
-            t: lo + 0.5 * (hi - lo),
-            len: hi - lo,
-            interval: k as u32,
-            reset,
-        }
     }
 }
 

@@ -190,6 +190,9 @@ impl<V: Volume> Volume for Mirrored<'_, V> {
                 rays: &rays,
                 offsets: &offsets,
                 t: &ts,
+                // The samples keep their order, so the caller's hints (the
+                // inner volume's intervals') still line up.
+                hints: batch.hints,
             },
             gradient,
             out,

@@ -8,12 +8,15 @@
 //!
 //! Samples are placed by the same [`Cursor`] and composited by the same
 //! [`RayState::feed`] as [`crate::march`], so the packet path draws the same
-//! image; only the sums inside the volume may run in another order.
+//! image; only the sums inside the volume may run in another order. Each
+//! ray asks the volume for its intervals as its cursor reaches them, so a
+//! ray that turns opaque asks for nothing behind.
 
-use voxless_core::{IntervalLists, Ray, Sample, SampleBatch, Vec3, Volume};
+use voxless_core::{IntervalQuery, Ray, Sample, SampleBatch, Vec3, Volume};
 
 use crate::Tile;
-use crate::march::{Ctx, Cursor, RaySpans, RayState, RayStats, Segment};
+use crate::cursor::{Cursor, RayIntervals, Segment};
+use crate::march::{Ctx, RaySpans, RayState, RayStats};
 use crate::sampling::PixelRng;
 
 /// Side of a packet in pixels.
@@ -25,14 +28,14 @@ const MAX_PER_RAY: usize = 256;
 /// Marks a segment of a constant interval: it takes no slot in the batch.
 const CONSTANT: u32 = u32::MAX;
 
-/// A tile's rays, their random streams, spans, starting opacities and
-/// intervals (row-major).
+/// A tile's rays, their random streams, spans and starting opacities
+/// (row-major), and the query their intervals are asked with.
 pub(crate) struct TileInput<'a> {
     pub rays: &'a [Ray],
     pub rngs: &'a [PixelRng],
     pub spans: &'a [RaySpans],
     pub alpha0: &'a [f32],
-    pub lists: &'a IntervalLists,
+    pub query: &'a IntervalQuery<'a>,
 }
 
 /// One ray of a packet.
@@ -53,6 +56,8 @@ pub(crate) struct PacketScratch {
     batch_rays: Vec<Ray>,
     offsets: Vec<u32>,
     t: Vec<f32>,
+    /// Per sample in `t`, the hint of its interval.
+    hints: Vec<u32>,
     /// Per gathered segment, its slot in `t`/`out` (or [`CONSTANT`]).
     segs: Vec<(Segment, u32)>,
     /// Per ray gathered in a pass: (packet ray, its first and end segment).
@@ -60,12 +65,15 @@ pub(crate) struct PacketScratch {
     out: Vec<(Option<Sample>, Vec3)>,
 }
 
-/// Renders `tile` with packets; pixels row-major into `out`.
+/// Renders `tile` with packets; pixels row-major into `out`. `ivs` holds
+/// each ray's intervals (started, or complete from a tile view).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn render_tile<V: Volume>(
     volume: &V,
     ctx: &Ctx,
     tile: Tile,
     input: TileInput,
+    ivs: &mut [RayIntervals],
     scratch: &mut PacketScratch,
     out: &mut Vec<[f32; 4]>,
     stats: &mut RayStats,
@@ -89,13 +97,19 @@ pub(crate) fn render_tile<V: Volume>(
                         done: spans.is_empty(),
                     };
                     if !p.done {
-                        p.next = p.cursor.next(input.lists.of(r), ctx.settings);
+                        p.next = p.cursor.next_in(
+                            &mut ivs[r],
+                            volume,
+                            &input.rays[r],
+                            input.query,
+                            ctx.settings,
+                        );
                         p.done = p.next.is_none();
                     }
                     scratch.rays.push(p);
                 }
             }
-            run_packet(volume, ctx, &input, scratch);
+            run_packet(volume, ctx, &input, ivs, scratch);
             for p in &scratch.rays {
                 out[p.r] = p.state.rgba();
                 stats.merge(&p.state.stats);
@@ -105,7 +119,13 @@ pub(crate) fn render_tile<V: Volume>(
 }
 
 /// Runs passes until every ray of the packet is done.
-fn run_packet<V: Volume>(volume: &V, ctx: &Ctx, input: &TileInput, s: &mut PacketScratch) {
+fn run_packet<V: Volume>(
+    volume: &V,
+    ctx: &Ctx,
+    input: &TileInput,
+    ivs: &mut [RayIntervals],
+    s: &mut PacketScratch,
+) {
     let settings = ctx.settings;
     let gradient = ctx.needs_gradient();
     loop {
@@ -125,6 +145,7 @@ fn run_packet<V: Volume>(volume: &V, ctx: &Ctx, input: &TileInput, s: &mut Packe
         s.batch_rays.clear();
         s.offsets.clear();
         s.t.clear();
+        s.hints.clear();
         s.segs.clear();
         s.gathered.clear();
         s.offsets.push(0);
@@ -132,7 +153,8 @@ fn run_packet<V: Volume>(volume: &V, ctx: &Ctx, input: &TileInput, s: &mut Packe
             if p.done {
                 continue;
             }
-            let ivs = input.lists.of(p.r);
+            let ivs = &mut ivs[p.r];
+            let ray = &input.rays[p.r];
             let (first_seg, first_t) = (s.segs.len(), s.t.len());
             while let Some(seg) = p.next {
                 // The furthest-behind ray always takes its first sample, so
@@ -141,13 +163,15 @@ fn run_packet<V: Volume>(volume: &V, ctx: &Ctx, input: &TileInput, s: &mut Packe
                 if (seg.t >= window_end && !leads) || s.segs.len() - first_seg >= MAX_PER_RAY {
                     break;
                 }
-                if ivs[seg.interval as usize].constant_value().is_some() {
+                let iv = &ivs.list[seg.interval as usize];
+                if iv.constant_value().is_some() {
                     s.segs.push((seg, CONSTANT));
                 } else {
                     s.segs.push((seg, s.t.len() as u32));
                     s.t.push(seg.t);
+                    s.hints.push(iv.hint);
                 }
-                p.next = p.cursor.next(ivs, settings);
+                p.next = p.cursor.next_in(ivs, volume, ray, input.query, settings);
             }
             if s.t.len() > first_t {
                 s.batch_rays.push(input.rays[p.r]);
@@ -162,6 +186,7 @@ fn run_packet<V: Volume>(volume: &V, ctx: &Ctx, input: &TileInput, s: &mut Packe
                     rays: &s.batch_rays,
                     offsets: &s.offsets,
                     t: &s.t,
+                    hints: Some(&s.hints),
                 },
                 gradient,
                 &mut s.out,
@@ -171,7 +196,7 @@ fn run_packet<V: Volume>(volume: &V, ctx: &Ctx, input: &TileInput, s: &mut Packe
         for &(i, lo, hi) in &s.gathered {
             let p = &mut s.rays[i];
             let ray = &input.rays[p.r];
-            let ivs = input.lists.of(p.r);
+            let ivs = &ivs[p.r].list;
             for &(seg, slot) in &s.segs[lo..hi] {
                 let iv = &ivs[seg.interval as usize];
                 let (sample, g) = match iv.constant_value() {

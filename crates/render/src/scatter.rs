@@ -28,7 +28,8 @@
 use voxless_core::{Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume};
 
 use crate::bluenoise;
-use crate::march::{Ctx, Cursor, region};
+use crate::cursor::Cursor;
+use crate::march::{Ctx, region};
 use crate::sampling::PixelRng;
 
 /// Where the light comes from.

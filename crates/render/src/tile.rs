@@ -1,10 +1,11 @@
 //! One tile of one pass: the tile's camera rays, their intervals (from the
-//! volume's tile view when it has one, else ray by ray), then one of the
-//! three integrators over those intervals — packets, per-sample marching,
-//! or single scattering.
+//! volume's tile view when it has one, else ray by ray, a chunk at a time
+//! as each ray goes), then one of the three integrators over those
+//! intervals — packets, per-sample marching, or single scattering.
 
 use voxless_core::{IntervalLists, IntervalQuery, Range1, Ray, TileRays, Volume};
 
+use crate::cursor::RayIntervals;
 use crate::march::{Ctx, RaySpans, RayStats, march_intervals, region};
 use crate::packet::{self, PacketScratch};
 use crate::sampling::PixelRng;
@@ -19,7 +20,10 @@ struct Scratch {
     spans: Vec<Range1>,
     ray_spans: Vec<RaySpans>,
     alpha0: Vec<f32>,
+    /// A tile view's lists.
     lists: IntervalLists,
+    /// Per ray, its intervals so far.
+    ivs: Vec<RayIntervals>,
     shadow: Vec<voxless_core::Interval>,
     packet: PacketScratch,
     hits: Vec<Option<Hit>>,
@@ -91,14 +95,19 @@ fn render_with<V: Volume>(
         }
     }
     // 2. Their visible intervals: the whole tile at once where the volume
-    // can, else ray by ray.
+    // can, else each ray's asked for as its samples reach them (so nothing
+    // is asked for behind the point where a ray turns opaque).
     let visible = |r: Range1| settings.is_visible(tf, r);
     let query = IntervalQuery {
         is_visible: &visible,
     };
-    s.lists.clear();
+    let n = s.rays.len();
+    if s.ivs.len() < n {
+        s.ivs.resize_with(n, RayIntervals::default);
+    }
     match &job.view {
         Some(view) => {
+            s.lists.clear();
             view.intervals(
                 &TileRays {
                     x0: tile.x,
@@ -112,28 +121,29 @@ fn render_with<V: Volume>(
                 &query,
                 &mut s.lists,
             );
-            debug_assert_eq!(s.lists.rays(), s.rays.len());
+            debug_assert_eq!(s.lists.rays(), n);
+            for (r, ivs) in s.ivs[..n].iter_mut().enumerate() {
+                ivs.complete(s.lists.of(r));
+            }
         }
         None => {
-            for (ray, span) in s.rays.iter().zip(&s.spans) {
-                if !span.is_empty() {
-                    volume.intervals(ray, *span, &query, &mut s.lists.intervals);
-                }
-                s.lists.end_ray();
+            for (ivs, span) in s.ivs[..n].iter_mut().zip(&s.spans) {
+                ivs.start(*span);
             }
         }
     }
     // 3. Integrate.
-    let n = s.rays.len();
+    let ivs = &mut s.ivs[..n];
     let mut out = Vec::with_capacity(n);
     if let Some(sc) = &settings.scatter {
         // Scattering paths are incoherent: one ray at a time.
-        for r in 0..n {
+        for (r, ray_ivs) in ivs.iter_mut().enumerate() {
             let (x, y) = (tile.x + r as u32 % tile.w, tile.y + r as u32 / tile.w);
+            ray_ivs.fetch_all(volume, &s.rays[r], &query);
             out.push(scatter::path(
                 volume,
                 &s.rays[r],
-                s.lists.of(r),
+                &ray_ivs.list,
                 &ctx,
                 sc,
                 (x, y),
@@ -151,18 +161,20 @@ fn render_with<V: Volume>(
                 rngs: &s.rngs,
                 spans: &s.ray_spans,
                 alpha0: &s.alpha0,
-                lists: &s.lists,
+                query: &query,
             },
+            ivs,
             &mut s.packet,
             &mut out,
             stats,
         );
     } else {
-        for r in 0..n {
+        for (r, ray_ivs) in ivs.iter_mut().enumerate() {
             out.push(march_intervals(
                 volume,
                 &s.rays[r],
-                s.lists.of(r),
+                ray_ivs,
+                &query,
                 &s.ray_spans[r],
                 s.alpha0[r],
                 &s.rngs[r],

@@ -7,7 +7,8 @@ use voxless_core::{Camera, IntervalQuery, Range1, Volume};
 use voxless_transfer::TransferFunction;
 
 use crate::RenderSettings;
-use crate::march::{region, step_in};
+use crate::cursor::step_in;
+use crate::march::region;
 
 /// What a render is expected to cost, before it starts (see
 /// [`estimate_work`]).

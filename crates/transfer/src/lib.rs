@@ -227,8 +227,6 @@ impl OpacityMap {
 
 /// Entries in the colour and opacity lookup tables.
 const LUT: usize = 1024;
-/// Bins of the max-opacity table.
-const BINS: usize = 256;
 
 /// A colormap and opacity map baked for fast lookup.
 #[derive(Clone, Debug)]
@@ -237,7 +235,7 @@ pub struct TransferFunction {
     opacity_map: OpacityMap,
     color_lut: Vec<Vec3>,
     opacity_lut: Vec<f32>,
-    /// `max_table[level][i]` = max opacity over bins `i .. i + 2^level`.
+    /// `max_table[level][i]` = max of `opacity_lut[i .. i + 2^level]`.
     max_table: Vec<Vec<f32>>,
 }
 
@@ -246,24 +244,13 @@ impl TransferFunction {
         let at = |i: usize| i as f32 / (LUT - 1) as f32;
         let color_lut: Vec<Vec3> = (0..LUT).map(|i| colormap.linear(at(i))).collect();
         let opacity_lut: Vec<f32> = (0..LUT).map(|i| opacity_map.0.eval(at(i))).collect();
-        // Bin b covers x in [b/BINS, (b+1)/BINS]; lookups there interpolate
-        // between LUT entries whose segments overlap that span, so the bin max
-        // is the max over those entries — conservative for what `opacity` returns.
-        let bins: Vec<f32> = (0..BINS)
-            .map(|b| {
-                let lo = ((b as f32 / BINS as f32) * (LUT - 1) as f32).floor() as usize;
-                let hi = (((b + 1) as f32 / BINS as f32) * (LUT - 1) as f32).ceil() as usize;
-                opacity_lut[lo..=hi.min(LUT - 1)]
-                    .iter()
-                    .copied()
-                    .fold(0.0, f32::max)
-            })
-            .collect();
-        let mut max_table = vec![bins];
+        // A sparse table over the LUT's knots: the maximum of any run of
+        // them is two overlapping power-of-two windows.
+        let mut max_table = vec![opacity_lut.clone()];
         let mut width = 1;
-        while width * 2 <= BINS {
+        while width * 2 <= LUT {
             let prev = max_table.last().unwrap();
-            let next: Vec<f32> = (0..=BINS - 2 * width)
+            let next: Vec<f32> = (0..=LUT - 2 * width)
                 .map(|i| prev[i].max(prev[i + width]))
                 .collect();
             max_table.push(next);
@@ -315,18 +302,37 @@ impl TransferFunction {
         self.opacity_lut[i] * (1.0 - s) + self.opacity_lut[i + 1] * s
     }
 
-    /// An upper bound of `opacity(x)` over normalised `x` in `[lo, hi]`.
+    /// Whether `opacity(x)` is non-zero anywhere in `[lo, hi]`: exactly
+    /// `max_opacity(lo, hi) > 0`, answered from the ends alone when they
+    /// settle it (space skipping asks once per interval).
+    #[inline]
+    pub fn any_opacity(&self, lo: f32, hi: f32) -> bool {
+        lo <= hi && (self.opacity(hi) > 0.0 || self.max_opacity(lo, hi) > 0.0)
+    }
+
+    /// The maximum of `opacity(x)` over normalised `x` in `[lo, hi]` (up to
+    /// rounding in `opacity`'s interpolation). `opacity` is piecewise
+    /// linear between the LUT's knots, so the maximum lies at an end or at
+    /// a knot inside: exact, so a range the map gives no opacity anywhere
+    /// is recognised as invisible even where it ends at the foot of a ramp
+    /// (a conservative bound over coarser bins would call it visible).
     pub fn max_opacity(&self, lo: f32, hi: f32) -> f32 {
         if !(lo <= hi) {
             return 0.0;
         }
-        let bin = |x: f32| ((x.clamp(0.0, 1.0) * BINS as f32) as usize).min(BINS - 1);
-        let (a, b) = (bin(lo), bin(hi));
+        let ends = self.opacity(lo).max(self.opacity(hi));
+        let pos = |x: f32| x.clamp(0.0, 1.0) * (LUT - 1) as f32;
+        // Knots strictly between the ends.
+        let a = pos(lo).floor() as usize + 1;
+        let b = (pos(hi).ceil() as usize).saturating_sub(1);
+        if a > b {
+            return ends;
+        }
         // Sparse-table range maximum: two overlapping power-of-two windows.
         let len = b - a + 1;
         let level = (usize::BITS - 1 - len.leading_zeros()) as usize;
         let w = 1 << level;
-        self.max_table[level][a].max(self.max_table[level][b + 1 - w])
+        ends.max(self.max_table[level][a].max(self.max_table[level][b + 1 - w]))
     }
 }
 
@@ -375,6 +381,29 @@ mod tests {
         }
         // The zero-opacity region is recognised as invisible (away from the kink).
         assert_eq!(tf.max_opacity(0.0, 0.29), 0.0);
+        // And the maximum is the maximum, not a bound over a coarser grid.
+        for _ in 0..2000 {
+            let (a, b) = (rnd(), rnd());
+            let (lo, hi) = (a.min(b), a.max(b));
+            let brute = (0..=20_000)
+                .map(|k| tf.opacity(lo + (hi - lo) * k as f32 / 20_000.0))
+                .fold(0.0, f32::max);
+            let m = tf.max_opacity(lo, hi);
+            assert!(
+                m >= brute - 1e-7 && m <= brute + 1e-3,
+                "[{lo}, {hi}]: {m} vs {brute}"
+            );
+        }
+        // The foot of a ramp: values at or below the range's low end are
+        // invisible under the linear map.
+        let linear = TransferFunction::default_for_density();
+        assert_eq!(linear.max_opacity(0.0, 0.0), 0.0);
+        assert!(linear.max_opacity(0.0, 1e-3) > 0.0);
+        for _ in 0..2000 {
+            let (a, b) = (rnd(), rnd());
+            let (lo, hi) = (a.min(b) * 0.4, a.max(b) * 0.4);
+            assert_eq!(tf.any_opacity(lo, hi), tf.max_opacity(lo, hi) > 0.0);
+        }
     }
 
     #[test]

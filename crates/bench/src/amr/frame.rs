@@ -130,7 +130,8 @@ fn samples_per_pixel<V: Volume>(
 /// Space skipping of one configuration.
 #[derive(Clone, Copy, PartialEq)]
 enum Skip {
-    /// The context for the TF: a BVH of the visible regions.
+    /// The context for the TF: the region tree's walk skips subtrees
+    /// without a visible region.
     On,
     /// A context with every region: invisible intervals still dropped.
     Off,
@@ -220,8 +221,8 @@ pub(super) fn bench_frames(s: &Dataset, vol: &AmrVolume, o: &AmrArgs) -> Result<
         }
         let diff = image_diff(&images[0], &images[k]).0;
         let skipping = match skip {
-            Skip::On => "on (BVH of visible regions)",
-            Skip::Off => "off (BVH of all regions)",
+            Skip::On => "on (tree masked to visible regions)",
+            Skip::Off => "off (every region walked)",
             Skip::None => "none (every interval sampled)",
         };
         let step = match settings(adapt).step {

@@ -1,0 +1,203 @@
+//! Front-to-back walks of the region tree: the k-d tree the regions were
+//! cut by ([`crate::regions::KdNode`]), in world coordinates.
+//!
+//! **Why this tree.** The two children of a node lie on either side of its
+//! plane and do not overlap, so visiting the child on the ray's side of the
+//! plane first (the near child) meets the regions in the order the ray
+//! does: intervals come out sorted, one region at a time, and a walk can
+//! stop at any region and resume behind it (ExaBricks §4 steps a ray from
+//! region to region the same way, with one hardware traversal per step).
+//! A BVH over the regions (what [`crate::AmrVolume`] keeps for point
+//! location) has overlapping siblings, so it must collect every region a
+//! ray hits and sort them, even behind the point where the ray is opaque.
+//!
+//! **Exactness.** A region's `t` range comes out as
+//! `max(t.lo, entry planes)..min(t.hi, exit planes)`, each plane's `t`
+//! computed as `(x − o)·(1/d)` like [`voxless_core::Aabb::clip_ray`] does
+//! from the same `f32` plane positions as the region's box; the planes
+//! passed on the way down are the region's own faces or lie outside them
+//! along the ray, so the range is bit for bit the region box clipped to the
+//! ray. A ray in the plane of a cut belongs to the upper side (half-open
+//! boxes, as `clip_ray` treats them).
+//!
+//! **Visibility.** A [`NodeMask`] marks the subtrees holding at least one
+//! region a transfer function can see; the walk skips the others whole
+//! (TF space skipping, ExaBricks §4.1, without a tree per transfer
+//! function).
+
+use voxless_core::{Aabb, Range1, Ray};
+
+use crate::regions::KdNode;
+
+/// A node in world coordinates, 12 bytes.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    /// The cut's plane (inner nodes).
+    at: f32,
+    /// `0..=2`: an inner node cut across that axis; [`LEAF`]; [`HOLE`].
+    kind: u32,
+    /// Inner: offset of the right child from this node; leaf: the region.
+    index: u32,
+}
+
+const LEAF: u32 = 3;
+const HOLE: u32 = 4;
+
+/// The region k-d tree, ready to walk.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct RegionTree {
+    nodes: Vec<Node>,
+    /// The box the tree cuts (the union of the regions).
+    root: Aabb,
+}
+
+/// Per node of a [`RegionTree`], whether its subtree holds a region that
+/// can be seen.
+#[derive(Clone, Debug)]
+pub(crate) struct NodeMask(Vec<u64>);
+
+impl NodeMask {
+    #[inline]
+    fn get(&self, i: usize) -> bool {
+        self.0[i / 64] >> (i % 64) & 1 != 0
+    }
+    fn set(&mut self, i: usize) {
+        self.0[i / 64] |= 1 << (i % 64);
+    }
+}
+
+thread_local! {
+    /// A walk's pending far children (node, and the part of the ray in
+    /// it), kept between walks so that none allocates or clears a stack.
+    static STACK: std::cell::Cell<Vec<(u32, f32, f32)>> = const { std::cell::Cell::new(Vec::new()) };
+}
+
+impl RegionTree {
+    /// The tree of `tree` (as [`crate::regions::build`] made it) with cut
+    /// positions mapped to world coordinates by `world(axis, doubled
+    /// units)` — the mapping the region boxes `region_bounds` were made
+    /// with, so planes and boxes agree to the bit.
+    pub fn new(tree: &[KdNode], region_bounds: &[Aabb], world: impl Fn(usize, i64) -> f32) -> Self {
+        let nodes = tree
+            .iter()
+            .map(|n| match *n {
+                KdNode::Inner { axis, at, right } => Node {
+                    at: world(axis as usize, at),
+                    kind: axis as u32,
+                    index: right,
+                },
+                KdNode::Leaf(r) => Node {
+                    at: 0.0,
+                    kind: LEAF,
+                    index: r,
+                },
+                KdNode::Hole => Node {
+                    at: 0.0,
+                    kind: HOLE,
+                    index: 0,
+                },
+            })
+            .collect();
+        let root = region_bounds.iter().fold(Aabb::EMPTY, |b, &r| b.union(r));
+        RegionTree { nodes, root }
+    }
+
+    /// The mask of the subtrees holding a region `visible` accepts.
+    pub fn mask(&self, visible: impl Fn(u32) -> bool) -> NodeMask {
+        let mut mask = NodeMask(vec![0; self.nodes.len().div_ceil(64)]);
+        // Children follow their parent: a reverse sweep sees them first.
+        for i in (0..self.nodes.len()).rev() {
+            let n = self.nodes[i];
+            let seen = match n.kind {
+                LEAF => visible(n.index),
+                HOLE => false,
+                _ => mask.get(i + 1) || mask.get(i + n.index as usize),
+            };
+            if seen {
+                mask.set(i);
+            }
+        }
+        mask
+    }
+
+    /// Calls `leaf(region, t)` for every region (of those `mask` keeps)
+    /// that `ray` crosses within `t`, front to back, with a non-empty part
+    /// of the ray; `leaf` returns whether to go on. Returns where a stopped
+    /// walk can resume (the end of the last region given), `None` when
+    /// every region was given.
+    #[inline]
+    pub fn walk(
+        &self,
+        ray: &Ray,
+        t: Range1,
+        mask: Option<&NodeMask>,
+        mut leaf: impl FnMut(u32, Range1) -> bool,
+    ) -> Option<f32> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let t = self.root.clip_ray(ray, t);
+        if !(t.lo < t.hi) {
+            return None;
+        }
+        // Taken out of the thread-local (not borrowed) for the walk.
+        let mut stack = STACK.take();
+        stack.clear();
+        let rest = self.walk_with(ray, t, mask, &mut leaf, &mut stack);
+        STACK.set(stack);
+        rest
+    }
+
+    #[inline]
+    fn walk_with(
+        &self,
+        ray: &Ray,
+        t: Range1,
+        mask: Option<&NodeMask>,
+        leaf: &mut impl FnMut(u32, Range1) -> bool,
+        stack: &mut Vec<(u32, f32, f32)>,
+    ) -> Option<f32> {
+        let inv = ray.inv_dir();
+        let (mut i, mut lo, mut hi) = (0usize, t.lo, t.hi);
+        loop {
+            let n = self.nodes[i];
+            let keep = mask.is_none_or(|m| m.get(i));
+            if keep && n.kind < LEAF {
+                let a = n.kind as usize;
+                let (left, right) = (i + 1, i + n.index as usize);
+                let (o, d) = (ray.origin[a], ray.dir[a]);
+                let ts = (n.at - o) * inv[a];
+                if d == 0.0 || ts.is_nan() {
+                    // Parallel to the plane (or in it: upper side).
+                    i = if o < n.at { left } else { right };
+                    continue;
+                }
+                // The near child holds the part of the ray before the
+                // plane; a side the ray does not reach inside [lo, hi) is
+                // skipped.
+                let (near, far) = if d > 0.0 {
+                    (left, right)
+                } else {
+                    (right, left)
+                };
+                if ts >= hi {
+                    i = near;
+                } else if ts <= lo {
+                    i = far;
+                } else {
+                    stack.push((far as u32, ts, hi));
+                    i = near;
+                    hi = ts;
+                }
+                continue;
+            }
+            if keep && n.kind == LEAF && lo < hi && !leaf(n.index, Range1::new(lo, hi)) {
+                return (!stack.is_empty()).then_some(hi);
+            }
+            match stack.pop() {
+                Some((next, a, b)) => (i, lo, hi) = (next as usize, a, b),
+                None => return None,
+            }
+        }
+    }
+}

@@ -1,0 +1,391 @@
+//! Where a ray's samples lie: the [`Cursor`] over the sample lattice, and
+//! the ray's intervals, which [`RayIntervals`] asks of the volume a chunk at
+//! a time as the cursor reaches them — front to back, so a ray that turns
+//! opaque never asks for the intervals behind the point where it stopped.
+
+use voxless_core::{Interval, IntervalQuery, Range1, Ray, Volume};
+
+use crate::RenderSettings;
+use crate::sampling::PixelRng;
+
+/// One sample: the midpoint `t` of a segment of length `len` in interval
+/// `interval` of the ray's list; `reset` when the segment does not start
+/// where the previous one ended (a gap: the previous sample no longer
+/// brackets iso-surface crossings; next to a constant interval the gap is
+/// zero).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Segment {
+    pub t: f32,
+    pub len: f32,
+    pub interval: u32,
+    pub reset: bool,
+}
+
+/// The step through sampled interval `iv`: the settings' step, else the
+/// interval's nominal step over the sampling rate — but at least a
+/// millionth of the interval and [`MIN_STEP_ULPS`] units in the last place
+/// of its far end, so every step moves `t` (a step below f32's resolution
+/// at `t` would never reach the end of the interval).
+#[inline]
+pub fn step_in(iv: &Interval, settings: &RenderSettings) -> f32 {
+    settings
+        .step
+        .unwrap_or(iv.nominal_dt / settings.sampling_rate)
+        .max(iv.t.span() * 1e-6)
+        .max(min_step_at(iv.t.hi))
+}
+
+/// Smallest step [`step_in`] takes at distance `t` along a ray.
+pub const MIN_STEP_ULPS: f32 = 4.0;
+
+/// [`MIN_STEP_ULPS`] units in the last place at `t` (f32), and at least
+/// the smallest normal f32.
+#[inline]
+pub fn min_step_at(t: f32) -> f32 {
+    (MIN_STEP_ULPS * f32::EPSILON * t.abs()).max(f32::MIN_POSITIVE)
+}
+
+/// What [`Cursor::step`] found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Step {
+    Segment(Segment),
+    /// The list ends before the next segment is known and more intervals
+    /// may follow: fetch them and ask again (the cursor has not moved past
+    /// anything it still needs).
+    More,
+    /// No more segments.
+    Done,
+}
+
+/// Walks the segments of a ray's intervals in order; resumable, so the
+/// packet path can take them a window at a time, and lazy, so the list may
+/// grow as the walk goes (it looks at most one lattice cell ahead).
+///
+/// **The sample lattice.** Sampled intervals are cut into the cells of a
+/// lattice fixed on the ray: boundaries at `t = (n + ξ)·dt` for integers
+/// `n`, with `ξ` one random number per pixel sample and `dt` the interval's
+/// step. A cell is sampled at its midpoint, with its length as the segment
+/// length, when that midpoint lies in one of the intervals. Cells are cut
+/// only where the lattice must end: at the ray's span (the volume's bounds
+/// and the clip box), where the step changes, and next to constant
+/// intervals — never at the seams between intervals of one step (macrocell
+/// or region boundaries) nor at the edges of skipped space, which depend on
+/// how the data is organised rather than on the field. So the samples of a
+/// ray depend on the field, the camera, the pixel and the sample index only,
+/// and a domain decomposition that renders the samples whose midpoints lie
+/// in its box ([`crate::own_range`]) takes exactly the samples of the
+/// one-process render.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Cursor {
+    /// The interval the next segment is looked for in.
+    k: usize,
+    /// Lattice index of the next cell.
+    n: i64,
+    dt: f32,
+    /// The lattice offset in steps, in `[0, 1)`.
+    xi: f64,
+    /// Cells are cut to this span (the ray inside the bounds and clip box).
+    span: Range1,
+    /// Only segments whose midpoints lie in `[own.lo, own.hi)` are returned.
+    own: Range1,
+    /// Where the current run of same-step intervals starts (cells are cut
+    /// there).
+    run_lo: f32,
+    /// Whether a run of sampled intervals is open: `dt`, `n` and `run_lo`
+    /// belong to it, and interval `k` continues it if its step is `dt`.
+    open: bool,
+    /// Where the last returned segment ended.
+    prev_end: f32,
+}
+
+impl Cursor {
+    /// A cursor for a ray whose part inside the volume is `span`, returning
+    /// the segments whose midpoints lie in `own` (half-open; everything for
+    /// a one-process render), with the lattice offset drawn from `rng`.
+    pub fn new(span: Range1, own: Range1, rng: &PixelRng) -> Self {
+        Cursor {
+            k: 0,
+            n: 0,
+            dt: 0.0,
+            xi: rng.uniform(2) as f64,
+            span,
+            own,
+            run_lo: span.lo,
+            open: false,
+            prev_end: span.lo,
+        }
+    }
+
+    /// The step of the current interval (valid after the first segment).
+    pub fn dt(&self) -> f32 {
+        self.dt
+    }
+
+    /// Boundary `n` of the lattice (computed from `n`, never accumulated, so
+    /// it does not depend on where the walk started).
+    #[inline]
+    fn boundary(&self, n: i64) -> f32 {
+        ((n as f64 + self.xi) * self.dt as f64) as f32
+    }
+
+    /// The first lattice cell that can hold a midpoint at or after `t`.
+    #[inline]
+    fn cell_before(&self, t: f32) -> i64 {
+        ((t as f64 / self.dt as f64 - self.xi).floor() as i64).saturating_sub(1)
+    }
+
+    /// Whether interval `nx` goes on with the current run's lattice.
+    #[inline]
+    fn continues(&self, nx: &Interval, settings: &RenderSettings) -> bool {
+        nx.constant_value().is_none() && step_in(nx, settings).to_bits() == self.dt.to_bits()
+    }
+
+    /// The next segment of a complete list of intervals.
+    #[inline]
+    pub fn next(&mut self, intervals: &[Interval], settings: &RenderSettings) -> Option<Segment> {
+        match self.step(intervals, true, settings) {
+            Step::Segment(s) => Some(s),
+            Step::More | Step::Done => None,
+        }
+    }
+
+    /// The next segment of the ray's intervals, asking the volume for more
+    /// of them when the cursor reaches the end of what it has.
+    #[inline]
+    pub fn next_in<V: Volume>(
+        &mut self,
+        ivs: &mut RayIntervals,
+        volume: &V,
+        ray: &Ray,
+        query: &IntervalQuery,
+        settings: &RenderSettings,
+    ) -> Option<Segment> {
+        loop {
+            match self.step(&ivs.list, ivs.is_complete(), settings) {
+                Step::Segment(s) => return Some(s),
+                Step::Done => return None,
+                Step::More => ivs.fetch(volume, ray, query),
+            }
+        }
+    }
+
+    /// The next segment of `intervals`, which are all the ray's intervals
+    /// when `complete`, else the first ones (then [`Step::More`] asks for
+    /// more where the next segment depends on them).
+    #[inline]
+    pub fn step(
+        &mut self,
+        intervals: &[Interval],
+        complete: bool,
+        settings: &RenderSettings,
+    ) -> Step {
+        loop {
+            let Some(iv) = intervals.get(self.k) else {
+                return if complete { Step::Done } else { Step::More };
+            };
+            if iv.t.lo >= self.own.hi {
+                // Every later midpoint lies beyond what this render owns.
+                return Step::Done;
+            }
+            if iv.constant_value().is_some() {
+                // Constant: one segment, the whole interval (the part owned),
+                // no jitter.
+                self.k += 1;
+                self.open = false;
+                let lo = iv.t.lo.max(self.own.lo);
+                let hi = iv.t.hi.min(self.own.hi);
+                if hi <= lo {
+                    continue;
+                }
+                return Step::Segment(self.emit(lo, hi, self.k - 1));
+            }
+            // A sampled interval either goes on with the open run (same
+            // step: no cut at the seam) or starts a run of its own, at the
+            // span for the first interval, else where it starts (the step
+            // changed, or a constant interval ended).
+            if !(self.open && self.continues(iv, settings)) {
+                self.dt = step_in(iv, settings);
+                self.run_lo = if self.k == 0 { self.span.lo } else { iv.t.lo };
+                self.n = self.cell_before(self.run_lo);
+                self.open = true;
+            }
+            // Skip the cells before this interval and before what is owned
+            // without walking them (a gap of skipped space can be long).
+            // Only a jump of more than two cells is worth the division: the
+            // loop below passes over cells ending before the interval
+            // anyway, so starting a little early changes nothing.
+            let from = iv.t.lo.max(self.own.lo).max(self.run_lo);
+            if from > self.boundary(self.n + 2) {
+                self.n = self.n.max(self.cell_before(from));
+            }
+            loop {
+                let b0 = self.boundary(self.n).max(self.run_lo);
+                // A cell starting at or past the interval's end (or the
+                // span's) has its midpoint beyond the interval: done here.
+                if b0 >= iv.t.hi || b0 >= self.span.hi {
+                    break;
+                }
+                // The cell ends at the next boundary unless the run ends
+                // first. Only a cell reaching past this interval can meet
+                // the run's end, which the intervals after it decide.
+                let bn = self.boundary(self.n + 1);
+                let b1 = if bn <= iv.t.hi {
+                    bn.min(self.span.hi)
+                } else {
+                    match self.run_end_within(intervals, complete, bn, settings) {
+                        Some(b) => b,
+                        None => return Step::More,
+                    }
+                };
+                if b1 <= b0 {
+                    self.n += 1;
+                    continue;
+                }
+                let m = b0 + 0.5 * (b1 - b0);
+                if m >= iv.t.hi {
+                    break;
+                }
+                self.n += 1;
+                if m < iv.t.lo || m < self.own.lo {
+                    continue;
+                }
+                if m >= self.own.hi {
+                    return Step::Done;
+                }
+                return Step::Segment(Segment {
+                    t: m,
+                    ..self.emit(b0, b1, self.k)
+                });
+            }
+            // This interval is done; the run stays open for the next one.
+            self.k += 1;
+        }
+    }
+
+    /// `min(b, run end)` for the run holding interval `k`, where `b` lies
+    /// past interval `k`'s end. The run ends with its last same-step
+    /// interval — at the span when that is the ray's last interval — so
+    /// this looks ahead only through the intervals that start before `b`;
+    /// `None` when the list ends first and is not complete.
+    #[inline]
+    fn run_end_within(
+        &self,
+        intervals: &[Interval],
+        complete: bool,
+        b: f32,
+        settings: &RenderSettings,
+    ) -> Option<f32> {
+        let cap = b.min(self.span.hi);
+        let mut j = self.k;
+        loop {
+            // An interval of the run reaching `b` puts the run's end at or
+            // past `b`, so only the span cuts the cell.
+            if intervals[j].t.hi >= b {
+                return Some(cap);
+            }
+            match intervals.get(j + 1) {
+                Some(nx) if self.continues(nx, settings) => j += 1,
+                Some(_) => return Some(cap.min(intervals[j].t.hi)),
+                // The ray's last interval: its run ends at the span.
+                None if complete => return Some(cap),
+                None => return None,
+            }
+        }
+    }
+
+    /// The segment `[lo, hi)` of interval `k`, sampled at its midpoint.
+    #[inline]
+    fn emit(&mut self, lo: f32, hi: f32, k: usize) -> Segment {
+        let reset = lo != self.prev_end;
+        self.prev_end = hi;
+        Segment {
+            t: lo + 0.5 * (hi - lo),
+            len: hi - lo,
+            interval: k as u32,
+            reset,
+        }
+    }
+}
+
+/// Intervals asked for first; each later request asks for twice as many,
+/// up to [`MAX_CHUNK`]. Small, because rays that turn opaque early are
+/// where asking lazily pays; growing, so long rays ask only a few times.
+pub(crate) const FIRST_CHUNK: usize = 8;
+/// The most intervals one request asks for.
+pub(crate) const MAX_CHUNK: usize = 256;
+
+/// A ray's intervals, asked of the volume a chunk at a time
+/// ([`Volume::intervals_chunk`]), front to back, as its cursor reaches them.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct RayIntervals {
+    /// The intervals so far, in increasing `t`.
+    pub list: Vec<Interval>,
+    /// Where the intervals not yet asked for begin; `None` once all are in
+    /// `list`.
+    rest: Option<f32>,
+    /// The end of the part of the ray the intervals are asked for.
+    end: f32,
+    /// How many intervals the next request asks for.
+    chunk: usize,
+}
+
+impl RayIntervals {
+    /// Intervals kept in `buffer` (its allocation reused).
+    pub fn with_buffer(buffer: Vec<Interval>) -> Self {
+        RayIntervals {
+            list: buffer,
+            ..Default::default()
+        }
+    }
+
+    /// Starts over for a ray whose intervals lie in `span` (none asked for
+    /// yet).
+    pub fn start(&mut self, span: Range1) {
+        self.list.clear();
+        self.rest = (!span.is_empty()).then_some(span.lo);
+        self.end = span.hi;
+        self.chunk = FIRST_CHUNK;
+    }
+
+    /// Starts over with a ray's complete list (from a tile view).
+    pub fn complete(&mut self, list: &[Interval]) {
+        self.list.clear();
+        self.list.extend_from_slice(list);
+        self.rest = None;
+    }
+
+    /// Whether every interval is in `list`.
+    #[inline]
+    pub fn is_complete(&self) -> bool {
+        self.rest.is_none()
+    }
+
+    /// Asks the volume for the next chunk of intervals (nothing once
+    /// complete).
+    pub fn fetch<V: Volume>(&mut self, volume: &V, ray: &Ray, query: &IntervalQuery) {
+        let Some(lo) = self.rest else {
+            return;
+        };
+        let before = self.list.len();
+        let rest = volume.intervals_chunk(
+            ray,
+            Range1::new(lo, self.end),
+            query,
+            &mut self.list,
+            self.chunk,
+        );
+        self.chunk = (self.chunk * 2).min(MAX_CHUNK);
+        // A volume must move on with every request; one that hands out
+        // nothing and would resume where it started is taken as done
+        // rather than asked forever.
+        self.rest = rest.filter(|&r| r > lo || self.list.len() > before);
+    }
+
+    /// Asks for everything still missing (integrators that need the whole
+    /// list: scattering).
+    pub fn fetch_all<V: Volume>(&mut self, volume: &V, ray: &Ray, query: &IntervalQuery) {
+        while !self.is_complete() {
+            self.fetch(volume, ray, query);
+        }
+    }
+}
