@@ -136,7 +136,7 @@ enum Command {
         /// (default): the column along the line through the pixel's centre;
         /// area: the column averaged over the pixel's square, exactly, so
         /// Σ column × pixel area is the mass in view at every resolution
-        /// (3–5× the time; not with --depth). Scene: tets.pixels.
+        /// (4–6× the time; not with --depth). Scene: tets.pixels.
         #[arg(long, value_enum)]
         pixels: Option<voxless::PixelsName>,
         /// Frame N of a time series (default 0).

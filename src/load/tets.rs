@@ -254,7 +254,7 @@ pub(crate) fn build_tets(
 }
 
 /// The projections' pixel integral a description asks for (pixel centres
-/// by default: pixel areas are exact but take 3–5× as long).
+/// by default: pixel areas are exact but take 4–6× as long).
 pub(crate) fn pixel_integral(p: Option<PixelsName>) -> PixelIntegral {
     match p.unwrap_or(PixelsName::Centre) {
         PixelsName::Area => PixelIntegral::Area,

@@ -165,7 +165,7 @@ pub struct TetsDesc {
     /// How projections integrate each pixel: centre (default; the column
     /// through the pixel's centre) or area (the column averaged over the
     /// pixel's square, exactly, so the projected mass does not depend on
-    /// the resolution; orthographic views without a depth slab; 3–5× the
+    /// the resolution; orthographic views without a depth slab; 4–6× the
     /// time).
     pub pixels: Option<PixelsName>,
 }

@@ -202,22 +202,24 @@ impl AreaTile {
         // Depth relative to vertex 0: the planes' offsets cancel between
         // front and back faces, so keep them small.
         let s = s.map(|p| [p[0], p[1], p[2] - s[0][2]]);
-        let Some((terms, mass)) = edge_terms(&s, rho) else {
+        let Some(det) = solid_det(&s) else {
             return;
         };
-        if self.in_one_pixel(&s, mass) {
+        if let Some(at) = self.one_pixel(&s) {
+            self.acc[at] += rho * det.abs() / 6.0;
             return;
         }
+        let terms = edge_terms(&s, det, rho);
         for (e, &(from, to)) in TET_EDGES.iter().enumerate() {
             self.edge([s[from][0], s[from][1]], [s[to][0], s[to][1]], terms[e]);
         }
     }
 
-    /// Adds `mass` to the pixel that holds every point of `s` and returns
-    /// true; false (nothing added) when there is no such pixel of the tile.
-    /// A column inside one pixel integrates to its mass there.
+    /// The pixel of the tile (its index) that holds every point of `s`,
+    /// if one does: a column inside one pixel integrates to its mass there,
+    /// with no edge to walk.
     #[inline]
-    fn in_one_pixel(&mut self, s: &[Uvt], mass: f64) -> bool {
+    fn one_pixel(&self, s: &[Uvt]) -> Option<usize> {
         let (mut lo, mut hi) = ([s[0][0], s[0][1]], [s[0][0], s[0][1]]);
         for p in &s[1..] {
             for a in 0..2 {
@@ -226,14 +228,10 @@ impl AreaTile {
             }
         }
         if !(lo[0] >= 0.0 && lo[1] >= 0.0 && hi[0] < self.w as f64 && hi[1] < self.h as f64) {
-            return false;
+            return None;
         }
         let (i, j) = (lo[0] as usize, lo[1] as usize);
-        if hi[0] < (i + 1) as f64 && hi[1] < (j + 1) as f64 {
-            self.acc[j * self.w + i] += mass;
-            return true;
-        }
-        false
+        (hi[0] < (i + 1) as f64 && hi[1] < (j + 1) as f64).then_some(j * self.w + i)
     }
 
     /// The tets of one Lagrangian cell (`corners` at their image, `tets`
@@ -266,23 +264,28 @@ impl AreaTile {
         }
         let s = w.map(|p| map.uvt(p, reference));
         let s = s.map(|p| [p[0], p[1], p[2] - s[0][2]]);
+        if let Some(at) = self.one_pixel(&s) {
+            for &(index, ref tet) in tets {
+                if let Some(det) = solid_det(&KUHN[index].map(|c| s[c])) {
+                    self.acc[at] += tet.density as f64 * det.abs() / 6.0;
+                }
+            }
+            return;
+        }
         let mut table = [[0.0f64; 3]; 19];
-        let mut mass = 0.0;
         for &(index, ref tet) in tets {
             let k = KUHN[index];
-            let Some((terms, m)) = edge_terms(&k.map(|c| s[c]), tet.density as f64) else {
+            let v = k.map(|c| s[c]);
+            let Some(det) = solid_det(&v) else {
                 continue;
             };
-            mass += m;
+            let terms = edge_terms(&v, det, tet.density as f64);
             for (e, &(from, to)) in TET_EDGES.iter().enumerate() {
                 let slot = &mut table[PAIR[k[from]][k[to]] as usize];
                 for x in 0..3 {
                     slot[x] += terms[e][x];
                 }
             }
-        }
-        if self.in_one_pixel(&s, mass) {
-            return;
         }
         for (g, &(a, b)) in table.iter().zip(&PAIRS) {
             if *g != [0.0; 3] {
@@ -467,12 +470,11 @@ const PAIR: [[u8; 8]; 8] = {
     out
 };
 
-/// A tet's six edge terms (in [`TET_EDGES`] order: what to walk each edge
-/// with, see the module docs) and its mass `ρ·V`, for vertices `s` in
-/// screen space; `None` for a flat tet, which has no volume and no outward
+/// The determinant (6 × the signed volume) of a tet with vertices `s` in
+/// screen space; `None` for a flat one, which has no volume and no outward
 /// side to orient its faces by.
 #[inline]
-fn edge_terms(s: &[Uvt; 4], rho: f64) -> Option<([[f64; 3]; 6], f64)> {
+fn solid_det(s: &[Uvt; 4]) -> Option<f64> {
     let sub = |a: Uvt, b: Uvt| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let (e1, e2, e3) = (sub(s[1], s[0]), sub(s[2], s[0]), sub(s[3], s[0]));
     let det = e1[0] * (e2[1] * e3[2] - e2[2] * e3[1]) - e1[1] * (e2[0] * e3[2] - e2[2] * e3[0])
@@ -481,9 +483,14 @@ fn edge_terms(s: &[Uvt; 4], rho: f64) -> Option<([[f64; 3]; 6], f64)> {
         .iter()
         .map(|e| e[0].abs() + e[1].abs() + e[2].abs())
         .fold(0.0, f64::max);
-    if !(det.abs() > 1e-12 * scale * scale * scale) {
-        return None;
-    }
+    (det.abs() > 1e-12 * scale * scale * scale).then_some(det)
+}
+
+/// A tet's six edge terms (in [`TET_EDGES`] order: what to walk each edge
+/// with, see the module docs) times its density `rho`, for vertices `s` in
+/// screen space with determinant `det` ([`solid_det`]).
+#[inline]
+fn edge_terms(s: &[Uvt; 4], det: f64, rho: f64) -> [[f64; 3]; 6] {
     // Outward faces of a positively oriented tet (the boundary of
     // [0, 1, 2, 3]): F0 = (1, 2, 3), F1 = (0, 3, 2), F2 = (0, 1, 3),
     // F3 = (0, 2, 1); a negative one has them reversed, which negates every
@@ -494,15 +501,14 @@ fn edge_terms(s: &[Uvt; 4], rho: f64) -> Option<([[f64; 3]; 6], f64)> {
     // Each edge runs one way in one face and the other way in the other:
     // walked once (from → to), with the difference of their planes.
     let faces_of = [(0, 3), (0, 1), (2, 0), (1, 2), (3, 1), (2, 3)];
-    let terms = faces_of.map(|(f, g)| {
+    faces_of.map(|(f, g)| {
         let (a, b) = (faces[f], faces[g]);
         [
             sign * (a[0] - b[0]),
             sign * (a[1] - b[1]),
             sign * (a[2] - b[2]),
         ]
-    });
-    Some((terms, rho * det.abs() / 6.0))
+    })
 }
 
 /// The plane of the face `(a, b, c)` as `t = g0 + g1·u + g2·v`; zero for a

@@ -5,6 +5,7 @@
 
 use voxless_core::{Camera, Projection, Ray, Vec3};
 
+use crate::lattice::Cell;
 use crate::mesh::{KUHN, Tet, TetMesh};
 use crate::raster::{Screen, TILE, corners};
 
@@ -205,7 +206,8 @@ impl Frame {
             } => Some((half_width, half_height)),
             Projection::Perspective { .. } => None,
         };
-        let lean = m.block_cells_where(b, keep, |corners, tets| {
+        let lean = m.block_cells_where(b, keep, |cell| {
+            let corners = &cell.at_image;
             // The cell's corners projected once (the per-point operations of
             // `Screen::tet_rect`, so each tet's rectangle is the one its own
             // vertices give); a perspective cell reaching behind the eye
@@ -223,7 +225,8 @@ impl Frame {
                         }
                     }
                     if !front {
-                        for (_, t) in tets {
+                        let (tets, count) = cell.tets();
+                        for (_, t) in &tets[..count] {
                             if let Some(r) = rect(t) {
                                 out.tets.push(*t);
                                 out.rects.push(r);
@@ -234,19 +237,26 @@ impl Frame {
                     (px, py)
                 }
             };
-            for &(index, t) in tets {
-                let k = KUHN[index];
+            let pad = self.pad;
+            let rect_over = |k: &[usize]| {
                 let (mut x0, mut x1, mut y0, mut y1) = (px[k[0]], px[k[0]], py[k[0]], py[k[0]]);
                 for &c in &k[1..] {
                     (x0, x1) = (x0.min(px[c]), x1.max(px[c]));
                     (y0, y1) = (y0.min(py[c]), y1.max(py[c]));
                 }
-                let pad = self.pad;
-                if let Some(r) = self
-                    .screen
+                self.screen
                     .rect_of(x0 - pad, x1 + pad, y0 - pad, y1 + pad)
                     .filter(|&r| meets(r))
-                {
+            };
+            // A cell whose corners' rectangle misses the tile has no tet
+            // that meets it (each tet's rectangle lies in it): no tets to
+            // derive.
+            if rect_over(&[0, 1, 2, 3, 4, 5, 6, 7]).is_none() {
+                return;
+            }
+            let (tets, count) = cell.tets();
+            for &(index, t) in &tets[..count] {
+                if let Some(r) = rect_over(&KUHN[index]) {
                     out.tets.push(t);
                     out.rects
                         .push([r.0 as u16, r.1 as u16, r.2 as u16, r.3 as u16]);
@@ -261,6 +271,30 @@ impl Frame {
                 }
             }
         }
+    }
+
+    /// Whether the hull of a cell's corners `c` (at its image) may meet a
+    /// pixel of tile `tile` under an orthographic camera (its corners'
+    /// rectangle does; it holds every tet's); `true` for perspective ones.
+    pub(crate) fn cell_meets_tile(&self, c: &[Vec3; 8], tile: u32) -> bool {
+        let Projection::Orthographic {
+            half_width,
+            half_height,
+        } = self.screen.camera.projection
+        else {
+            return true;
+        };
+        let (px, py) = self.screen.ortho_points(c, (half_width, half_height));
+        let (mut x0, mut x1, mut y0, mut y1) = (px[0], px[0], py[0], py[0]);
+        for k in 1..8 {
+            (x0, x1) = (x0.min(px[k]), x1.max(px[k]));
+            (y0, y1) = (y0.min(py[k]), y1.max(py[k]));
+        }
+        let (tx0, ty0, w, h) = self.tile(tile);
+        let pad = self.pad;
+        self.screen
+            .rect_of(x0 - pad, x1 + pad, y0 - pad, y1 + pad)
+            .is_some_and(|r| r.0 < tx0 + w && r.1 >= tx0 && r.2 < ty0 + h && r.3 >= ty0)
     }
 
     /// The mesh (level of detail) and block of bin entry `entry`.
@@ -293,15 +327,15 @@ impl Frame {
 
     /// The tets of bin entry `entry` that may reach tile `tile`, for
     /// whole-cell work: a lean mesh's cells (culled as in
-    /// [`Frame::block_into`]) go to `on_cell` with their corners and tets
-    /// (see `TetMesh::block_cells_where`); an explicit mesh's tets whose
+    /// [`Frame::block_into`]) go to `on_cell` (see
+    /// `TetMesh::block_cells_where`); an explicit mesh's tets whose
     /// rectangles meet the tile go to `on_tet`.
     pub(crate) fn cells_of(
         &self,
         mesh: &TetMesh,
         entry: u32,
         tile: u32,
-        on_cell: impl FnMut(&[Vec3; 8], &[(usize, Tet)]),
+        on_cell: impl FnMut(&Cell),
         mut on_tet: impl FnMut(&Tet),
     ) {
         let (m, b) = self.entry(mesh, entry);

@@ -170,11 +170,19 @@ impl Lattice {
                         let d = *c - corners[0];
                         reach = reach.max(d.x.abs()).max(d.y.abs()).max(d.z.abs());
                     }
+                    // A cell strictly inside the box: its tets are their own
+                    // only image (no shift brings them back in or out).
+                    let (clo, chi) = extent(&corners);
+                    let inside = (0..3).all(|a| clo[a] > 0.0 && chi[a] < self.l);
                     for t in KUHN {
                         let v = t.map(|c| corners[c]);
                         let vol = Tet::signed_volume(&v).abs();
                         let (lo, hi) = extent(&v);
-                        let (shifts, count) = images_of(lo, hi, self.l);
+                        let (shifts, count) = if inside {
+                            ([[0i8; 3]; 27], 1)
+                        } else {
+                            images_of(lo, hi, self.l)
+                        };
                         if vol < self.floor {
                             for &shift in &shifts[..count] {
                                 let vs = v.map(|p| p + offset(shift, self.l));
@@ -230,28 +238,24 @@ impl Lattice {
         keep: impl FnMut(Vec3) -> bool,
         out: &mut Vec<Tet>,
     ) {
-        self.cells_where(group, keep, |_, tets| {
-            out.extend(tets.iter().map(|t| t.1));
+        self.cells_where(group, keep, |cell| {
+            let (tets, count) = cell.tets();
+            out.extend(tets[..count].iter().map(|t| t.1));
         });
     }
 
-    /// [`Lattice::tets`] cell by cell: `f` gets each accepted cell's corners
-    /// (moved to the image) and its tets in Kuhn order with their index in
-    /// [`KUHN`] (so `tet.v[m] == corners[KUHN[index][m]]`).
+    /// [`Lattice::tets`] cell by cell: `f` gets each accepted [`Cell`],
+    /// whose corners are at hand and whose tets it derives if it wants them.
     #[inline]
     pub fn cells_where(
         &self,
         (b, shift, complete): (u32, [i8; 3], bool),
         mut keep: impl FnMut(Vec3) -> bool,
-        mut f: impl FnMut(&[Vec3; 8], &[(usize, Tet)]),
+        mut f: impl FnMut(&Cell),
     ) {
         let off = offset(shift, self.l);
         let [ri, rj, rk] = self.cells(b);
         let n = self.n;
-        let none = Tet {
-            v: [Vec3::ZERO; 4],
-            density: 0.0,
-        };
         for i in ri {
             let plane = self.plane(i) * n * n;
             for j in rj.clone() {
@@ -260,18 +264,14 @@ impl Lattice {
                         continue;
                     }
                     let corners = self.cell_corners(i, j, k);
-                    let mut tets = [(0, none); 6];
-                    let mut count = 0;
-                    let mut push = |t| {
-                        tets[count] = t;
-                        count += 1;
-                    };
-                    if complete {
-                        self.cell_tets::<false>(&corners, shift, off, &mut push);
-                    } else {
-                        self.cell_tets::<true>(&corners, shift, off, &mut push);
-                    }
-                    f(&corners.map(|p| p + off), &tets[..count]);
+                    f(&Cell {
+                        lattice: self,
+                        at_image: corners.map(|p| p + off),
+                        corners,
+                        shift,
+                        off,
+                        complete,
+                    });
                 }
             }
         }
@@ -356,6 +356,44 @@ fn round(y: f32) -> f32 {
         t - 1.0
     } else {
         t
+    }
+}
+
+/// A cell of a block group being visited: its corners moved to the group's
+/// image, and its tets on request.
+pub(crate) struct Cell<'a> {
+    lattice: &'a Lattice,
+    /// The corners (corner index = 4·di + 2·dj + dk) at the image.
+    pub at_image: [Vec3; 8],
+    corners: [Vec3; 8],
+    shift: [i8; 3],
+    off: Vec3,
+    complete: bool,
+}
+
+impl Cell<'_> {
+    /// The cell's tets at the image, in Kuhn order with their index in
+    /// [`KUHN`] (`tet.v[m] == at_image[KUHN[index][m]]`): the first `count`
+    /// of the array.
+    #[inline]
+    pub fn tets(&self) -> ([(usize, Tet); 6], usize) {
+        let none = Tet {
+            v: [Vec3::ZERO; 4],
+            density: 0.0,
+        };
+        let mut tets = [(0, none); 6];
+        let mut count = 0;
+        let mut push = |t| {
+            tets[count] = t;
+            count += 1;
+        };
+        let l = self.lattice;
+        if self.complete {
+            l.cell_tets::<false>(&self.corners, self.shift, self.off, &mut push);
+        } else {
+            l.cell_tets::<true>(&self.corners, self.shift, self.off, &mut push);
+        }
+        (tets, count)
     }
 }
 

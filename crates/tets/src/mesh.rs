@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use voxless_core::{Aabb, Vec3};
 
 use crate::TetError;
-use crate::lattice::Lattice;
+use crate::lattice::{Cell, Lattice};
 
 /// N-body particles on an N³ Lagrangian grid in a periodic box `[0, L)³`.
 #[derive(Clone, Debug)]
@@ -434,14 +434,13 @@ impl TetMesh {
     }
 
     /// A lean mesh's [`TetMesh::block_tets_where`] cell by cell: `f` gets
-    /// each accepted cell's corners (at the block's image) and its tets
-    /// with their index in [`KUHN`] (`tet.v[m] == corners[KUHN[index][m]]`).
-    /// `false` for explicit meshes (nothing visited).
+    /// each accepted cell (its corners at the block's image, its tets on
+    /// request). `false` for explicit meshes (nothing visited).
     pub(crate) fn block_cells_where(
         &self,
         b: usize,
         keep: impl FnMut(Vec3) -> bool,
-        f: impl FnMut(&[Vec3; 8], &[(usize, Tet)]),
+        f: impl FnMut(&Cell),
     ) -> bool {
         let block = &self.blocks[b];
         match &self.source {

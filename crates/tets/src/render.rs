@@ -98,14 +98,15 @@ pub fn project(
     )
 }
 
-/// Tile side of the orthographic projection: up to 256 pixels, so that a
+/// Tile side of the orthographic projection: up to 128 pixels, so that a
 /// tet is set up in fewer tiles (the 128³ set at 1024²: 1.70 tiles per tet
-/// on screen at 32 px, 1.31 at 64, 1.14 at 128) and a lean mesh's blocks
-/// are derived in fewer tiles (2 per block at 256 px, 4 at 128), while
-/// keeping four tiles per thread.
+/// on screen at 32 px, 1.31 at 64, 1.14 at 128), while keeping four tiles
+/// per thread. (256 px would derive a lean mesh's blocks in half as many
+/// tiles, but change the f32 accumulation order, and so the low bits, of
+/// every image.)
 fn project_tile(width: u32, height: u32) -> u32 {
     let want = 4 * rayon::current_num_threads() as u32;
-    [256, 128, 64]
+    [128, 64]
         .into_iter()
         .find(|&t| width.div_ceil(t) * height.div_ceil(t) >= want)
         .unwrap_or(TILE)
@@ -230,7 +231,14 @@ fn project_areas(
                 mesh,
                 entry,
                 i,
-                |corners, cell| sums.cell(map, &clip, (corners, cell), (x0, y0)),
+                |cell| {
+                    // Cells whose outline misses the tile add nothing to it.
+                    if !frame.cell_meets_tile(&cell.at_image, i) {
+                        return;
+                    }
+                    let (tets, count) = cell.tets();
+                    sums.cell(map, &clip, (&cell.at_image, &tets[..count]), (x0, y0));
+                },
                 |tet| tets.push(*tet),
             );
             for tet in &tets {
