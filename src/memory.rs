@@ -251,7 +251,7 @@ impl AnyVolume {
             n,
             box_size: box_size as f64,
             positions: positions
-                .iter()
+                .into_iter()
                 .map(|p| p.to_array().map(f64::from))
                 .collect(),
         };
@@ -262,7 +262,7 @@ impl AnyVolume {
         };
         let source = Path::new("positions");
         load::tets::check_grid(&grid, source)?;
-        let (v, frame) = load::tets::build_world(&grid, &t, source)?;
+        let (v, frame) = load::tets::build_world(grid, &t, source)?;
         Ok(Loaded {
             volume: AnyVolume::Tets(Box::new(v)),
             frame,

@@ -64,12 +64,13 @@ fn brute_force(
     region: Aabb,
 ) -> Vec<[f32; 4]> {
     let mut out = Vec::new();
+    let tets = v.mesh.tets();
     for y in 0..s.height {
         for x in 0..s.width {
             let ray = cam.ray(x as f32 + 0.5, y as f32 + 0.5, s.width, s.height);
             let mut ev: Vec<(f32, f64)> = Vec::new();
             let span = region.clip_ray(&ray, Range1::new(0.0, f32::INFINITY));
-            for t in &v.mesh.tets {
+            for t in &tets {
                 let (a, b) = raster::Planes::new(t).clip(&ray);
                 let (a, b) = (a.max(span.lo), b.min(span.hi));
                 if b > a {
@@ -193,11 +194,11 @@ fn camera_inside_the_box_renders_exactly_and_culls_what_is_behind() {
     assert!(max_abs_diff(&got, &want) <= 1e-5);
     // Tets wholly behind the eye are binned nowhere.
     let frame = Frame::new(&v.mesh, &cam, 24, 20, None);
-    let binned: usize = frame.tet_count();
+    let binned: usize = frame.tet_count(&v.mesh, None);
     assert!(
-        binned < v.mesh.tets.len(),
+        binned < v.mesh.tet_count(),
         "{binned} of {} tets binned",
-        v.mesh.tets.len()
+        v.mesh.tet_count()
     );
 }
 
@@ -234,12 +235,13 @@ fn iso_surface_lies_where_the_density_first_crosses_the_value() {
     // Brute force: a pixel is covered iff some piece of its ray (inside the
     // box, after the ray's first event) crosses the iso-value.
     let mut covered = 0;
+    let tets = v.mesh.tets();
     for y in 0..s.height {
         for x in 0..s.width {
             let ray = cam.ray(x as f32 + 0.5, y as f32 + 0.5, s.width, s.height);
             let span = unit_box().clip_ray(&ray, Range1::new(0.0, f32::INFINITY));
             let mut ev: Vec<(f32, f64)> = Vec::new();
-            for t in &v.mesh.tets {
+            for t in &tets {
                 let (a, b) = raster::Planes::new(t).clip(&ray);
                 let (a, b) = (a.max(span.lo), b.min(span.hi));
                 if b > a {

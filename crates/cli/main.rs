@@ -132,6 +132,13 @@ enum Command {
         /// Image size in pixels (default 800 600).
         #[arg(long, num_args = 2, value_names = ["W", "H"])]
         size: Option<Vec<u32>>,
+        /// Phase-space tessellations: how each pixel is integrated — centre
+        /// (default): the column along the line through the pixel's centre;
+        /// area: the column averaged over the pixel's square, exactly, so
+        /// Σ column × pixel area is the mass in view at every resolution
+        /// (4–6× the time; not with --depth). Scene: tets.pixels.
+        #[arg(long, value_enum)]
+        pixels: Option<voxless::PixelsName>,
         /// Frame N of a time series (default 0).
         #[arg(long, value_name = "N")]
         frame: Option<usize>,
@@ -324,6 +331,7 @@ fn run(cli: Cli) -> Result<()> {
             depth,
             output,
             size,
+            pixels,
             frame,
             data,
         } => {
@@ -335,7 +343,26 @@ fn run(cli: Cli) -> Result<()> {
                 },
                 ..Default::default()
             };
-            let (desc, base) = args.scene()?;
+            let (mut desc, base) = args.scene()?;
+            if let Some(p) = pixels {
+                let Some(t) = desc.tets.as_mut() else {
+                    anyhow::bail!(
+                        "pixels: --pixels applies to phase-space tessellations (--lagrangian, \
+                         --box, or a [tets] scene); other data is projected through pixel \
+                         centres"
+                    );
+                };
+                t.pixels = Some(p);
+            }
+            if depth.is_some()
+                && desc.tets.as_ref().and_then(|t| t.pixels) == Some(voxless::PixelsName::Area)
+            {
+                anyhow::bail!(
+                    "pixels: area integrates whole lines of sight; with --depth a projection \
+                     integrates the slab through pixel centres (leave out --pixels area, or \
+                     tets.pixels in the scene)"
+                );
+            }
             out::check(
                 std::slice::from_ref(&output),
                 OutputKind::Map,
@@ -343,9 +370,15 @@ fn run(cli: Cli) -> Result<()> {
                 &base,
                 &[],
             )?;
-            let s = resolve(&desc, &base, frame.unwrap_or(0))?;
             let projection = projection_desc(axis, bounds, normal, north, center, width, depth);
-            project(&s, &projection, &output)
+            // A projection needs the data and the image size, not a render's
+            // defaults (camera, transfer function, and the probe of the
+            // field they are chosen from).
+            let size = voxless::projection::image_size(&desc.image)?;
+            let t = Instant::now();
+            let loaded = voxless::load(&desc, &base, frame.unwrap_or(0))?;
+            report_volume(&loaded.notes, &loaded.volume, &loaded.frame, t);
+            project(&loaded, size, &projection, &output)
         }
         Command::Serve {
             port,
@@ -386,19 +419,29 @@ fn projection_desc(
     }
 }
 
-fn project(s: &Scene, projection: &ProjectionDesc, output: &Path) -> Result<()> {
-    let view = ProjectionView::new(projection, &s.volume.bounds(), &s.frame)?;
-    let (w, h) = (s.settings.width, s.settings.height);
+fn project(
+    loaded: &voxless::Loaded,
+    (w, h): (u32, u32),
+    projection: &ProjectionDesc,
+    output: &Path,
+) -> Result<()> {
+    let view = ProjectionView::new(projection, &loaded.volume.bounds(), &loaded.frame)?;
     let progress = Progress::new("projecting", 1);
     let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
     let t = Instant::now();
-    let column = view.project(&s.volume, w, h, &Control::new().with_progress(&report))?;
+    let column = view.project(&loaded.volume, w, h, &Control::new().with_progress(&report))?;
     progress.finish();
     out::write_gray(output, w, h, &column)?;
     let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * view.pixel_area(w, h);
-    let mass = s
+    let mass = loaded
+        .volume
         .total_mass()
-        .map(|m| format!(", exact ∫ field dV = {m:.6e}"))
+        .map(|m| {
+            format!(
+                ", exact ∫ field dV = {:.6e}",
+                m * loaded.frame.scale.powi(3)
+            )
+        })
         .unwrap_or_default();
     eprintln!(
         "projected {w}×{h} in {:.2}s → {} (Σ column × pixel area = {integral:.6e}{mass})",
@@ -453,13 +496,24 @@ fn resolve(desc: &voxless::SceneDesc, base: &Path, frame: usize) -> Result<Scene
 
 /// Prints a scene's notes and what was loaded.
 fn report_loaded(s: &Scene, t: Instant) {
-    for n in &s.notes {
+    report_volume(&s.notes, &s.volume, &s.frame, t);
+}
+
+/// Prints `notes` and what was loaded (a volume placed in `frame`).
+fn report_volume(
+    notes: &[String],
+    volume: &voxless::AnyVolume,
+    frame: &voxless::WorldFrame,
+    t: Instant,
+) {
+    for n in notes {
         eprintln!("note: {n}");
     }
-    let (lo, hi) = s.world_bounds();
+    let b = volume.bounds();
+    let (lo, hi) = (frame.to_world(b.min), frame.to_world(b.max));
     eprintln!(
         "loaded {} in {:.2}s: bounds [{:.4e}, {:.4e}, {:.4e}]..[{:.4e}, {:.4e}, {:.4e}]",
-        s.volume.kind(),
+        volume.kind(),
         t.elapsed().as_secs_f64(),
         lo[0],
         lo[1],

@@ -10,8 +10,8 @@
 
 use std::path::Path;
 
-use voxless_scene::TetsDesc;
-use voxless_tets::{LagrangianGrid, TetSettings, TetVolume};
+use voxless_scene::{PixelsName, TetsDesc};
+use voxless_tets::{LagrangianGrid, PixelIntegral, TetSettings, TetVolume};
 
 use super::formats::ParticleFormat;
 use super::particles::positive;
@@ -52,7 +52,7 @@ pub(crate) fn load_tets(
         let (positions, _) = super::table::read_positions(&path)?;
         world_grid(positions, t, &path)?
     };
-    build_world(&grid, t, &path)
+    build_world(grid, t, &path)
 }
 
 /// The Lagrangian grid of world `positions` with the description's N and
@@ -144,7 +144,7 @@ pub(crate) fn check_inside(
 
 /// A tessellation of world positions, placed in the frame its box picks.
 pub(crate) fn build_world(
-    g: &WorldGrid,
+    g: WorldGrid,
     t: &TetsDesc,
     source: &Path,
 ) -> Result<(TetVolume, WorldFrame), SceneError> {
@@ -154,12 +154,14 @@ pub(crate) fn build_world(
         box_size: (g.box_size / frame.scale) as f32,
         positions: g.positions.iter().map(|&p| frame.to_local(p)).collect(),
     };
+    // The float64 world positions are not needed past this point.
+    drop(g.positions);
     let mass = particle_mass(t, g.n, grid.box_size, g.box_size, frame.scale)?;
     let local = TetsDesc {
         particle_mass: Some(mass),
         ..t.clone()
     };
-    let v = build_tets(&grid, &local, source)?;
+    let v = build_tets(grid, &local, source)?;
     Ok((v, frame))
 }
 
@@ -219,10 +221,11 @@ pub(crate) fn particle_mass(
 /// one cell.
 const MAX_LOD_LEVELS: usize = 3;
 
-/// A tessellation of `grid` (local units) with the description's mass and
-/// level of detail; errors name `source`.
+/// A tessellation of `grid` (local units; its positions become the
+/// mesh's) with the description's mass, level of detail and projection
+/// pixels; errors name `source`.
 pub(crate) fn build_tets(
-    grid: &LagrangianGrid,
+    grid: LagrangianGrid,
     t: &TetsDesc,
     source: &Path,
 ) -> Result<TetVolume, SceneError> {
@@ -242,9 +245,19 @@ pub(crate) fn build_tets(
     let levels = t
         .lod_levels
         .unwrap_or(if t.lod_pixels.is_some() { 3 } else { 0 });
-    let v = TetVolume::new(grid, &settings, levels).map_err(|e| SceneError::Tets {
+    let v = TetVolume::from_grid(grid, &settings, levels).map_err(|e| SceneError::Tets {
         path: source.to_path_buf(),
         source: e,
     })?;
-    Ok(v.with_lod_pixels(t.lod_pixels))
+    Ok(v.with_lod_pixels(t.lod_pixels)
+        .with_pixel_integral(pixel_integral(t.pixels)))
+}
+
+/// The projections' pixel integral a description asks for (pixel centres
+/// by default: pixel areas are exact but take 4–6× as long).
+pub(crate) fn pixel_integral(p: Option<PixelsName>) -> PixelIntegral {
+    match p.unwrap_or(PixelsName::Centre) {
+        PixelsName::Area => PixelIntegral::Area,
+        PixelsName::Centre => PixelIntegral::Centre,
+    }
 }

@@ -17,7 +17,7 @@ use voxless_core::{Aabb, Vec3};
 use voxless_parallel::{Comm, CommExt, Reader, Writer};
 use voxless_scene::TetsDesc;
 use voxless_tets::{
-    BLOCK, Block, LagrangianSlab, Tet, TetMesh, TetSettings, TetVolume, density_range,
+    BLOCK, LagrangianSlab, Tet, TetMesh, TetMeshBuilder, TetSettings, TetVolume, density_range,
     density_stride,
 };
 
@@ -165,16 +165,21 @@ pub(crate) fn open(
         }),
     )?;
     drop(slab);
-    // The mesh index of this rank's first tet, and the sampled tets.
-    let counts = comm.all_gather_f64(&[mesh.tets.len() as f64])?;
+    // The mesh index of this rank's first tet, and the sampled tets (a
+    // lean mesh derives its tets block by block).
+    let counts = comm.all_gather_f64(&[mesh.tet_count() as f64])?;
     let before: usize = counts[..comm.rank()].iter().map(|c| c[0] as usize).sum();
     let total: usize = counts.iter().map(|c| c[0] as usize).sum();
     let stride = density_stride(total);
     let mut w = Writer::new();
-    for (i, tet) in mesh.tets.iter().enumerate() {
-        if (before + i).is_multiple_of(stride) {
-            w.f32(tet.density);
-            w.vec3(centroid(tet));
+    let mut buf = Vec::new();
+    for (b, block) in mesh.blocks().iter().enumerate() {
+        let tets = mesh.block_tets(b, &mut buf);
+        for (i, tet) in (block.tets.start as usize..).zip(tets) {
+            if (before + i).is_multiple_of(stride) {
+                w.f32(tet.density);
+                w.vec3(centroid(tet));
+            }
         }
     }
     let (mut densities, mut centroids) = (Vec::new(), Vec::new());
@@ -194,12 +199,12 @@ pub(crate) fn open(
     let mut out = outboxes(comm);
     let mut dst = Vec::new();
     let mut per: Vec<Vec<u32>> = vec![Vec::new(); comm.size()];
-    for b in &mesh.blocks {
+    for (b, block) in mesh.blocks().iter().enumerate() {
         for list in &mut per {
             list.clear();
         }
-        for i in b.tets.clone() {
-            let tet = &mesh.tets[i as usize];
+        let tets = mesh.block_tets(b, &mut buf);
+        for (i, tet) in tets.iter().enumerate() {
             match purpose {
                 Purpose::Render => decomposition.overlapping(&tet.bounds(), &mut dst),
                 Purpose::Project => {
@@ -208,7 +213,7 @@ pub(crate) fn open(
                 }
             }
             for &r in &dst {
-                per[r].push(i);
+                per[r].push(i as u32);
             }
         }
         for (r, list) in per.iter().enumerate() {
@@ -217,10 +222,10 @@ pub(crate) fn open(
             }
             let w = &mut out[r];
             w.u8(0);
-            w.u32(b.lagrangian);
+            w.u32(block.lagrangian);
             w.u64(list.len() as u64);
             for &i in list {
-                let tet = &mesh.tets[i as usize];
+                let tet = &tets[i as usize];
                 for v in tet.v {
                     w.vec3(v);
                 }
@@ -228,7 +233,7 @@ pub(crate) fn open(
             }
         }
     }
-    for &(p, m) in &mesh.point_masses {
+    for &(p, m) in mesh.point_masses() {
         let w = &mut out[decomposition.owner(p)];
         w.u8(1);
         w.vec3(p);
@@ -236,48 +241,33 @@ pub(crate) fn open(
     }
     let (n, tet_mass, mean_volume) = (mesh.n, mesh.tet_mass, mesh.mean_volume);
     drop(mesh);
-    let mut local = TetMesh {
-        n,
-        box_size: l,
-        tet_mass,
-        tets: Vec::new(),
-        blocks: Vec::new(),
-        point_masses: Vec::new(),
-        mean_volume,
-        lod: Vec::new(),
-    };
+    let mut local = TetMeshBuilder::new(n, l, tet_mass, mean_volume);
     // Decoded straight into the mesh, message by message (each freed once
     // read), in source order and, within a source, Lagrangian block order.
     for msg in exchange(comm, out)? {
         let mut r = Reader::new(&msg);
         while !r.is_done() {
             if r.u8()? == 1 {
-                local.point_masses.push((r.vec3()?, r.f64()?));
+                local.push_point_mass(r.vec3()?, r.f64()?);
                 continue;
             }
             let lagrangian = r.u32()?;
             let count = r.u64()? as usize;
-            let start = local.tets.len() as u32;
-            let mut bounds = Aabb::EMPTY;
+            let mut tets = Vec::with_capacity(count);
             for _ in 0..count {
                 let v = [r.vec3()?, r.vec3()?, r.vec3()?, r.vec3()?];
-                let tet = Tet {
+                tets.push(Tet {
                     v,
                     density: r.f32()?,
-                };
-                bounds = bounds.union(tet.bounds());
-                local.tets.push(tet);
+                });
             }
-            local.blocks.push(Block {
-                tets: start..local.tets.len() as u32,
-                bounds,
-                lagrangian,
-            });
+            local.push_block(lagrangian, tets);
         }
     }
-    local.tets.shrink_to_fit();
-    let held = local.tets.len() as u64;
-    let volume = TetVolume::from_parts(local, value_range);
+    let held = local.tet_count() as u64;
+    let local = local.build();
+    let volume = TetVolume::from_parts(local, value_range)
+        .with_pixel_integral(crate::load::tets::pixel_integral(t.pixels));
     Ok(Part {
         volume: Some(AnyVolume::Tets(Box::new(volume))),
         frame,

@@ -296,7 +296,11 @@ fn bench_main(
     let mesh = mesh?;
     let n = mesh.n;
     let cells6 = 6 * n * n * n;
-    let (tets, blocks, points) = (mesh.tets.len(), mesh.blocks.len(), mesh.point_masses.len());
+    let (tets, blocks, points) = (
+        mesh.tet_count(),
+        mesh.blocks().len(),
+        mesh.point_masses().len(),
+    );
     drop(mesh);
     eprintln!("tets/{label}: TetVolume::new, 0 levels");
     let (t_vol0, v) = bench(r, || (), |_| TetVolume::new(grid, &s, 0));
@@ -305,7 +309,11 @@ fn bench_main(
     let (t_vol3, vol) = bench(r, || (), |_| TetVolume::new(grid, &s, 3));
     let (vol, view) = resolved(vol?, o.size)?;
     let mesh = &vol.mesh;
-    let lod_tets: Vec<String> = mesh.lod.iter().map(|m| m.tets.len().to_string()).collect();
+    let lod_tets: Vec<String> = mesh
+        .lod()
+        .iter()
+        .map(|m| m.tet_count().to_string())
+        .collect();
     // Degenerate tets are point masses; images are the extra copies of tets
     // that cross a face of the box.
     let images = tets as i64 - (cells6 - points.min(cells6)) as i64;

@@ -97,6 +97,17 @@ choice! {
 }
 
 choice! {
+    /// How a projection of a tessellation integrates each pixel.
+    pub enum PixelsName {
+        /// The column averaged over the pixel's square, exactly: the
+        /// projected mass is the same at every resolution.
+        Area = "area",
+        /// The column along the line through the pixel's centre.
+        Centre = "centre" | "center",
+    }
+}
+
+choice! {
     /// How free-flight distances of single scattering are sampled.
     pub enum FreeFlightName {
         /// Stochastic ray marching (one random number per distance).

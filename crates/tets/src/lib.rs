@@ -9,6 +9,18 @@
 //! tets covering it (eq. 1 of the paper), and the number of those tets is the
 //! stream count.
 //!
+//! **Lean meshes.** A mesh over a grid holds the positions (12 bytes a
+//! particle) and, per 8³-cell culling block, the bounds of each group of
+//! image tets — nothing per tet. The six tets of a cell are derived from
+//! its grid indices whenever an operation visits it, with the arithmetic of
+//! an explicit construction, so every image is the same bit for bit
+//! (`crate::lattice`). Acceleration structures are built by the operations
+//! that need them, on first use: the point/ray index (a BVH over cells) by
+//! point samples, shadow rays and per-ray integrals; the coarser levels of
+//! detail by renders with a threshold; the default density range by renders.
+//! Projections build none of them. Meshes assembled tet by tet (a part of a
+//! decomposed run, [`TetMeshBuilder`]) hold their tets and work the same way.
+//!
 //! **Periodicity.** Every tet is unwrapped to the periodic image nearest its
 //! anchor vertex (no tet spans the box), and a tet that crosses a face of the
 //! box is repeated at the images that bring its parts back in, so a view of
@@ -24,15 +36,22 @@
 //! *constant* intervals — the pieces between sorted tet entry/exit events,
 //! on which the density is constant — which integrators composite in closed
 //! form, so the image has no sampling error. For a whole screen tile at once
-//! ([`events::TetTileView`]) every tet of the tile's 8³-cell culling blocks
-//! is rasterised once; the k-buffer (first `k` events exact, the rest in
+//! ([`events::TetTileView`]) every tet of the tile's culling blocks is
+//! rasterised once; the k-buffer (first `k` events exact, the rest in
 //! log-spaced depth layers, the paper's bounded-memory mode) is an option of
 //! the render ([`voxless_core::EventBudget`]). Single rays (shadows) get
-//! their events from a BVH over the tets, built on first use. Column-density
-//! projections ([`render::project`]) of orthographic views evaluate eight
-//! pixels of a tet's row at a time (AVX2 where the CPU has it).
+//! their events from the point/ray index. Column-density projections
+//! ([`render::project`]) of orthographic views evaluate eight pixel centres
+//! of a tet's row at a time (AVX2 where the CPU has it), or, with
+//! [`PixelIntegral::Area`], integrate each tet's piecewise-linear column
+//! exactly over pixel squares (`crate::area`), so the projected mass does
+//! not depend on the resolution.
 
+mod area;
 pub mod events;
+mod frame;
+mod index;
+mod lattice;
 pub mod mesh;
 mod ortho;
 pub mod raster;
@@ -42,9 +61,13 @@ pub mod testing;
 mod volume;
 
 pub use events::TetTileView;
-pub use mesh::{BLOCK, Block, LagrangianGrid, LagrangianSlab, Tet, TetMesh, TetSettings};
-pub use render::TetOptions;
-pub use volume::{TetContext, TetVolume, canonical_point, density_range, density_stride};
+pub use mesh::{
+    BLOCK, Block, LagrangianGrid, LagrangianSlab, Tet, TetMesh, TetMeshBuilder, TetSettings,
+};
+pub use render::{PixelIntegral, TetOptions};
+pub use volume::{
+    TetContext, TetVolume, canonical_point, density_range, density_stride, sampled_densities,
+};
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum TetError {

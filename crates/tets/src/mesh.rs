@@ -1,10 +1,24 @@
 //! The phase-space tessellation: Lagrangian grid → tetrahedra with masses,
 //! densities, periodic images and culling blocks.
+//!
+//! A mesh over a grid is *lean*: it holds the particle positions and, per
+//! 8³-cell culling block, the bounds of each group of image tets — nothing
+//! per tet. The tets of a block are derived from grid indices when an
+//! operation visits it ([`TetMesh::block_tets`], `crate::lattice`).
+//! Acceleration structures are built by the operations that need them: the
+//! coarser levels of detail on first use ([`TetMesh::lod`]), the point/ray
+//! index by `crate::TetVolume` on its first point sample. A mesh assembled
+//! tet by tet (a part of a decomposed run, [`TetMeshBuilder`]) holds its
+//! tets explicitly and answers the same questions.
+
+use std::ops::Range;
+use std::sync::OnceLock;
 
 use rayon::prelude::*;
 use voxless_core::{Aabb, Vec3};
 
 use crate::TetError;
+use crate::lattice::{Cell, Lattice};
 
 /// N-body particles on an N³ Lagrangian grid in a periodic box `[0, L)³`.
 #[derive(Clone, Debug)]
@@ -59,8 +73,13 @@ pub struct Tet {
 
 impl Tet {
     pub fn bounds(&self) -> Aabb {
+        Tet::bounds_of(&self.v)
+    }
+    /// The bounds of four vertices.
+    #[inline]
+    pub fn bounds_of(v: &[Vec3; 4]) -> Aabb {
         let mut b = Aabb::EMPTY;
-        for p in self.v {
+        for &p in v {
             b.grow(p);
         }
         b
@@ -96,16 +115,22 @@ impl Tet {
 /// that share one periodic image shift, and their bounds.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Block {
-    pub tets: std::ops::Range<u32>,
+    /// The group's tets' indices in mesh order (the order of
+    /// [`TetMesh::tets`]).
+    pub tets: Range<u64>,
     pub bounds: Aabb,
     /// Index of the 8³-cell Lagrangian block this group belongs to (the same
     /// at every level of detail).
     pub lagrangian: u32,
+    /// The image shift of the group's tets, in box lengths per axis
+    /// (explicit meshes: `[0; 3]`, their tets are already placed).
+    pub shift: [i8; 3],
+    /// Lean meshes: the group holds every tet of its Lagrangian block once.
+    complete: bool,
+    /// Lean meshes: the tets of a cell of the block lie within this of the
+    /// cell's first corner, per axis.
+    pub(crate) reach: f32,
 }
-
-/// One block's tets grouped by image shift (with their bounds), and its
-/// degenerate tets' point masses.
-type BlockTets = (Vec<(Vec<Tet>, Aabb)>, Vec<(Vec3, f64)>);
 
 /// Cells per block axis.
 pub const BLOCK: usize = 8;
@@ -122,35 +147,79 @@ pub const KUHN: [[usize; 4]; 6] = [
     [0, 4, 6, 7], // z, y, x
 ];
 
-/// The tessellated mesh.
+/// Where a mesh's tets come from.
 #[derive(Clone, Debug)]
+enum Source {
+    /// Derived from the particles when visited.
+    Lattice(Lattice),
+    /// Held, in mesh order.
+    Explicit(Vec<Tet>),
+}
+
+/// The tessellated mesh.
+#[derive(Debug)]
 pub struct TetMesh {
     pub n: usize,
     pub box_size: f32,
     pub tet_mass: f64,
-    pub tets: Vec<Tet>,
-    pub blocks: Vec<Block>,
-    /// Point masses of degenerate tets (centroid, mass), images included.
-    pub point_masses: Vec<(Vec3, f64)>,
     /// Mean tet volume (L/N)³/6.
     pub mean_volume: f64,
-    /// Coarser levels of detail: level r (index r − 1) tessellates every
-    /// 2^r-th particle per axis with tet mass × 2^{3r}, its blocks covering the
-    /// same Lagrangian blocks as level 0. Empty unless built by [`TetMesh::with_lod`].
-    pub lod: Vec<TetMesh>,
+    blocks: Vec<Block>,
+    /// Point masses of degenerate tets (centroid, mass), images included.
+    point_masses: Vec<(Vec3, f64)>,
+    source: Source,
+    /// Levels of detail asked for ([`TetMesh::with_lod`]) and, once an
+    /// operation needed them, built.
+    lod_levels: usize,
+    lod: OnceLock<Vec<TetMesh>>,
+}
+
+impl Clone for TetMesh {
+    /// The mesh without its built levels of detail (a clone builds them
+    /// again when needed).
+    fn clone(&self) -> TetMesh {
+        TetMesh {
+            n: self.n,
+            box_size: self.box_size,
+            tet_mass: self.tet_mass,
+            mean_volume: self.mean_volume,
+            blocks: self.blocks.clone(),
+            point_masses: self.point_masses.clone(),
+            source: self.source.clone(),
+            lod_levels: self.lod_levels,
+            lod: OnceLock::new(),
+        }
+    }
+}
+
+fn check_box(l: f32) -> Result<(), TetError> {
+    if !(l.is_finite() && l > 0.0) {
+        return Err(TetError::BadBox { box_size: l });
+    }
+    Ok(())
+}
+
+fn check_mass(settings: &TetSettings, n: usize) -> Result<f64, TetError> {
+    let particle_mass = settings.particle_mass.unwrap_or(1.0 / (n * n * n) as f64);
+    if !(particle_mass.is_finite() && particle_mass > 0.0) {
+        return Err(TetError::BadMass {
+            mass: particle_mass,
+        });
+    }
+    Ok(particle_mass)
 }
 
 impl TetMesh {
-    /// Tessellates `grid`: 6 tets per cell, every tet unwrapped to the
-    /// periodic image nearest its anchor (corner 0), and every tet that
-    /// crosses a face of the box repeated at the images that bring its parts
-    /// back inside, so that exactly the box shows each tet whole.
+    /// Tessellates `grid` (see [`TetMesh::from_grid`]; this copies the
+    /// positions).
     pub fn new(grid: &LagrangianGrid, settings: &TetSettings) -> Result<TetMesh, TetError> {
+        TetMesh::check_grid(grid)?;
+        TetMesh::from_grid(grid.clone(), settings)
+    }
+
+    fn check_grid(grid: &LagrangianGrid) -> Result<(), TetError> {
         let n = grid.n;
-        let l = grid.box_size;
-        if !(l.is_finite() && l > 0.0) {
-            return Err(TetError::BadBox { box_size: l });
-        }
+        check_box(grid.box_size)?;
         if n < 2 || n.checked_pow(3) != Some(grid.positions.len()) {
             return Err(TetError::NotCubic {
                 count: grid.positions.len(),
@@ -159,18 +228,29 @@ impl TetMesh {
         if let Some(i) = grid.positions.iter().position(|p| !p.is_finite()) {
             return Err(TetError::NonFinite { index: i });
         }
-        let particle_mass = settings.particle_mass.unwrap_or(1.0 / (n * n * n) as f64);
-        if !(particle_mass.is_finite() && particle_mass > 0.0) {
-            return Err(TetError::BadMass {
-                mass: particle_mass,
-            });
-        }
-        Ok(TetMesh::build(
-            grid,
+        Ok(())
+    }
+
+    /// Tessellates `grid`, keeping its positions: 6 tets per cell, every
+    /// tet unwrapped to the periodic image nearest its anchor (corner 0),
+    /// and every tet that crosses a face of the box repeated at the images
+    /// that bring its parts back inside, so that exactly the box shows each
+    /// tet whole. One pass over the tets finds each block's image groups
+    /// and bounds and the degenerate tets' point masses; the tets themselves
+    /// are not kept.
+    pub fn from_grid(grid: LagrangianGrid, settings: &TetSettings) -> Result<TetMesh, TetError> {
+        TetMesh::check_grid(&grid)?;
+        let particle_mass = check_mass(settings, grid.n)?;
+        let lattice = Lattice::new(
+            (grid.n, grid.box_size),
+            grid.positions,
+            0,
+            BLOCK,
             particle_mass,
             settings.degenerate_fraction,
-            BLOCK,
-        ))
+        );
+        let rows = 0..lattice.blocks_per_axis();
+        Ok(TetMesh::scan(lattice, rows))
     }
 
     /// The tets of the Lagrangian blocks whose first index lies in
@@ -180,10 +260,8 @@ impl TetMesh {
     /// that each read a slab of a run tessellate it together (see
     /// [`LagrangianSlab`]).
     pub fn from_slab(slab: &LagrangianSlab, settings: &TetSettings) -> Result<TetMesh, TetError> {
-        let (n, l) = (slab.n, slab.box_size);
-        if !(l.is_finite() && l > 0.0) {
-            return Err(TetError::BadBox { box_size: l });
-        }
+        let n = slab.n;
+        check_box(slab.box_size)?;
         if n < 2
             || n.checked_mul(n).and_then(|nn| nn.checked_mul(slab.planes))
                 != Some(slab.positions.len())
@@ -197,179 +275,208 @@ impl TetMesh {
                 index: slab.first_plane * n * n + i,
             });
         }
-        let particle_mass = settings.particle_mass.unwrap_or(1.0 / (n * n * n) as f64);
-        if !(particle_mass.is_finite() && particle_mass > 0.0) {
-            return Err(TetError::BadMass {
-                mass: particle_mass,
-            });
-        }
-        let rows = slab.rows.start.min(n.div_ceil(BLOCK))..slab.rows.end.min(n.div_ceil(BLOCK));
+        let particle_mass = check_mass(settings, n)?;
+        let nb = n.div_ceil(BLOCK);
+        let rows = slab.rows.start.min(nb)..slab.rows.end.min(nb);
         let needed = (rows.end * BLOCK).min(n) + 1 - (rows.start * BLOCK).min(n);
         if !rows.is_empty() && (slab.first_plane != rows.start * BLOCK || slab.planes < needed) {
             return Err(TetError::NotCubic {
                 count: slab.positions.len(),
             });
         }
-        let at = |a: usize, b: usize, c: usize| {
-            let plane = (a % n + n - slab.first_plane % n) % n;
-            slab.positions[(plane * n + b % n) * n + c % n]
-        };
-        Ok(TetMesh::build_rows(
-            (n, l),
-            &at,
+        let lattice = Lattice::new(
+            (n, slab.box_size),
+            slab.positions.clone(),
+            slab.first_plane,
+            BLOCK,
             particle_mass,
             settings.degenerate_fraction,
-            BLOCK,
-            rows,
-        ))
+        );
+        Ok(TetMesh::scan(lattice, rows))
     }
 
-    /// Adds up to `levels` coarser levels of detail (each halving N; stops
-    /// when N is odd or the blocks would hold less than one cell).
-    pub fn with_lod(
-        mut self,
-        grid: &LagrangianGrid,
-        levels: usize,
-        settings: &TetSettings,
-    ) -> TetMesh {
-        let particle_mass = self.tet_mass * 6.0;
-        let mut r = 1;
-        while r <= levels && BLOCK >> r >= 1 && grid.n.is_multiple_of(1 << r) && grid.n >> r >= 2 {
-            let step = 1 << r;
-            let nc = grid.n / step;
-            let positions = (0..nc * nc * nc)
-                .map(|c| {
-                    let (i, j, k) = (c / (nc * nc), (c / nc) % nc, c % nc);
-                    grid.positions[((i * step) * grid.n + j * step) * grid.n + k * step]
-                })
-                .collect();
-            let coarse = LagrangianGrid {
-                n: nc,
-                box_size: grid.box_size,
-                positions,
-            };
-            let mass = particle_mass * (step * step * step) as f64;
-            self.lod.push(TetMesh::build(
-                &coarse,
-                mass,
-                settings.degenerate_fraction,
-                BLOCK >> r,
-            ));
-            r += 1;
-        }
+    /// Asks for up to `levels` coarser levels of detail (each halving N;
+    /// they stop when N is odd or the blocks would hold less than one cell).
+    /// They are built when an operation first needs them ([`TetMesh::lod`]).
+    pub fn with_lod(mut self, levels: usize) -> TetMesh {
+        self.lod_levels = levels;
+        self.lod = OnceLock::new();
         self
     }
 
-    /// Tessellates a validated grid with blocks of `block` cells per axis.
-    fn build(
-        grid: &LagrangianGrid,
-        particle_mass: f64,
-        degenerate_fraction: f64,
-        block: usize,
-    ) -> TetMesh {
-        let n = grid.n;
-        let at =
-            |a: usize, b: usize, c: usize| grid.positions[((a % n) * n + (b % n)) * n + (c % n)];
-        TetMesh::build_rows(
-            (n, grid.box_size),
-            &at,
-            particle_mass,
-            degenerate_fraction,
-            block,
-            0..n.div_ceil(block),
-        )
+    /// The coarser levels of detail asked for by [`TetMesh::with_lod`],
+    /// built on first use: level r (index r − 1) tessellates every 2^r-th
+    /// particle per axis with tet mass × 2^{3r}, its blocks covering the
+    /// same Lagrangian blocks as level 0. Empty for explicit meshes and
+    /// slabs.
+    pub fn lod(&self) -> &[TetMesh] {
+        self.lod.get_or_init(|| {
+            let Source::Lattice(lattice) = &self.source else {
+                return Vec::new();
+            };
+            (1..=self.lod_levels as u32)
+                .map_while(|r| lattice.coarse(r))
+                .map(|coarse| {
+                    let rows = 0..coarse.blocks_per_axis();
+                    TetMesh::scan(coarse, rows)
+                })
+                .collect()
+        })
     }
 
-    /// Tessellates the blocks of block rows `rows` of a grid of N³ particles
-    /// in a box of size L (`(n, l)`) whose position `(i, j, k)` is `at(i, j,
-    /// k)` (indices may exceed N by one: the periodic neighbour).
-    fn build_rows(
-        (n, l): (usize, f32),
-        at: &(dyn Fn(usize, usize, usize) -> Vec3 + Sync),
-        particle_mass: f64,
-        degenerate_fraction: f64,
-        block: usize,
-        rows: std::ops::Range<usize>,
-    ) -> TetMesh {
-        let tet_mass = particle_mass / 6.0;
-        let mean_volume = (l as f64 / n as f64).powi(3) / 6.0;
-        let floor = degenerate_fraction * mean_volume;
-        let nb = n.div_ceil(block);
-        // Per block, in parallel: its tets grouped by image shift.
-        let per_block: Vec<BlockTets> = (rows.start * nb * nb..rows.end * nb * nb)
+    /// The levels of detail asked for (built or not).
+    pub fn lod_levels(&self) -> usize {
+        self.lod_levels
+    }
+
+    /// Scans the blocks of block rows `rows` of `lattice`: per block, in
+    /// parallel, its image groups (tet counts and bounds) and point masses.
+    fn scan(lattice: Lattice, rows: Range<usize>) -> TetMesh {
+        let nb = lattice.blocks_per_axis();
+        let first = rows.start * nb * nb;
+        let scans: Vec<_> = (first..rows.end * nb * nb)
             .into_par_iter()
-            .map(|b| {
-                let (bi, bj, bk) = (b / (nb * nb), (b / nb) % nb, b % nb);
-                let mut groups: Vec<([i8; 3], Vec<Tet>, Aabb)> = Vec::new();
-                let mut points = Vec::new();
-                for i in bi * block..((bi + 1) * block).min(n) {
-                    for j in bj * block..((bj + 1) * block).min(n) {
-                        for k in bk * block..((bk + 1) * block).min(n) {
-                            let corners = cell_corners(at, l, i, j, k);
-                            for t in KUHN {
-                                let v = t.map(|c| corners[c]);
-                                let vol = Tet::signed_volume(&v).abs();
-                                for shift in images(&v, l) {
-                                    let off = Vec3::new(
-                                        shift[0] as f32,
-                                        shift[1] as f32,
-                                        shift[2] as f32,
-                                    ) * l;
-                                    let vs = v.map(|p| p + off);
-                                    if vol < floor {
-                                        let c = (vs[0] + vs[1] + vs[2] + vs[3]) * 0.25;
-                                        // The point mass belongs to the image whose centroid is in the box.
-                                        if in_box(c, l) {
-                                            points.push((c, tet_mass));
-                                        }
-                                        continue;
-                                    }
-                                    let tet = Tet {
-                                        v: vs,
-                                        density: (tet_mass / vol) as f32,
-                                    };
-                                    let g = match groups.iter().position(|g| g.0 == shift) {
-                                        Some(g) => g,
-                                        None => {
-                                            groups.push((shift, Vec::new(), Aabb::EMPTY));
-                                            groups.len() - 1
-                                        }
-                                    };
-                                    groups[g].2 = groups[g].2.union(tet.bounds());
-                                    groups[g].1.push(tet);
-                                }
-                            }
-                        }
-                    }
-                }
-                (groups.into_iter().map(|g| (g.1, g.2)).collect(), points)
-            })
+            .map(|b| lattice.scan(b as u32))
             .collect();
-        let mut tets = Vec::new();
         let mut blocks = Vec::new();
         let mut point_masses = Vec::new();
-        let first = rows.start * nb * nb;
-        for (b, (groups, points)) in (first..).zip(per_block) {
-            for (ts, bounds) in groups {
-                let start = tets.len() as u32;
-                tets.extend(ts);
+        let mut next = 0u64;
+        for (b, scan) in (first..).zip(scans) {
+            for (shift, count, bounds) in scan.groups {
                 blocks.push(Block {
-                    tets: start..tets.len() as u32,
+                    tets: next..next + count,
                     bounds,
                     lagrangian: b as u32,
+                    shift,
+                    complete: scan.complete,
+                    reach: scan.reach,
                 });
+                next += count;
             }
-            point_masses.extend(points);
+            point_masses.extend(scan.points);
         }
+        let (n, l) = (lattice.n, lattice.l);
         TetMesh {
             n,
             box_size: l,
-            tet_mass,
-            tets,
+            tet_mass: lattice.tet_mass,
+            mean_volume: (l as f64 / n as f64).powi(3) / 6.0,
             blocks,
             point_masses,
-            mean_volume,
-            lod: Vec::new(),
+            source: Source::Lattice(lattice),
+            lod_levels: 0,
+            lod: OnceLock::new(),
+        }
+    }
+
+    /// The culling blocks (image groups), in mesh order.
+    pub fn blocks(&self) -> &[Block] {
+        &self.blocks
+    }
+
+    /// Point masses of degenerate tets (centroid, mass), images included.
+    pub fn point_masses(&self) -> &[(Vec3, f64)] {
+        &self.point_masses
+    }
+
+    /// How many tets the mesh has (images included, degenerate tets not).
+    pub fn tet_count(&self) -> usize {
+        self.blocks.last().map_or(0, |b| b.tets.end as usize)
+    }
+
+    /// Whether the tets are derived from grid indices (not held).
+    pub fn is_lean(&self) -> bool {
+        matches!(self.source, Source::Lattice(_))
+    }
+
+    /// Bytes the mesh holds: positions (or explicit tets), blocks and point
+    /// masses; levels of detail once built.
+    pub fn held_bytes(&self) -> usize {
+        let own = match &self.source {
+            Source::Lattice(l) => l.held_bytes(),
+            Source::Explicit(t) => t.len() * std::mem::size_of::<Tet>(),
+        };
+        own + self.blocks.len() * std::mem::size_of::<Block>()
+            + self.point_masses.len() * std::mem::size_of::<(Vec3, f64)>()
+            + self
+                .lod
+                .get()
+                .map_or(0, |l| l.iter().map(TetMesh::held_bytes).sum())
+    }
+
+    /// The tets of block `b` (an index into [`TetMesh::blocks`]), in mesh
+    /// order: the held ones, or derived into `buf`.
+    pub fn block_tets<'a>(&'a self, b: usize, buf: &'a mut Vec<Tet>) -> &'a [Tet] {
+        self.block_tets_where(b, |_| true, buf)
+    }
+
+    /// [`TetMesh::block_tets`] of the cells `keep` accepts — it sees a
+    /// cell's first corner (moved to the block's image), and the cell's
+    /// tets lie within [`Block`]'s `reach` of it per axis — so an operation
+    /// that needs part of a block (a tile's pixels) skips deriving the rest.
+    /// Explicit meshes give every tet of the block.
+    pub(crate) fn block_tets_where<'a>(
+        &'a self,
+        b: usize,
+        keep: impl FnMut(Vec3) -> bool,
+        buf: &'a mut Vec<Tet>,
+    ) -> &'a [Tet] {
+        let block = &self.blocks[b];
+        match &self.source {
+            Source::Explicit(tets) => &tets[block.tets.start as usize..block.tets.end as usize],
+            Source::Lattice(lattice) => {
+                buf.clear();
+                let group = (block.lagrangian, block.shift, block.complete);
+                lattice.tets(group, keep, buf);
+                buf
+            }
+        }
+    }
+
+    /// A lean mesh's [`TetMesh::block_tets_where`] cell by cell: `f` gets
+    /// each accepted cell (its corners at the block's image, its tets on
+    /// request). `false` for explicit meshes (nothing visited).
+    pub(crate) fn block_cells_where(
+        &self,
+        b: usize,
+        keep: impl FnMut(Vec3) -> bool,
+        f: impl FnMut(&Cell),
+    ) -> bool {
+        let block = &self.blocks[b];
+        match &self.source {
+            Source::Explicit(_) => false,
+            Source::Lattice(lattice) => {
+                let group = (block.lagrangian, block.shift, block.complete);
+                lattice.cells_where(group, keep, f);
+                true
+            }
+        }
+    }
+
+    /// Every tet, in mesh order (for tests and tools: this materialises
+    /// what the mesh does not hold).
+    pub fn tets(&self) -> Vec<Tet> {
+        let mut out = Vec::with_capacity(self.tet_count());
+        let mut buf = Vec::new();
+        for b in 0..self.blocks.len() {
+            out.extend_from_slice(self.block_tets(b, &mut buf));
+        }
+        out
+    }
+
+    /// The lattice behind a lean mesh.
+    pub(crate) fn lattice(&self) -> Option<&Lattice> {
+        match &self.source {
+            Source::Lattice(l) => Some(l),
+            Source::Explicit(_) => None,
+        }
+    }
+
+    /// The held tets of an explicit mesh.
+    pub(crate) fn explicit_tets(&self) -> Option<&[Tet]> {
+        match &self.source {
+            Source::Explicit(t) => Some(t),
+            Source::Lattice(_) => None,
         }
     }
 
@@ -382,57 +489,65 @@ impl TetMesh {
     }
 }
 
-/// The 8 corners of cell (i, j, k), unwrapped to the periodic image nearest
-/// corner 0 (corner index = 4·di + 2·dj + dk).
-fn cell_corners(
-    at: &(dyn Fn(usize, usize, usize) -> Vec3 + Sync),
-    l: f32,
-    i: usize,
-    j: usize,
-    k: usize,
-) -> [Vec3; 8] {
-    let anchor = at(i, j, k);
-    let mut out = [anchor; 8];
-    for (c, slot) in out.iter_mut().enumerate() {
-        let p = at(i + (c >> 2), j + ((c >> 1) & 1), k + (c & 1));
-        let d = p - anchor;
-        let wrap = |x: f32| x - l * (x / l).round();
-        *slot = anchor + Vec3::new(wrap(d.x), wrap(d.y), wrap(d.z));
-    }
-    out
+/// A mesh assembled tet by tet — the part of a decomposed run that reaches
+/// into one box, or tets from elsewhere — held explicitly.
+#[derive(Debug)]
+pub struct TetMeshBuilder {
+    mesh: TetMesh,
+    tets: Vec<Tet>,
 }
 
-fn in_box(p: Vec3, l: f32) -> bool {
-    (0..3).all(|a| p[a] >= 0.0 && p[a] < l)
-}
+impl TetMeshBuilder {
+    /// An empty mesh of a run of N³ particles in a box of size `box_size`
+    /// whose tets carry `tet_mass` and have mean volume `mean_volume`.
+    pub fn new(n: usize, box_size: f32, tet_mass: f64, mean_volume: f64) -> TetMeshBuilder {
+        TetMeshBuilder {
+            mesh: TetMesh {
+                n,
+                box_size,
+                tet_mass,
+                mean_volume,
+                blocks: Vec::new(),
+                point_masses: Vec::new(),
+                source: Source::Explicit(Vec::new()),
+                lod_levels: 0,
+                lod: OnceLock::new(),
+            },
+            tets: Vec::new(),
+        }
+    }
 
-/// The image shifts (in box lengths, per axis −1, 0 or +1) at which a tet
-/// overlaps the box `[0, L)³`: the tet itself if it does, plus the images
-/// that bring its out-of-box parts back in.
-fn images(v: &[Vec3; 4], l: f32) -> Vec<[i8; 3]> {
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for p in v {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
+    /// Adds a culling block of Lagrangian block `lagrangian` holding `tets`.
+    pub fn push_block(&mut self, lagrangian: u32, tets: impl IntoIterator<Item = Tet>) {
+        let start = self.tets.len();
+        let mut bounds = Aabb::EMPTY;
+        for t in tets {
+            bounds = bounds.union(t.bounds());
+            self.tets.push(t);
         }
+        self.mesh.blocks.push(Block {
+            tets: start as u64..self.tets.len() as u64,
+            bounds,
+            lagrangian,
+            shift: [0; 3],
+            complete: false,
+            reach: f32::INFINITY,
+        });
     }
-    // Per axis, the shifts s with [lo + sL, hi + sL] overlapping [0, L).
-    let shifts = |a: usize| -> Vec<i8> {
-        [-1i8, 0, 1]
-            .into_iter()
-            .filter(|&s| hi[a] + s as f32 * l > 0.0 && lo[a] + (s as f32) * l < l)
-            .collect()
-    };
-    let (sx, sy, sz) = (shifts(0), shifts(1), shifts(2));
-    let mut out = Vec::new();
-    for &x in &sx {
-        for &y in &sy {
-            for &z in &sz {
-                out.push([x, y, z]);
-            }
-        }
+
+    /// Adds a degenerate tet's point mass.
+    pub fn push_point_mass(&mut self, p: Vec3, mass: f64) {
+        self.mesh.point_masses.push((p, mass));
     }
-    out
+
+    /// Tets held so far.
+    pub fn tet_count(&self) -> usize {
+        self.tets.len()
+    }
+
+    pub fn build(mut self) -> TetMesh {
+        self.tets.shrink_to_fit();
+        self.mesh.source = Source::Explicit(self.tets);
+        self.mesh
+    }
 }

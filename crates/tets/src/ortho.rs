@@ -41,7 +41,7 @@ use voxless_core::{Camera, Projection, Vec3};
 use wide::f32x4;
 
 use crate::mesh::{Tet, TetMesh};
-use crate::raster::Frame;
+use crate::raster::{BlockTets, Frame};
 
 /// Tets accumulated in f32 before the tile's f64 sums take them over.
 const FLUSH: usize = 256;
@@ -133,6 +133,21 @@ impl OrthoMap {
             fy,
             fz,
         })
+    }
+}
+
+impl OrthoMap {
+    /// World point `p` (f64) → `(u, v, t)`: pixel coordinates relative to
+    /// pixel `reference` with pixel `(i, j)` the square `[i, i+1] ×
+    /// [j, j+1]`, and the ray parameter.
+    #[inline]
+    pub(crate) fn uvt(&self, p: D3, (ref_x, ref_y): (u32, u32)) -> D3 {
+        let d = sub(p, self.eye);
+        [
+            dot(d, self.ex) + self.cx + 0.5 - ref_x as f64,
+            dot(d, self.ey) + self.cy + 0.5 - ref_y as f64,
+            dot(d, self.ez),
+        ]
     }
 }
 
@@ -339,9 +354,13 @@ impl TileJob<'_> {
             buf.common = (buf.common.0.max(a), buf.common.1.min(b));
         }
         let mut pending = 0;
+        let mut block = BlockTets::default();
         for &entry in &self.frame.bins[self.tile as usize] {
-            let (tets, rects) = self.frame.block(self.mesh, entry);
-            for (tet, rect) in tets.iter().zip(rects) {
+            // The block's tets that meet this tile, derived (lean meshes)
+            // outside the lanes' hot loop.
+            self.frame
+                .block_into(self.mesh, entry, self.tile, &mut block);
+            for (tet, rect) in block.tets.iter().zip(&block.rects) {
                 let (x0, x1) = ((rect[0] as u32).max(tx0), (rect[1] as u32).min(tx1));
                 let (y0, y1) = ((rect[2] as u32).max(ty0), (rect[3] as u32).min(ty1));
                 if x0 > x1 || y0 > y1 {

@@ -10,6 +10,7 @@
 use voxless_core::{Aabb, Camera, Projection, Ray, Vec3};
 use wide::f32x4;
 
+pub use crate::frame::{BlockTets, Frame};
 use crate::mesh::{Tet, TetMesh};
 
 /// Side of a tile in pixels.
@@ -18,9 +19,9 @@ pub const TILE: u32 = 32;
 /// Maps world points to continuous pixel coordinates.
 #[derive(Clone, Copy)]
 pub struct Screen {
-    camera: Camera,
-    width: u32,
-    height: u32,
+    pub(crate) camera: Camera,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
     /// Perspective: tan(fov/2) (vertical) and aspect.
     tan_half: f32,
     aspect: f32,
@@ -129,6 +130,15 @@ impl Screen {
         half: (f32, f32),
         pad: f32,
     ) -> Option<(u32, u32, u32, u32)> {
+        let (x0, x1, y0, y1) = self.ortho_extent(v, half);
+        self.rect_of(x0 - pad, x1 + pad, y0 - pad, y1 + pad)
+    }
+
+    /// The continuous pixel coordinates of four points under an
+    /// orthographic camera, projected at once (f32x4; lane by lane the same
+    /// operations as one point alone).
+    #[inline(always)]
+    fn ortho4(&self, v: &[Vec3; 4], half: (f32, f32)) -> ([f32; 4], [f32; 4]) {
         let c = &self.camera;
         let s = f32x4::splat;
         let lanes = |f: fn(&Vec3) -> f32| f32x4::new([f(&v[0]), f(&v[1]), f(&v[2]), f(&v[3])]);
@@ -139,18 +149,99 @@ impl Screen {
         let (sx, sy) = (dot(c.right) / s(half.0), dot(c.up) / s(half.1));
         let px = ((sx + s(1.0)) * s(0.5) * s(self.width as f32)).to_array();
         let py = ((s(1.0) - sy) * s(0.5) * s(self.height as f32)).to_array();
+        (px, py)
+    }
+
+    /// [`Screen::ortho4`] of a cell's eight corners.
+    #[inline]
+    pub(crate) fn ortho_points(&self, c: &[Vec3; 8], half: (f32, f32)) -> ([f32; 8], [f32; 8]) {
+        let (ax, ay) = self.ortho4(&[c[0], c[1], c[2], c[3]], half);
+        let (bx, by) = self.ortho4(&[c[4], c[5], c[6], c[7]], half);
+        let join =
+            |a: [f32; 4], b: [f32; 4]| std::array::from_fn(|i| if i < 4 { a[i] } else { b[i - 4] });
+        (join(ax, bx), join(ay, by))
+    }
+
+    /// The continuous pixel extent `(x0, x1, y0, y1)` of four points under
+    /// an orthographic camera, projected at once (f32x4).
+    #[inline]
+    fn ortho_extent(&self, v: &[Vec3; 4], half: (f32, f32)) -> (f32, f32, f32, f32) {
+        let (px, py) = self.ortho4(v, half);
         let (mut x0, mut x1, mut y0, mut y1) = (px[0], px[0], py[0], py[0]);
         for k in 1..4 {
             (x0, x1) = (x0.min(px[k]), x1.max(px[k]));
             (y0, y1) = (y0.min(py[k]), y1.max(py[k]));
         }
-        self.rect_of(x0 - pad, x1 + pad, y0 - pad, y1 + pad)
+        (x0, x1, y0, y1)
+    }
+
+    /// Whether the cube of half-size `r` about `c` may reach a pixel
+    /// (centre, or square with `pad` 0.5) of the pixel rectangle `(x0, x1,
+    /// y0, y1)`: a superset, with a pixel of slack for rounding — for
+    /// culling, not drawing.
+    #[inline]
+    pub fn cube_meets(
+        &self,
+        c: Vec3,
+        r: f32,
+        pad: f32,
+        (x0, x1, y0, y1): (u32, u32, u32, u32),
+    ) -> bool {
+        let cam = &self.camera;
+        let v = c - cam.eye;
+        let (w, h) = (self.width as f32, self.height as f32);
+        let l1 = |d: Vec3| d.x.abs() + d.y.abs() + d.z.abs();
+        // The cube's centre on screen and how far its points may be from it.
+        let (px, py, rx, ry) = match cam.projection {
+            Projection::Orthographic {
+                half_width,
+                half_height,
+            } => {
+                let (sx, sy) = (v.dot(cam.right) / half_width, v.dot(cam.up) / half_height);
+                (
+                    (sx + 1.0) * 0.5 * w,
+                    (1.0 - sy) * 0.5 * h,
+                    r * l1(cam.right) * 0.5 * w / half_width,
+                    r * l1(cam.up) * 0.5 * h / half_height,
+                )
+            }
+            Projection::Perspective { .. } => {
+                // A point δ (|δ| ≤ ρ = r√3) off a centre at depth z with
+                // screen offset u moves on screen by at most
+                // f·ρ·(1 + |u|/z)/(z − ρ), f the focal length in pixels.
+                let rho = r * 3f32.sqrt();
+                let z = v.dot(cam.forward);
+                if !(z - rho > 1e-6 * z.abs().max(1.0)) {
+                    return true;
+                }
+                let f = 0.5 * h / self.tan_half;
+                let (u, t) = (v.dot(cam.right), v.dot(cam.up));
+                (
+                    0.5 * w + f * u / z,
+                    0.5 * h - f * t / z,
+                    f * rho * (1.0 + u.abs() / z) / (z - rho),
+                    f * rho * (1.0 + t.abs() / z) / (z - rho),
+                )
+            }
+        };
+        let (rx, ry) = (rx + pad + 1.0, ry + pad + 1.0);
+        // Pixel x's centre is at x + 0.5. NaN (a degenerate view) keeps.
+        !(px - rx > x1 as f32 + 0.5
+            || px + rx < x0 as f32 + 0.5
+            || py - ry > y1 as f32 + 0.5
+            || py + ry < y0 as f32 + 0.5)
     }
 
     /// The pixels whose centres lie in `[x0, x1] × [y0, y1]`, clipped to the
     /// image.
     #[inline]
-    fn rect_of(&self, x0: f32, x1: f32, y0: f32, y1: f32) -> Option<(u32, u32, u32, u32)> {
+    pub(crate) fn rect_of(
+        &self,
+        x0: f32,
+        x1: f32,
+        y0: f32,
+        y1: f32,
+    ) -> Option<(u32, u32, u32, u32)> {
         // Pixel c's centre is c + 0.5. Clamped to [-1, n] before rounding
         // (NaN to the side `ceil`/`floor` then `max`/`min` would take it):
         // the same rectangle, with the rounding done through i32.
@@ -213,7 +304,8 @@ fn ceil_small(v: f32) -> f32 {
     if t < v { t + 1.0 } else { t }
 }
 
-fn corners(b: &Aabb) -> [Vec3; 8] {
+/// The eight corners of a box.
+pub(crate) fn corners(b: &Aabb) -> [Vec3; 8] {
     let mut out = [b.min; 8];
     for (i, c) in out.iter_mut().enumerate() {
         *c = Vec3::new(
@@ -223,227 +315,6 @@ fn corners(b: &Aabb) -> [Vec3; 8] {
         );
     }
     out
-}
-
-/// Everything per frame that does not depend on the tile: each tet's pixel
-/// rectangle (computed once, not once per tile it touches), the level of
-/// detail of each Lagrangian block, and per tile the blocks whose screen box
-/// overlaps it (block culling).
-pub struct Frame {
-    pub screen: Screen,
-    /// Side of a tile in pixels ([`TILE`] unless chosen).
-    pub tile_size: u32,
-    pub tiles_x: u32,
-    pub tiles_y: u32,
-    /// Per tile (row-major), the overlapping blocks as `level << 28 | block`.
-    pub bins: Vec<Vec<u32>>,
-    /// Per level, per tet, inclusive pixel rect `[x0, x1, y0, y1]`
-    /// (`x0 > x1` when off screen or in a block not drawn at that level;
-    /// empty for a level no block is drawn at).
-    rects: Vec<Vec<[u16; 4]>>,
-    /// Blocks drawn at each level (for statistics).
-    pub blocks_per_level: Vec<usize>,
-}
-
-const LEVEL_SHIFT: u32 = 28;
-
-/// The rectangle of a tet with no pixel (or of a block not drawn).
-const OFF_SCREEN: [u16; 4] = [1, 0, 1, 0];
-
-impl Frame {
-    /// `lod`: blocks whose screen box is smaller than this many pixels use a
-    /// coarser level (one level per halving), when the mesh has them.
-    pub fn new(
-        mesh: &TetMesh,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-        lod: Option<f32>,
-    ) -> Frame {
-        Frame::with_tile(mesh, camera, width, height, lod, TILE)
-    }
-
-    /// [`Frame::new`] with tiles of `tile_size`² pixels.
-    pub fn with_tile(
-        mesh: &TetMesh,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-        lod: Option<f32>,
-        tile_size: u32,
-    ) -> Frame {
-        Frame::build(mesh, camera, (width, height), lod, tile_size, 0.0)
-    }
-
-    /// [`Frame::with_tile`] for rays anywhere inside their pixels (jittered
-    /// passes): rectangles hold every pixel whose square meets a tet's or a
-    /// block's outline, not only the pixels whose centres lie inside.
-    pub fn covering(
-        mesh: &TetMesh,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-        lod: Option<f32>,
-        tile_size: u32,
-    ) -> Frame {
-        Frame::build(mesh, camera, (width, height), lod, tile_size, 0.5)
-    }
-
-    fn build(
-        mesh: &TetMesh,
-        camera: &Camera,
-        (width, height): (u32, u32),
-        lod: Option<f32>,
-        tile_size: u32,
-        pad: f32,
-    ) -> Frame {
-        use rayon::prelude::*;
-        let tile_size = tile_size.max(1);
-        let screen = Screen::new(camera, width, height);
-        let levels: Vec<&TetMesh> = std::iter::once(mesh).chain(mesh.lod.iter()).collect();
-        // Level per Lagrangian block from its level-0 screen size: the
-        // largest of its pieces (a block that wraps around the periodic box
-        // is drawn as pieces shifted by whole boxes; their union would span
-        // the box).
-        let nlag = mesh
-            .blocks
-            .iter()
-            .map(|b| b.lagrangian + 1)
-            .max()
-            .unwrap_or(0) as usize;
-        let mut level_of = vec![0usize; nlag];
-        if let (Some(threshold), true) = (lod, levels.len() > 1) {
-            let mut sizes = vec![0.0f32; nlag];
-            for b in &mesh.blocks {
-                let size = match screen.pixel_rect(&corners(&b.bounds)) {
-                    Some((x0, x1, y0, y1)) => (x1 - x0).max(y1 - y0) as f32 + 1.0,
-                    None if b.bounds.is_empty() => 0.0,
-                    None => f32::INFINITY, // off screen: culled anyway
-                };
-                let s = &mut sizes[b.lagrangian as usize];
-                *s = s.max(size);
-            }
-            for (l, &size) in level_of.iter_mut().zip(&sizes) {
-                if size < threshold {
-                    let r = 1 + (threshold / size.max(1e-3)).log2().floor() as usize;
-                    *l = r.min(levels.len() - 1);
-                }
-            }
-        }
-        let tiles_x = width.div_ceil(tile_size);
-        let tiles_y = height.div_ceil(tile_size);
-        let mut bins = vec![Vec::new(); (tiles_x * tiles_y) as usize];
-        let mut blocks_per_level = vec![0; levels.len()];
-        // Blocks drawn, per level: only their tets get rectangles, so a
-        // coarse level of detail costs what it draws, not what the finest
-        // level holds.
-        let mut drawn: Vec<Vec<usize>> = vec![Vec::new(); levels.len()];
-        for (r, m) in levels.iter().enumerate() {
-            for (i, b) in m.blocks.iter().enumerate() {
-                if level_of.get(b.lagrangian as usize).copied().unwrap_or(0) != r {
-                    continue;
-                }
-                if let Some((x0, x1, y0, y1)) = screen.pixel_rect_padded(&corners(&b.bounds), pad) {
-                    blocks_per_level[r] += 1;
-                    drawn[r].push(i);
-                    for y in y0 / tile_size..=y1 / tile_size {
-                        for x in x0 / tile_size..=x1 / tile_size {
-                            bins[(y * tiles_x + x) as usize]
-                                .push(((r as u32) << LEVEL_SHIFT) | i as u32);
-                        }
-                    }
-                }
-            }
-        }
-        let rects = levels
-            .iter()
-            .zip(&drawn)
-            .map(|(m, blocks)| {
-                if blocks.is_empty() {
-                    return Vec::new();
-                }
-                let per_block: Vec<(usize, Vec<[u16; 4]>)> = blocks
-                    .par_iter()
-                    .map(|&i| {
-                        let range = &m.blocks[i].tets;
-                        let rects = m.tets[range.start as usize..range.end as usize]
-                            .iter()
-                            .map(|t| match screen.tet_rect_padded(&t.v, pad) {
-                                Some((x0, x1, y0, y1)) => {
-                                    [x0 as u16, x1 as u16, y0 as u16, y1 as u16]
-                                }
-                                None => OFF_SCREEN,
-                            })
-                            .collect();
-                        (range.start as usize, rects)
-                    })
-                    .collect();
-                let mut all = vec![OFF_SCREEN; m.tets.len()];
-                for (start, rects) in per_block {
-                    all[start..start + rects.len()].copy_from_slice(&rects);
-                }
-                all
-            })
-            .collect();
-        Frame {
-            screen,
-            tile_size,
-            tiles_x,
-            tiles_y,
-            bins,
-            rects,
-            blocks_per_level,
-        }
-    }
-
-    /// How many tets (of the blocks drawn, at their levels) have a
-    /// rectangle on screen.
-    pub fn tet_count(&self) -> usize {
-        self.rects
-            .iter()
-            .flatten()
-            .filter(|r| r[0] <= r[1] && r[2] <= r[3])
-            .count()
-    }
-
-    /// The tets of bin entry `entry` (a block at its level of detail) and
-    /// their pixel rectangles.
-    #[inline]
-    pub(crate) fn block<'m>(&self, mesh: &'m TetMesh, entry: u32) -> (&'m [Tet], &[[u16; 4]]) {
-        let level = (entry >> LEVEL_SHIFT) as usize;
-        let m = if level == 0 {
-            mesh
-        } else {
-            &mesh.lod[level - 1]
-        };
-        let block = &m.blocks[(entry & ((1 << LEVEL_SHIFT) - 1)) as usize];
-        let range = block.tets.start as usize..block.tets.end as usize;
-        (&m.tets[range.clone()], &self.rects[level][range])
-    }
-
-    /// Tile `i`'s pixel rectangle `(x0, y0, w, h)`.
-    pub fn tile(&self, i: u32) -> (u32, u32, u32, u32) {
-        let t = self.tile_size;
-        let (x0, y0) = ((i % self.tiles_x) * t, (i / self.tiles_x) * t);
-        (
-            x0,
-            y0,
-            t.min(self.screen.width - x0),
-            t.min(self.screen.height - y0),
-        )
-    }
-
-    /// The rays through the centres of tile `i`'s pixels, row-major.
-    pub fn rays(&self, i: u32) -> Vec<Ray> {
-        let (x0, y0, w, h) = self.tile(i);
-        let mut rays = Vec::with_capacity((w * h) as usize);
-        for y in y0..y0 + h {
-            for x in x0..x0 + w {
-                rays.push(self.screen.ray(x, y));
-            }
-        }
-        rays
-    }
 }
 
 /// A tet's projected vertices. The projection of a tet is the convex hull of
@@ -601,21 +472,20 @@ impl Planes {
 /// Calls `f(tet, rect)` for every tet of tile `tile`'s blocks (at the
 /// level of detail chosen for its block) whose pixel rectangle meets the
 /// tile, with `rect = (x0, x1, y0, y1)` clipped to the tile.
-pub fn for_each_tet<'m>(
-    mesh: &'m TetMesh,
+pub fn for_each_tet(
+    mesh: &TetMesh,
     frame: &Frame,
     tile: u32,
-    mut f: impl FnMut(&'m Tet, (u32, u32, u32, u32)),
+    mut f: impl FnMut(&Tet, (u32, u32, u32, u32)),
 ) {
     let (tx0, ty0, w, h) = frame.tile(tile);
+    let mut block = BlockTets::default();
     for &entry in &frame.bins[tile as usize] {
-        let (tets, rects) = frame.block(mesh, entry);
-        for (tet, r) in tets.iter().zip(rects) {
+        frame.block_into(mesh, entry, tile, &mut block);
+        for (tet, r) in block.tets.iter().zip(&block.rects) {
             let (x0, x1) = ((r[0] as u32).max(tx0), (r[1] as u32).min(tx0 + w - 1));
             let (y0, y1) = ((r[2] as u32).max(ty0), (r[3] as u32).min(ty0 + h - 1));
-            if x0 <= x1 && y0 <= y1 {
-                f(tet, (x0, x1, y0, y1));
-            }
+            f(tet, (x0, x1, y0, y1));
         }
     }
 }

@@ -66,7 +66,7 @@ fn a_volume_from_a_mesh_is_the_volume_of_its_grid() {
     let b = TetVolume::from_mesh(TetMesh::new(&g, &s).unwrap());
     assert_eq!(a.bounds(), b.bounds());
     assert_eq!(a.value_range(), b.value_range());
-    assert_eq!(a.mesh.tets.len(), b.mesh.tets.len());
+    assert_eq!(a.mesh.tet_count(), b.mesh.tet_count());
     let p = Vec3::new(0.3, 0.6, 0.2);
     assert_eq!(a.density_and_streams(p), b.density_and_streams(p));
 }
@@ -312,7 +312,7 @@ fn ray_tet_clip_matches_point_sampling() {
     let g = grid(4, 1.0, jitter(19, 0.08));
     let mesh = TetMesh::new(&g, &TetSettings::default()).unwrap();
     let mut rng = Lcg(23);
-    for t in mesh.tets.iter().take(200) {
+    for t in mesh.tets().iter().take(200) {
         let c = (t.v[0] + t.v[1] + t.v[2] + t.v[3]) * 0.25;
         let o = c + Vec3::new(rng.f() - 0.5, rng.f() - 0.5, 2.0);
         let ray = Ray::new(
@@ -338,7 +338,7 @@ fn ray_tet_clip_matches_point_sampling() {
 fn lod_conserves_mass_and_approaches_the_full_render() {
     let g = grid(16, 1.0, jitter(29, 0.02));
     let v = TetVolume::new(&g, &TetSettings::default(), 3).unwrap();
-    assert_eq!(v.mesh.lod.len(), 3, "levels for N = 16: 8, 4, 2");
+    assert_eq!(v.mesh.lod().len(), 3, "levels for N = 16: 8, 4, 2");
     let cam = axis_camera(1.0);
     // Every block is below 10⁶ pixels: the coarsest levels are used, and a
     // projection still carries the whole mass.
@@ -447,4 +447,6 @@ fn fast_projection_equals_full_ray_clipping() {
     }
 }
 
+mod area;
+mod lean;
 mod ortho;

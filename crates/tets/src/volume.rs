@@ -1,15 +1,16 @@
 //! [`TetVolume`]: a tet mesh behind the `Volume` seam — exact constant
-//! intervals per ray (through a BVH over the tets) and per screen tile
-//! ([`crate::events::TetTileView`]), point samples (density and stream
-//! count), exact line integrals and whole-image projections.
+//! intervals per ray (through a point/ray index over the cells) and per
+//! screen tile ([`crate::events::TetTileView`]), point samples (density and
+//! stream count), exact line integrals and whole-image projections.
 //!
-//! The BVH is built on first use: projections and tile renders never need
-//! it, only point samples, single rays (shadows) and per-ray integrals.
+//! What an operation needs is built by the first operation that needs it,
+//! and kept: the point/ray index by point samples, single rays (shadows)
+//! and per-ray integrals; the default density range by renders (it is a
+//! transfer-function default); the levels of detail by renders that use
+//! them. A projection builds none of these.
 
 use std::sync::OnceLock;
 
-use rayon::prelude::*;
-use voxless_bvh::Bvh;
 use voxless_core::{
     Aabb, Camera, Cancelled, Control, EventBudget, Interval, IntervalQuery, Prepare, PrepareQuery,
     Range1, Ray, Sample, TileIntervals, Vec3, View, Volume,
@@ -17,63 +18,86 @@ use voxless_core::{
 
 use crate::TetError;
 use crate::events::{TetTileView, sweep};
+use crate::index::TetIndex;
 use crate::mesh::{LagrangianGrid, TetMesh, TetSettings};
 use crate::raster::Planes;
-use crate::render::{TetOptions, project};
+use crate::render::{PixelIntegral, TetOptions, project};
 
 pub struct TetVolume {
     pub mesh: TetMesh,
-    bvh: OnceLock<Bvh>,
+    index: OnceLock<TetIndex>,
     bounds: Aabb,
-    value_range: Range1,
+    /// The default density range: given, or found on first use.
+    value_range: OnceLock<Range1>,
     /// Level of detail for tile renders and projections (blocks smaller
     /// than this many pixels use the coarser levels); `None`: off.
     lod_pixels: Option<f32>,
+    /// How whole-image projections integrate each pixel.
+    pixels: PixelIntegral,
 }
 
 impl TetVolume {
-    /// Tessellates `grid`, with `lod_levels` coarser levels of detail (0 for none).
+    /// Tessellates `grid`, with `lod_levels` coarser levels of detail (0 for
+    /// none; built when a render first uses them). Copies the positions
+    /// ([`TetVolume::from_grid`] keeps them).
     pub fn new(
         grid: &LagrangianGrid,
         settings: &TetSettings,
         lod_levels: usize,
     ) -> Result<TetVolume, TetError> {
-        let mut mesh = TetMesh::new(grid, settings)?;
-        if lod_levels > 0 {
-            mesh = mesh.with_lod(grid, lod_levels, settings);
-        }
-        Ok(TetVolume::from_mesh(mesh))
+        let mesh = TetMesh::new(grid, settings)?;
+        Ok(TetVolume::from_mesh(mesh.with_lod(lod_levels)))
+    }
+
+    /// [`TetVolume::new`], keeping the grid's positions as the mesh's.
+    pub fn from_grid(
+        grid: LagrangianGrid,
+        settings: &TetSettings,
+        lod_levels: usize,
+    ) -> Result<TetVolume, TetError> {
+        let mesh = TetMesh::from_grid(grid, settings)?;
+        Ok(TetVolume::from_mesh(mesh.with_lod(lod_levels)))
     }
 
     /// A volume over a mesh built elsewhere (a sub-block cut out of a run,
     /// a mesh assembled tet by tet): its bounds are the mesh's box
-    /// `[0, box_size)³`, which must hold every tet.
+    /// `[0, box_size)³`, which must hold every tet. Its default density
+    /// range is found when first asked for.
     pub fn from_mesh(mesh: TetMesh) -> TetVolume {
-        // The periodic box: image tets fill it exactly, and outside it they
-        // would double what the originals show.
-        let stride = density_stride(mesh.tets.len());
-        let mut d: Vec<f32> = mesh
-            .tets
-            .iter()
-            .step_by(stride)
-            .map(|t| t.density)
-            .collect();
-        let value_range = density_range(&mesh, &mut d);
-        TetVolume::from_parts(mesh, value_range)
+        TetVolume::with_range(mesh, OnceLock::new())
     }
 
     /// A volume over part of a decomposed run (the tets reaching into one
     /// box) with the whole run's density range; its bounds are the whole
     /// box `[0, box_size)³` like the whole run's.
     pub fn from_parts(mesh: TetMesh, value_range: Range1) -> TetVolume {
+        TetVolume::with_range(mesh, OnceLock::from(value_range))
+    }
+
+    fn with_range(mesh: TetMesh, value_range: OnceLock<Range1>) -> TetVolume {
+        // The periodic box: image tets fill it exactly, and outside it they
+        // would double what the originals show.
         let bounds = Aabb::new(Vec3::ZERO, Vec3::splat(mesh.box_size));
         TetVolume {
             mesh,
-            bvh: OnceLock::new(),
+            index: OnceLock::new(),
             bounds,
             value_range,
             lod_pixels: None,
+            pixels: PixelIntegral::default(),
         }
+    }
+
+    /// How whole-image projections integrate each pixel (see
+    /// [`PixelIntegral`]).
+    pub fn with_pixel_integral(mut self, pixels: PixelIntegral) -> Self {
+        self.pixels = pixels;
+        self
+    }
+
+    /// The projections' pixel integral.
+    pub fn pixel_integral(&self) -> PixelIntegral {
+        self.pixels
     }
 
     /// Draws blocks smaller than `pixels` on screen from the coarser levels
@@ -88,12 +112,15 @@ impl TetVolume {
         self.lod_pixels
     }
 
-    /// The BVH over every tet's bounds, built on first use.
-    fn bvh(&self) -> &Bvh {
-        self.bvh.get_or_init(|| {
-            let boxes: Vec<Aabb> = self.mesh.tets.par_iter().map(|t| t.bounds()).collect();
-            Bvh::build(&boxes)
-        })
+    /// The point/ray index, built on first use.
+    fn index(&self) -> &TetIndex {
+        self.index.get_or_init(|| TetIndex::build(&self.mesh))
+    }
+
+    /// Whether the point/ray index has been built (by a point sample, a
+    /// single ray or a per-ray integral).
+    pub fn has_index(&self) -> bool {
+        self.index.get().is_some()
     }
 
     /// The Lagrangian spacing L/N: the scale of the smoothed gradient.
@@ -117,8 +144,7 @@ impl TetVolume {
     pub fn density_and_streams(&self, p: Vec3) -> (f64, u32) {
         let p = self.canonical_point(p);
         let mut covering: Vec<f32> = Vec::new();
-        self.bvh().point_query(p, |i| {
-            let t = &self.mesh.tets[i as usize];
+        self.index().at_point(&self.mesh, p, |t| {
             if t.contains(p) {
                 covering.push(t.density);
             }
@@ -141,9 +167,12 @@ impl Volume for TetVolume {
         self.bounds
     }
 
-    /// Density range used by default with a log10 transfer function.
+    /// Density range used by default with a log10 transfer function
+    /// (found on first use: see [`density_range`]).
     fn value_range(&self) -> Range1 {
-        self.value_range
+        *self
+            .value_range
+            .get_or_init(|| density_range(&self.mesh, &mut sampled_densities(&self.mesh)))
     }
 
     fn sample(&self, p: Vec3) -> Option<Sample> {
@@ -171,8 +200,7 @@ impl Volume for TetVolume {
     /// positive density is handed out, visible or not.
     fn intervals(&self, ray: &Ray, t: Range1, _: &IntervalQuery, out: &mut Vec<Interval>) {
         let mut events: Vec<(f32, f32)> = Vec::new();
-        self.bvh().ray_query(ray, t, |i, _| {
-            let tet = &self.mesh.tets[i as usize];
+        self.index().along_ray(&self.mesh, ray, t, |tet| {
             let (a, b) = Planes::new(tet).clip(ray);
             let (a, b) = (a.max(t.lo), b.min(t.hi));
             if b > a {
@@ -198,8 +226,7 @@ impl Volume for TetVolume {
     /// Exact: Σ ρ × chord over every tet the ray crosses within `t`.
     fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
         let mut sum = 0.0f64;
-        self.bvh().ray_query(ray, t, |i, _| {
-            let tet = &self.mesh.tets[i as usize];
+        self.index().along_ray(&self.mesh, ray, t, |tet| {
             let (a, b) = Planes::new(tet).clip(ray);
             let (a, b) = (a.max(t.lo), b.min(t.hi));
             if b > a {
@@ -221,6 +248,7 @@ impl Volume for TetVolume {
     ) -> Option<Result<Vec<f32>, Cancelled>> {
         let options = TetOptions {
             lod_pixels: self.lod_pixels,
+            pixels: self.pixels,
             ..Default::default()
         };
         Some(project(&self.mesh, camera, width, height, options, control))
@@ -299,6 +327,31 @@ pub fn canonical_point(l: f32, n: usize, p: Vec3) -> Vec3 {
 /// `tets` tets (in mesh order).
 pub fn density_stride(tets: usize) -> usize {
     (tets / 100_000).max(1)
+}
+
+/// The densities of every [`density_stride`]-th tet of `mesh` in mesh
+/// order (what [`density_range`] takes), block by block in parallel.
+pub fn sampled_densities(mesh: &TetMesh) -> Vec<f32> {
+    use rayon::prelude::*;
+    let stride = density_stride(mesh.tet_count()) as u64;
+    let per_block: Vec<Vec<f32>> = (0..mesh.blocks().len())
+        .into_par_iter()
+        .map(|b| {
+            let range = mesh.blocks()[b].tets.clone();
+            // The first multiple of the stride in the block's range.
+            let first = range.start.div_ceil(stride) * stride;
+            if first >= range.end {
+                return Vec::new();
+            }
+            let mut buf = Vec::new();
+            let tets = mesh.block_tets(b, &mut buf);
+            (first..range.end)
+                .step_by(stride as usize)
+                .map(|i| tets[(i - range.start) as usize].density)
+                .collect()
+        })
+        .collect();
+    per_block.concat()
 }
 
 /// The default density range of a run (log10 by default): from the mean

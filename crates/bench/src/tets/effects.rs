@@ -89,7 +89,7 @@ pub(super) fn bench_effects(
     ] {
         let frame = Frame::new(mesh, &cam, size, size, None);
         let binned: u64 = frame.bins.iter().map(|b| b.len() as u64).sum();
-        let all = mesh.blocks.len() as u64 * tiles;
+        let all = mesh.blocks().len() as u64 * tiles;
         let on_screen = frame.blocks_per_level[0];
         drop(frame);
         let (w, _) = work(mesh, &cam, size, None);
@@ -135,7 +135,7 @@ pub(super) fn bench_effects(
         };
         println!(
             "| {name} | {} | {on_screen} | {:.3} | {} | {} | {culled} | {un} | {speed} | {diff} |",
-            mesh.blocks.len(),
+            mesh.blocks().len(),
             binned as f64 / all as f64,
             sci(w.tests as f64),
             w.crossings.map_or("—".into(), |c| sci(c as f64)),
@@ -181,7 +181,7 @@ pub(super) fn bench_effects(
     println!(
         "Level of detail: blocks whose screen box is below the threshold use coarser levels \
          (one per halving; {} levels built). Exact mode, framing view, against the same mesh without LOD.\n",
-        mesh.lod.len()
+        mesh.lod().len()
     );
     println!(
         "| lod_pixels | blocks per level (0/1/2/3) | pixel tests | s | time / no LOD | max abs diff | mean abs diff |"
@@ -190,7 +190,7 @@ pub(super) fn bench_effects(
     let (w0, _) = work(mesh, &framing, size, None);
     println!(
         "| none | {} | {} | {:.2} | 1.00 | 0 | 0 |",
-        mesh.blocks.len(),
+        mesh.blocks().len(),
         sci(w0.tests as f64),
         exact.time
     );

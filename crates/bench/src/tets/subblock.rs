@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use voxless_core::{Aabb, Camera, Control, Projection, Vec3};
 use voxless_tets::mesh::KUHN;
 use voxless_tets::raster::{Frame, box_spans, for_each_crossing};
-use voxless_tets::{BLOCK, Block, LagrangianGrid, Tet, TetMesh, TetSettings, TetVolume};
+use voxless_tets::{BLOCK, LagrangianGrid, Tet, TetMesh, TetMeshBuilder, TetSettings, TetVolume};
 
 use super::{resolved, wrap};
 use crate::common::{bench, print_header, save_png};
@@ -66,15 +66,14 @@ pub(super) fn export_subblock(
     let tet_mass = 1.0 / (6.0 * (n * n * n) as f64);
     let mean_volume = (spacing as f64).powi(3) / 6.0;
     let floor = TetSettings::default().degenerate_fraction * mean_volume;
-    let mut tets = Vec::with_capacity(SUB * SUB * SUB * 6);
-    let mut blocks = Vec::new();
+    let mut built = TetMeshBuilder::new(SUB, big, tet_mass, mean_volume);
+    let mut bounds = Aabb::EMPTY;
     let mut degenerate = 0usize;
     let nb = SUB / BLOCK;
     for bi in 0..nb {
         for bj in 0..nb {
             for bk in 0..nb {
-                let start = tets.len() as u32;
-                let mut bounds = Aabb::EMPTY;
+                let mut tets = Vec::new();
                 for i in bi * BLOCK..(bi + 1) * BLOCK {
                     for j in bj * BLOCK..(bj + 1) * BLOCK {
                         for k in bk * BLOCK..(bk + 1) * BLOCK {
@@ -98,28 +97,14 @@ pub(super) fn export_subblock(
                         }
                     }
                 }
-                blocks.push(Block {
-                    tets: start..tets.len() as u32,
-                    bounds,
-                    lagrangian: ((bi * nb + bj) * nb + bk) as u32,
-                });
+                built.push_block(((bi * nb + bj) * nb + bk) as u32, tets);
             }
         }
     }
-    let bounds = blocks.iter().fold(Aabb::EMPTY, |a, b| a.union(b.bounds));
-    let mesh = TetMesh {
-        n: SUB,
-        box_size: big,
-        tet_mass,
-        tets,
-        blocks,
-        point_masses: Vec::new(),
-        mean_volume,
-        lod: Vec::new(),
-    };
+    let mesh = built.build();
     eprintln!(
         "sub-block: {} tets ({degenerate} degenerate dropped), extent {:?}, box {big}",
-        mesh.tets.len(),
+        mesh.tet_count(),
         (hi - lo).to_array()
     );
 
@@ -135,7 +120,7 @@ pub(super) fn export_subblock(
         &TetSettings::default(),
     )?;
     let wide = periodic
-        .tets
+        .tets()
         .iter()
         .filter(|t| t.bounds().extent().max_elem() > 0.5 * big)
         .count();
@@ -175,13 +160,13 @@ pub(super) fn export_subblock(
     let multi = covered.iter().filter(|&&s| s >= 3).count();
     let two = covered.iter().filter(|&&s| s == 2).count();
 
-    let nt = mesh.tets.len();
-    let verts: Vec<f32> = mesh
-        .tets
+    let all = mesh.tets();
+    let nt = all.len();
+    let verts: Vec<f32> = all
         .iter()
         .flat_map(|t| t.v.iter().flat_map(|v| v.to_array()))
         .collect();
-    let dens: Vec<f32> = mesh.tets.iter().map(|t| t.density).collect();
+    let dens: Vec<f32> = all.iter().map(|t| t.density).collect();
     voxless_io::write_npy_f32(&dir.join("vertices.npy"), &[nt, 12], &verts)?;
     voxless_io::write_npy_f32(&dir.join("density.npy"), &[nt], &dens)?;
     let table: Vec<f32> = (0..256)
@@ -224,7 +209,7 @@ pub(super) fn export_subblock(
          (33³ cells × 6 = {}, plus periodic images), {wide} of them spanning more than half the \
          box (the wrap-around layer joining the last plane to the first), so the CLI route does \
          not give the 32³-cell block.\n",
-        periodic.tets.len(),
+        periodic.tet_count(),
         33 * 33 * 33 * 6
     );
     println!(

@@ -88,7 +88,7 @@ impl<'v> Prepare for Binned<'v> {
 /// `frame` with its bins replaced as `bins` asks (level-0 block indices).
 fn with_bins(mut frame: Frame, bins: Bins, mesh: &TetMesh) -> Frame {
     if bins == Bins::All {
-        let every: Vec<u32> = (0..mesh.blocks.len() as u32).collect();
+        let every: Vec<u32> = (0..mesh.blocks().len() as u32).collect();
         frame.bins = vec![every; frame.bins.len()];
     }
     frame

@@ -41,9 +41,6 @@ pub(super) fn sci(v: f64) -> String {
     format!("{v:.2e}")
 }
 
-/// Inclusive pixel rectangle `(x0, x1, y0, y1)`, as `Screen::pixel_rect`.
-type PixelRect = (u32, u32, u32, u32);
-
 /// Pixel tests beyond which [`work`] does not count crossings (and a view is
 /// not timed): a frame that size would take hours.
 const TEST_LIMIT: u64 = 20_000_000_000;
@@ -58,27 +55,22 @@ pub(super) fn work(
     lod: Option<f32>,
 ) -> (Work, Vec<u32>) {
     let frame = Frame::new(mesh, camera, size, size, lod);
-    let levels: Vec<&TetMesh> = std::iter::once(mesh).chain(mesh.lod.iter()).collect();
-    let rects: Vec<Vec<Option<PixelRect>>> = levels
-        .iter()
-        .map(|m| {
-            m.tets
-                .par_iter()
-                .map(|t| frame.screen.pixel_rect(&t.v))
-                .collect()
-        })
-        .collect();
+    let coarse = if lod.is_some() { mesh.lod() } else { &[] };
+    let levels: Vec<&TetMesh> = std::iter::once(mesh).chain(coarse.iter()).collect();
     let (visits, tests) = (0..frame.tiles_x * frame.tiles_y)
         .into_par_iter()
         .map(|i| {
             let (x0, y0, w, h) = frame.tile(i);
             let (mut visits, mut tests) = (0u64, 0u64);
+            let mut buf = Vec::new();
             for &e in &frame.bins[i as usize] {
-                let level = (e >> 28) as usize;
-                let b = &levels[level].blocks[(e & ((1 << 28) - 1)) as usize];
-                let range = b.tets.start as usize..b.tets.end as usize;
-                visits += range.len() as u64;
-                for r in rects[level][range].iter().flatten() {
+                let m = levels[(e >> 28) as usize];
+                let b = (e & ((1 << 28) - 1)) as usize;
+                // The block's tets, derived (a lean mesh holds none), and
+                // their pixel rectangles.
+                let tets = m.block_tets(b, &mut buf);
+                visits += tets.len() as u64;
+                for r in tets.iter().filter_map(|t| frame.screen.pixel_rect(&t.v)) {
                     let (ax, bx) = (r.0.max(x0), r.1.min(x0 + w - 1));
                     let (ay, by) = (r.2.max(y0), r.3.min(y0 + h - 1));
                     if ax <= bx && ay <= by {
@@ -89,7 +81,6 @@ pub(super) fn work(
             (visits, tests)
         })
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-    drop(rects);
     let mut counts = vec![0u32; (size * size) as usize];
     let mut crossings = None;
     if tests <= TEST_LIMIT {

@@ -72,7 +72,13 @@ fn ortho_lanes_equal_the_scalar_kernel_per_pixel() {
 
 /// Column density of pixel `(x, y)` of an orthographic view by clipping
 /// the ray through the pixel centre against the box and every tet, in f64.
-fn column_f64(v: &TetVolume, cam: &Camera, (w, h): (u32, u32), (x, y): (u32, u32)) -> f64 {
+fn column_f64(
+    v: &TetVolume,
+    tets: &[Tet],
+    cam: &Camera,
+    (w, h): (u32, u32),
+    (x, y): (u32, u32),
+) -> f64 {
     type D = [f64; 3];
     let d = |p: Vec3| [p.x as f64, p.y as f64, p.z as f64];
     let sub = |a: D, b: D| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
@@ -114,7 +120,7 @@ fn column_f64(v: &TetVolume, cam: &Camera, (w, h): (u32, u32), (x, y): (u32, u32
         return 0.0;
     }
     let mut total = 0.0;
-    'tet: for t in &v.mesh.tets {
+    'tet: for t in tets {
         let q = t.v.map(d);
         let (mut t0, mut t1) = (lo, hi);
         for f in 0..4 {
@@ -155,6 +161,7 @@ fn ortho_kernels_match_f64_clipping_per_pixel() {
     let (w, h) = (200, 180);
     for (case, (g, pad)) in cases.iter().enumerate() {
         let v = TetVolume::new(g, &TetSettings::default(), 0).unwrap();
+        let tets = v.mesh.tets();
         let b = Aabb::new(Vec3::splat(-pad), Vec3::splat(1.0 + pad));
         for axis in 0..3 {
             let cam = Camera::axis_projection(&b, axis).unwrap();
@@ -176,7 +183,7 @@ fn ortho_kernels_match_f64_clipping_per_pixel() {
                 .collect();
             let mut covered = 0;
             for p in (0..(w * h) as usize).step_by(3) {
-                let exact = column_f64(&v, &cam, (w, h), (p as u32 % w, p as u32 / w));
+                let exact = column_f64(&v, &tets, &cam, (w, h), (p as u32 % w, p as u32 / w));
                 let rel = |x: f32| (x as f64 - exact).abs() / exact.max(1e-3);
                 for (k, img) in &images {
                     assert!(
@@ -210,6 +217,7 @@ fn oblique_camera() -> Camera {
 #[test]
 fn oblique_views_match_f64_clipping_and_the_lanes() {
     let v = TetVolume::new(&grid(6, 1.0, jitter(53, 0.04)), &TetSettings::default(), 0).unwrap();
+    let tets = v.mesh.tets();
     let cam = oblique_camera();
     let (w, h) = (160, 150);
     let images: Vec<_> = kernels()
@@ -217,7 +225,7 @@ fn oblique_views_match_f64_clipping_and_the_lanes() {
         .map(|k| (k, project_kernel(&v, &cam, w, h, k)))
         .collect();
     let exact: Vec<f64> = (0..w * h)
-        .map(|p| column_f64(&v, &cam, (w, h), (p % w, p / w)))
+        .map(|p| column_f64(&v, &tets, &cam, (w, h), (p % w, p / w)))
         .collect();
     let peak = exact.iter().copied().fold(0.0, f64::max);
     let mut covered = 0;
@@ -242,7 +250,7 @@ fn orthographic_tet_rects_equal_the_per_vertex_rects() {
     let cams = [0, 1, 2].map(|a| Camera::axis_projection(&b, a).unwrap());
     for cam in cams.iter().chain([&oblique_camera()]) {
         let screen = raster::Screen::new(cam, 97, 83);
-        for t in &v.mesh.tets {
+        for t in &v.mesh.tets() {
             assert_eq!(screen.tet_rect(&t.v), screen.pixel_rect(&t.v));
         }
     }
