@@ -140,8 +140,9 @@ impl Cursor {
         nx.constant_value().is_none() && step_in(nx, settings).to_bits() == self.dt.to_bits()
     }
 
-    /// The next segment of a complete list of intervals.
-    #[inline]
+    /// The next segment of a complete list of intervals (the tests' walk
+    /// over a list; renders ask with [`Cursor::next_in`]).
+    #[cfg(test)]
     pub fn next(&mut self, intervals: &[Interval], settings: &RenderSettings) -> Option<Segment> {
         match self.step(intervals, true, settings) {
             Step::Segment(s) => Some(s),

@@ -48,6 +48,7 @@ pub mod mirror;
 mod packet;
 pub mod sampling;
 pub mod scatter;
+mod scatter_packet;
 pub mod surface;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;

@@ -11,8 +11,12 @@
 //! image; only the sums inside the volume may run in another order. Each
 //! ray asks the volume for its intervals as its cursor reaches them, so a
 //! ray that turns opaque asks for nothing behind.
+//!
+//! The passes ([`run_passes`]) are generic over what a ray does with its
+//! samples ([`Integrator`]): emission–absorption here, free flights of
+//! single scattering in [`crate::scatter_packet`].
 
-use voxless_core::{IntervalQuery, Ray, Sample, SampleBatch, Vec3, Volume};
+use voxless_core::{Interval, IntervalQuery, Ray, Sample, SampleBatch, Vec3, Volume};
 
 use crate::Tile;
 use crate::cursor::{Cursor, RayIntervals, Segment};
@@ -38,21 +42,92 @@ pub(crate) struct TileInput<'a> {
     pub query: &'a IntervalQuery<'a>,
 }
 
-/// One ray of a packet.
-struct PacketRay {
-    /// Index of the ray in the tile.
-    r: usize,
+/// Where one ray of a packet is in its samples.
+pub(crate) struct Lane {
+    /// Index of the ray (and of its intervals) in the arrays a pass gets.
+    pub r: usize,
     cursor: Cursor,
     /// The next segment, already taken from the cursor.
     next: Option<Segment>,
-    state: RayState,
-    done: bool,
+    pub done: bool,
 }
 
-/// Scratch reused across the packets of a tile.
+impl Lane {
+    /// Lane of ray `r`, its first segment taken from `cursor` (done at once
+    /// when it has none, or when `empty`).
+    pub fn start<V: Volume>(
+        r: usize,
+        mut cursor: Cursor,
+        empty: bool,
+        (volume, ray, ivs): (&V, &Ray, &mut RayIntervals),
+        query: &IntervalQuery,
+        ctx: &Ctx,
+    ) -> Lane {
+        let next = if empty {
+            None
+        } else {
+            cursor.next_in(ivs, volume, ray, query, ctx.settings)
+        };
+        Lane {
+            r,
+            cursor,
+            next,
+            done: next.is_none(),
+        }
+    }
+}
+
+/// What a ray of a packet does with its samples, front to back.
+pub(crate) trait Integrator {
+    fn lane(&mut self) -> &mut Lane;
+    /// One segment and its sample; true when the ray needs no more
+    /// (opaque, or its scattering event found).
+    #[allow(clippy::too_many_arguments)]
+    fn feed<V: Volume>(
+        &mut self,
+        volume: &V,
+        ray: &Ray,
+        iv: &Interval,
+        seg: Segment,
+        sample: Option<Sample>,
+        gradient: Vec3,
+        ctx: &Ctx,
+    ) -> bool;
+    /// The ray ran out of segments.
+    fn finish<V: Volume>(&mut self, volume: &V, ray: &Ray, ctx: &Ctx);
+}
+
+/// One ray of an emission–absorption packet.
+struct PacketRay {
+    lane: Lane,
+    state: RayState,
+}
+
+impl Integrator for PacketRay {
+    fn lane(&mut self) -> &mut Lane {
+        &mut self.lane
+    }
+    #[inline]
+    fn feed<V: Volume>(
+        &mut self,
+        volume: &V,
+        ray: &Ray,
+        iv: &Interval,
+        seg: Segment,
+        sample: Option<Sample>,
+        gradient: Vec3,
+        ctx: &Ctx,
+    ) -> bool {
+        self.state.feed(volume, ray, iv, seg, sample, gradient, ctx)
+    }
+    fn finish<V: Volume>(&mut self, volume: &V, ray: &Ray, ctx: &Ctx) {
+        self.state.finish(volume, ray, ctx);
+    }
+}
+
+/// Buffers of one pass, reused across passes and packets.
 #[derive(Default)]
-pub(crate) struct PacketScratch {
-    rays: Vec<PacketRay>,
+pub(crate) struct PassScratch {
     batch_rays: Vec<Ray>,
     offsets: Vec<u32>,
     t: Vec<f32>,
@@ -63,6 +138,13 @@ pub(crate) struct PacketScratch {
     /// Per ray gathered in a pass: (packet ray, its first and end segment).
     gathered: Vec<(usize, usize, usize)>,
     out: Vec<(Option<Sample>, Vec3)>,
+}
+
+/// Scratch reused across the packets of a tile.
+#[derive(Default)]
+pub(crate) struct PacketScratch {
+    rays: Vec<PacketRay>,
+    pub pass: PassScratch,
 }
 
 /// Renders `tile` with packets; pixels row-major into `out`. `ivs` holds
@@ -80,61 +162,68 @@ pub(crate) fn render_tile<V: Volume>(
 ) {
     out.clear();
     out.resize((tile.w * tile.h) as usize, [0.0; 4]);
-    for py in (0..tile.h).step_by(PACKET as usize) {
-        for px in (0..tile.w).step_by(PACKET as usize) {
-            let pw = PACKET.min(tile.w - px);
-            let ph = PACKET.min(tile.h - py);
-            scratch.rays.clear();
-            for y in py..py + ph {
-                for x in px..px + pw {
-                    let r = (y * tile.w + x) as usize;
-                    let spans = &input.spans[r];
-                    let mut p = PacketRay {
+    for (px, py, pw, ph) in packets(tile) {
+        scratch.rays.clear();
+        for y in py..py + ph {
+            for x in px..px + pw {
+                let r = (y * tile.w + x) as usize;
+                let spans = &input.spans[r];
+                scratch.rays.push(PacketRay {
+                    lane: Lane::start(
                         r,
-                        cursor: spans.cursor(&input.rngs[r]),
-                        next: None,
-                        state: RayState::new(spans.cells, input.alpha0[r], input.rngs[r]),
-                        done: spans.is_empty(),
-                    };
-                    if !p.done {
-                        p.next = p.cursor.next_in(
-                            &mut ivs[r],
-                            volume,
-                            &input.rays[r],
-                            input.query,
-                            ctx.settings,
-                        );
-                        p.done = p.next.is_none();
-                    }
-                    scratch.rays.push(p);
-                }
+                        spans.cursor(&input.rngs[r]),
+                        spans.is_empty(),
+                        (volume, &input.rays[r], &mut ivs[r]),
+                        input.query,
+                        ctx,
+                    ),
+                    state: RayState::new(spans.cells, input.alpha0[r], input.rngs[r]),
+                });
             }
-            run_packet(volume, ctx, &input, ivs, scratch);
-            for p in &scratch.rays {
-                out[p.r] = p.state.rgba();
-                stats.merge(&p.state.stats);
-            }
+        }
+        run_passes(
+            volume,
+            ctx,
+            (input.rays, ivs),
+            input.query,
+            &mut scratch.rays,
+            &mut scratch.pass,
+        );
+        for p in &scratch.rays {
+            out[p.lane.r] = p.state.rgba();
+            stats.merge(&p.state.stats);
         }
     }
 }
 
-/// Runs passes until every ray of the packet is done.
-fn run_packet<V: Volume>(
+/// The packets of a tile: (x, y, width, height) in tile pixels.
+pub(crate) fn packets(tile: Tile) -> impl Iterator<Item = (u32, u32, u32, u32)> {
+    (0..tile.h).step_by(PACKET as usize).flat_map(move |py| {
+        (0..tile.w)
+            .step_by(PACKET as usize)
+            .map(move |px| (px, py, PACKET.min(tile.w - px), PACKET.min(tile.h - py)))
+    })
+}
+
+/// Runs passes until every ray of `items` is done. A lane's `r` indexes
+/// `rays` and `ivs`.
+pub(crate) fn run_passes<V: Volume, I: Integrator>(
     volume: &V,
     ctx: &Ctx,
-    input: &TileInput,
-    ivs: &mut [RayIntervals],
-    s: &mut PacketScratch,
+    (rays, ivs): (&[Ray], &mut [RayIntervals]),
+    query: &IntervalQuery,
+    items: &mut [I],
+    s: &mut PassScratch,
 ) {
     let settings = ctx.settings;
     let gradient = ctx.needs_gradient();
     loop {
         // The window starts at the ray that is furthest behind.
-        let Some((t0, dt)) = s
-            .rays
-            .iter()
-            .filter(|r| !r.done)
-            .filter_map(|r| r.next.map(|n| (n.t, r.cursor.dt())))
+        let Some((t0, dt)) = items
+            .iter_mut()
+            .map(|i| i.lane())
+            .filter(|l| !l.done)
+            .filter_map(|l| l.next.map(|n| (n.t, l.cursor.dt())))
             .min_by(|a, b| a.0.total_cmp(&b.0))
         else {
             return;
@@ -149,12 +238,13 @@ fn run_packet<V: Volume>(
         s.segs.clear();
         s.gathered.clear();
         s.offsets.push(0);
-        for (i, p) in s.rays.iter_mut().enumerate() {
+        for (i, item) in items.iter_mut().enumerate() {
+            let p = item.lane();
             if p.done {
                 continue;
             }
             let ivs = &mut ivs[p.r];
-            let ray = &input.rays[p.r];
+            let ray = &rays[p.r];
             let (first_seg, first_t) = (s.segs.len(), s.t.len());
             while let Some(seg) = p.next {
                 // The furthest-behind ray always takes its first sample, so
@@ -171,10 +261,10 @@ fn run_packet<V: Volume>(
                     s.t.push(seg.t);
                     s.hints.push(iv.hint);
                 }
-                p.next = p.cursor.next_in(ivs, volume, ray, input.query, settings);
+                p.next = p.cursor.next_in(ivs, volume, ray, query, settings);
             }
             if s.t.len() > first_t {
-                s.batch_rays.push(input.rays[p.r]);
+                s.batch_rays.push(*ray);
                 s.offsets.push(s.t.len() as u32);
             }
             s.gathered.push((i, first_seg, s.segs.len()));
@@ -192,26 +282,29 @@ fn run_packet<V: Volume>(
                 &mut s.out,
             );
         }
-        // Composite every ray front to back from the buffer.
+        // Every ray takes its samples front to back from the buffer.
         for &(i, lo, hi) in &s.gathered {
-            let p = &mut s.rays[i];
-            let ray = &input.rays[p.r];
-            let ivs = &ivs[p.r].list;
+            let item = &mut items[i];
+            let r = item.lane().r;
+            let ray = &rays[r];
+            let ivs = &ivs[r].list;
+            let mut done = false;
             for &(seg, slot) in &s.segs[lo..hi] {
                 let iv = &ivs[seg.interval as usize];
                 let (sample, g) = match iv.constant_value() {
                     Some(v) => (Some(Sample::scalar(v)), Vec3::ZERO),
                     None => s.out[slot as usize],
                 };
-                if p.state.feed(volume, ray, iv, seg, sample, g, ctx) {
-                    p.done = true;
+                if item.feed(volume, ray, iv, seg, sample, g, ctx) {
+                    done = true;
                     break;
                 }
             }
-            if !p.done && p.next.is_none() {
-                p.state.finish(volume, ray, ctx);
-                p.done = true;
+            if !done && item.lane().next.is_none() {
+                item.finish(volume, ray, ctx);
+                done = true;
             }
+            item.lane().done = done;
         }
     }
 }

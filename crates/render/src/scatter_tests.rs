@@ -4,7 +4,7 @@
 use super::*;
 use voxless_transfer::{Colormap, OpacityMap};
 
-use crate::test_volumes::Blob;
+use crate::test_volumes::{BatchedBlob, Blob};
 
 fn setup(
     size: u32,
@@ -193,4 +193,56 @@ fn shadows_darken_the_side_away_from_the_light() {
     let flat = render(&Blob, &camera, &tf, &s, &Control::new()).unwrap();
     let sum = |img: &Image| img.pixels.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>();
     assert!(sum(&lit) < 0.9 * sum(&flat), "shadows must remove light");
+}
+
+/// Every pixel of a render on the packet path equals the per-ray path's:
+/// the same lattice, random numbers and sums, only batched.
+#[test]
+fn packet_paths_draw_the_per_ray_image() {
+    for (noise, light) in [
+        (
+            Noise::Blue,
+            LightSource::Directional(Vec3::new(0.3, 1.0, 0.2).normalized()),
+        ),
+        (Noise::White, LightSource::Point(Vec3::new(1.5, 0.5, -2.0))),
+    ] {
+        let (camera, tf, mut s) = setup(40, noise, FreeFlight::Marching);
+        s.spp = 4;
+        s.scatter.as_mut().unwrap().light = light;
+        let per_ray = render(&Blob, &camera, &tf, &s, &Control::new()).unwrap();
+        let packets = render(&BatchedBlob, &camera, &tf, &s, &Control::new()).unwrap();
+        assert!(per_ray.pixels.iter().any(|p| p[3] > 0.5));
+        let differ = per_ray
+            .pixels
+            .iter()
+            .zip(&packets.pixels)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert_eq!(differ, 0, "{noise:?}, {light:?}: {differ} pixels differ");
+    }
+}
+
+/// The packet path converges like the per-ray path (1/√spp) to the same
+/// reference, and with blue noise no slower than white.
+#[test]
+fn packet_shadows_converge_like_per_ray_shadows() {
+    let size = 24;
+    let reference = render_spp(size, 1024, Noise::White, FreeFlight::Marching, 99);
+    let packets = |spp: u32, noise: Noise| {
+        let (camera, tf, mut s) = setup(size, noise, FreeFlight::Marching);
+        s.spp = spp;
+        s.seed = 1;
+        render(&BatchedBlob, &camera, &tf, &s, &Control::new()).unwrap()
+    };
+    let e: Vec<f64> = [4, 16, 64]
+        .iter()
+        .map(|&n| rmse(&packets(n, Noise::White), &reference))
+        .collect();
+    eprintln!("packet path RMSE at 4, 16, 64 spp: {e:?}");
+    for w in e.windows(2) {
+        let ratio = w[0] / w[1];
+        assert!((1.6..2.5).contains(&ratio), "RMSE {e:?}: ratio {ratio}");
+    }
+    let blue = rmse(&packets(64, Noise::Blue), &reference);
+    assert!(blue <= e[2] * 1.1, "blue {blue} vs white {}", e[2]);
 }

@@ -27,3 +27,27 @@ impl Volume for Blob {
         }
     }
 }
+
+voxless_core::prepare_as_self!(BatchedBlob);
+
+/// [`Blob`] claiming a packet path (the default `sample_batch`, which gives
+/// exactly `sample`), so renders of it take the packet integrators.
+pub(crate) struct BatchedBlob;
+
+impl Volume for BatchedBlob {
+    fn bounds(&self) -> Aabb {
+        Blob.bounds()
+    }
+    fn value_range(&self) -> Range1 {
+        Blob.value_range()
+    }
+    fn sample(&self, p: Vec3) -> Option<Sample> {
+        Blob.sample(p)
+    }
+    fn packet_sampling(&self) -> bool {
+        true
+    }
+    fn intervals(&self, ray: &Ray, t: Range1, q: &IntervalQuery, out: &mut Vec<Interval>) {
+        Blob.intervals(ray, t, q, out)
+    }
+}

@@ -1,7 +1,8 @@
 //! One tile of one pass: the tile's camera rays, their intervals (from the
 //! volume's tile view when it has one, else ray by ray, a chunk at a time
 //! as each ray goes), then one of the three integrators over those
-//! intervals — packets, per-sample marching, or single scattering.
+//! intervals — packets, per-sample marching, or single scattering (on
+//! packets too where the volume samples in batches).
 
 use voxless_core::{IntervalLists, IntervalQuery, Range1, Ray, TileRays, Volume};
 
@@ -9,6 +10,8 @@ use crate::cursor::RayIntervals;
 use crate::march::{Ctx, RaySpans, RayStats, march_intervals, region};
 use crate::packet::{self, PacketScratch};
 use crate::sampling::PixelRng;
+use crate::scatter::FreeFlight;
+use crate::scatter_packet::{self, ScatterScratch};
 use crate::{Job, Tile, pixel_ray, scatter, surface};
 use voxless_mesh::Hit;
 
@@ -26,6 +29,7 @@ struct Scratch {
     ivs: Vec<RayIntervals>,
     shadow: Vec<voxless_core::Interval>,
     packet: PacketScratch,
+    scatter: ScatterScratch,
     hits: Vec<Option<Hit>>,
 }
 
@@ -135,34 +139,51 @@ fn render_with<V: Volume>(
     // 3. Integrate.
     let ivs = &mut s.ivs[..n];
     let mut out = Vec::with_capacity(n);
+    let packets = settings.packets && volume.packet_sampling();
+    let input = packet::TileInput {
+        rays: &s.rays,
+        rngs: &s.rngs,
+        spans: &s.ray_spans,
+        alpha0: &s.alpha0,
+        query: &query,
+    };
     if let Some(sc) = &settings.scatter {
-        // Scattering paths are incoherent: one ray at a time.
-        for (r, ray_ivs) in ivs.iter_mut().enumerate() {
-            let (x, y) = (tile.x + r as u32 % tile.w, tile.y + r as u32 / tile.w);
-            ray_ivs.fetch_all(volume, &s.rays[r], &query);
-            out.push(scatter::path(
+        if packets && sc.method == FreeFlight::Marching {
+            // Marching flights, camera and shadow rays, a packet at a time.
+            scatter_packet::render_tile(
                 volume,
-                &s.rays[r],
-                &ray_ivs.list,
                 &ctx,
                 sc,
-                (x, y),
+                tile,
                 sample,
-                &mut s.shadow,
-            ));
+                input,
+                ivs,
+                &mut s.scatter,
+                &mut out,
+            );
+        } else {
+            for (r, ray_ivs) in ivs.iter_mut().enumerate() {
+                let (x, y) = (tile.x + r as u32 % tile.w, tile.y + r as u32 / tile.w);
+                out.push(scatter::path(
+                    volume,
+                    &s.rays[r],
+                    ray_ivs,
+                    &query,
+                    &s.ray_spans[r],
+                    &ctx,
+                    sc,
+                    (x, y),
+                    sample,
+                    &mut s.shadow,
+                ));
+            }
         }
-    } else if settings.packets && volume.packet_sampling() {
+    } else if packets {
         packet::render_tile(
             volume,
             &ctx,
             tile,
-            packet::TileInput {
-                rays: &s.rays,
-                rngs: &s.rngs,
-                spans: &s.ray_spans,
-                alpha0: &s.alpha0,
-                query: &query,
-            },
+            input,
             ivs,
             &mut s.packet,
             &mut out,
