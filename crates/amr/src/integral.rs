@@ -182,7 +182,11 @@ impl AmrVolume {
         let (t0, t1) = (t.lo as f64, t.hi as f64);
         let axes = d.iter().filter(|&&x| x != 0.0).count();
         let values = self.field_values(self.settings().field);
-        self.region_bvh().ray_query(ray, t, |r, _| {
+        // Regions in any order would do for a sum; the walk of the region
+        // k-d tree finds them without the BVH's overlapping siblings (and
+        // puts a ray lying in a cut plane on the plane's upper side, as the
+        // half-open clip below does).
+        self.region_tree().walk(ray, t, None, |r, _| {
             let r = r as usize;
             let (ws, nw) = widths(self, r);
             let field = self.settings().field;
@@ -287,6 +291,7 @@ impl AmrVolume {
                     }
                 }
             }
+            true
         });
         sum
     }

@@ -85,7 +85,7 @@ pub struct AmrVolume {
     /// The k-d tree the regions were cut by: ray intervals, front to back
     /// (a prepared [`crate::AmrContext`] masks the subtrees it cannot see).
     tree: RegionTree,
-    /// All regions, for point location and exact line integrals.
+    /// All regions, for point location.
     region_bvh: Bvh,
     /// Brick boxes, for nearest-cell lookups and exact projections.
     brick_bvh: Bvh,
@@ -368,8 +368,8 @@ impl AmrVolume {
             .count()
     }
 
-    pub(crate) fn region_bvh(&self) -> &Bvh {
-        &self.region_bvh
+    pub(crate) fn region_tree(&self) -> &RegionTree {
+        &self.tree
     }
 
     /// World position of unit coordinate 0.
