@@ -71,7 +71,7 @@ pub(crate) struct Line {
     o: [f64; 3],
     d: [f64; 3],
     /// The one axis the ray moves along, when it is parallel to an axis.
-    axis: Option<usize>,
+    pub(crate) axis: Option<usize>,
 }
 
 /// One brick's tents along a ray: the ray's coordinate in the lattice of
@@ -297,17 +297,19 @@ pub(crate) struct Scratch {
 }
 
 thread_local! {
-    static SCRATCH: std::cell::Cell<Scratch> = std::cell::Cell::new(Scratch {
-        cuts: Vec::new(),
-        tents: Vec::new(),
-        columns: Vec::new(),
-        pieces: AxisPieces { segments: Vec::new(), cuts: Vec::new() },
-    });
+    static SCRATCH: std::cell::Cell<Scratch> = const {
+        std::cell::Cell::new(Scratch {
+            cuts: Vec::new(),
+            tents: Vec::new(),
+            columns: Vec::new(),
+            pieces: AxisPieces { segments: Vec::new(), cuts: Vec::new() },
+        })
+    };
 }
 
 impl Line {
     /// `ray` in the finest units of `volume`.
-    fn new(volume: &AmrVolume, ray: &Ray) -> Line {
+    pub(crate) fn new(volume: &AmrVolume, ray: &Ray) -> Line {
         let (origin, h) = (volume.origin(), volume.cell_size() as f64);
         let d = [0, 1, 2].map(|a| ray.dir[a] as f64 / h);
         Line {
