@@ -27,7 +27,6 @@ use crate::bricks::Brick;
 use crate::volume::AmrVolume;
 
 /// Gauss–Legendre nodes on [0, 1] and weights summing to 1.
-const GL1: [(f64, f64); 1] = [(0.5, 1.0)];
 const GL2: [(f64, f64); 2] = [
     (0.211_324_865_405_187_1, 0.5),
     (0.788_675_134_594_812_9, 0.5),
@@ -39,61 +38,166 @@ const GL4: [(f64, f64); 4] = [
     (0.930_568_155_797_026_3, 0.173_927_422_568_726_9),
 ];
 
-/// Levels (as widths in finest units) present among a region's bricks; at
-/// most a handful, so a small inline list.
-fn widths(volume: &AmrVolume, region: usize) -> ([i32; 8], usize) {
-    let mut out = [0i32; 8];
-    let mut n = 0;
-    for &b in volume.region_bricks(region) {
-        let w = volume.bricks()[b as usize].width();
-        if !out[..n].contains(&w) {
-            if n == out.len() {
-                // More than eight levels in one region: keep the finest
-                // eight (extra planes only refine the pieces).
-                let (i, _) = out
-                    .iter()
-                    .enumerate()
-                    .max_by_key(|x| x.1)
-                    .unwrap_or((0, &0));
-                if w < out[i] {
-                    out[i] = w;
-                }
-                continue;
-            }
-            out[n] = w;
-            n += 1;
-        }
-    }
-    (out, n)
+/// `⌊x⌋` without a libm call (exact for |x| < 2⁶³).
+#[inline]
+fn floor(x: f64) -> i64 {
+    let i = x as i64;
+    i - (x < i as f64) as i64
 }
 
-/// B at unit point `pu` where brick `b` alone reaches: trilinear
-/// interpolation between its cell centres with indices clamped at its faces
-/// (what the tents' normalisation gives there, axis by axis).
+/// `⌈x⌉`, likewise.
 #[inline]
-fn single_brick_value(b: &Brick, values: &[f32], pu: [f64; 3]) -> f32 {
-    let w = b.width() as f64;
-    let mut idx = [[0usize; 2]; 3];
-    let mut f = [0.0f32; 3];
-    for a in 0..3 {
-        let t = (pu[a] - b.lower[a] as f64) / w - 0.5;
-        // ⌊t⌋ without a libm call.
-        let i0 = t as i64 - (t < (t as i64) as f64) as i64;
-        f[a] = (t - i0 as f64) as f32;
-        let last = b.size[a] as i64 - 1;
-        idx[a] = [i0.clamp(0, last) as usize, (i0 + 1).clamp(0, last) as usize];
-    }
-    let (sx, sy) = (b.size[0] as usize, b.size[1] as usize);
-    let at = |x: usize, y: usize, z: usize| values[b.offset as usize + (z * sy + y) * sx + x];
-    let mut v = 0.0f32;
-    for (kz, wz) in [(0, 1.0 - f[2]), (1, f[2])] {
-        for (ky, wy) in [(0, 1.0 - f[1]), (1, f[1])] {
-            let row = wz * wy;
-            let (y, z) = (idx[1][ky], idx[2][kz]);
-            v += row * ((1.0 - f[0]) * at(idx[0][0], y, z) + f[0] * at(idx[0][1], y, z));
+fn ceil(x: f64) -> i64 {
+    let i = x as i64;
+    i + (x > i as f64) as i64
+}
+
+/// The hats of one axis at lattice coordinate `tau` (cell `i`'s hat peaks at
+/// `tau = i`): the two cells that may reach, with weights, zero for a cell
+/// outside `0..n` (the normalisation then clamps to the face, per axis).
+#[inline]
+fn hats(tau: f64, n: i64) -> [(i64, f64); 2] {
+    let i0 = floor(tau);
+    let f = tau - i0 as f64;
+    let inside = |i: i64| (0..n).contains(&i);
+    [
+        (i0, if inside(i0) { 1.0 - f } else { 0.0 }),
+        (i0 + 1, if inside(i0 + 1) { f } else { 0.0 }),
+    ]
+}
+
+/// The ray in finest units, `u(s) = o + d·s`, and what the pieces depend on.
+pub(crate) struct Line {
+    o: [f64; 3],
+    d: [f64; 3],
+    /// The one axis the ray moves along, when it is parallel to an axis.
+    pub(crate) axis: Option<usize>,
+}
+
+/// One brick's tents along a ray: the ray's coordinate in the lattice of
+/// the brick's cell centres is affine in the ray parameter,
+/// `τ_a(s) = α_a + β_a·s`, so nothing per brick is recomputed per point.
+#[derive(Clone, Copy, Debug, Default)]
+struct Tents {
+    alpha: [f64; 3],
+    beta: [f64; 3],
+    size: [i64; 3],
+    offset: i64,
+    stride: [i64; 3],
+}
+
+impl Tents {
+    fn new(b: &Brick, line: &Line) -> Tents {
+        // Bricks are one level, so the width is a power of two and scaling
+        // by its inverse is exact.
+        let inv = 1.0 / b.width() as f64;
+        let (sx, sy) = (b.size[0] as i64, b.size[1] as i64);
+        Tents {
+            alpha: [0, 1, 2].map(|a| (line.o[a] - b.lower[a] as f64) * inv - 0.5),
+            beta: [0, 1, 2].map(|a| line.d[a] * inv),
+            size: b.size.map(|n| n as i64),
+            offset: b.offset as i64,
+            stride: [1, sx, sx * sy],
         }
     }
-    v
+
+    /// `(Σ Ĥ v, Σ Ĥ)` of this brick's cells at `s`.
+    #[inline]
+    fn sums(&self, values: &[f32], s: f64) -> (f64, f64) {
+        let h = [0, 1, 2].map(|a| hats(self.alpha[a] + self.beta[a] * s, self.size[a]));
+        if h.iter().any(|x| x[0].1 <= 0.0 && x[1].1 <= 0.0) {
+            return (0.0, 0.0);
+        }
+        let (mut sv, mut sw) = (0.0, 0.0);
+        for (iz, wz) in h[2] {
+            for (iy, wy) in h[1] {
+                let wzy = wz * wy;
+                if wzy <= 0.0 {
+                    continue;
+                }
+                let row = self.offset + iz * self.stride[2] + iy * self.stride[1];
+                for (ix, wx) in h[0] {
+                    let w = wzy * wx;
+                    if w > 0.0 {
+                        sv += w * values[(row + ix) as usize] as f64;
+                        sw += w;
+                    }
+                }
+            }
+        }
+        (sv, sw)
+    }
+}
+
+/// [`Tents`] for a ray parallel to axis `m`: the hats across the ray are
+/// the same all along it, so the (at most four) columns of cells they
+/// weight are found once and only the hats along `m` vary.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct ColumnTents {
+    alpha: f64,
+    beta: f64,
+    size: i64,
+    stride: i64,
+    /// Index of each column's cell 0 along `m`, and its weight.
+    columns: [(i64, f64); 4],
+    count: usize,
+}
+
+impl ColumnTents {
+    fn new(t: &Tents, m: usize) -> ColumnTents {
+        let (a1, a2) = ((m + 1) % 3, (m + 2) % 3);
+        let h1 = hats(t.alpha[a1], t.size[a1]);
+        let h2 = hats(t.alpha[a2], t.size[a2]);
+        let mut c = ColumnTents {
+            alpha: t.alpha[m],
+            beta: t.beta[m],
+            size: t.size[m],
+            stride: t.stride[m],
+            ..Default::default()
+        };
+        for (i2, w2) in h2 {
+            for (i1, w1) in h1 {
+                let w = w2 * w1;
+                if w > 0.0 {
+                    c.columns[c.count] = (t.offset + i1 * t.stride[a1] + i2 * t.stride[a2], w);
+                    c.count += 1;
+                }
+            }
+        }
+        c
+    }
+
+    #[inline]
+    fn sums(&self, values: &[f32], s: f64) -> (f64, f64) {
+        let (mut sv, mut sw) = (0.0, 0.0);
+        for (i, h) in hats(self.alpha + self.beta * s, self.size) {
+            if h <= 0.0 {
+                continue;
+            }
+            for &(base, w) in &self.columns[..self.count] {
+                sv += h * w * values[(base + i * self.stride) as usize] as f64;
+                sw += h * w;
+            }
+        }
+        (sv, sw)
+    }
+}
+
+/// `(Σ Ĥ v, Σ Ĥ)` over a region's bricks: B's numerator and denominator.
+#[inline]
+fn sums_of(tents: &[Tents], values: &[f32], s: f64) -> (f64, f64) {
+    tents.iter().fold((0.0, 0.0), |(n, d), t| {
+        let (a, b) = t.sums(values, s);
+        (n + a, d + b)
+    })
+}
+
+#[inline]
+fn column_sums_of(tents: &[ColumnTents], values: &[f32], s: f64) -> (f64, f64) {
+    tents.iter().fold((0.0, 0.0), |(n, d), t| {
+        let (a, b) = t.sums(values, s);
+        (n + a, d + b)
+    })
 }
 
 /// `∫₀¹ N(s)/D(s) ds` for `N`, `D` linear between `(N0, D0)` and `(N1, D1)`
@@ -121,173 +225,328 @@ fn ratio_mean((n0, d0): (f64, f64), (n1, d1): (f64, f64)) -> f64 {
     dn / dd + (n0 - dn * d0 / dd) * (d1 / d0).ln() / dd
 }
 
-impl AmrVolume {
-    /// `(Σ Ĥ v, Σ Ĥ)` of `field` at unit point `pu` over region `region`'s
-    /// bricks: the basis value's numerator and denominator.
-    fn basis_sums(&self, pu: [f64; 3], region: usize, field: usize) -> (f64, f64) {
-        let values = self.field_values(field);
-        let (mut sv, mut sw) = (0.0f64, 0.0f64);
-        for &b in self.region_bricks(region) {
-            let b = &self.bricks()[b as usize];
-            let w = b.width() as f64;
-            let mut idx = [[0i64; 2]; 3];
-            let mut wt = [[0.0f64; 2]; 3];
-            let mut reaches = true;
-            for a in 0..3 {
-                let t = (pu[a] - b.lower[a] as f64) / w - 0.5;
-                let i0 = t as i64 - (t < (t as i64) as f64) as i64;
-                let f = t - i0 as f64;
-                let n = b.size[a] as i64;
-                idx[a] = [i0, i0 + 1];
-                wt[a] = [
-                    if (0..n).contains(&i0) { 1.0 - f } else { 0.0 },
-                    if (0..n).contains(&(i0 + 1)) { f } else { 0.0 },
-                ];
-                if wt[a][0] <= 0.0 && wt[a][1] <= 0.0 {
-                    reaches = false;
-                    break;
-                }
+/// Sorts the cuts of a segment: runs that are already monotone (one per
+/// axis and level), so insertion sort is close to linear.
+fn sort_cuts(v: &mut [f64]) {
+    for i in 1..v.len() {
+        let x = v[i];
+        let mut j = i;
+        while j > 0 && v[j - 1] > x {
+            v[j] = v[j - 1];
+            j -= 1;
+        }
+        v[j] = x;
+    }
+}
+
+/// The levels (as widths in finest units) among `bricks`, finest eight at
+/// most (extra planes only refine the pieces).
+fn widths(volume: &AmrVolume, bricks: &[u32]) -> ([i32; 8], usize) {
+    let (mut ws, mut nw) = ([0i32; 8], 0);
+    for &b in bricks {
+        let w = volume.bricks()[b as usize].width();
+        if !ws[..nw].contains(&w) {
+            if nw < ws.len() {
+                ws[nw] = w;
+                nw += 1;
+            } else if let Some(c) = ws.iter_mut().max().filter(|c| w < **c) {
+                *c = w;
             }
-            if !reaches {
+        }
+    }
+    (ws, nw)
+}
+
+/// The kinks of the tents of widths `ws` that the ray `o + d·s` crosses
+/// along `ax` strictly inside `(a, z)`, appended to `cuts`.
+fn push_kinks(cuts: &mut Vec<f64>, ws: &[i32], o: f64, d: f64, a: f64, z: f64) {
+    for &w in ws {
+        let w = w as f64;
+        let (ua, uz) = (o + d * a, o + d * z);
+        let (umin, umax) = (ua.min(uz), ua.max(uz));
+        for k in ceil(umin / w - 0.5)..=floor(umax / w - 0.5) {
+            let tc = ((k as f64 + 0.5) * w - o) / d;
+            if tc > a && tc < z {
+                cuts.push(tc);
+            }
+        }
+    }
+}
+
+/// A region's pieces along rays parallel to one axis `m` that share their
+/// position and direction along `m` and their range `t`: which bricks'
+/// cells the region holds there, and where the ray crosses kinks inside
+/// each. Everything here is the same for all such rays (the parallel rays
+/// of a projection down an axis), so a whole-image projection finds it once
+/// per region ([`crate::project`]).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct AxisPieces {
+    /// Per brick (index into the volume's bricks): its segment's cuts,
+    /// `cuts[start..end]`, ends included.
+    segments: Vec<(u32, u32, u32)>,
+    cuts: Vec<f64>,
+}
+
+/// Per-thread buffers, reused from ray to ray.
+#[derive(Default)]
+pub(crate) struct Scratch {
+    cuts: Vec<f64>,
+    tents: Vec<Tents>,
+    columns: Vec<ColumnTents>,
+    pieces: AxisPieces,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::Cell<Scratch> = const {
+        std::cell::Cell::new(Scratch {
+            cuts: Vec::new(),
+            tents: Vec::new(),
+            columns: Vec::new(),
+            pieces: AxisPieces { segments: Vec::new(), cuts: Vec::new() },
+        })
+    };
+}
+
+impl Line {
+    /// `ray` in the finest units of `volume`.
+    pub(crate) fn new(volume: &AmrVolume, ray: &Ray) -> Line {
+        let (origin, h) = (volume.origin(), volume.cell_size() as f64);
+        let d = [0, 1, 2].map(|a| ray.dir[a] as f64 / h);
+        Line {
+            o: [0, 1, 2].map(|a| (ray.origin[a] as f64 - origin[a] as f64) / h),
+            d,
+            axis: match d.map(|x| x != 0.0) {
+                [true, false, false] => Some(0),
+                [false, true, false] => Some(1),
+                [false, false, true] => Some(2),
+                _ => None,
+            },
+        }
+    }
+}
+
+impl AmrVolume {
+    /// `∫ B dt` along `ray` over `t`, integrating the basis reconstruction of
+    /// the opacity field exactly inside the cells (see the module docs).
+    pub(crate) fn basis_line_integral(&self, ray: &Ray, t: Range1) -> f64 {
+        let line = Line::new(self, ray);
+        // Taken out of the thread-local (not borrowed) for the walk.
+        let mut scratch = SCRATCH.take();
+        let mut sum = 0.0f64;
+        // Regions in any order would do for a sum; the walk of the region
+        // k-d tree finds them without the BVH's overlapping siblings (and
+        // puts a ray lying in a cut plane on the plane's upper side, as the
+        // half-open clips below do).
+        self.region_tree().walk(ray, t, None, |r, _| {
+            let r = r as usize;
+            sum += match line.axis {
+                Some(m) => {
+                    let s = &mut scratch;
+                    self.axis_pieces(&line, m, t, r, &mut s.pieces);
+                    self.axis_region_integral(ray, &line, r, &s.pieces, &mut s.columns)
+                }
+                None => self.oblique_region_integral(ray, &line, t, r, &mut scratch),
+            };
+            true
+        });
+        SCRATCH.set(scratch);
+        sum
+    }
+
+    /// Region `r`'s [`AxisPieces`] for rays like `line` (parallel to axis
+    /// `m`) over `t`.
+    pub(crate) fn axis_pieces(
+        &self,
+        line: &Line,
+        m: usize,
+        t: Range1,
+        r: usize,
+        out: &mut AxisPieces,
+    ) {
+        out.segments.clear();
+        out.cuts.clear();
+        let region = &self.regions()[r];
+        let bricks = self.region_bricks(r);
+        let (ws, nw) = widths(self, bricks);
+        let (o, d) = (line.o[m], line.d[m]);
+        for &b in bricks {
+            let brick = &self.bricks()[b as usize];
+            // The ray inside region ∩ brick cells along m, in f64 from the
+            // exact integer boxes; region ∩ brick must not be empty across
+            // m either (the side a ray lies on there is decided per ray).
+            let (blo, bhi) = (brick.lower, brick.upper());
+            let lo = |ax: usize| (blo[ax] as f64).max(region.lo[ax] as f64 * 0.5);
+            let hi = |ax: usize| (bhi[ax] as f64).min(region.hi[ax] as f64 * 0.5);
+            if (0..3).any(|ax| lo(ax) >= hi(ax)) {
                 continue;
             }
-            let (sx, sy) = (b.size[0] as i64, b.size[1] as i64);
-            for kz in 0..2 {
-                for ky in 0..2 {
-                    for kx in 0..2 {
-                        let h = wt[0][kx] * wt[1][ky] * wt[2][kz];
-                        if h <= 0.0 {
-                            continue;
-                        }
-                        let cell =
-                            b.offset as i64 + (idx[2][kz] * sy + idx[1][ky]) * sx + idx[0][kx];
-                        sv += h * values[cell as usize] as f64;
-                        sw += h;
+            let (ta, tb) = ((lo(m) - o) / d, (hi(m) - o) / d);
+            let a = (t.lo as f64).max(ta.min(tb));
+            let z = (t.hi as f64).min(ta.max(tb));
+            if z <= a {
+                continue;
+            }
+            let start = out.cuts.len();
+            out.cuts.push(a);
+            push_kinks(&mut out.cuts, &ws[..nw], o, d, a, z);
+            out.cuts.push(z);
+            sort_cuts(&mut out.cuts[start..]);
+            out.segments.push((b, start as u32, out.cuts.len() as u32));
+        }
+    }
+
+    /// `∫ B dt` in region `r` along `ray`, parallel to an axis, from the
+    /// region's `pieces` for it.
+    pub(crate) fn axis_region_integral(
+        &self,
+        ray: &Ray,
+        line: &Line,
+        r: usize,
+        pieces: &AxisPieces,
+        columns: &mut Vec<ColumnTents>,
+    ) -> f64 {
+        if pieces.segments.is_empty() {
+            return 0.0;
+        }
+        let Some(m) = line.axis else {
+            return 0.0;
+        };
+        let (origin, h) = (self.origin(), self.cell_size());
+        let values = self.field_values(self.settings().field);
+        let region = &self.regions()[r];
+        let bricks = self.region_bricks(r);
+        columns.clear();
+        for &b in bricks {
+            let c = ColumnTents::new(&Tents::new(&self.bricks()[b as usize], line), m);
+            // A brick whose hats miss the ray adds nothing.
+            if c.count > 0 {
+                columns.push(c);
+            }
+        }
+        // One brick: the tents factor per axis, so B is linear along the
+        // ray on each piece; more bricks make it a ratio of linear pieces.
+        let polynomial = bricks.len() == 1;
+        let mut sum = 0.0;
+        for &(b, start, end) in &pieces.segments {
+            let brick = &self.bricks()[b as usize];
+            // A ray in the plane of a face across the ray: decide its side
+            // in f32 world coordinates, as the tree did (in units the
+            // rounding could fall on the other side). Faces are half-open
+            // like the cells, so a ray in a face between two bricks is
+            // counted once.
+            let inside = (0..3).filter(|&ax| ax != m).all(|ax| {
+                let lo = (brick.lower[ax] as f64).max(region.lo[ax] as f64 * 0.5);
+                let hi = (brick.upper()[ax] as f64).min(region.hi[ax] as f64 * 0.5);
+                let world = |u: f64| origin[ax] + u as f32 * h;
+                ray.origin[ax] >= world(lo) && ray.origin[ax] < world(hi)
+            });
+            if !inside {
+                continue;
+            }
+            let cuts = &pieces.cuts[start as usize..end as usize];
+            let pieces = cuts.windows(2).map(|p| (p[0], p[1] - p[0]));
+            if polynomial {
+                // Linear on each piece: the midpoint rule is exact.
+                for (s, len) in pieces {
+                    let (n, den) = column_sums_of(columns, values, s + 0.5 * len);
+                    if den > 0.0 {
+                        sum += len * n / den;
+                    }
+                }
+            } else {
+                // Numerator Σ Ĥ v and denominator Σ Ĥ are both linear on a
+                // piece, so the integral of their ratio is exact in closed
+                // form from their values at the piece's ends (shared
+                // between neighbouring pieces).
+                let mut prev = column_sums_of(columns, values, cuts[0]);
+                for (s, len) in pieces {
+                    let next = column_sums_of(columns, values, s + len);
+                    sum += len * ratio_mean(prev, next);
+                    prev = next;
+                }
+            }
+        }
+        sum
+    }
+
+    /// `∫ B dt` in region `r` along an oblique `ray` over `t`.
+    fn oblique_region_integral(
+        &self,
+        ray: &Ray,
+        line: &Line,
+        t: Range1,
+        r: usize,
+        scratch: &mut Scratch,
+    ) -> f64 {
+        let (origin, h) = (self.origin(), self.cell_size() as f64);
+        let (o, d) = (line.o, line.d);
+        let values = self.field_values(self.settings().field);
+        let region = &self.regions()[r];
+        let bricks = self.region_bricks(r);
+        let (ws, nw) = widths(self, bricks);
+        scratch.tents.clear();
+        for &b in bricks {
+            scratch
+                .tents
+                .push(Tents::new(&self.bricks()[b as usize], line));
+        }
+        let (t0, t1) = (t.lo as f64, t.hi as f64);
+        // One brick: the tents factor per axis, so B is at most cubic on a
+        // piece, two Gauss points are exact. Several bricks (level
+        // transitions, holes): a ratio of cubics; four Gauss points are
+        // exact to ~1e-8 on these smooth quotients.
+        let nodes: &[(f64, f64)] = if bricks.len() == 1 { &GL2 } else { &GL4 };
+        let mut sum = 0.0;
+        for &b in bricks {
+            let brick = &self.bricks()[b as usize];
+            // The ray inside region ∩ brick cells, in f64 from the exact
+            // integer boxes (the f32 walk of the tree only finds them),
+            // half-open like the cells.
+            let (blo, bhi) = (brick.lower, brick.upper());
+            let (mut a, mut z) = (t0, t1);
+            for ax in 0..3 {
+                let lo = (blo[ax] as f64).max(region.lo[ax] as f64 * 0.5);
+                let hi = (bhi[ax] as f64).min(region.hi[ax] as f64 * 0.5);
+                if lo >= hi {
+                    z = f64::NEG_INFINITY;
+                    break;
+                }
+                if d[ax] == 0.0 {
+                    // In the plane of a face: the side in f32 world
+                    // coordinates, as the tree decided it.
+                    let world = |u: f64| origin[ax] + u as f32 * h as f32;
+                    if !(ray.origin[ax] >= world(lo) && ray.origin[ax] < world(hi)) {
+                        z = f64::NEG_INFINITY;
+                        break;
+                    }
+                    continue;
+                }
+                let (ta, tb) = ((lo - o[ax]) / d[ax], (hi - o[ax]) / d[ax]);
+                a = a.max(ta.min(tb));
+                z = z.min(ta.max(tb));
+            }
+            if z <= a {
+                continue;
+            }
+            // Kinks of every level's tents inside (a, z).
+            let cuts = &mut scratch.cuts;
+            cuts.clear();
+            cuts.push(a);
+            for ax in (0..3).filter(|&ax| d[ax] != 0.0) {
+                push_kinks(cuts, &ws[..nw], o[ax], d[ax], a, z);
+            }
+            cuts.push(z);
+            sort_cuts(cuts);
+            for p in cuts.windows(2) {
+                let (s, len) = (p[0], p[1] - p[0]);
+                for &(x, wt) in nodes {
+                    let (n, den) = sums_of(&scratch.tents, values, s + x * len);
+                    if den > 0.0 {
+                        sum += wt * len * n / den;
                     }
                 }
             }
         }
-        (sv, sw)
-    }
-
-    /// `∫ B dt` along `ray` over `t`, integrating the basis reconstruction of
-    /// the opacity field exactly inside the cells (see the module docs).
-    pub(crate) fn basis_line_integral(&self, ray: &Ray, t: Range1) -> f64 {
-        let (origin, h) = (self.origin(), self.cell_size() as f64);
-        // Unit coordinates along the ray: u(t) = (o + d t − origin) / h.
-        let o = [0, 1, 2].map(|a| (ray.origin[a] as f64 - origin[a] as f64) / h);
-        let d = [0, 1, 2].map(|a| ray.dir[a] as f64 / h);
-        let mut cuts: Vec<f64> = Vec::with_capacity(64);
-        let mut sum = 0.0f64;
-        let (t0, t1) = (t.lo as f64, t.hi as f64);
-        let axes = d.iter().filter(|&&x| x != 0.0).count();
-        let values = self.field_values(self.settings().field);
-        self.region_bvh().ray_query(ray, t, |r, _| {
-            let r = r as usize;
-            let (ws, nw) = widths(self, r);
-            let field = self.settings().field;
-            // One brick: the tents factor per axis, so B is a cubic on each
-            // piece even at the brick's faces; more bricks (level
-            // transitions, holes) make it a ratio of cubics.
-            let polynomial = self.region_bricks(r).len() == 1;
-            let region = &self.regions()[r];
-            for &b in self.region_bricks(r) {
-                let brick = &self.bricks()[b as usize];
-                // The ray inside region ∩ brick cells, in f64 from the exact
-                // integer boxes (the f32 hit of the tree only finds them).
-                // Faces are half-open like the cells, so a ray lying in a
-                // face between two bricks is counted once.
-                let (blo, bhi) = (brick.lower, brick.upper());
-                let (mut a, mut z) = (t0, t1);
-                for ax in 0..3 {
-                    let lo = (blo[ax] as f64).max(region.lo[ax] as f64 * 0.5);
-                    let hi = (bhi[ax] as f64).min(region.hi[ax] as f64 * 0.5);
-                    if lo >= hi {
-                        z = f64::NEG_INFINITY;
-                        break;
-                    }
-                    if d[ax] == 0.0 {
-                        // A ray in the plane of a face: decide its side in
-                        // f32 world coordinates, as the tree did (in units
-                        // the rounding could fall on the other side).
-                        let world = |u: f64| origin[ax] + u as f32 * h as f32;
-                        let (wlo, whi) = (world(lo), world(hi));
-                        if !(ray.origin[ax] >= wlo && ray.origin[ax] < whi) {
-                            z = f64::NEG_INFINITY;
-                            break;
-                        }
-                        continue;
-                    }
-                    let (ta, tb) = ((lo - o[ax]) / d[ax], (hi - o[ax]) / d[ax]);
-                    a = a.max(ta.min(tb));
-                    z = z.min(ta.max(tb));
-                }
-                if z <= a {
-                    continue;
-                }
-                // Kinks of every level's tents inside (a, z).
-                cuts.clear();
-                cuts.push(a);
-                for &w in &ws[..nw] {
-                    let w = w as f64;
-                    for ax in 0..3 {
-                        if d[ax] == 0.0 {
-                            continue;
-                        }
-                        let (ua, uz) = (o[ax] + d[ax] * a, o[ax] + d[ax] * z);
-                        let (umin, umax) = (ua.min(uz), ua.max(uz));
-                        let k0 = (umin / w - 0.5).ceil() as i64;
-                        let k1 = (umax / w - 0.5).floor() as i64;
-                        for k in k0..=k1 {
-                            let tc = ((k as f64 + 0.5) * w - o[ax]) / d[ax];
-                            if tc > a && tc < z {
-                                cuts.push(tc);
-                            }
-                        }
-                    }
-                }
-                cuts.push(z);
-                cuts.sort_unstable_by(f64::total_cmp);
-                let pos = |tt: f64| [0, 1, 2].map(|a| o[a] + d[a] * tt);
-                if polynomial {
-                    // One brick: B is a polynomial on each piece, linear
-                    // along a ray parallel to an axis (midpoint rule), at
-                    // most cubic otherwise (two Gauss points): exact.
-                    let nodes: &[(f64, f64)] = if axes <= 1 { &GL1 } else { &GL2 };
-                    for piece in cuts.windows(2) {
-                        let len = piece[1] - piece[0];
-                        for &(x, wt) in nodes {
-                            let pu = pos(piece[0] + x * len);
-                            sum += wt * len * single_brick_value(brick, values, pu) as f64;
-                        }
-                    }
-                } else if axes <= 1 {
-                    // Several bricks along an axis: numerator Σ Ĥ v and
-                    // denominator Σ Ĥ are both linear on a piece, so the
-                    // integral of their ratio is exact in closed form from
-                    // their values at the piece's ends (shared between
-                    // neighbouring pieces).
-                    let mut prev = self.basis_sums(pos(cuts[0]), r, field);
-                    for piece in cuts.windows(2) {
-                        let next = self.basis_sums(pos(piece[1]), r, field);
-                        sum += (piece[1] - piece[0]) * ratio_mean(prev, next);
-                        prev = next;
-                    }
-                } else {
-                    // Several bricks, oblique: a ratio of cubics; four Gauss
-                    // points are exact to ~1e-8 on these smooth quotients.
-                    for piece in cuts.windows(2) {
-                        let len = piece[1] - piece[0];
-                        for &(x, wt) in &GL4 {
-                            let (n, den) = self.basis_sums(pos(piece[0] + x * len), r, field);
-                            if den > 0.0 {
-                                sum += wt * len * n / den;
-                            }
-                        }
-                    }
-                }
-            }
-        });
         sum
     }
 }

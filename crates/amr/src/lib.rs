@@ -33,6 +33,7 @@
 pub mod bricks;
 mod context;
 mod integral;
+mod project;
 pub mod regions;
 mod volume;
 mod walk;

@@ -11,7 +11,10 @@ mod recon;
 use std::time::{Duration, Instant};
 
 use voxless_bvh::Bvh;
-use voxless_core::{Aabb, Interval, IntervalQuery, Range1, Ray, Sample, SampleBatch, Vec3, Volume};
+use voxless_core::{
+    Aabb, Camera, Cancelled, Control, Interval, IntervalQuery, Range1, Ray, Sample, SampleBatch,
+    Vec3, Volume,
+};
 
 use crate::AmrError;
 use crate::bricks::{self, Brick};
@@ -85,7 +88,7 @@ pub struct AmrVolume {
     /// The k-d tree the regions were cut by: ray intervals, front to back
     /// (a prepared [`crate::AmrContext`] masks the subtrees it cannot see).
     tree: RegionTree,
-    /// All regions, for point location and exact line integrals.
+    /// All regions, for point location.
     region_bvh: Bvh,
     /// Brick boxes, for nearest-cell lookups and exact projections.
     brick_bvh: Bvh,
@@ -368,8 +371,8 @@ impl AmrVolume {
             .count()
     }
 
-    pub(crate) fn region_bvh(&self) -> &Bvh {
-        &self.region_bvh
+    pub(crate) fn region_tree(&self) -> &RegionTree {
+        &self.tree
     }
 
     /// World position of unit coordinate 0.
@@ -493,6 +496,21 @@ impl Volume for AmrVolume {
         max: usize,
     ) -> Option<f32> {
         self.region_intervals(None, ray, t, query, out, max)
+    }
+
+    /// Basis reconstruction down an axis: every region's pieces found
+    /// once for all the pixels whose rays cross it ([`crate::project`]).
+    fn project_image(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        control: &Control,
+    ) -> Option<Result<Vec<f32>, Cancelled>> {
+        match self.settings.reconstruction {
+            Reconstruction::Basis => self.project_axis_view(camera, width, height, control),
+            Reconstruction::Nearest => None,
+        }
     }
 
     fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {

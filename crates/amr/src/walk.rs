@@ -148,6 +148,49 @@ impl RegionTree {
         rest
     }
 
+    /// Calls `leaf(region)` for every region whose subtree box `keep`
+    /// accepts, in the order the walk of any ray along axis `m` (towards
+    /// `+m` when `positive`) meets them: the near child of every cut
+    /// across `m` first. A ray parallel to `m` lies on one side of every
+    /// other cut, so the regions it crosses come in its walk's order.
+    pub fn visit_along(
+        &self,
+        m: usize,
+        positive: bool,
+        keep: impl Fn(&Aabb) -> bool,
+        mut leaf: impl FnMut(u32),
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = vec![(0usize, self.root)];
+        while let Some((i, b)) = stack.pop() {
+            if !keep(&b) {
+                continue;
+            }
+            let n = self.nodes[i];
+            match n.kind {
+                LEAF => leaf(n.index),
+                HOLE => {}
+                a => {
+                    let a = a as usize;
+                    let (mut lb, mut rb) = (b, b);
+                    lb.max[a] = n.at;
+                    rb.min[a] = n.at;
+                    let (left, right) = ((i + 1, lb), (i + n.index as usize, rb));
+                    // Pushed far first, so the near child pops first.
+                    let (near, far) = if a != m || positive {
+                        (left, right)
+                    } else {
+                        (right, left)
+                    };
+                    stack.push(far);
+                    stack.push(near);
+                }
+            }
+        }
+    }
+
     #[inline]
     fn walk_with(
         &self,

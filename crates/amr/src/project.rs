@@ -1,0 +1,260 @@
+//! Whole-image column densities of the basis reconstruction for views down
+//! an axis ([`voxless_core::Volume::project_image`]).
+//!
+//! **Why.** The rays of an orthographic view down axis `m` are parallel and
+//! share their start and direction along `m`, so a region's pieces along
+//! them — which bricks' cells it holds along `m`, where the kinks of its
+//! tents cut the rays — are the same for every ray through it
+//! ([`AxisPieces`]). Per ray, the walk of the region tree, the clipping and
+//! the kinks cost more than the basis sums themselves; here they are done
+//! once per region and band of rows, and every pixel of the band whose ray
+//! crosses the region only evaluates its sums.
+//!
+//! **Exactness.** Each pixel's ray is the camera's, its range the bounds
+//! clipped to it, its regions those the walk would give (the region box
+//! clipped to the ray, as the walk computes it), visited in the walk's
+//! order, and each region's term comes from the same functions as
+//! [`AmrVolume::line_integral`]: the image is bit for bit the per-pixel
+//! one (tested). Views that are not down an axis, or whose pixels do not
+//! share the axis position and range, get `None` (the per-pixel path).
+
+use rayon::prelude::*;
+use voxless_core::{Aabb, Camera, Cancelled, Control, Range1, Ray, Volume};
+
+use crate::integral::{AxisPieces, Line};
+use crate::volume::AmrVolume;
+
+/// Rows per task: a region's pieces are found once per band.
+const BAND: u32 = 8;
+
+/// Indices `i` with `lo <= v[i] < hi` of a strictly monotone `v`.
+fn span(v: &[f32], lo: f32, hi: f32) -> std::ops::Range<usize> {
+    if v.len() < 2 || v[0] < v[1] {
+        v.partition_point(|&x| x < lo)..v.partition_point(|&x| x < hi)
+    } else {
+        v.partition_point(|&x| x >= hi)..v.partition_point(|&x| x >= lo)
+    }
+}
+
+fn monotone(v: &[f32]) -> bool {
+    v.windows(2).all(|w| w[0] < w[1]) || v.windows(2).all(|w| w[0] > w[1])
+}
+
+impl AmrVolume {
+    /// The basis column densities through every pixel centre of a view
+    /// down an axis (see the module docs); `None` for other views.
+    pub(crate) fn project_axis_view(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        control: &Control,
+    ) -> Option<Result<Vec<f32>, Cancelled>> {
+        let (w, h) = (width as usize, height as usize);
+        let rays: Vec<Ray> = (0..height)
+            .flat_map(|y| {
+                (0..width).map(move |x| camera.ray(x as f32 + 0.5, y as f32 + 0.5, width, height))
+            })
+            .collect();
+        let first = *rays.first()?;
+        let m = Line::new(self, &first).axis?;
+        let all = Range1::new(f32::NEG_INFINITY, f32::INFINITY);
+        let ts: Vec<Range1> = rays
+            .iter()
+            .map(|r| self.bounds().clip_ray(r, all))
+            .collect();
+        let t = *ts.iter().find(|t| !t.is_empty())?;
+        // The shared part must be shared to the bit, and each pixel's
+        // position across m must depend on its column or its row only.
+        let same = |a: f32, b: f32| a.to_bits() == b.to_bits();
+        let shared = rays.iter().zip(&ts).all(|(r, rt)| {
+            (0..3).all(|a| same(r.dir[a], first.dir[a]))
+                && same(r.origin[m], first.origin[m])
+                && (rt.is_empty() || (same(rt.lo, t.lo) && same(rt.hi, t.hi)))
+        });
+        let (p, q) = ((m + 1) % 3, (m + 2) % 3);
+        let by_column = |a: usize| {
+            (0..h).all(|y| (0..w).all(|x| same(rays[y * w + x].origin[a], rays[x].origin[a])))
+        };
+        let by_row = |a: usize| {
+            (0..h).all(|y| (0..w).all(|x| same(rays[y * w + x].origin[a], rays[y * w].origin[a])))
+        };
+        let (ax, ay) = if by_column(p) && by_row(q) {
+            (p, q)
+        } else if by_column(q) && by_row(p) {
+            (q, p)
+        } else {
+            return None;
+        };
+        let xs: Vec<f32> = (0..w).map(|x| rays[x].origin[ax]).collect();
+        let ys: Vec<f32> = (0..h).map(|y| rays[y * w].origin[ay]).collect();
+        if !shared || !monotone(&xs) || !monotone(&ys) {
+            return None;
+        }
+        let done = std::sync::atomic::AtomicU64::new(0);
+        let bands: Vec<Option<Vec<f32>>> = (0..height.div_ceil(BAND))
+            .into_par_iter()
+            .map(|band| {
+                if control.is_cancelled() {
+                    return None;
+                }
+                let rows = (band * BAND) as usize..((band + 1) * BAND).min(height) as usize;
+                let column = self.project_band(
+                    &rays[rows.start * w..rows.end * w],
+                    &ts,
+                    rows.start * w,
+                    m,
+                    t,
+                    (ax, &xs),
+                    (ay, &ys[rows.clone()]),
+                );
+                let d = done.fetch_add(rows.len() as u64, std::sync::atomic::Ordering::Relaxed);
+                control.report(d + rows.len() as u64, height as u64);
+                Some(column)
+            })
+            .collect();
+        if control.is_cancelled() {
+            return Some(Err(Cancelled));
+        }
+        Some(Ok(bands.into_iter().flatten().flatten().collect()))
+    }
+
+    /// The columns of a band of rows: `rays` row-major, `ts[base + i]` the
+    /// range of `rays[i]`; pixel positions `xs` along `ax` by column, `ys`
+    /// along `ay` by row of the band.
+    #[allow(clippy::too_many_arguments)]
+    fn project_band(
+        &self,
+        rays: &[Ray],
+        ts: &[Range1],
+        base: usize,
+        m: usize,
+        t: Range1,
+        (ax, xs): (usize, &[f32]),
+        (ay, ys): (usize, &[f32]),
+    ) -> Vec<f32> {
+        let w = xs.len();
+        let mut sums = vec![0.0f64; rays.len()];
+        let lines: Vec<Line> = rays.iter().map(|r| Line::new(self, r)).collect();
+        let (ylo, yhi) = ys
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &y| {
+                (a.min(y), b.max(y))
+            });
+        let mut pieces = AxisPieces::default();
+        let mut columns = Vec::new();
+        // Subtrees holding none of the band's rows are skipped (closed
+        // bounds: the half-open decision is the clip's below).
+        let keep = |b: &Aabb| b.min[ay] <= yhi && b.max[ay] >= ylo;
+        self.region_tree()
+            .visit_along(m, rays[0].dir[m] > 0.0, keep, |r| {
+                let r = r as usize;
+                let rb = self.region_bounds(r);
+                let (cols, rows) = (
+                    span(xs, rb.min[ax], rb.max[ax]),
+                    span(ys, rb.min[ay], rb.max[ay]),
+                );
+                let mut found = false;
+                for y in rows {
+                    for x in cols.clone() {
+                        let i = y * w + x;
+                        let (ray, rt) = (&rays[i], ts[base + i]);
+                        // The walk's test: the region's box clipped to the ray.
+                        if rt.is_empty() || rb.clip_ray(ray, rt).is_empty() {
+                            continue;
+                        }
+                        if !found {
+                            self.axis_pieces(&lines[i], m, t, r, &mut pieces);
+                            found = true;
+                        }
+                        sums[i] +=
+                            self.axis_region_integral(ray, &lines[i], r, &pieces, &mut columns);
+                    }
+                }
+            });
+        sums.into_iter().map(|s| s as f32).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The whole-image path against one line integral per pixel.
+    use crate::tests::{cells_with, smooth, synthetic};
+    use crate::{AmrSettings, AmrVolume};
+    use voxless_core::{Aabb, Camera, Control, Projection, Vec3, Volume};
+    use voxless_render::project_per_pixel;
+
+    #[test]
+    fn axis_views_equal_the_per_pixel_projection_to_the_bit() {
+        let vols = [(41, true), (42, false)].map(|(seed, holes)| {
+            AmrVolume::new(
+                cells_with(synthetic(seed, holes), smooth),
+                AmrSettings::default(),
+            )
+            .unwrap()
+        });
+        let mut checked = 0;
+        for vol in &vols {
+            let b = vol.bounds();
+            // The data are 64 finest cells wide: 32 pixels put the pixel
+            // centres in finest cell faces (half-open decisions), 64 on
+            // cell centres (kink planes); 50 × 37 anywhere. A sub-box and a
+            // box larger than the data frame other positions.
+            let inner = Aabb::new(b.min + b.extent() * 0.3, b.max - b.extent() * 0.2);
+            let outer = Aabb::new(b.min - b.extent() * 0.1, b.max + b.extent() * 0.05);
+            for (frame, w, h) in [
+                (b, 32, 32),
+                (b, 64, 64),
+                (b, 50, 37),
+                (inner, 41, 29),
+                (outer, 33, 35),
+            ] {
+                for axis in 0..3 {
+                    let down = Camera::axis_projection(&frame, axis).unwrap();
+                    // Looking down +axis as well (rays towards −axis above).
+                    let mut up = down;
+                    up.forward = -up.forward;
+                    up.right = -up.right;
+                    for cam in [down, up] {
+                        let fast = vol
+                            .project_image(&cam, w, h, &Control::new())
+                            .unwrap()
+                            .unwrap();
+                        let slow = project_per_pixel(vol, &cam, w, h, &Control::new()).unwrap();
+                        assert_eq!(fast.len(), slow.len());
+                        for (i, (a, s)) in fast.iter().zip(&slow).enumerate() {
+                            assert!(
+                                a.to_bits() == s.to_bits(),
+                                "axis {axis} pixel {i}: {a} vs {s}"
+                            );
+                        }
+                        assert!(slow.iter().any(|&v| v != 0.0));
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(checked, 60);
+    }
+
+    #[test]
+    fn other_views_take_the_per_pixel_path() {
+        let vol = AmrVolume::new(
+            cells_with(synthetic(43, true), smooth),
+            AmrSettings::default(),
+        )
+        .unwrap();
+        let oblique = Camera::framing(&vol.bounds(), 1.0);
+        assert!(
+            vol.project_image(&oblique, 16, 16, &Control::new())
+                .is_none()
+        );
+        let mut tilted = Camera::axis_projection(&vol.bounds(), 2).unwrap();
+        tilted.forward = Vec3::new(0.1, 0.0, -1.0).normalized();
+        assert!(matches!(tilted.projection, Projection::Orthographic { .. }));
+        assert!(
+            vol.project_image(&tilted, 16, 16, &Control::new())
+                .is_none()
+        );
+    }
+}
