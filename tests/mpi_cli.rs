@@ -255,6 +255,17 @@ fn tessellations_under_mpirun_equal_one_process() {
     let lag = dir.str("lag.npy");
     let data = ["--particles", &lag, "--lagrangian", "16", "--box", "8"];
     check_kind(&dir, "tets", &data, &[], &points);
+    // The pixel-area projection is one process's: refused by name, not
+    // silently replaced by pixel centres.
+    let out = dir.str("area.npy");
+    let mut args = vec!["project"];
+    args.extend(data);
+    args.extend(["--pixels", "area", "--size", "32", "32", "-o", &out]);
+    let (ok, err) = mpi(2, &args);
+    assert!(!ok, "--pixels area under mpirun must fail:\n{err}");
+    assert_eq!(err.matches("error:").count(), 1, "said once:\n{err}");
+    assert!(err.contains("pixels") && err.contains("mpirun"), "{err}");
+    assert!(!Path::new(&out).exists());
 }
 
 #[test]

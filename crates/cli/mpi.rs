@@ -57,6 +57,7 @@ pub fn main(cli: Cli) -> ! {
             depth,
             output,
             size,
+            pixels,
             frame,
             data,
         } => SceneArgs {
@@ -69,6 +70,16 @@ pub fn main(cli: Cli) -> ! {
         }
         .scene()
         .and_then(|(desc, base)| {
+            // Ranks project their boxes through pixel centres; the exact
+            // pixel-area projection is one process's (refused, not ignored).
+            let area = Some(voxless::PixelsName::Area);
+            if pixels == area || desc.tets.as_ref().and_then(|t| t.pixels) == area {
+                bail!(
+                    "pixels: the pixel-area projection (--pixels area, tets.pixels) runs in one \
+                     process; under mpirun each rank projects its box through pixel centres \
+                     (leave it out, or run voxless project without mpirun)"
+                );
+            }
             let f = frame.unwrap_or(0);
             let projection =
                 crate::projection_desc(axis, bounds, normal, north, center, width, depth);
