@@ -491,6 +491,69 @@ impl Column {
     }
 }
 
+impl Column {
+    /// [`Column::add_row`] eight pixels at a time for the SPH kernels (the
+    /// others take the scalar row): the table position is computed in f32
+    /// lanes from the offsets of evenly spaced pixel centres `u` and only
+    /// the table reads are per pixel. Agrees with the f64 row to f32
+    /// rounding of the table position (~1e-7 of the peak column, tested).
+    #[inline(always)]
+    pub fn add_row_lanes<L: Lanes>(
+        &self,
+        out: &mut [f64],
+        u: &[f64],
+        a: f64,
+        dv2: f64,
+        weight: f64,
+    ) {
+        if !self.kernel.is_sph() {
+            return self.add_row(out, u, a, dv2, weight);
+        }
+        let rest = self.support2 - dv2;
+        if !(rest > 0.0) {
+            return;
+        }
+        // The same chord as the scalar row.
+        let half = rest.sqrt();
+        let first = u.partition_point(|&x| x < a - half).saturating_sub(1);
+        let last = (u.partition_point(|&x| x <= a + half) + 1).min(u.len());
+        if first >= last {
+            return;
+        }
+        let (out, u) = (&mut out[first..last], &u[first..last]);
+        let n = out.len();
+        // Pixel centres are evenly spaced: u[k] − a = du0 + k·step.
+        let du0 = (u[0] - a) as f32;
+        let step = if n > 1 { (u[1] - u[0]) as f32 } else { 0.0 };
+        let s = L::splat;
+        let (dv2, to_index) = (s(dv2 as f32), s(self.to_index as f32));
+        let (inside, top) = (s(self.support2 as f32), s((PROJ_Q2_TABLE - 1) as f32));
+        let ws = weight * self.scale;
+        let mut k = 0;
+        while k < n {
+            let du = s(du0) + (L::iota() + s(k as f32)) * s(step);
+            let b2 = du * du + dv2;
+            let x = (b2 * to_index).min(top);
+            let xi = x.trunc_i32();
+            let (mut lo, mut hi, mut at) = ([0f32; 8], [0f32; 8], [0f32; 8]);
+            for j in 0..8 {
+                let i = (xi[j].max(0) as usize).min(PROJ_Q2_TABLE - 2);
+                lo[j] = self.table[i];
+                hi[j] = self.table[i + 1];
+                at[j] = i as f32;
+            }
+            let f = x - L::from_array(at);
+            let col = L::from_array(lo) * (s(1.0) - f) + L::from_array(hi) * f;
+            let col = b2.lt(inside).select(col, s(0.0)).to_array();
+            let m = (n - k).min(8);
+            for (o, &c) in out[k..k + m].iter_mut().zip(&col[..m]) {
+                *o += ws * c as f64;
+            }
+            k += 8;
+        }
+    }
+}
+
 fn gaussian_chord(b2: f64, s: f64, amp: f64, a: f64, b: f64) -> f64 {
     let k = std::f64::consts::SQRT_2 * s;
     amp * (-b2 / (2.0 * s * s)).exp()
