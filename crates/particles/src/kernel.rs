@@ -513,10 +513,18 @@ impl Column {
         if !(rest > 0.0) {
             return;
         }
-        // The same chord as the scalar row.
+        // The support's chord, from the even spacing of the pixel centres
+        // instead of a search, padded by a pixel each side (pixels outside
+        // the support add 0).
         let half = rest.sqrt();
-        let first = u.partition_point(|&x| x < a - half).saturating_sub(1);
-        let last = (u.partition_point(|&x| x <= a + half) + 1).min(u.len());
+        let (first, last) = if u.len() > 1 {
+            let (u0, du) = (u[0], u[1] - u[0]);
+            let k = |x: f64| ((x - u0) / du).clamp(-1.0, u.len() as f64);
+            let (k0, k1) = (k(a - half).floor() - 1.0, k(a + half).ceil() + 2.0);
+            (k0.max(0.0) as usize, (k1.max(0.0) as usize).min(u.len()))
+        } else {
+            (0, u.len())
+        };
         if first >= last {
             return;
         }
