@@ -2,6 +2,7 @@
 kernel), colour handling, the AMRClaw reader, running a program while
 measuring its peak memory, and comparing answers."""
 
+import argparse
 import json
 import os
 import platform
@@ -224,6 +225,18 @@ def worker_result(text):
 def emit(**kw):
     """Workers report their own setup/compute split on stdout."""
     print("RESULT " + json.dumps(kw), flush=True)
+
+
+def worker_main(tasks):
+    """A worker's command line, `TASK --data DIR --out FILE --threads N`:
+    runs `tasks[TASK]` with the parsed arguments."""
+    ap = argparse.ArgumentParser()
+    ap.add_argument("task", choices=sorted(tasks))
+    ap.add_argument("--data", required=True)
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--threads", type=int, default=2)
+    a = ap.parse_args()
+    tasks[a.task](a)
 
 
 # --- where and with what it ran ---------------------------------------------

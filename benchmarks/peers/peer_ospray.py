@@ -6,7 +6,6 @@ structures there); the first frame is rendered and thrown away (lazy
 initialisation), the second is timed and saved.
 """
 
-import argparse
 import os
 import sys
 import time
@@ -38,14 +37,8 @@ def amr(osp, data):
     return vol, s
 
 
-def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("task", choices=["particles", "amr"])
-    ap.add_argument("--data", required=True)
-    ap.add_argument("--out", required=True)
-    ap.add_argument("--threads", type=int, default=2)
-    a = ap.parse_args()
-
+def render(a):
+    """Set-up, a first frame thrown away, and the timed frame of `a.task`."""
     t0 = time.perf_counter()
     osp = O.OSPRay(a.threads)
     vol, s = (particles if a.task == "particles" else amr)(osp, a.data)
@@ -61,6 +54,10 @@ def main():
         print("ospray:", err, file=sys.stderr)
     C.save_png(a.out, img)
     C.emit(setup_s=setup, compute_s=secs, first_frame_s=first, version=O.version())
+
+
+def main():
+    C.worker_main({"particles": render, "amr": render})
 
 
 if __name__ == "__main__":

@@ -11,7 +11,6 @@ Tasks:
                     (equal masses; its own smoothing lengths from 32 neighbours)
 """
 
-import argparse
 import os
 import sys
 import time
@@ -151,13 +150,7 @@ def pynbody_tets(a):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("task", choices=["vtk_amr", "sarracen_project", "pynbody_tets"])
-    ap.add_argument("--data", required=True)
-    ap.add_argument("--out", required=True)
-    ap.add_argument("--threads", type=int, default=2)
-    a = ap.parse_args()
-    globals()[a.task](a)
+    C.worker_main({t: globals()[t] for t in ("vtk_amr", "sarracen_project", "pynbody_tets")})
 
 
 if __name__ == "__main__":

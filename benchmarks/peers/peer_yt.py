@@ -11,7 +11,6 @@ Outputs are written in voxless's orientation (row 0 at the top, columns
 west to east): yt indexes images [x, y].
 """
 
-import argparse
 import os
 import sys
 import time
@@ -164,13 +163,7 @@ def amr_project(a):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("task", choices=["sph_project", "amr_render", "amr_project"])
-    ap.add_argument("--data", required=True)
-    ap.add_argument("--out", required=True)
-    ap.add_argument("--threads", type=int, default=2)
-    a = ap.parse_args()
-    globals()[a.task](a)
+    C.worker_main({t: globals()[t] for t in ("sph_project", "amr_render", "amr_project")})
 
 
 T0 = time.perf_counter()  # setup counts from the start of the process (imports)

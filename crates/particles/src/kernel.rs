@@ -30,7 +30,7 @@
 //! drops the `1/s²` factor; we keep the exact form).
 
 use voxless_core::Vec3;
-use voxless_core::simd::Lanes;
+use voxless_core::simd::{LANES, Lanes};
 
 pub mod sph;
 
@@ -489,9 +489,7 @@ impl Column {
             }
         }
     }
-}
 
-impl Column {
     /// [`Column::add_row`] eight pixels at a time for the SPH kernels (the
     /// others take the scalar row): the table position is computed in f32
     /// lanes from the offsets of evenly spaced pixel centres `u` and only
@@ -543,8 +541,8 @@ impl Column {
             let b2 = du * du + dv2;
             let x = (b2 * to_index).min(top);
             let xi = x.trunc_i32();
-            let (mut lo, mut hi, mut at) = ([0f32; 8], [0f32; 8], [0f32; 8]);
-            for j in 0..8 {
+            let (mut lo, mut hi, mut at) = ([0f32; LANES], [0f32; LANES], [0f32; LANES]);
+            for j in 0..LANES {
                 let i = (xi[j].max(0) as usize).min(PROJ_Q2_TABLE - 2);
                 lo[j] = self.table[i];
                 hi[j] = self.table[i + 1];
@@ -553,11 +551,11 @@ impl Column {
             let f = x - L::from_array(at);
             let col = L::from_array(lo) * (s(1.0) - f) + L::from_array(hi) * f;
             let col = b2.lt(inside).select(col, s(0.0)).to_array();
-            let m = (n - k).min(8);
+            let m = (n - k).min(LANES);
             for (o, &c) in out[k..k + m].iter_mut().zip(&col[..m]) {
                 *o += ws * c as f64;
             }
-            k += 8;
+            k += LANES;
         }
     }
 }

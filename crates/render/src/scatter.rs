@@ -134,10 +134,10 @@ pub(crate) fn path<V: Volume>(
     sample: u32,
     scratch: &mut Vec<Interval>,
 ) -> [f32; 4] {
-    let n = Noises::new(ctx.settings, sc, pixel, sample);
     if spans.is_empty() {
         return [0.0; 4];
     }
+    let n = Noises::new(ctx.settings, sc, pixel, sample);
     let event = match sc.method {
         FreeFlight::Marching => marching(
             volume,
@@ -156,7 +156,7 @@ pub(crate) fn path<V: Volume>(
     let Some((t, s)) = event else {
         return [0.0; 4];
     };
-    let (_, lit) = light_at(volume, ray.at(t), ctx, sc, pixel, sample, scratch);
+    let (_, lit) = light_with(volume, ray.at(t), ctx, sc, &n, scratch);
     scattered(ctx, sc, &s, lit)
 }
 
@@ -222,12 +222,24 @@ pub(crate) fn light_at<V: Volume>(
     sample: u32,
     scratch: &mut Vec<Interval>,
 ) -> (Vec3, f32) {
+    let n = Noises::new(ctx.settings, sc, pixel, sample);
+    light_with(volume, p, ctx, sc, &n, scratch)
+}
+
+/// [`light_at`] with the path's noises already drawn.
+fn light_with<V: Volume>(
+    volume: &V,
+    p: Vec3,
+    ctx: &Ctx,
+    sc: &Scatter,
+    n: &Noises,
+    scratch: &mut Vec<Interval>,
+) -> (Vec3, f32) {
     let (dir, shadow) = shadow_ray(volume, p, ctx, sc);
     let (ray, span) = match shadow {
         Shadow::Known(lit) => return (dir, lit),
         Shadow::Trace(ray, span) => (ray, span),
     };
-    let n = Noises::new(ctx.settings, sc, pixel, sample);
     let visible = |r: Range1| ctx.settings.is_visible(ctx.tf, r);
     let query = IntervalQuery {
         is_visible: &visible,
@@ -236,7 +248,7 @@ pub(crate) fn light_at<V: Volume>(
     ivs.start(span);
     let blocked = match sc.method {
         FreeFlight::Marching => {
-            let cursor = shadow_cursor(span, &n);
+            let cursor = shadow_cursor(span, n);
             marching(volume, &ray, &mut ivs, &query, cursor, ctx, n.shadow).is_some()
         }
         FreeFlight::DeltaTracking => {

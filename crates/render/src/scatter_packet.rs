@@ -13,7 +13,7 @@
 use voxless_core::{Interval, Ray, Sample, Vec3, Volume};
 
 use crate::Tile;
-use crate::cursor::{RayIntervals, Segment};
+use crate::cursor::{Cursor, RayIntervals, Segment};
 use crate::march::Ctx;
 use crate::packet::{Integrator, Lane, PassScratch, TileInput, packets, run_passes};
 use crate::scatter::{Flight, Noises, Scatter, Shadow, scattered, shadow_cursor, shadow_ray};
@@ -63,6 +63,8 @@ pub(crate) struct ScatterScratch {
     /// Per shadow ray: its camera ray's flight and the event's sample.
     owners: Vec<(usize, Sample)>,
     shadow_rays: Vec<Ray>,
+    /// Per shadow ray: its index, cursor and free-flight number.
+    shadows: Vec<(usize, Cursor, f32)>,
     shadow_ivs: Vec<RayIntervals>,
     pass: PassScratch,
 }
@@ -120,7 +122,7 @@ pub(crate) fn render_tile<V: Volume>(
         // flights are reused for them (lane `r` indexes the shadow rays).
         s.owners.clear();
         s.shadow_rays.clear();
-        let mut shadows = Vec::new();
+        s.shadows.clear();
         for (i, f) in s.flights.iter().enumerate() {
             let Some((t, sample)) = f.event else {
                 continue;
@@ -136,7 +138,8 @@ pub(crate) fn render_tile<V: Volume>(
                     s.shadow_ivs[k].start(span);
                     s.shadow_rays.push(ray);
                     s.owners.push((r, sample));
-                    shadows.push((k, shadow_cursor(span, &s.noises[i]), s.noises[i].shadow));
+                    s.shadows
+                        .push((k, shadow_cursor(span, &s.noises[i]), s.noises[i].shadow));
                 }
             }
         }
@@ -144,7 +147,7 @@ pub(crate) fn render_tile<V: Volume>(
             continue;
         }
         s.flights.clear();
-        for (k, cursor, xi) in shadows {
+        for &(k, cursor, xi) in &s.shadows {
             s.flights.push(FlightRay {
                 lane: Lane::start(
                     k,
