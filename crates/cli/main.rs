@@ -444,7 +444,7 @@ fn project(
         })
         .unwrap_or_default();
     eprintln!(
-        "projected {w}×{h} in {:.2}s → {} (Σ column × pixel area = {integral:.6e}{mass})",
+        "projected {w}×{h} in {:.3}s → {} (Σ column × pixel area = {integral:.6e}{mass})",
         t.elapsed().as_secs_f64(),
         output.display()
     );
@@ -543,7 +543,7 @@ fn render_to(s: &Scene, desc: &voxless::SceneDesc, output: &Path, colorbar: bool
     view::decorate(&mut image, s, view::colorbar(s, desc, colorbar).as_ref());
     out::write_image(output, &image, s.background)?;
     eprintln!(
-        "rendered {}×{} at {} spp in {secs:.2}s → {}",
+        "rendered {}×{} at {} spp in {secs:.3}s → {}",
         st.width,
         st.height,
         st.spp,

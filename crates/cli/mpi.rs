@@ -304,7 +304,7 @@ fn render(
     if comm.is_root() {
         let st = &s.settings;
         eprintln!(
-            "rendered {}×{} at {} spp on {} ranks in {secs:.2}s → {}",
+            "rendered {}×{} at {} spp on {} ranks in {secs:.3}s → {}",
             st.width,
             st.height,
             st.spp,
@@ -587,7 +587,7 @@ fn project(
             out::write_gray(output, w, h, &c)?;
             let integral: f64 = c.iter().map(|&x| x as f64).sum::<f64>() * view.pixel_area(w, h);
             eprintln!(
-                "projected {w}×{h} on {} ranks in {secs:.2}s → {} (Σ column × pixel area = \
+                "projected {w}×{h} on {} ranks in {secs:.3}s → {} (Σ column × pixel area = \
                  {integral:.6e})",
                 comm.size(),
                 output.display()

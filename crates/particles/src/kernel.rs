@@ -551,9 +551,16 @@ impl Column {
             let f = x - L::from_array(at);
             let col = L::from_array(lo) * (s(1.0) - f) + L::from_array(hi) * f;
             let col = b2.lt(inside).select(col, s(0.0)).to_array();
-            let m = (n - k).min(LANES);
-            for (o, &c) in out[k..k + m].iter_mut().zip(&col[..m]) {
-                *o += ws * c as f64;
+            if let Some(o) = out.get_mut(k..k + LANES) {
+                // A whole group: fixed-length, so the f64 adds vectorise.
+                let o: &mut [f64; LANES] = o.try_into().expect("LANES pixels");
+                for (o, &c) in o.iter_mut().zip(&col) {
+                    *o += ws * c as f64;
+                }
+            } else {
+                for (o, &c) in out[k..].iter_mut().zip(&col) {
+                    *o += ws * c as f64;
+                }
             }
             k += LANES;
         }

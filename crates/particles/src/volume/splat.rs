@@ -30,8 +30,13 @@ use crate::kernel::Column;
 
 use super::ParticleVolume;
 
-/// Tile side in pixels.
-const TILE: u32 = 32;
+/// Tile width and height in pixels. Wide, because a particle's row is set
+/// up once per tile it crosses (its chord, the lanes' start): 32-pixel
+/// tiles cut the rows of a particle ~60 pixels wide into three (measured:
+/// 128 is ~20 % faster on the dam break). Short, so that dense parts of the
+/// image are shared among threads (rows are never cut by a tile's height).
+const TILE_W: u32 = 128;
+const TILE_H: u32 = 16;
 
 impl ParticleVolume {
     /// The column density through every pixel centre of an orthographic
@@ -53,8 +58,8 @@ impl ParticleVolume {
         if width == 0 || height == 0 || !(half_width > 0.0 && half_height > 0.0) {
             return None;
         }
-        let tiles_x = width.div_ceil(TILE);
-        let tiles_y = height.div_ceil(TILE);
+        let tiles_x = width.div_ceil(TILE_W);
+        let tiles_y = height.div_ceil(TILE_H);
         let lists = self.bin(
             camera,
             (width, height),
@@ -70,8 +75,8 @@ impl ParticleVolume {
                 if control.is_cancelled() {
                     return None;
                 }
-                let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
-                let (x1, y1) = ((x0 + TILE).min(width), (y0 + TILE).min(height));
+                let (x0, y0) = ((tile % tiles_x) * TILE_W, (tile / tiles_x) * TILE_H);
+                let (x1, y1) = ((x0 + TILE_W).min(width), (y0 + TILE_H).min(height));
                 let tw = (x1 - x0) as usize;
                 let mut sum = vec![0.0f64; tw * (y1 - y0) as usize];
                 // Pixel centres in the image plane, relative to the eye.
@@ -107,8 +112,8 @@ impl ParticleVolume {
                 return Some(Err(Cancelled));
             };
             let tile = tile as u32;
-            let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
-            let tw = ((x0 + TILE).min(width) - x0) as usize;
+            let (x0, y0) = ((tile % tiles_x) * TILE_W, (tile / tiles_x) * TILE_H);
+            let tw = ((x0 + TILE_W).min(width) - x0) as usize;
             for (k, v) in sum.into_iter().enumerate() {
                 let (x, y) = (x0 as usize + k % tw, y0 as usize + k / tw);
                 image[y * width as usize + x] = v as f32;
@@ -172,7 +177,14 @@ impl ParticleVolume {
             .collect();
         let tiles = (tiles_x * tiles_y) as usize;
         let tile_range = |&(x0, x1, y0, y1): &(u32, u32, u32, u32)| {
-            (x1 > x0 && y1 > y0).then(|| (x0 / TILE, (x1 - 1) / TILE, y0 / TILE, (y1 - 1) / TILE))
+            (x1 > x0 && y1 > y0).then(|| {
+                (
+                    x0 / TILE_W,
+                    (x1 - 1) / TILE_W,
+                    y0 / TILE_H,
+                    (y1 - 1) / TILE_H,
+                )
+            })
         };
         // Counting sort: counts, offsets, then the members in index order.
         let mut start = vec![0u32; tiles + 1];
