@@ -96,6 +96,10 @@ pub(crate) struct Cursor {
     open: bool,
     /// Where the last returned segment ended.
     prev_end: f32,
+    /// Whether interval `k` has been entered: its run is open with its step
+    /// and `n` is at or past its start, so the next call goes straight to
+    /// its cells.
+    entered: bool,
 }
 
 impl Cursor {
@@ -113,6 +117,7 @@ impl Cursor {
             run_lo: span.lo,
             open: false,
             prev_end: span.lo,
+            entered: false,
         }
     }
 
@@ -200,24 +205,27 @@ impl Cursor {
                 }
                 return Step::Segment(self.emit(lo, hi, self.k - 1));
             }
-            // A sampled interval either goes on with the open run (same
-            // step: no cut at the seam) or starts a run of its own, at the
-            // span for the first interval, else where it starts (the step
-            // changed, or a constant interval ended).
-            if !(self.open && self.continues(iv, settings)) {
-                self.dt = step_in(iv, settings);
-                self.run_lo = if self.k == 0 { self.span.lo } else { iv.t.lo };
-                self.n = self.cell_before(self.run_lo);
-                self.open = true;
-            }
-            // Skip the cells before this interval and before what is owned
-            // without walking them (a gap of skipped space can be long).
-            // Only a jump of more than two cells is worth the division: the
-            // loop below passes over cells ending before the interval
-            // anyway, so starting a little early changes nothing.
-            let from = iv.t.lo.max(self.own.lo).max(self.run_lo);
-            if from > self.boundary(self.n + 2) {
-                self.n = self.n.max(self.cell_before(from));
+            if !self.entered {
+                // A sampled interval either goes on with the open run (same
+                // step: no cut at the seam) or starts a run of its own, at the
+                // span for the first interval, else where it starts (the step
+                // changed, or a constant interval ended).
+                if !(self.open && self.continues(iv, settings)) {
+                    self.dt = step_in(iv, settings);
+                    self.run_lo = if self.k == 0 { self.span.lo } else { iv.t.lo };
+                    self.n = self.cell_before(self.run_lo);
+                    self.open = true;
+                }
+                // Skip the cells before this interval and before what is owned
+                // without walking them (a gap of skipped space can be long).
+                // Only a jump of more than two cells is worth the division: the
+                // loop below passes over cells ending before the interval
+                // anyway, so starting a little early changes nothing.
+                let from = iv.t.lo.max(self.own.lo).max(self.run_lo);
+                if from > self.boundary(self.n + 2) {
+                    self.n = self.n.max(self.cell_before(from));
+                }
+                self.entered = true;
             }
             loop {
                 let b0 = self.boundary(self.n).max(self.run_lo);
@@ -260,6 +268,7 @@ impl Cursor {
             }
             // This interval is done; the run stays open for the next one.
             self.k += 1;
+            self.entered = false;
         }
     }
 
