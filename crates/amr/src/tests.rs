@@ -450,6 +450,53 @@ fn bricks_are_filled_same_level_and_at_most_32_wide() {
     assert!(vol.bricks().iter().all(|b| b.size.iter().all(|&s| s <= 32)));
 }
 
+#[test]
+fn abutting_same_level_bricks_are_merged() {
+    // Level-1 cells over x ∈ [0, 40) finest units and level-0 cells over
+    // [40, 48), 16 wide in y and z: the middle splits cut the level-1 part
+    // at x = 24 and 36 on their way to the level boundary; merged, it is one
+    // 20 × 8 × 8 brick.
+    let mut cells = Vec::new();
+    for z in 0..16 {
+        for y in 0..16 {
+            for x in 0..48 {
+                if x >= 40 {
+                    cells.push([x, y, z, 0]);
+                } else if x % 2 == 0 && y % 2 == 0 && z % 2 == 0 {
+                    cells.push([x, y, z, 1]);
+                }
+            }
+        }
+    }
+    let vol = AmrVolume::new(cells_with(cells, smooth), AmrSettings::default()).unwrap();
+    let coarse: Vec<_> = vol.bricks().iter().filter(|b| b.level == 1).collect();
+    assert_eq!(coarse.len(), 1, "{coarse:?}");
+    assert_eq!((coarse[0].lower, coarse[0].size), ([0, 0, 0], [20, 8, 8]));
+    // On mixed data no two bricks are left that could still be joined.
+    let vol = AmrVolume::new(
+        cells_with(synthetic(16, true), smooth),
+        AmrSettings::default(),
+    )
+    .unwrap();
+    let bricks = vol.bricks();
+    for b in bricks {
+        for axis in 0..3 {
+            let mut next = b.lower;
+            next[axis] += b.size[axis] * b.width();
+            let joinable = bricks.iter().any(|n| {
+                n.level == b.level
+                    && n.lower == next
+                    && (0..3).all(|a| a == axis || n.size[a] == b.size[a])
+                    && b.size[axis] + n.size[axis] <= 32
+            });
+            assert!(
+                !joinable,
+                "{b:?} could still join its neighbour along {axis}"
+            );
+        }
+    }
+}
+
 /// The real AMRClaw frame (ExaBricks conversion): regions equal the
 /// brute-force sum over all 216k cells at a few hundred points and cell
 /// location at 10⁴; skipped with a notice when the shared data is absent.

@@ -20,7 +20,7 @@
 
 use voxless_core::{Interval, Sample, SampleBatch, Vec3};
 
-use super::recon::{BasisSums, BrickGrid, brick_sums};
+use super::recon::{BasisSums, BrickGrid, brick_sums, brick_value_sums};
 use super::{AmrVolume, Reconstruction};
 
 /// Samples per run at most (a run of one region longer than this is cut).
@@ -80,8 +80,11 @@ impl AmrVolume {
         sums.fill(BasisSums::default());
         for &b in self.regions.bricks_of(run.region) {
             let grid = BrickGrid::new(&self.bricks[b as usize]);
-            for (s, &pu) in sums.iter_mut().zip(&run.pu[..n]) {
-                brick_sums(&grid, pu, gradient, fields, s);
+            let samples = sums.iter_mut().zip(&run.pu[..n]);
+            if gradient {
+                samples.for_each(|(s, &pu)| brick_sums(&grid, pu, true, fields, s));
+            } else {
+                samples.for_each(|(s, &pu)| brick_value_sums(&grid, pu, fields, s));
             }
         }
         for s in sums.iter() {

@@ -42,7 +42,11 @@ impl AmrVolume {
         let mut sums = BasisSums::default();
         for &b in self.regions.bricks_of(region) {
             let grid = BrickGrid::new(&self.bricks[b as usize]);
-            brick_sums(&grid, pu, gradient, fields, &mut sums);
+            if gradient {
+                brick_sums(&grid, pu, true, fields, &mut sums);
+            } else {
+                brick_value_sums(&grid, pu, fields, &mut sums);
+            }
         }
         self.finish(&sums, gradient, fields.1.is_some())
     }
@@ -340,6 +344,57 @@ pub(super) fn brick_sums(
         s.sdw[0] += (dx0 + dx1) * ay * az;
         s.sdw[1] += ax * (dy0 + dy1) * az;
         s.sdw[2] += ax * ay * (dz0 + dz1);
+    }
+}
+
+/// [`brick_sums`] without the gradient, to the same bits: the stencil is
+/// found axis by axis with no derivative weights or inside flags to carry,
+/// which is most of a brick's cost when only values are asked for (every
+/// sample of a render without shading).
+#[inline(always)]
+pub(super) fn brick_value_sums(
+    g: &BrickGrid,
+    pu: Vec3,
+    fields: (&[f32], Option<&[f32]>),
+    s: &mut BasisSums,
+) {
+    // Per axis: the two cells (clamped into the brick) and their weights,
+    // as `Stencil::new` finds them; `None` when neither weighs anything.
+    let axis = |a: usize, p: f32| {
+        let t = (p - g.lower[a]) * g.inv_w - 0.5;
+        let i0 = floor_i32(t);
+        let f = t - i0 as f32;
+        let last = g.last[a];
+        let w0 = if i0 >= 0 && i0 <= last { 1.0 - f } else { 0.0 };
+        let w1 = if i0 + 1 >= 0 && i0 < last { f } else { 0.0 };
+        if w0 <= 0.0 && w1 <= 0.0 {
+            return None;
+        }
+        let c = [i0.clamp(0, last) as usize, (i0 + 1).clamp(0, last) as usize];
+        Some((c, w0 as f64, w1 as f64))
+    };
+    let Some(([x0, x1], wx0, wx1)) = axis(0, pu.x) else {
+        return;
+    };
+    let Some(([y0, y1], wy0, wy1)) = axis(1, pu.y) else {
+        return;
+    };
+    let Some(([z0, z1], wz0, wz1)) = axis(2, pu.z) else {
+        return;
+    };
+    let rows = [
+        g.base + z0 * g.sxy + y0 * g.sx,
+        g.base + z0 * g.sxy + y1 * g.sx,
+        g.base + z1 * g.sxy + y0 * g.sx,
+        g.base + z1 * g.sxy + y1 * g.sx,
+    ];
+    let lerp = |v: &[f32]| lerp_rows(v, &rows, [x0, x1], [wx0, wx1], [wy0, wy1]);
+    let (_, p0, p1) = lerp(fields.0);
+    s.sw += (wx0 + wx1) * (wy0 + wy1) * (wz0 + wz1);
+    s.sv += wz0 * p0 + wz1 * p1;
+    if let Some(color) = fields.1 {
+        let (_, c0, c1) = lerp(color);
+        s.sc += wz0 * c0 + wz1 * c1;
     }
 }
 
