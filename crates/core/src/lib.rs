@@ -65,10 +65,10 @@ mod tests {
         let mut g = MacroGrid::with_cell_size(b, 1.0, 64);
         assert_eq!(g.dims, [4, 4, 4]);
         // Mark cells x = 1 and x = 3 on the row y = 0, z = 0 as occupied.
-        let i1 = g.index(1, 0, 0);
-        let i3 = g.index(3, 0, 0);
-        g.ranges[i1] = Range1::new(0.0, 1.0);
-        g.ranges[i3] = Range1::new(0.0, 2.0);
+        let mut ranges = g.ranges().to_vec();
+        ranges[g.index(1, 0, 0)] = Range1::new(0.0, 1.0);
+        ranges[g.index(3, 0, 0)] = Range1::new(0.0, 2.0);
+        g.set_ranges(ranges.clone());
         let ray = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::new(1.0, 0.0, 0.0));
         let mut out = Vec::new();
         g.intervals(
@@ -82,8 +82,8 @@ mod tests {
         assert!((out[0].t.lo - 2.0).abs() < 1e-5 && (out[0].t.hi - 3.0).abs() < 1e-5);
         assert!((out[1].t.lo - 4.0).abs() < 1e-5 && (out[1].t.hi - 5.0).abs() < 1e-5);
         // Adjacent occupied cells merge, with the union of their ranges.
-        let i2 = g.index(2, 0, 0);
-        g.ranges[i2] = Range1::new(0.5, 0.7);
+        ranges[g.index(2, 0, 0)] = Range1::new(0.5, 0.7);
+        g.set_ranges(ranges);
         out.clear();
         g.intervals(
             &ray,
@@ -112,9 +112,7 @@ mod tests {
     fn macrogrid_diagonal_ray_visits_every_cell_once() {
         let b = Aabb::new(Vec3::ZERO, Vec3::splat(8.0));
         let mut g = MacroGrid::with_cell_size(b, 1.0, 64);
-        for r in g.ranges.iter_mut() {
-            *r = Range1::new(0.0, 1.0);
-        }
+        g.set_ranges(vec![Range1::new(0.0, 1.0); g.len()]);
         let ray = Ray::new(
             Vec3::new(-1.0, -0.7, -0.3),
             Vec3::new(1.0, 0.9, 0.8).normalized(),

@@ -6,16 +6,37 @@
 //! adjacent visible cells merge into one [`Interval`] whose value range is the
 //! union of theirs, and empty or invisible cells become gaps that integrators
 //! skip.
+//!
+//! **Empty-space skipping.** Most rays through a particle set cross far more
+//! empty cells than occupied ones (a disc galaxy in its bounding box), and
+//! the per-cell test touched a 16 MB array at 128³. A coarse level holds the
+//! union of the ranges of each [`BLOCK`]³ block of cells; where a block is
+//! empty or invisible under the query (visibility of a union bounds that of
+//! its parts: any opacity over a larger range), the walk jumps to the block's
+//! exit in one step. The intervals are the same as a cell-by-cell walk's up
+//! to the rounding of the cell-face distances after a jump (recomputed from
+//! the cell index, not accumulated).
+//!
+//! Invariant: `coarse` always summarises `ranges`; both change only through
+//! [`MacroGrid::set_ranges`].
 
 use crate::math::{Aabb, Range1, Ray};
 use crate::volume::{Interval, IntervalQuery};
+
+/// Cells per axis of a block of the coarse level (a power of two).
+pub const BLOCK: usize = 4;
+const BLOCK_SHIFT: u32 = BLOCK.trailing_zeros();
 
 #[derive(Clone, Debug)]
 pub struct MacroGrid {
     pub bounds: Aabb,
     pub dims: [usize; 3],
     /// Value range per cell, x fastest.
-    pub ranges: Vec<Range1>,
+    ranges: Vec<Range1>,
+    /// Blocks per axis (`ceil(dims / BLOCK)`).
+    coarse_dims: [usize; 3],
+    /// Union of the ranges of each block's cells, x fastest.
+    coarse: Vec<Range1>,
 }
 
 impl MacroGrid {
@@ -31,13 +52,63 @@ impl MacroGrid {
             }
         };
         let dims = [dim(e.x), dim(e.y), dim(e.z)];
+        let coarse_dims = dims.map(|d| d.div_ceil(BLOCK));
         MacroGrid {
             bounds,
             dims,
             ranges: vec![Range1::EMPTY; dims[0] * dims[1] * dims[2]],
+            coarse_dims,
+            coarse: vec![Range1::EMPTY; coarse_dims[0] * coarse_dims[1] * coarse_dims[2]],
         }
     }
 
+    /// Value range per cell, x fastest (see [`MacroGrid::index`]).
+    pub fn ranges(&self) -> &[Range1] {
+        &self.ranges
+    }
+
+    /// Number of cells.
+    pub fn len(&self) -> usize {
+        self.ranges.len()
+    }
+
+    /// Whether the grid has no cells.
+    pub fn is_empty(&self) -> bool {
+        self.ranges.is_empty()
+    }
+
+    /// Sets every cell's value range (x fastest) and the coarse level that
+    /// summarises them.
+    ///
+    /// # Panics
+    /// If `ranges` does not hold one range per cell (a caller's bug).
+    pub fn set_ranges(&mut self, ranges: Vec<Range1>) {
+        assert_eq!(ranges.len(), self.ranges.len(), "one range per macrocell");
+        self.ranges = ranges;
+        self.coarse.fill(Range1::EMPTY);
+        for k in 0..self.dims[2] {
+            for j in 0..self.dims[1] {
+                for i in 0..self.dims[0] {
+                    let r = self.ranges[self.index(i, j, k)];
+                    if !r.is_empty() {
+                        let c = self.block_of([i as i64, j as i64, k as i64]);
+                        self.coarse[c] = self.coarse[c].union(r);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Index of the block holding cell `idx`.
+    #[inline]
+    fn block_of(&self, idx: [i64; 3]) -> usize {
+        let [cx, cy, _] = self.coarse_dims;
+        let b = idx.map(|v| (v as usize) >> BLOCK_SHIFT);
+        (b[2] * cy + b[1]) * cx + b[0]
+    }
+
+    /// Where cell `(i, j, k)` is stored (x fastest).
+    #[inline]
     pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
         (k * self.dims[1] + j) * self.dims[0] + i
     }
@@ -107,18 +178,70 @@ impl MacroGrid {
         // Whether the last pushed interval ends where the current cell starts,
         // so a visible cell extends it rather than opening a new one.
         let mut open = false;
+        // The block the walk is in and whether it may hold visible cells
+        // (asked once per block entered).
+        let mut block = usize::MAX;
+        let mut seen = Seen::default();
         loop {
-            let axis = if t_next[0] <= t_next[1] && t_next[0] <= t_next[2] {
-                0
-            } else if t_next[1] <= t_next[2] {
-                1
-            } else {
-                2
-            };
+            let b = self.block_of(idx);
+            if b != block {
+                block = b;
+                let r = self.coarse[b];
+                if !seen.visible(r, query) {
+                    // Nothing to see in this block: jump to where the ray
+                    // leaves it, the earliest of its three exit faces.
+                    let mut rem = [0i64; 3];
+                    let mut t_out = [f32::INFINITY; 3];
+                    for a in 0..3 {
+                        if step[a] == 0 {
+                            continue;
+                        }
+                        let first = (idx[a] >> BLOCK_SHIFT) << BLOCK_SHIFT;
+                        let last = if step[a] > 0 {
+                            (first + BLOCK as i64).min(self.dims[a] as i64) - 1
+                        } else {
+                            first
+                        };
+                        rem[a] = (last - idx[a]).abs();
+                        t_out[a] = t_next[a] + rem[a] as f32 * t_delta[a];
+                    }
+                    let axis = argmin(t_out);
+                    let t_exit = t_out[axis].min(tr.hi);
+                    open = false;
+                    t_cur = t_cur.max(t_exit);
+                    if t_exit >= tr.hi {
+                        break;
+                    }
+                    // The other axes cross the faces they meet before the
+                    // exit; the exit axis leaves the block.
+                    for a in 0..3 {
+                        let n = if a == axis {
+                            rem[a] + 1
+                        } else {
+                            let mut n = 0;
+                            let mut t = t_next[a];
+                            while n < rem[a] && t < t_exit {
+                                n += 1;
+                                t += t_delta[a];
+                            }
+                            n
+                        };
+                        if n > 0 {
+                            idx[a] += n * step[a];
+                            t_next[a] = self.face_after(ray, a, idx[a], step[a]);
+                        }
+                    }
+                    if idx[axis] < 0 || idx[axis] >= self.dims[axis] as i64 {
+                        break;
+                    }
+                    continue;
+                }
+            }
+            let axis = argmin(t_next);
             let t_exit = t_next[axis].min(tr.hi);
             if t_exit > t_cur {
                 let r = self.ranges[self.index(idx[0] as usize, idx[1] as usize, idx[2] as usize)];
-                if !r.is_empty() && (query.is_visible)(r) {
+                if seen.visible(r, query) {
                     match out.last_mut() {
                         Some(last) if open => {
                             last.t.hi = t_exit;
@@ -141,5 +264,214 @@ impl MacroGrid {
             }
             t_next[axis] += t_delta[axis];
         }
+    }
+}
+
+impl MacroGrid {
+    /// Distance along `ray` to the face cell `idx` of axis `a` is left
+    /// through, walking in direction `step` (from the index: a jump leaves
+    /// no accumulated rounding behind).
+    #[inline]
+    fn face_after(&self, ray: &Ray, a: usize, idx: i64, step: i64) -> f32 {
+        let min = self.bounds.min[a];
+        let cs = (self.bounds.max[a] - min) / self.dims[a] as f32;
+        let face = if step > 0 { idx + 1 } else { idx };
+        (min + face as f32 * cs - ray.origin[a]) / ray.dir[a]
+    }
+}
+
+/// The axis of the smallest of three distances (the first on ties).
+#[inline]
+fn argmin(t: [f32; 3]) -> usize {
+    if t[0] <= t[1] && t[0] <= t[2] {
+        0
+    } else if t[1] <= t[2] {
+        1
+    } else {
+        2
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec3;
+
+    /// Deterministic uniform numbers in [0, 1).
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> f32 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    /// The visible cells `ray` crosses, each clipped to its box, merged
+    /// where they abut: the answer without any walk.
+    fn brute_force(
+        g: &MacroGrid,
+        ray: &Ray,
+        t: Range1,
+        query: &IntervalQuery,
+    ) -> Vec<(Range1, Range1)> {
+        let e = g.bounds.extent();
+        let cs = Vec3::new(
+            e.x / g.dims[0] as f32,
+            e.y / g.dims[1] as f32,
+            e.z / g.dims[2] as f32,
+        );
+        let mut hits = Vec::new();
+        for k in 0..g.dims[2] {
+            for j in 0..g.dims[1] {
+                for i in 0..g.dims[0] {
+                    let r = g.ranges()[g.index(i, j, k)];
+                    if r.is_empty() || !(query.is_visible)(r) {
+                        continue;
+                    }
+                    let lo = g.bounds.min + cs.mul_elem(Vec3::new(i as f32, j as f32, k as f32));
+                    let span = Aabb::new(lo, lo + cs).clip_ray(ray, t);
+                    if span.hi > span.lo + 1e-5 {
+                        hits.push((span, r));
+                    }
+                }
+            }
+        }
+        hits.sort_by(|a, b| a.0.lo.total_cmp(&b.0.lo));
+        let mut merged: Vec<(Range1, Range1)> = Vec::new();
+        for (span, r) in hits {
+            match merged.last_mut() {
+                Some(last) if span.lo <= last.0.hi + 1e-4 => {
+                    last.0.hi = last.0.hi.max(span.hi);
+                    last.1 = last.1.union(r);
+                }
+                _ => merged.push((span, r)),
+            }
+        }
+        merged
+    }
+
+    /// Jumping over empty and invisible blocks gives the intervals of a
+    /// cell-by-cell answer: the same coverage and value ranges at 4,000
+    /// points along each of 300 random rays through sparse grids whose
+    /// sizes are not multiples of the block (1e-4 tolerance on where an
+    /// interval starts and ends).
+    #[test]
+    fn skipping_blocks_matches_brute_force() {
+        let mut rng = Lcg(7);
+        for case in 0..300 {
+            let dims = [
+                3 + (rng.next() * 20.0) as usize,
+                3 + (rng.next() * 20.0) as usize,
+                3 + (rng.next() * 20.0) as usize,
+            ];
+            let bounds = Aabb::new(
+                Vec3::new(-1.0, 0.5, 2.0),
+                Vec3::new(
+                    -1.0 + dims[0] as f32 * 0.3,
+                    0.5 + dims[1] as f32 * 0.3,
+                    2.0 + dims[2] as f32 * 0.3,
+                ),
+            );
+            let mut g = MacroGrid::with_cell_size(bounds, 0.3, 64);
+            // A few occupied clumps, the rest empty.
+            let fill = if case % 3 == 0 { 0.02 } else { 0.15 };
+            let ranges = (0..g.len())
+                .map(|_| {
+                    if rng.next() < fill {
+                        let lo = rng.next();
+                        Range1::new(lo, lo + rng.next())
+                    } else {
+                        Range1::EMPTY
+                    }
+                })
+                .collect();
+            g.set_ranges(ranges);
+            let hide = |r: Range1| r.hi > 0.6;
+            let all = IntervalQuery::all();
+            let some = IntervalQuery { is_visible: &hide };
+            let query = if case % 2 == 0 { &all } else { &some };
+            let c = bounds.center();
+            let e = bounds.extent();
+            let origin = c + Vec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5)
+                .mul_elem(e * 3.0);
+            let target =
+                c + Vec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5).mul_elem(e);
+            let mut dir = target - origin;
+            if case % 5 == 0 {
+                dir.y = 0.0; // a ray in a plane of the grid
+            }
+            let ray = Ray::new(origin, dir.normalized());
+            let t = Range1::new(0.0, 1e6);
+            let mut out = Vec::new();
+            g.intervals(&ray, t, 0.1, query, &mut out);
+            let want = brute_force(&g, &ray, t, query);
+            let span = bounds.clip_ray(&ray, t);
+            if span.is_empty() {
+                assert!(out.is_empty());
+                continue;
+            }
+            let near_edge = |x: f32| {
+                want.iter()
+                    .any(|w| (x - w.0.lo).abs() < 1e-4 || (x - w.0.hi).abs() < 1e-4)
+            };
+            for s in 0..4000 {
+                let x = span.lo + (s as f32 + 0.5) / 4000.0 * span.span();
+                if near_edge(x) {
+                    continue;
+                }
+                let got = out.iter().find(|iv| iv.t.lo <= x && x < iv.t.hi);
+                let exp = want.iter().find(|w| w.0.lo <= x && x < w.0.hi);
+                match (got, exp) {
+                    (None, None) => {}
+                    (Some(iv), Some(w)) => assert_eq!(iv.value_range, w.1, "case {case}, t = {x}"),
+                    _ => panic!(
+                        "case {case}: t = {x} covered {:?} vs brute force {:?}",
+                        got.map(|i| i.t),
+                        exp.map(|w| w.0)
+                    ),
+                }
+            }
+        }
+    }
+}
+
+/// The last visible and invisible ranges a walk asked about. Visibility is
+/// monotone ([`IntervalQuery::is_visible`]): a range holding a visible one
+/// is visible, one inside an invisible one is not — so most cells (value
+/// ranges `[0, s]` of summed particle peaks) are settled without asking.
+#[derive(Default)]
+struct Seen {
+    visible: Option<Range1>,
+    invisible: Option<Range1>,
+}
+
+impl Seen {
+    #[inline]
+    fn visible(&mut self, r: Range1, query: &IntervalQuery) -> bool {
+        if r.is_empty() {
+            return false;
+        }
+        if let Some(v) = self.visible
+            && r.lo <= v.lo
+            && r.hi >= v.hi
+        {
+            return true;
+        }
+        if let Some(v) = self.invisible
+            && r.lo >= v.lo
+            && r.hi <= v.hi
+        {
+            return false;
+        }
+        let v = (query.is_visible)(r);
+        if v {
+            self.visible = Some(r);
+        } else {
+            self.invisible = Some(r);
+        }
+        v
     }
 }

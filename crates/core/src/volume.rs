@@ -94,7 +94,10 @@ impl Interval {
 pub struct IntervalQuery<'a> {
     /// Whether a value range can contribute to the image (the transfer function's
     /// maximum opacity over it is non-zero). Volumes drop invisible pieces and may
-    /// merge adjacent visible ones.
+    /// merge adjacent visible ones. Must be monotone: a range that holds a
+    /// visible range is visible (volumes skip a block whose union of ranges
+    /// is invisible, and reuse answers for ranges that hold or lie in ones
+    /// already asked about).
     pub is_visible: &'a (dyn Fn(Range1) -> bool + Sync),
 }
 

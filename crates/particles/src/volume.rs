@@ -427,7 +427,7 @@ impl ParticleVolume {
 
         // Macrocells about two support radii wide, at most 128 per axis.
         let mut grid = MacroGrid::with_cell_size(self.bounds(), 2.0 * median_support, 128);
-        let cells = grid.ranges.len();
+        let cells = grid.len();
         // Per-thread sums of peak values; -1 marks a cell no particle touches.
         let sums = self
             .packed
@@ -462,14 +462,18 @@ impl ParticleVolume {
                     a
                 },
             );
-        for (r, s) in grid.ranges.iter_mut().zip(sums) {
-            // Rounding in the f32 sum could undercut the true bound; pad it.
-            *r = if s >= 0.0 {
-                Range1::new(0.0, s * 1.0001)
-            } else {
-                Range1::EMPTY
-            };
-        }
+        // Rounding in the f32 sum could undercut the true bound; pad it.
+        grid.set_ranges(
+            sums.into_iter()
+                .map(|s| {
+                    if s >= 0.0 {
+                        Range1::new(0.0, s * 1.0001)
+                    } else {
+                        Range1::EMPTY
+                    }
+                })
+                .collect(),
+        );
         self.grid = grid;
 
         // Φ's range depends on the radii and weights just derived: a part

@@ -57,6 +57,17 @@ pub(crate) enum Step {
     Done,
 }
 
+/// How [`Cursor::walk`] ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Walk {
+    /// The taker refused a segment (it has it).
+    Stopped,
+    /// As [`Step::More`].
+    More,
+    /// No more segments.
+    Done,
+}
+
 /// Walks the segments of a ray's intervals in order; resumable, so the
 /// packet path can take them a window at a time, and lazy, so the list may
 /// grow as the walk goes (it looks at most one lattice cell ahead).
@@ -175,6 +186,28 @@ impl Cursor {
         }
     }
 
+    /// [`Cursor::walk`] over the ray's intervals, asking the volume for
+    /// more of them as the walk reaches the end of what it has; true when
+    /// `take` stopped it, false when the ray has no more segments.
+    #[inline]
+    pub fn walk_in<V: Volume, F: FnMut(Segment, &Interval) -> bool>(
+        &mut self,
+        ivs: &mut RayIntervals,
+        volume: &V,
+        ray: &Ray,
+        query: &IntervalQuery,
+        settings: &RenderSettings,
+        mut take: F,
+    ) -> bool {
+        loop {
+            match self.walk(&ivs.list, ivs.is_complete(), settings, &mut take) {
+                Walk::Stopped => return true,
+                Walk::Done => return false,
+                Walk::More => ivs.fetch(volume, ray, query),
+            }
+        }
+    }
+
     /// The next segment of `intervals`, which are all the ray's intervals
     /// when `complete`, else the first ones (then [`Step::More`] asks for
     /// more where the next segment depends on them).
@@ -185,13 +218,39 @@ impl Cursor {
         complete: bool,
         settings: &RenderSettings,
     ) -> Step {
+        let mut first = None;
+        match self.walk(intervals, complete, settings, |seg, _| {
+            first = Some(seg);
+            false
+        }) {
+            Walk::Stopped => Step::Segment(first.expect("a stopped walk saw a segment")),
+            Walk::More => Step::More,
+            Walk::Done => Step::Done,
+        }
+    }
+
+    /// Hands the segments of `intervals` (each with its interval) to `take`
+    /// in order until it
+    /// returns false (the segment it refused is consumed: the caller keeps
+    /// it), the list runs out ([`Walk::More`] when it is not `complete`) or
+    /// the ray does ([`Walk::Done`]). One call emits a whole window of
+    /// segments with the walk's state in registers; [`Cursor::step`] is
+    /// this with a `take` that stops at the first.
+    #[inline]
+    pub fn walk<F: FnMut(Segment, &Interval) -> bool>(
+        &mut self,
+        intervals: &[Interval],
+        complete: bool,
+        settings: &RenderSettings,
+        mut take: F,
+    ) -> Walk {
         loop {
             let Some(iv) = intervals.get(self.k) else {
-                return if complete { Step::Done } else { Step::More };
+                return if complete { Walk::Done } else { Walk::More };
             };
             if iv.t.lo >= self.own.hi {
                 // Every later midpoint lies beyond what this render owns.
-                return Step::Done;
+                return Walk::Done;
             }
             if iv.constant_value().is_some() {
                 // Constant: one segment, the whole interval (the part owned),
@@ -203,7 +262,11 @@ impl Cursor {
                 if hi <= lo {
                     continue;
                 }
-                return Step::Segment(self.emit(lo, hi, self.k - 1));
+                let seg = self.emit(lo, hi, self.k - 1);
+                if !take(seg, iv) {
+                    return Walk::Stopped;
+                }
+                continue;
             }
             if !self.entered {
                 // A sampled interval either goes on with the open run (same
@@ -227,8 +290,12 @@ impl Cursor {
                 }
                 self.entered = true;
             }
+            // The cells of this interval. Each boundary is computed from its
+            // index (never accumulated); the far one of a cell is the near
+            // one of the next, so it is computed once.
+            let mut b_near = self.boundary(self.n);
             loop {
-                let b0 = self.boundary(self.n).max(self.run_lo);
+                let b0 = b_near.max(self.run_lo);
                 // A cell starting at or past the interval's end (or the
                 // span's) has its midpoint beyond the interval: done here.
                 if b0 >= iv.t.hi || b0 >= self.span.hi {
@@ -243,9 +310,10 @@ impl Cursor {
                 } else {
                     match self.run_end_within(intervals, complete, bn, settings) {
                         Some(b) => b,
-                        None => return Step::More,
+                        None => return Walk::More,
                     }
                 };
+                b_near = bn;
                 if b1 <= b0 {
                     self.n += 1;
                     continue;
@@ -259,12 +327,15 @@ impl Cursor {
                     continue;
                 }
                 if m >= self.own.hi {
-                    return Step::Done;
+                    return Walk::Done;
                 }
-                return Step::Segment(Segment {
+                let seg = Segment {
                     t: m,
                     ..self.emit(b0, b1, self.k)
-                });
+                };
+                if !take(seg, iv) {
+                    return Walk::Stopped;
+                }
             }
             // This interval is done; the run stays open for the next one.
             self.k += 1;

@@ -8,7 +8,7 @@
 use voxless_core::{Interval, Range1, SmallRng};
 
 use crate::RenderSettings;
-use crate::cursor::{Cursor, Segment, Step, step_in};
+use crate::cursor::{Cursor, Segment, Step, Walk, step_in};
 use crate::sampling::PixelRng;
 
 /// The cursor as it was before intervals came in chunks.
@@ -242,6 +242,47 @@ fn chunked_segments(
     }
 }
 
+/// The lazy cursor's walks, `window` segments a call (the packet path's
+/// use: a refused segment is held and comes first in the next window),
+/// handed the list `chunk` intervals at a time; checks that each segment
+/// comes with its own interval.
+fn walked_segments(
+    ivs: &[Interval],
+    (chunk, window): (usize, usize),
+    span: Range1,
+    own: Range1,
+    rng: &PixelRng,
+    settings: &RenderSettings,
+) -> Vec<Segment> {
+    let mut c = Cursor::new(span, own, rng);
+    let mut have = chunk.min(ivs.len());
+    let mut out = Vec::new();
+    let mut held: Option<Segment> = None;
+    loop {
+        let mut taken = 0;
+        if let Some(s) = held.take() {
+            out.push(s);
+            taken = 1;
+        }
+        let walk = c.walk(&ivs[..have], have == ivs.len(), settings, |seg, iv| {
+            assert_eq!(*iv, ivs[seg.interval as usize]);
+            if taken < window {
+                out.push(seg);
+                taken += 1;
+                true
+            } else {
+                held = Some(seg);
+                false
+            }
+        });
+        match walk {
+            Walk::Stopped => {}
+            Walk::More => have = (have + chunk).min(ivs.len()),
+            Walk::Done => return out,
+        }
+    }
+}
+
 #[test]
 fn lazy_cursor_places_the_samples_of_the_look_ahead_cursor() {
     let mut rng = SmallRng(17);
@@ -270,6 +311,15 @@ fn lazy_cursor_places_the_samples_of_the_look_ahead_cursor() {
         for chunk in [1, 2, 3, 8, usize::MAX] {
             let got = chunked_segments(&ivs, chunk, span, own, &pixel, &settings);
             assert_eq!(got, want, "case {case}, chunks of {chunk}");
+            // Whole windows of segments a walk (what the packet path,
+            // the marcher and the free flights do).
+            for window in [1, 5, usize::MAX] {
+                let got = walked_segments(&ivs, (chunk, window), span, own, &pixel, &settings);
+                assert_eq!(
+                    got, want,
+                    "case {case}, chunks of {chunk}, windows of {window}"
+                );
+            }
         }
         // And the convenience entry over a whole list.
         let mut c = Cursor::new(span, own, &pixel);

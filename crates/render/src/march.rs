@@ -103,8 +103,7 @@ pub(crate) fn march_intervals<V: Volume>(
         return state.rgba();
     }
     let mut cursor = spans.cursor(rng);
-    while let Some(seg) = cursor.next_in(ivs, volume, ray, query, ctx.settings) {
-        let iv = &ivs.list[seg.interval as usize];
+    let opaque = cursor.walk_in(ivs, volume, ray, query, ctx.settings, |seg, iv| {
         let p = ray.at(seg.t);
         let (sample, g) = if let Some(v) = iv.constant_value() {
             (Some(Sample::scalar(v)), Vec3::ZERO)
@@ -116,11 +115,12 @@ pub(crate) fn march_intervals<V: Volume>(
         } else {
             (volume.sample_in(p, iv), Vec3::ZERO)
         };
-        if state.feed(volume, ray, iv, seg, sample, g, ctx) {
-            // Opaque: the intervals behind are never asked for.
-            stats.merge(&state.stats);
-            return state.rgba();
-        }
+        !state.feed(volume, ray, iv, seg, sample, g, ctx)
+    });
+    if opaque {
+        // The intervals behind were never asked for.
+        stats.merge(&state.stats);
+        return state.rgba();
     }
     state.finish(volume, ray, ctx);
     stats.merge(&state.stats);

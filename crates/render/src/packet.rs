@@ -79,6 +79,8 @@ impl Lane {
 
 /// What a ray of a packet does with its samples, front to back.
 pub(crate) trait Integrator {
+    /// Depth window of a pass, in steps of the ray furthest behind.
+    const WINDOW_STEPS: f32 = WINDOW_STEPS;
     fn lane(&mut self) -> &mut Lane;
     /// One segment and its sample; true when the ray needs no more
     /// (opaque, or its scattering event found).
@@ -228,7 +230,7 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
         else {
             return;
         };
-        let window_end = t0 + WINDOW_STEPS * dt;
+        let window_end = t0 + I::WINDOW_STEPS * dt;
         // Gather each running ray's segments inside the window; samples of
         // constant intervals need no slot in the batch.
         s.batch_rays.clear();
@@ -246,14 +248,16 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
             let ivs = &mut ivs[p.r];
             let ray = &rays[p.r];
             let (first_seg, first_t) = (s.segs.len(), s.t.len());
-            while let Some(seg) = p.next {
-                // The furthest-behind ray always takes its first sample, so
-                // every pass advances even if `t0 + window` rounds to `t0`.
-                let leads = seg.t == t0 && s.segs.len() == first_seg;
-                if (seg.t >= window_end && !leads) || s.segs.len() - first_seg >= MAX_PER_RAY {
-                    break;
+            // Takes a segment into the pass, or refuses it when it lies past
+            // the window (or the ray has its fill). The furthest-behind ray
+            // always takes its first segment, so every pass advances even
+            // if `t0 + window` rounds to `t0`.
+            let mut take = |seg: Segment, iv: &Interval| {
+                let n = s.segs.len() - first_seg;
+                let leads = seg.t == t0 && n == 0;
+                if (seg.t >= window_end && !leads) || n >= MAX_PER_RAY {
+                    return false;
                 }
-                let iv = &ivs.list[seg.interval as usize];
                 if iv.constant_value().is_some() {
                     s.segs.push((seg, CONSTANT));
                 } else {
@@ -261,7 +265,22 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
                     s.t.push(seg.t);
                     s.hints.push(iv.hint);
                 }
-                p.next = p.cursor.next_in(ivs, volume, ray, query, settings);
+                true
+            };
+            // The segment the lane holds first, then the cursor's, one walk
+            // for the whole window; a refused segment is held for the next
+            // pass.
+            if let Some(seg) = p.next {
+                let mut refused = None;
+                let stopped = !take(seg, &ivs.list[seg.interval as usize])
+                    || p.cursor
+                        .walk_in(ivs, volume, ray, query, settings, |seg, iv| {
+                            take(seg, iv) || {
+                                refused = Some(seg);
+                                false
+                            }
+                        });
+                p.next = if stopped { refused.or(Some(seg)) } else { None };
             }
             if s.t.len() > first_t {
                 s.batch_rays.push(*ray);

@@ -321,16 +321,15 @@ fn marching<V: Volume>(
     xi: f32,
 ) -> Option<(f32, Sample)> {
     let mut flight = Flight::new(xi);
-    while let Some(seg) = cursor.next_in(ivs, volume, ray, query, ctx.settings) {
-        let iv = &ivs.list[seg.interval as usize];
+    let mut event = None;
+    cursor.walk_in(ivs, volume, ray, query, ctx.settings, |seg, iv| {
         let Some(s) = sample_at(volume, ray, iv, seg.t) else {
-            continue;
+            return true;
         };
-        if let Some(t) = flight.feed(ctx, &seg, &s) {
-            return Some((t, s));
-        }
-    }
-    None
+        event = flight.feed(ctx, &seg, &s).map(|t| (t, s));
+        event.is_none()
+    });
+    event
 }
 
 /// The first scattering event by delta tracking along `ray` within
