@@ -24,7 +24,7 @@ use crate::math::{Aabb, Range1, Ray};
 use crate::volume::{Interval, IntervalQuery};
 
 /// Cells per axis of a block of the coarse level (a power of two).
-pub const BLOCK: usize = 4;
+pub const BLOCK: usize = 8;
 const BLOCK_SHIFT: u32 = BLOCK.trailing_zeros();
 
 #[derive(Clone, Debug)]

@@ -46,6 +46,7 @@ pub fn min_step_at(t: f32) -> f32 {
 }
 
 /// What [`Cursor::step`] found.
+#[cfg(test)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Step {
     Segment(Segment),
@@ -62,7 +63,9 @@ pub(crate) enum Step {
 pub(crate) enum Walk {
     /// The taker refused a segment (it has it).
     Stopped,
-    /// As [`Step::More`].
+    /// The list ends before the next segment is known and more intervals
+    /// may follow: fetch them and walk on (the cursor has not moved past
+    /// anything it still needs).
     More,
     /// No more segments.
     Done,
@@ -177,13 +180,12 @@ impl Cursor {
         query: &IntervalQuery,
         settings: &RenderSettings,
     ) -> Option<Segment> {
-        loop {
-            match self.step(&ivs.list, ivs.is_complete(), settings) {
-                Step::Segment(s) => return Some(s),
-                Step::Done => return None,
-                Step::More => ivs.fetch(volume, ray, query),
-            }
-        }
+        let mut first = None;
+        self.walk_in(ivs, volume, ray, query, settings, |seg, _| {
+            first = Some(seg);
+            false
+        });
+        first
     }
 
     /// [`Cursor::walk`] over the ray's intervals, asking the volume for
@@ -210,8 +212,9 @@ impl Cursor {
 
     /// The next segment of `intervals`, which are all the ray's intervals
     /// when `complete`, else the first ones (then [`Step::More`] asks for
-    /// more where the next segment depends on them).
-    #[inline]
+    /// more where the next segment depends on them). The tests' entry: a
+    /// walk that stops at the first segment.
+    #[cfg(test)]
     pub fn step(
         &mut self,
         intervals: &[Interval],

@@ -22,16 +22,29 @@ use crate::scatter::{Flight, Noises, Scatter, Shadow, scattered, shadow_cursor, 
 struct FlightRay {
     lane: Lane,
     flight: Flight,
+    /// Samples fed so far.
+    fed: u32,
     /// Where the event happened and its sample.
     event: Option<(f32, Sample)>,
 }
 
 impl Integrator for FlightRay {
-    /// Free flights take wider windows than emission–absorption rays:
-    /// fewer passes (each one BVH traversal and ray-group setup) for a few
-    /// samples past the events. On the demo with shadows, instructions in
-    /// the pass loop: 32 steps 2.05 G, 64 1.91 G, 128 1.87 G, 256 1.90 G.
-    const WINDOW_STEPS: f32 = 128.0;
+    /// The steps left to the event at the optical depth per step seen so
+    /// far: flights through thin media ask for wide windows, flights in
+    /// dense media (which end soon) for the default. Instructions, 200×112
+    /// at 2 spp: the demo −1.2 % against fixed 32-step windows, the dam
+    /// break the same (the most any ray wants: −3 % and +7 %; fixed 128:
+    /// −4 % and +13 %).
+    fn wanted_steps(&self) -> f32 {
+        let (tau, left) = self.flight.depth();
+        if self.fed == 0 {
+            crate::packet::WINDOW_STEPS
+        } else if tau > 0.0 {
+            1.25 * left * self.fed as f32 / tau
+        } else {
+            f32::INFINITY
+        }
+    }
     fn lane(&mut self) -> &mut Lane {
         &mut self.lane
     }
@@ -49,6 +62,7 @@ impl Integrator for FlightRay {
         let Some(s) = sample else {
             return false;
         };
+        self.fed += 1;
         match self.flight.feed(ctx, &seg, &s) {
             Some(t) => {
                 self.event = Some((t, s));
@@ -110,6 +124,7 @@ pub(crate) fn render_tile<V: Volume>(
                         ctx,
                     ),
                     flight: Flight::new(n.primary),
+                    fed: 0,
                     event: None,
                 });
                 s.noises.push(n);
@@ -163,6 +178,7 @@ pub(crate) fn render_tile<V: Volume>(
                     ctx,
                 ),
                 flight: Flight::new(xi),
+                fed: 0,
                 event: None,
             });
         }
