@@ -164,14 +164,10 @@ impl MacroGrid {
             };
             idx[a] = c.clamp(0, n - 1);
             let d = ray.dir[a];
-            if d > 0.0 {
-                step[a] = 1;
-                t_next[a] = (min + (idx[a] + 1) as f32 * cs - ray.origin[a]) / d;
-                t_delta[a] = cs / d;
-            } else if d < 0.0 {
-                step[a] = -1;
-                t_next[a] = (min + idx[a] as f32 * cs - ray.origin[a]) / d;
-                t_delta[a] = -cs / d;
+            if d.abs() > 0.0 {
+                step[a] = if d > 0.0 { 1 } else { -1 };
+                t_next[a] = self.face_after(ray, a, idx[a], step[a]);
+                t_delta[a] = cs / d.abs();
             }
         }
         let mut t_cur = tr.lo;
@@ -265,9 +261,7 @@ impl MacroGrid {
             t_next[axis] += t_delta[axis];
         }
     }
-}
 
-impl MacroGrid {
     /// Distance along `ray` to the face cell `idx` of axis `a` is left
     /// through, walking in direction `step` (from the index: a jump leaves
     /// no accumulated rounding behind).
@@ -295,19 +289,8 @@ fn argmin(t: [f32; 3]) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::SmallRng;
     use crate::math::Vec3;
-
-    /// Deterministic uniform numbers in [0, 1).
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f32 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
 
     /// The visible cells `ray` crosses, each clipped to its box, merged
     /// where they abut: the answer without any walk.
@@ -360,12 +343,12 @@ mod tests {
     /// interval starts and ends).
     #[test]
     fn skipping_blocks_matches_brute_force() {
-        let mut rng = Lcg(7);
+        let mut rng = SmallRng(7);
         for case in 0..300 {
             let dims = [
-                3 + (rng.next() * 20.0) as usize,
-                3 + (rng.next() * 20.0) as usize,
-                3 + (rng.next() * 20.0) as usize,
+                3 + (rng.f() * 20.0) as usize,
+                3 + (rng.f() * 20.0) as usize,
+                3 + (rng.f() * 20.0) as usize,
             ];
             let bounds = Aabb::new(
                 Vec3::new(-1.0, 0.5, 2.0),
@@ -380,9 +363,9 @@ mod tests {
             let fill = if case % 3 == 0 { 0.02 } else { 0.15 };
             let ranges = (0..g.len())
                 .map(|_| {
-                    if rng.next() < fill {
-                        let lo = rng.next();
-                        Range1::new(lo, lo + rng.next())
+                    if rng.f() < fill {
+                        let lo = rng.f();
+                        Range1::new(lo, lo + rng.f())
                     } else {
                         Range1::EMPTY
                     }
@@ -395,10 +378,9 @@ mod tests {
             let query = if case % 2 == 0 { &all } else { &some };
             let c = bounds.center();
             let e = bounds.extent();
-            let origin = c + Vec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5)
-                .mul_elem(e * 3.0);
-            let target =
-                c + Vec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5).mul_elem(e);
+            let origin =
+                c + Vec3::new(rng.f() - 0.5, rng.f() - 0.5, rng.f() - 0.5).mul_elem(e * 3.0);
+            let target = c + Vec3::new(rng.f() - 0.5, rng.f() - 0.5, rng.f() - 0.5).mul_elem(e);
             let mut dir = target - origin;
             if case % 5 == 0 {
                 dir.y = 0.0; // a ray in a plane of the grid

@@ -45,19 +45,6 @@ pub fn min_step_at(t: f32) -> f32 {
     (MIN_STEP_ULPS * f32::EPSILON * t.abs()).max(f32::MIN_POSITIVE)
 }
 
-/// What [`Cursor::step`] found.
-#[cfg(test)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) enum Step {
-    Segment(Segment),
-    /// The list ends before the next segment is known and more intervals
-    /// may follow: fetch them and ask again (the cursor has not moved past
-    /// anything it still needs).
-    More,
-    /// No more segments.
-    Done,
-}
-
 /// How [`Cursor::walk`] ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Walk {
@@ -159,35 +146,6 @@ impl Cursor {
         nx.constant_value().is_none() && step_in(nx, settings).to_bits() == self.dt.to_bits()
     }
 
-    /// The next segment of a complete list of intervals (the tests' walk
-    /// over a list; renders ask with [`Cursor::next_in`]).
-    #[cfg(test)]
-    pub fn next(&mut self, intervals: &[Interval], settings: &RenderSettings) -> Option<Segment> {
-        match self.step(intervals, true, settings) {
-            Step::Segment(s) => Some(s),
-            Step::More | Step::Done => None,
-        }
-    }
-
-    /// The next segment of the ray's intervals, asking the volume for more
-    /// of them when the cursor reaches the end of what it has.
-    #[inline]
-    pub fn next_in<V: Volume>(
-        &mut self,
-        ivs: &mut RayIntervals,
-        volume: &V,
-        ray: &Ray,
-        query: &IntervalQuery,
-        settings: &RenderSettings,
-    ) -> Option<Segment> {
-        let mut first = None;
-        self.walk_in(ivs, volume, ray, query, settings, |seg, _| {
-            first = Some(seg);
-            false
-        });
-        first
-    }
-
     /// [`Cursor::walk`] over the ray's intervals, asking the volume for
     /// more of them as the walk reaches the end of what it has; true when
     /// `take` stopped it, false when the ray has no more segments.
@@ -210,35 +168,12 @@ impl Cursor {
         }
     }
 
-    /// The next segment of `intervals`, which are all the ray's intervals
-    /// when `complete`, else the first ones (then [`Step::More`] asks for
-    /// more where the next segment depends on them). The tests' entry: a
-    /// walk that stops at the first segment.
-    #[cfg(test)]
-    pub fn step(
-        &mut self,
-        intervals: &[Interval],
-        complete: bool,
-        settings: &RenderSettings,
-    ) -> Step {
-        let mut first = None;
-        match self.walk(intervals, complete, settings, |seg, _| {
-            first = Some(seg);
-            false
-        }) {
-            Walk::Stopped => Step::Segment(first.expect("a stopped walk saw a segment")),
-            Walk::More => Step::More,
-            Walk::Done => Step::Done,
-        }
-    }
-
     /// Hands the segments of `intervals` (each with its interval) to `take`
-    /// in order until it
-    /// returns false (the segment it refused is consumed: the caller keeps
-    /// it), the list runs out ([`Walk::More`] when it is not `complete`) or
-    /// the ray does ([`Walk::Done`]). One call emits a whole window of
-    /// segments with the walk's state in registers; [`Cursor::step`] is
-    /// this with a `take` that stops at the first.
+    /// in order until it returns false (the segment it refused is consumed:
+    /// the caller keeps it), the list runs out ([`Walk::More`] when it is
+    /// not `complete`: the list is the ray's first intervals) or the ray
+    /// does ([`Walk::Done`]). One call emits a whole window of segments
+    /// with the walk's state in registers.
     #[inline]
     pub fn walk<F: FnMut(Segment, &Interval) -> bool>(
         &mut self,

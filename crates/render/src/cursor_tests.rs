@@ -8,7 +8,7 @@
 use voxless_core::{Interval, Range1, SmallRng};
 
 use crate::RenderSettings;
-use crate::cursor::{Cursor, Segment, Step, Walk, step_in};
+use crate::cursor::{Cursor, Segment, Walk, step_in};
 use crate::sampling::PixelRng;
 
 /// The cursor as it was before intervals came in chunks.
@@ -221,31 +221,10 @@ fn reference_segments(
     std::iter::from_fn(|| c.next(ivs, settings)).collect()
 }
 
-/// The lazy cursor, handed the list `chunk` intervals at a time.
-fn chunked_segments(
-    ivs: &[Interval],
-    chunk: usize,
-    span: Range1,
-    own: Range1,
-    rng: &PixelRng,
-    settings: &RenderSettings,
-) -> Vec<Segment> {
-    let mut c = Cursor::new(span, own, rng);
-    let mut have = chunk.min(ivs.len());
-    let mut out = Vec::new();
-    loop {
-        match c.step(&ivs[..have], have == ivs.len(), settings) {
-            Step::Segment(s) => out.push(s),
-            Step::More => have = (have + chunk).min(ivs.len()),
-            Step::Done => return out,
-        }
-    }
-}
-
-/// The lazy cursor's walks, `window` segments a call (the packet path's
-/// use: a refused segment is held and comes first in the next window),
-/// handed the list `chunk` intervals at a time; checks that each segment
-/// comes with its own interval.
+/// The lazy cursor's walks, `window` segments a call (one: segment by
+/// segment; more: the packet path's use, where a refused segment is held
+/// and comes first in the next window), handed the list `chunk` intervals
+/// at a time; checks that each segment comes with its own interval.
 fn walked_segments(
     ivs: &[Interval],
     (chunk, window): (usize, usize),
@@ -308,11 +287,8 @@ fn lazy_cursor_places_the_samples_of_the_look_ahead_cursor() {
         let pixel = PixelRng::new(3, case as u64, 0);
         let want = reference_segments(&ivs, span, own, &pixel, &settings);
         segments += want.len();
+        // Chunks of `usize::MAX`: the whole list at once.
         for chunk in [1, 2, 3, 8, usize::MAX] {
-            let got = chunked_segments(&ivs, chunk, span, own, &pixel, &settings);
-            assert_eq!(got, want, "case {case}, chunks of {chunk}");
-            // Whole windows of segments a walk (what the packet path,
-            // the marcher and the free flights do).
             for window in [1, 5, usize::MAX] {
                 let got = walked_segments(&ivs, (chunk, window), span, own, &pixel, &settings);
                 assert_eq!(
@@ -321,10 +297,6 @@ fn lazy_cursor_places_the_samples_of_the_look_ahead_cursor() {
                 );
             }
         }
-        // And the convenience entry over a whole list.
-        let mut c = Cursor::new(span, own, &pixel);
-        let whole: Vec<Segment> = std::iter::from_fn(|| c.next(&ivs, &settings)).collect();
-        assert_eq!(whole, want, "case {case}");
     }
     assert!(segments > 100_000, "only {segments} segments compared");
 }

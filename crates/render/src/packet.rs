@@ -27,8 +27,6 @@ use crate::sampling::PixelRng;
 pub const PACKET: u32 = 8;
 /// Depth window of a pass, in steps of the ray that is furthest behind.
 pub const WINDOW_STEPS: f32 = 32.0;
-/// The widest window [`Integrator::wanted_steps`] can ask for.
-pub const MAX_WINDOW_STEPS: f32 = 256.0;
 /// At most this many samples of one ray per pass (tiny steps in a wide window).
 const MAX_PER_RAY: usize = 256;
 /// Marks a segment of a constant interval: it takes no slot in the batch.
@@ -65,11 +63,14 @@ impl Lane {
         query: &IntervalQuery,
         ctx: &Ctx,
     ) -> Lane {
-        let next = if empty {
-            None
-        } else {
-            cursor.next_in(ivs, volume, ray, query, ctx.settings)
-        };
+        // The first segment: a walk that stops at once.
+        let mut next = None;
+        if !empty {
+            cursor.walk_in(ivs, volume, ray, query, ctx.settings, |seg, _| {
+                next = Some(seg);
+                false
+            });
+        }
         Lane {
             r,
             cursor,
@@ -81,15 +82,6 @@ impl Lane {
 
 /// What a ray of a packet does with its samples, front to back.
 pub(crate) trait Integrator {
-    /// How many more steps this ray expects to need. The next pass's
-    /// window is the least any running ray of the packet expects, kept
-    /// between [`WINDOW_STEPS`] and [`MAX_WINDOW_STEPS`]: wider windows
-    /// mean fewer passes (each one traversal of the volume's structure),
-    /// but the samples past where a ray stops are wasted, so the window
-    /// widens only when every ray expects to go on.
-    fn wanted_steps(&self) -> f32 {
-        WINDOW_STEPS
-    }
     fn lane(&mut self) -> &mut Lane;
     /// One segment and its sample; true when the ray needs no more
     /// (opaque, or its scattering event found).
@@ -229,27 +221,17 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
     let settings = ctx.settings;
     let gradient = ctx.needs_gradient();
     loop {
-        // The window starts at the ray that is furthest behind and is as
-        // deep as the running rays expect to need.
-        let mut start: Option<(f32, f32)> = None;
-        let mut window = f32::INFINITY;
-        for item in items.iter_mut() {
-            let wanted = item.wanted_steps();
-            let l = item.lane();
-            if l.done {
-                continue;
-            }
-            if let Some(n) = l.next {
-                if start.is_none_or(|(t, _)| n.t < t) {
-                    start = Some((n.t, l.cursor.dt()));
-                }
-                window = window.min(wanted);
-            }
-        }
-        let Some((t0, dt)) = start else {
+        // The window starts at the ray that is furthest behind.
+        let Some((t0, dt)) = items
+            .iter_mut()
+            .map(|i| i.lane())
+            .filter(|l| !l.done)
+            .filter_map(|l| l.next.map(|n| (n.t, l.cursor.dt())))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+        else {
             return;
         };
-        let window_end = t0 + window.clamp(WINDOW_STEPS, MAX_WINDOW_STEPS) * dt;
+        let window_end = t0 + WINDOW_STEPS * dt;
         // Gather each running ray's segments inside the window; samples of
         // constant intervals need no slot in the batch.
         s.batch_rays.clear();

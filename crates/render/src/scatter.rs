@@ -276,11 +276,6 @@ impl Flight {
         }
     }
 
-    /// The optical depth so far and what is left to the event's.
-    pub fn depth(&self) -> (f32, f32) {
-        (self.tau, (self.target - self.tau).max(0.0))
-    }
-
     /// Adds segment `seg` with sample `s`; where the event happens, if in
     /// this segment.
     #[inline]

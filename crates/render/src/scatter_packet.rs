@@ -22,29 +22,11 @@ use crate::scatter::{Flight, Noises, Scatter, Shadow, scattered, shadow_cursor, 
 struct FlightRay {
     lane: Lane,
     flight: Flight,
-    /// Samples fed so far.
-    fed: u32,
     /// Where the event happened and its sample.
     event: Option<(f32, Sample)>,
 }
 
 impl Integrator for FlightRay {
-    /// The steps left to the event at the optical depth per step seen so
-    /// far: flights through thin media ask for wide windows, flights in
-    /// dense media (which end soon) for the default. Instructions, 200×112
-    /// at 2 spp: the demo −1.2 % against fixed 32-step windows, the dam
-    /// break the same (the most any ray wants: −3 % and +7 %; fixed 128:
-    /// −4 % and +13 %).
-    fn wanted_steps(&self) -> f32 {
-        let (tau, left) = self.flight.depth();
-        if self.fed == 0 {
-            crate::packet::WINDOW_STEPS
-        } else if tau > 0.0 {
-            1.25 * left * self.fed as f32 / tau
-        } else {
-            f32::INFINITY
-        }
-    }
     fn lane(&mut self) -> &mut Lane {
         &mut self.lane
     }
@@ -62,7 +44,6 @@ impl Integrator for FlightRay {
         let Some(s) = sample else {
             return false;
         };
-        self.fed += 1;
         match self.flight.feed(ctx, &seg, &s) {
             Some(t) => {
                 self.event = Some((t, s));
@@ -124,7 +105,6 @@ pub(crate) fn render_tile<V: Volume>(
                         ctx,
                     ),
                     flight: Flight::new(n.primary),
-                    fed: 0,
                     event: None,
                 });
                 s.noises.push(n);
@@ -178,7 +158,6 @@ pub(crate) fn render_tile<V: Volume>(
                     ctx,
                 ),
                 flight: Flight::new(xi),
-                fed: 0,
                 event: None,
             });
         }

@@ -311,23 +311,9 @@ pub(super) fn brick_sums(
     let [[wx0, wx1], [wy0, wy1], [wz0, wz1]] = st.w;
     let (wx0, wx1, wy0, wy1) = (wx0 as f64, wx1 as f64, wy0 as f64, wy1 as f64);
     let (wz0, wz1) = (wz0 as f64, wz1 as f64);
-    let [[x0, x1], [y0, y1], [z0, z1]] = st.c;
-    // The four rows along x, (ky, kz) = (0, 0), (1, 0), (0, 1), (1, 1).
-    let rows = [
-        g.base + z0 * g.sxy + y0 * g.sx,
-        g.base + z0 * g.sxy + y1 * g.sx,
-        g.base + z1 * g.sxy + y0 * g.sx,
-        g.base + z1 * g.sxy + y1 * g.sx,
-    ];
-    let lerp = |v: &[f32]| lerp_rows(v, &rows, [x0, x1], [wx0, wx1], [wy0, wy1]);
-    let (r, p0, p1) = lerp(fields.0);
+    let [[x0, x1], _, _] = st.c;
+    let (rows, r, p0, p1) = add_values(g, fields, st.c, [[wx0, wx1], [wy0, wy1], [wz0, wz1]], s);
     let (ax, ay, az) = (wx0 + wx1, wy0 + wy1, wz0 + wz1);
-    s.sw += ax * ay * az;
-    s.sv += wz0 * p0 + wz1 * p1;
-    if let Some(color) = fields.1 {
-        let (_, c0, c1) = lerp(color);
-        s.sc += wz0 * c0 + wz1 * c1;
-    }
     if gradient {
         let [[dx0, dx1], [dy0, dy1], [dz0, dz1]] = st.dw;
         let (dx0, dx1, dy0, dy1) = (dx0 as f64, dx1 as f64, dy0 as f64, dy1 as f64);
@@ -382,20 +368,45 @@ pub(super) fn brick_value_sums(
     let Some(([z0, z1], wz0, wz1)) = axis(2, pu.z) else {
         return;
     };
+    add_values(
+        g,
+        fields,
+        [[x0, x1], [y0, y1], [z0, z1]],
+        [[wx0, wx1], [wy0, wy1], [wz0, wz1]],
+        s,
+    );
+}
+
+/// Adds the weight, value and colour terms of the eight cells `c` (per
+/// axis) with tent weights `w` to `s`, as nested lerps; returns the row
+/// starts, the four x lerps of the value field and its two y lerps, which
+/// the derivative terms reuse.
+#[inline(always)]
+fn add_values(
+    g: &BrickGrid,
+    fields: (&[f32], Option<&[f32]>),
+    c: [[usize; 2]; 3],
+    w: [[f64; 2]; 3],
+    s: &mut BasisSums,
+) -> ([usize; 4], [f64; 4], f64, f64) {
+    let [x, [y0, y1], [z0, z1]] = c;
+    let [wx, wy, [wz0, wz1]] = w;
+    // The four rows along x, (ky, kz) = (0, 0), (1, 0), (0, 1), (1, 1).
     let rows = [
         g.base + z0 * g.sxy + y0 * g.sx,
         g.base + z0 * g.sxy + y1 * g.sx,
         g.base + z1 * g.sxy + y0 * g.sx,
         g.base + z1 * g.sxy + y1 * g.sx,
     ];
-    let lerp = |v: &[f32]| lerp_rows(v, &rows, [x0, x1], [wx0, wx1], [wy0, wy1]);
-    let (_, p0, p1) = lerp(fields.0);
-    s.sw += (wx0 + wx1) * (wy0 + wy1) * (wz0 + wz1);
+    let lerp = |v: &[f32]| lerp_rows(v, &rows, x, wx, wy);
+    let (r, p0, p1) = lerp(fields.0);
+    s.sw += (wx[0] + wx[1]) * (wy[0] + wy[1]) * (wz0 + wz1);
     s.sv += wz0 * p0 + wz1 * p1;
     if let Some(color) = fields.1 {
         let (_, c0, c1) = lerp(color);
         s.sc += wz0 * c0 + wz1 * c1;
     }
+    (rows, r, p0, p1)
 }
 
 /// The x lerps of four rows of cells (row starts `rows`, columns `x`,
