@@ -264,6 +264,13 @@ pub struct ViewFlags {
         arg(long, help_heading = "Render", allow_negative_numbers = true)
     )]
     pub step: Option<f32>,
+    /// Samples per nominal step when no --step is given (default 1: for AMR
+    /// two per finest cell of each region; 0.5 is one per cell).
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, help_heading = "Render", allow_negative_numbers = true)
+    )]
+    pub sampling_rate: Option<f32>,
     /// Stop marching at this opacity (default 0.99).
     #[cfg_attr(
         feature = "clap",
@@ -482,6 +489,7 @@ impl ViewFlags {
         "elevation",
         "zoom",
         "step",
+        "sampling_rate",
         "early_termination",
         "opacity_scale",
         "background",
@@ -791,6 +799,7 @@ impl SceneFlags {
         }
         let r = &mut d.render;
         set(&mut r.step, self.view.step);
+        set(&mut r.sampling_rate, self.view.sampling_rate);
         set(&mut r.early_termination, self.view.early_termination);
         set(&mut r.opacity_scale, self.view.opacity_scale);
         set(

@@ -165,7 +165,7 @@ pub fn resolve_summary(
         settings.step = Some(frame.length_to_local(step as f64));
     }
     if let Some(rate) = r.sampling_rate {
-        positive("render.sampling_rate", rate)?;
+        positive("render.sampling_rate (--sampling-rate)", rate)?;
         settings.sampling_rate = rate;
     }
     if let Some(et) = r.early_termination {

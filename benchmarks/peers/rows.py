@@ -57,6 +57,11 @@ def _amr_render(d):
             + _size(s) + _cam(s["camera"]) + _tf(s))
 
 
+def _amr_render_one_per_cell(d):
+    # voxless's default is two samples per finest cell; 0.5 takes one.
+    return _amr_render(d) + ["--sampling-rate", "0.5"]
+
+
 def _amr_project(recon):
     def f(d):
         s = C.AMR_PROJECT
@@ -93,6 +98,10 @@ ROWS = [
          programs=[("voxless basis", voxless(_amr_project("basis"))),
                    ("voxless nearest", voxless(_amr_project("nearest"))),
                    ("yt", worker("peer_yt.py", "amr_project"))]),
+    dict(id=6, title="AMR volume render 512², 1 spp, voxless at one sample per finest cell",
+         needs=[C.AMRCLAW], output="png",
+         programs=[("voxless --sampling-rate 0.5", voxless(_amr_render_one_per_cell)),
+                   ("OSPRay amr", worker("peer_ospray.py", "amr"))]),
     dict(id=5, title="Tessellation column density 1024² (JaxPM 64³, a = 1)",
          needs=[C.NBODY], output="npy", pixel_area=(C.TETS["box"] / C.TETS["size"][0]) ** 2,
          programs=[("voxless tets", voxless(_tets)),

@@ -38,7 +38,7 @@ def parse_args():
     ap.add_argument("--reps", type=int, default=3)
     ap.add_argument("--threads", type=int, default=os.cpu_count(),
                     help="threads for every program (default: all cores)")
-    ap.add_argument("--rows", default="1,2,3,4,5", help="comma-separated row numbers")
+    ap.add_argument("--rows", default="1,2,3,4,5,6", help="comma-separated row numbers")
     ap.add_argument("--python", default=sys.executable,
                     help="interpreter with the peers installed (default: this one)")
     return ap.parse_args()

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use voxless_core::{
     Aabb, Camera, Cancelled, Control, Interval, IntervalQuery, Prepare, PrepareQuery, Range1, Ray,
-    Sample, SampleBatch, Vec3, Volume,
+    Sample, SampleBatch, Simd, Vec3, Volume,
 };
 
 use crate::AmrVolume;
@@ -21,6 +21,8 @@ pub struct AmrContext<'a> {
     visible: Option<NodeMask>,
     visible_count: usize,
     selected_in: Duration,
+    /// The SIMD backend of the packet path.
+    simd: Simd,
 }
 
 impl<'a> AmrContext<'a> {
@@ -35,6 +37,7 @@ impl<'a> AmrContext<'a> {
             visible,
             visible_count,
             selected_in: t.elapsed(),
+            simd: Simd::Auto,
         }
     }
 
@@ -48,6 +51,11 @@ impl<'a> AmrContext<'a> {
         self.selected_in
     }
 
+    /// The same context with the packet path on the SIMD backend `simd`.
+    pub fn with_simd(self, simd: Simd) -> Self {
+        AmrContext { simd, ..self }
+    }
+
     pub fn volume(&self) -> &AmrVolume {
         self.volume
     }
@@ -57,7 +65,7 @@ impl Prepare for AmrVolume {
     type Prepared<'a> = AmrContext<'a>;
 
     fn prepare<'a>(&'a self, query: &PrepareQuery) -> AmrContext<'a> {
-        AmrContext::new(self, query.is_visible)
+        AmrContext::new(self, query.is_visible).with_simd(query.simd)
     }
 }
 
@@ -95,7 +103,7 @@ impl Volume for AmrContext<'_> {
         gradient: bool,
         out: &mut Vec<(Option<Sample>, Vec3)>,
     ) {
-        self.volume.sample_batch(batch, gradient, out)
+        self.volume.sample_batch_on(self.simd, batch, gradient, out)
     }
     /// Only the subtrees holding visible regions are walked.
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {

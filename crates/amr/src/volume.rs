@@ -1,9 +1,11 @@
 //! [`AmrVolume`]: construction, intervals and the `Volume` impl; the
-//! reconstruction ([`recon`]), its packet form ([`batch`]), the exact
+//! reconstruction ([`recon`]), its packet form ([`batch`], eight samples
+//! at a time in [`lanes`]), the exact
 //! nearest-reconstruction answers ([`nearest`]) and the cell-location
 //! baseline ([`locator`]) live beside it.
 
 mod batch;
+mod lanes;
 mod locator;
 mod nearest;
 mod recon;
@@ -474,7 +476,7 @@ impl Volume for AmrVolume {
         gradient: bool,
         out: &mut Vec<(Option<Sample>, Vec3)>,
     ) {
-        self.sample_batch_in(batch, gradient, out);
+        self.sample_batch_on(voxless_core::Simd::Auto, batch, gradient, out);
     }
 
     /// One interval per visible region the ray crosses, in order; the step is

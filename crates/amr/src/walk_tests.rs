@@ -233,10 +233,12 @@ fn a_batch_gives_the_bits_of_point_samples() {
                 &IntervalQuery::all(),
                 &mut list,
             );
-            for iv in &list {
-                // A few samples per interval, as a packet window takes them.
-                for k in 0..3 {
-                    ts.push(iv.t.lo + iv.t.span() * (0.1 + 0.35 * k as f32));
+            for (j, iv) in list.iter().enumerate() {
+                // 1 to 19 samples per interval, as packet windows take
+                // them: runs that fill no lanes, some, and more than 2 × 8.
+                let m = 1 + (j * 7 + ray_index(ray)) % 19;
+                for k in 0..m {
+                    ts.push(iv.t.lo + iv.t.span() * (0.05 + 0.9 * k as f32 / m as f32));
                     hints.push(iv.hint);
                     ivs.push(*iv);
                 }
@@ -249,10 +251,16 @@ fn a_batch_gives_the_bits_of_point_samples() {
             t: &ts,
             hints,
         };
-        for gradient in [false, true] {
+        // Every SIMD backend (the value-only batch runs in lanes) against
+        // the scalar point path.
+        let backends = voxless_core::Simd::ALL
+            .into_iter()
+            .filter(|s| s.available());
+        for (simd, gradient) in backends.flat_map(|s| [(s, false), (s, true)]) {
             for with_hints in [true, false] {
                 let mut out = Vec::new();
-                vol.sample_batch(&batch(with_hints.then_some(&hints[..])), gradient, &mut out);
+                let b = batch(with_hints.then_some(&hints[..]));
+                vol.sample_batch_on(simd, &b, gradient, &mut out);
                 assert_eq!(out.len(), ts.len());
                 let mut i = 0;
                 for (r, ray) in rays.iter().enumerate() {
@@ -268,13 +276,18 @@ fn a_batch_gives_the_bits_of_point_samples() {
                                 .sample_with_gradient(p)
                                 .map_or((None, Vec3::ZERO), |(s, g)| (Some(s), g)),
                         };
-                        assert_eq!(out[i], want, "sample {i} at {p:?}");
+                        assert_eq!(out[i], want, "{simd:?}: sample {i} at {p:?}");
                         i += 1;
                     }
                 }
             }
         }
     }
+}
+
+/// A small number that differs between rays (to vary the test's runs).
+fn ray_index(ray: &Ray) -> usize {
+    (ray.dir.x.to_bits() % 5) as usize
 }
 
 /// An AMR volume as it was handed out before the walk: every region's
@@ -402,5 +415,58 @@ fn packets_and_lazy_intervals_draw_the_image_of_sorted_lists_sampled_point_by_po
             let d = max_diff(&reference, &image);
             assert!(d == 0.0, "{what}, {name}: differs by {d}");
         }
+    }
+}
+
+#[test]
+fn a_constant_field_reconstructs_to_the_constant_exactly() {
+    // Across bricks of three levels and their boundaries, the normalised
+    // basis sum of a constant is the constant to the bit — point by point
+    // and in the batch, on every backend (the CLI's constant-field check
+    // and users' probes rely on it).
+    for value in [3.0f32, 0.1, 1.0e-20, 7.3e12] {
+        let vol = AmrVolume::new(
+            cells_with(synthetic(34, true), |_| value),
+            AmrSettings::default(),
+        )
+        .unwrap();
+        let mut rng = Lcg(7);
+        let rays = rays(&vol, &mut rng, 48);
+        let (mut offsets, mut ts) = (vec![0u32], Vec::new());
+        for ray in &rays {
+            let mut list = Vec::new();
+            let all = Range1::new(0.0, f32::INFINITY);
+            vol.intervals(ray, all, &IntervalQuery::all(), &mut list);
+            for iv in &list {
+                ts.extend((0..5).map(|k| iv.t.lo + iv.t.span() * (0.1 + 0.2 * k as f32)));
+            }
+            offsets.push(ts.len() as u32);
+        }
+        let batch = SampleBatch {
+            rays: &rays,
+            offsets: &offsets,
+            t: &ts,
+            hints: None,
+        };
+        let mut seen = 0;
+        for simd in voxless_core::Simd::ALL
+            .into_iter()
+            .filter(|s| s.available())
+        {
+            let mut out = Vec::new();
+            vol.sample_batch_on(simd, &batch, false, &mut out);
+            for s in out.iter().filter_map(|x| x.0) {
+                assert_eq!(s.value, value, "{simd:?}");
+                seen += 1;
+            }
+        }
+        for (r, ray) in rays.iter().enumerate() {
+            for &t in batch.samples(r) {
+                if let Some(s) = vol.sample(ray.at(t)) {
+                    assert_eq!(s.value, value);
+                }
+            }
+        }
+        assert!(seen > 1000, "too few samples ({seen})");
     }
 }

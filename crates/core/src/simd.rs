@@ -154,6 +154,15 @@ pub trait Lanes:
     /// Each lane's bit pattern shifted left by 23 bits (into the exponent
     /// field), zeros shifted in.
     fn shl23(self) -> Self;
+    /// `v[i]` in every lane, `i` its value truncated toward zero and
+    /// clamped into `0..v.len()`; a lane whose value is not in `[0, 2³¹)`
+    /// (NaN included) reads `v[0]`. Zero in every lane when `v` is empty.
+    /// (AVX2: one hardware gather; portable: eight loads.)
+    fn gather(v: &[f32], at: Self) -> Self;
+    /// `acc[k] += a[k] as f64 * b[k] as f64` in every lane: the product is
+    /// exact (an f32 × f32 product fits an f64), the sum rounded once — for
+    /// sums that must stay exact where the terms' weights add up to one.
+    fn add_product_f64(acc: &mut [f64; LANES], a: Self, b: Self);
 
     /// Whether any lane of the mask is set.
     #[inline(always)]
@@ -346,6 +355,28 @@ impl Lanes for wide::f32x8 {
         let bits: wide::u32x8 = wide::bytemuck::cast(self);
         wide::bytemuck::cast(bits << 23u32)
     }
+    #[inline(always)]
+    fn gather(v: &[f32], at: Self) -> Self {
+        let Some(last) = v.len().checked_sub(1) else {
+            return Self::splat(0.0);
+        };
+        let last = last.min(i32::MAX as usize) as i32;
+        wide::f32x8::new(wide::f32x8::to_array(at).map(|x| {
+            let i = if (0.0..2_147_483_648.0).contains(&x) {
+                x as i32
+            } else {
+                0
+            };
+            v[i.min(last) as usize]
+        }))
+    }
+    #[inline(always)]
+    fn add_product_f64(acc: &mut [f64; LANES], a: Self, b: Self) {
+        let (a, b) = (wide::f32x8::to_array(a), wide::f32x8::to_array(b));
+        for k in 0..LANES {
+            acc[k] += a[k] as f64 * b[k] as f64;
+        }
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -466,6 +497,39 @@ mod avx2 {
             let mut a = [0i32; LANES];
             unsafe { _mm256_storeu_si256(a.as_mut_ptr().cast(), _mm256_cvttps_epi32(self.0)) };
             a
+        }
+        #[inline(always)]
+        fn gather(v: &[f32], at: Self) -> Self {
+            let Some(last) = v.len().checked_sub(1) else {
+                return Self::splat(0.0);
+            };
+            let last = last.min(i32::MAX as usize) as i32;
+            // `cvttps` gives i32::MIN for NaN and values ≥ 2³¹, so the clamp
+            // sends them to 0; every index read is in 0..v.len().
+            unsafe {
+                let i = _mm256_cvttps_epi32(at.0);
+                let i = _mm256_max_epi32(i, _mm256_setzero_si256());
+                let i = _mm256_min_epi32(i, _mm256_set1_epi32(last));
+                Avx2Lanes(_mm256_i32gather_ps::<4>(v.as_ptr(), i))
+            }
+        }
+        #[inline(always)]
+        fn add_product_f64(acc: &mut [f64; LANES], a: Self, b: Self) {
+            // Two halves of four f64 lanes; `acc` is eight f64s, so both
+            // unaligned loads and stores stay inside it.
+            unsafe {
+                let lo = _mm256_mul_pd(
+                    _mm256_cvtps_pd(_mm256_castps256_ps128(a.0)),
+                    _mm256_cvtps_pd(_mm256_castps256_ps128(b.0)),
+                );
+                let hi = _mm256_mul_pd(
+                    _mm256_cvtps_pd(_mm256_extractf128_ps::<1>(a.0)),
+                    _mm256_cvtps_pd(_mm256_extractf128_ps::<1>(b.0)),
+                );
+                let p = acc.as_mut_ptr();
+                _mm256_storeu_pd(p, _mm256_add_pd(_mm256_loadu_pd(p), lo));
+                _mm256_storeu_pd(p.add(4), _mm256_add_pd(_mm256_loadu_pd(p.add(4)), hi));
+            }
         }
         #[inline(always)]
         fn shl23(self) -> Self {

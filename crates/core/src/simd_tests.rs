@@ -32,6 +32,9 @@ const EDGES: [f32; 24] = [
     0.1,
 ];
 
+/// What `gather` reads: `TABLE[i] = 10 + i`.
+const TABLE: [f32; 5] = [10.0, 11.0, 12.0, 13.0, 14.0];
+
 /// Every (a, b) pair of [`EDGES`], eight lanes at a time.
 fn pairs() -> Vec<([f32; LANES], [f32; LANES])> {
     let all: Vec<(f32, f32)> = EDGES
@@ -93,6 +96,14 @@ impl WithLanes for AllOps {
                 ("from_bits", bits(L::from_bits(b.map(f32::to_bits)))),
                 ("load/store", bits(loaded)),
                 ("trunc_i32", trunc),
+                ("gather", bits(L::gather(&TABLE, x))),
+                ("gather empty", bits(L::gather(&[], x))),
+                ("add_product_f64", {
+                    let mut acc = [0.25f64; LANES];
+                    L::add_product_f64(&mut acc, x, y);
+                    L::add_product_f64(&mut acc, y, x);
+                    acc.map(|v| (v.to_bits() ^ (v.to_bits() >> 32)) as u32)
+                }),
                 ("bitmask/any", mask),
             ] {
                 out.push((format!("{name} #{i}"), v));
@@ -191,6 +202,13 @@ fn lane_semantics_are_the_documented_ones() {
     #[cfg(target_arch = "x86_64")]
     assert_eq!(t, [2, -2, i32::MIN, i32::MIN, 0, 0, 7, i32::MIN]);
     assert_eq!([t[0], t[1], t[4], t[6]], [2, -2, 0, 7]);
+    // gather: truncated, clamped into the table, NaN and negatives at 0.
+    let g = PortableLanes::gather(&TABLE, l([0.0, 1.9, 4.0, 4.5, 99.0, -0.7, -5.0, nan]));
+    assert_eq!(
+        g.to_array(),
+        [10.0, 11.0, 14.0, 14.0, 14.0, 10.0, 10.0, 10.0]
+    );
+    assert_eq!(PortableLanes::gather(&[], g).to_array(), [0.0; LANES]);
     assert_eq!(
         l([-3.0, -0.0, 0.0, 4.0, f32::NEG_INFINITY, 1.0, 1.0, 1.0])
             .abs()

@@ -39,15 +39,15 @@ impl AmrVolume {
             return self.nearest(pu, region, field, color_field);
         }
         let fields = self.basis_fields(field);
-        let mut sums = BasisSums::default();
-        for &b in self.regions.bricks_of(region) {
-            let grid = BrickGrid::new(&self.bricks[b as usize]);
-            if gradient {
-                brick_sums(&grid, pu, true, fields, &mut sums);
-            } else {
-                brick_value_sums(&grid, pu, fields, &mut sums);
-            }
+        let bricks = self.regions.bricks_of(region).iter();
+        let grids = bricks.map(|&b| BrickGrid::new(&self.bricks[b as usize]));
+        if !gradient {
+            let mut sums = ValueSums::default();
+            grids.for_each(|grid| brick_value_sums(&grid, pu, fields, &mut sums));
+            return self.finish_values(sums, fields.1.is_some());
         }
+        let mut sums = BasisSums::default();
+        grids.for_each(|grid| brick_sums(&grid, pu, true, fields, &mut sums));
         self.finish(&sums, gradient, fields.1.is_some())
     }
 
@@ -85,6 +85,25 @@ impl AmrVolume {
                 value as f32
             },
             gradient: g,
+        })
+    }
+
+    /// `B = Σ Ĥ v / Σ Ĥ` (and the colour's) from value-only sums; `None`
+    /// where no tent reaches.
+    #[inline]
+    pub(super) fn finish_values(&self, s: ValueSums, two_fields: bool) -> Option<Recon> {
+        if s.sw <= 0.0 {
+            return None;
+        }
+        let value = (s.sv / s.sw) as f32;
+        Some(Recon {
+            value,
+            color: if two_fields {
+                (s.sc / s.sw) as f32
+            } else {
+                value
+            },
+            gradient: Vec3::ZERO,
         })
     }
 
@@ -201,34 +220,52 @@ pub(super) struct BasisSums {
     sdv: [f64; 3],
 }
 
+/// The value-only sums of the basis reconstruction (what a render without
+/// shading asks for): Σ weight, Σ weight × value, Σ weight × colour, with a
+/// brick's terms in `f32` and the sums in `f64` — the same arithmetic,
+/// operation by operation, as the eight-lane form in [`super::lanes`], so
+/// the packet path gives these bits.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct ValueSums {
+    pub sw: f64,
+    pub sv: f64,
+    pub sc: f64,
+}
+
 /// What the stencil needs of a brick, read once for all the samples a
 /// batch reconstructs with it.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct BrickGrid {
     /// Lower corner, finest units.
-    lower: [f32; 3],
+    pub lower: [f32; 3],
     /// `1 / cell width`: widths are powers of two, so multiplying by it is
     /// exact division.
-    inv_w: f32,
+    pub inv_w: f32,
     /// Last cell index per axis.
     last: [i32; 3],
-    /// Strides of y and z in the brick-ordered values, and the brick's
-    /// first value.
-    sx: usize,
-    sxy: usize,
-    base: usize,
+    /// The same as floats (exact: at most [`crate::bricks`]' 32 cells).
+    pub last_f: [f32; 3],
+    /// Strides of y and z in the brick-ordered values, the brick's first
+    /// value and its number of cells.
+    pub sx: usize,
+    pub sxy: usize,
+    pub base: usize,
+    pub cells: usize,
 }
 
 impl BrickGrid {
     #[inline(always)]
     pub fn new(b: &Brick) -> Self {
+        let last = b.size.map(|n| n - 1);
         BrickGrid {
             lower: b.lower.map(|l| l as f32),
             inv_w: 1.0 / b.width() as f32,
-            last: b.size.map(|n| n - 1),
+            last,
+            last_f: last.map(|l| l as f32),
             sx: b.size[0] as usize,
             sxy: (b.size[0] * b.size[1]) as usize,
             base: b.offset as usize,
+            cells: (b.size[0] * b.size[1] * b.size[2]) as usize,
         }
     }
 }
@@ -333,48 +370,76 @@ pub(super) fn brick_sums(
     }
 }
 
-/// [`brick_sums`] without the gradient, to the same bits: the stencil is
-/// found axis by axis with no derivative weights or inside flags to carry,
-/// which is most of a brick's cost when only values are asked for (every
-/// sample of a render without shading).
+/// The value-only terms of brick `g` at unit-space point `pu`, added to
+/// `s`. The tents factor per axis, so the brick's terms are its weight —
+/// the product of the per-axis weight sums — times the trilinear lerp
+/// `a + f·(b − a)` of its eight cells (a cell outside the brick has weight
+/// zero, and its clamped index reads the inside neighbour, so the lerp
+/// does not see it). The lerp form keeps a constant field exactly constant;
+/// the weight and lerp are `f32`, the sums `f64` (the products are exact
+/// there), so the normalised value rounds back to the constant. The
+/// eight-lane form ([`super::lanes::brick_value_lanes`]) does the same
+/// operations in the same order, lane by lane.
 #[inline(always)]
 pub(super) fn brick_value_sums(
     g: &BrickGrid,
     pu: Vec3,
     fields: (&[f32], Option<&[f32]>),
-    s: &mut BasisSums,
+    s: &mut ValueSums,
 ) {
-    // Per axis: the two cells (clamped into the brick) and their weights,
-    // as `Stencil::new` finds them; `None` when neither weighs anything.
-    let axis = |a: usize, p: f32| {
-        let t = (p - g.lower[a]) * g.inv_w - 0.5;
-        let i0 = floor_i32(t);
-        let f = t - i0 as f32;
-        let last = g.last[a];
-        let w0 = if i0 >= 0 && i0 <= last { 1.0 - f } else { 0.0 };
-        let w1 = if i0 + 1 >= 0 && i0 < last { f } else { 0.0 };
-        if w0 <= 0.0 && w1 <= 0.0 {
-            return None;
-        }
-        let c = [i0.clamp(0, last) as usize, (i0 + 1).clamp(0, last) as usize];
-        Some((c, w0 as f64, w1 as f64))
-    };
-    let Some(([x0, x1], wx0, wx1)) = axis(0, pu.x) else {
+    let Some(([x0, x1], wx, fx)) = tent_axis(g, 0, pu.x) else {
         return;
     };
-    let Some(([y0, y1], wy0, wy1)) = axis(1, pu.y) else {
+    let Some(([y0, y1], wy, fy)) = tent_axis(g, 1, pu.y) else {
         return;
     };
-    let Some(([z0, z1], wz0, wz1)) = axis(2, pu.z) else {
+    let Some(([z0, z1], wz, fz)) = tent_axis(g, 2, pu.z) else {
         return;
     };
-    add_values(
-        g,
-        fields,
-        [[x0, x1], [y0, y1], [z0, z1]],
-        [[wx0, wx1], [wy0, wy1], [wz0, wz1]],
-        s,
-    );
+    let rows = [
+        z0 * g.sxy + y0 * g.sx,
+        z0 * g.sxy + y1 * g.sx,
+        z1 * g.sxy + y0 * g.sx,
+        z1 * g.sxy + y1 * g.sx,
+    ];
+    let lerp = |v: &[f32]| {
+        let v = &v[g.base..g.base + g.cells];
+        let r = rows.map(|row| v[row + x0] + fx * (v[row + x1] - v[row + x0]));
+        let (p0, p1) = (r[0] + fy * (r[1] - r[0]), r[2] + fy * (r[3] - r[2]));
+        (p0 + fz * (p1 - p0)) as f64
+    };
+    let weight = (wx * wy * wz) as f64;
+    s.sw += weight;
+    s.sv += weight * lerp(fields.0);
+    if let Some(color) = fields.1 {
+        s.sc += weight * lerp(color);
+    }
+}
+
+/// One axis of a brick's tent stencil at coordinate `p` (unit space): the
+/// two cells whose centres lie within a cell width (clamped into the
+/// brick), the sum of their weights (a cell outside the brick weighs zero)
+/// and the lerp parameter; `None` when neither weighs anything. The cell
+/// coordinate is clamped to `[-2, last + 2]` first — beyond that both
+/// weights are zero anyway — so the floor stays exact in the lanes'
+/// rounding trick.
+#[inline(always)]
+fn tent_axis(g: &BrickGrid, a: usize, p: f32) -> Option<([usize; 2], f32, f32)> {
+    let last = g.last_f[a];
+    let t = ((p - g.lower[a]) * g.inv_w - 0.5).max(-2.0).min(last + 2.0);
+    let i0 = floor_i32(t) as f32;
+    let f = t - i0;
+    let w0 = if i0 >= 0.0 && i0 <= last {
+        1.0 - f
+    } else {
+        0.0
+    };
+    let w1 = if i0 >= -1.0 && i0 < last { f } else { 0.0 };
+    if !(w0 > 0.0 || w1 > 0.0) {
+        return None;
+    }
+    let c = [i0.max(0.0).min(last), (i0 + 1.0).max(0.0).min(last)];
+    Some((c.map(|c| c as usize), w0 + w1, f))
 }
 
 /// Adds the weight, value and colour terms of the eight cells `c` (per
