@@ -302,6 +302,18 @@ fn subdivide_in(
     stack.truncate(top);
 }
 
+/// Per region, a group number shared with exactly the regions whose brick
+/// lists are the same (numbered in order of first appearance).
+pub fn groups(regions: &Regions) -> Vec<u32> {
+    let mut seen: std::collections::HashMap<&[u32], u32> = std::collections::HashMap::new();
+    (0..regions.regions.len())
+        .map(|r| {
+            let next = seen.len() as u32;
+            *seen.entry(regions.bricks_of(r)).or_insert(next)
+        })
+        .collect()
+}
+
 /// Per region and field, the range of every cell value whose basis function
 /// reaches into the region (a bound on every basis-reconstructed sample, which
 /// is a convex combination of those values), and the finest cell width there.

@@ -86,6 +86,10 @@ pub struct AmrVolume {
     region_ranges: Vec<Range1>,
     /// Finest cell width per region, finest units.
     region_finest: Vec<i32>,
+    /// Per region, a number it shares with exactly the regions of the same
+    /// brick list (which reconstruct the same field): a ray's consecutive
+    /// regions of one group are one interval.
+    region_group: Vec<u32>,
     field_ranges: Vec<Range1>,
     /// The k-d tree the regions were cut by: ray intervals, front to back
     /// (a prepared [`crate::AmrContext`] masks the subtrees it cannot see).
@@ -169,6 +173,7 @@ impl AmrVolume {
         let t = Instant::now();
         let regions = regions::build(&bricks);
         let (region_ranges, region_finest) = regions::metadata(&regions, &bricks, &values);
+        let region_group = regions::groups(&regions);
         stats.region_build = t.elapsed();
 
         let (origin, h) = (input.origin, input.cell_size);
@@ -235,6 +240,7 @@ impl AmrVolume {
             region_bounds,
             region_ranges,
             region_finest,
+            region_group,
             field_ranges,
             tree,
             region_bvh,
@@ -281,15 +287,16 @@ impl AmrVolume {
     }
 
     /// The intervals of the regions `ray` crosses within `t` that `mask`
-    /// (all when `None`) and `query` accept, front to back, stopping after
-    /// `max`; returns where the rest begins (see
-    /// [`Volume::intervals_chunk`]).
+    /// (all when `None`) and `keep` (given the region's value range)
+    /// accept, front to back, stopping after `max`; returns where the rest
+    /// begins (see [`Volume::intervals_chunk`]).
+    #[inline]
     pub(crate) fn region_intervals(
         &self,
         mask: Option<&NodeMask>,
         ray: &Ray,
         t: Range1,
-        query: &IntervalQuery,
+        keep: impl Fn(Range1) -> bool,
         out: &mut Vec<Interval>,
         max: usize,
     ) -> Option<f32> {
@@ -298,12 +305,34 @@ impl AmrVolume {
         if t.is_empty() || max == 0 {
             return None;
         }
-        let mut left = max;
-        self.tree.walk(ray, t, mask, |r, hit| {
+        let (start, mut left) = (out.len(), max);
+        // Where the walk stopped short of a region that would have opened
+        // interval `max + 1`: the next call starts there.
+        let mut refused = None;
+        let rest = self.tree.walk(ray, t, mask, |r, hit| {
             let r = r as usize;
             let range = self.region_ranges[r * nf + self.settings.field];
-            if !(query.is_visible)(range) {
+            if !keep(range) {
                 return true;
+            }
+            // A region touching the last one of the same brick list goes
+            // on with its interval: the same field, the same step, and the
+            // sample lattice is not cut at the seam anyway. (Only within
+            // this call, so chunks cut the list where a whole walk puts a
+            // new interval.)
+            if out.len() > start {
+                let last = out.last_mut().expect("pushed in this call");
+                if last.t.hi == hit.lo
+                    && self.region_group[last.hint as usize] == self.region_group[r]
+                {
+                    last.t.hi = hit.hi;
+                    last.value_range = last.value_range.union(range);
+                    return true;
+                }
+            }
+            if left == 0 {
+                refused = Some(hit.lo);
+                return false;
             }
             // Two samples per finest cell at sampling rate 1: adaptive
             // sampling (ExaBricks §4.2).
@@ -313,8 +342,9 @@ impl AmrVolume {
                 ..Interval::sampled(hit, range, dt)
             });
             left -= 1;
-            left > 0
-        })
+            true
+        });
+        refused.or(rest)
     }
 
     /// The same intervals as [`AmrVolume::region_intervals`] found the
@@ -345,6 +375,25 @@ impl AmrVolume {
             }
         });
         out[start..].sort_unstable_by(|a, b| a.t.lo.total_cmp(&b.t.lo));
+        // Touching regions of one brick list are one interval, as in the
+        // walk.
+        let mut merged = start;
+        for i in start..out.len() {
+            let iv = out[i];
+            if merged > start {
+                let last = &mut out[merged - 1];
+                if last.t.hi == iv.t.lo
+                    && self.region_group[last.hint as usize] == self.region_group[iv.hint as usize]
+                {
+                    last.t.hi = iv.t.hi;
+                    last.value_range = last.value_range.union(iv.value_range);
+                    continue;
+                }
+            }
+            out[merged] = iv;
+            merged += 1;
+        }
+        out.truncate(merged);
     }
 
     /// The mask of the tree's subtrees holding a region whose range of the
@@ -371,6 +420,12 @@ impl AmrVolume {
         (0..self.regions.regions.len())
             .filter(|&r| is_visible(self.region_ranges[r * nf + f]))
             .count()
+    }
+
+    /// Per region, its brick-list group (see `region_group`).
+    #[cfg(test)]
+    pub(crate) fn region_groups(&self) -> &[u32] {
+        &self.region_group
     }
 
     pub(crate) fn region_tree(&self) -> &RegionTree {
@@ -486,7 +541,7 @@ impl Volume for AmrVolume {
     /// [`crate::AmrContext`] skips the subtrees its transfer function
     /// cannot see.
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
-        self.region_intervals(None, ray, t, query, out, usize::MAX);
+        self.region_intervals(None, ray, t, query.is_visible, out, usize::MAX);
     }
 
     fn intervals_chunk(
@@ -497,7 +552,7 @@ impl Volume for AmrVolume {
         out: &mut Vec<Interval>,
         max: usize,
     ) -> Option<f32> {
-        self.region_intervals(None, ray, t, query, out, max)
+        self.region_intervals(None, ray, t, query.is_visible, out, max)
     }
 
     /// Basis reconstruction down an axis: every region's pieces found

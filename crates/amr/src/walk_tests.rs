@@ -133,6 +133,52 @@ fn walk_gives_the_sorted_intervals_of_every_region_the_ray_hits() {
 }
 
 #[test]
+fn an_interval_over_several_regions_samples_like_point_location() {
+    // Touching regions of one brick list are one interval whose hint is
+    // the first region: every point of it must reconstruct as the region
+    // that point location finds.
+    let mut rng = Lcg(43);
+    let (mut merged, mut points) = (0, 0);
+    for vol in volumes() {
+        let groups = vol.region_groups();
+        for ray in rays(&vol, &mut rng, 1500) {
+            let mut ivs = Vec::new();
+            let t = Range1::new(0.0, f32::INFINITY);
+            vol.intervals(&ray, t, &IntervalQuery::all(), &mut ivs);
+            for iv in &ivs {
+                let mut spans_regions = false;
+                for k in 1..16 {
+                    let tp = iv.t.lo + iv.t.span() * (k as f32 / 16.0);
+                    let p = ray.at(tp);
+                    let Some(at) = vol.locate(p) else { continue };
+                    // A point on a region's face (rays in cut planes), or
+                    // rounded off the ray into a neighbour (slivers where a
+                    // ray grazes an edge), may be located in either region:
+                    // only points strictly inside the region found, at a
+                    // `t` strictly inside its part of the ray, are compared.
+                    let b = vol.region_bounds(at);
+                    let hit = b.clip_ray(&ray, t);
+                    if (0..3).any(|a| !(b.min[a] < p[a] && p[a] < b.max[a]))
+                        || !(hit.lo < tp && tp < hit.hi)
+                    {
+                        continue;
+                    }
+                    assert_eq!(groups[at], groups[iv.hint as usize], "{p:?} in {iv:?}");
+                    spans_regions |= at != iv.hint as usize;
+                    let (a, b) = (vol.sample_in(p, iv), vol.sample(p));
+                    let (a, b) = (a.expect("hinted").value, b.expect("located").value);
+                    assert_eq!(a.to_bits(), b.to_bits(), "{p:?}: {a} vs {b}");
+                    points += 1;
+                }
+                merged += spans_regions as usize;
+            }
+        }
+    }
+    assert!(merged > 100, "only {merged} intervals span several regions");
+    assert!(points > 10_000, "only {points} points compared");
+}
+
+#[test]
 fn the_walk_a_chunk_at_a_time_is_the_whole_list() {
     let mut rng = Lcg(41);
     for vol in volumes() {

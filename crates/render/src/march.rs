@@ -244,7 +244,7 @@ impl<'a> Ctx<'a> {
     }
 
     /// The colour of a sample whose normalised value is `x`.
-    #[inline]
+    #[inline(always)]
     pub fn colour_of(&self, s: &Sample, x: f32) -> Vec3 {
         match s.attribute {
             Attribute::Scalar(v) => self.tf.color(self.attr_range.normalize(v)),
