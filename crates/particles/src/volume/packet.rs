@@ -34,9 +34,9 @@
 use std::marker::PhantomData;
 
 use voxless_core::simd::{LANES, Lanes, Simd, WithLanes, dispatch};
-use voxless_core::{Aabb, Sample, SampleBatch, Vec3};
+use voxless_core::{Aabb, Attribute, Sample, SampleBatch, Vec3};
 
-use super::{FieldSample, ParticleVolume, to_sample};
+use super::ParticleVolume;
 use crate::kernel::{Family, with_family};
 
 /// Adds `x` to lanes `j..j + 8` of a padded buffer.
@@ -496,26 +496,63 @@ impl ParticleVolume {
         }
         buf.clusters = clusters;
         buf.groups = hit_groups;
-        out.extend((0..batch.t.len()).map(|j| {
-            let density = buf.density[j];
-            let f = FieldSample {
-                density,
-                attribute: if attr.is_some() && density > 0.0 {
-                    buf.attr[j] / density
+        // The sums become samples as `to_sample` makes them, one loop per
+        // kind of attribute over slices cut to the batch, so the loop
+        // carries no bounds checks and no per-sample test of the kind (it
+        // was a tenth of a shadowed frame).
+        let n = batch.t.len();
+        let (density, covered) = (&buf.density[..n], &buf.covered[..n]);
+        let grad = |j: usize| {
+            if GRAD {
+                Vec3::new(buf.grad[0][j], buf.grad[1][j], buf.grad[2][j])
+            } else {
+                Vec3::ZERO
+            }
+        };
+        if pre {
+            let [r, g, b] = &buf.color;
+            let (r, g, b) = (&r[..n], &g[..n], &b[..n]);
+            emit(density, covered, grad, out, |j, d| {
+                Attribute::Rgb(Vec3::new(r[j], g[j], b[j]) / d)
+            });
+        } else if attr.is_some() {
+            let a = &buf.attr[..n];
+            emit(density, covered, grad, out, |j, d| {
+                let x = a[j] / d;
+                if x.is_nan() {
+                    Attribute::None
                 } else {
-                    f32::NAN
-                },
-                color: (pre && density > 0.0).then(|| {
-                    Vec3::new(buf.color[0][j], buf.color[1][j], buf.color[2][j]) / density
-                }),
-                gradient: if GRAD {
-                    Vec3::new(buf.grad[0][j], buf.grad[1][j], buf.grad[2][j])
-                } else {
-                    Vec3::ZERO
-                },
-                covered: buf.covered[j] > 0.0,
-            };
-            (f.covered.then(|| to_sample(&f)), f.gradient)
-        }));
+                    Attribute::Scalar(x)
+                }
+            });
+        } else {
+            emit(density, covered, grad, out, |_, _| Attribute::None);
+        }
     }
+}
+
+/// Appends the samples of a batch's sums to `out`: the sample where some
+/// support covers it (its attribute from `attribute(j, density)` where the
+/// density is positive, none elsewhere), and the gradient.
+#[inline(always)]
+fn emit(
+    density: &[f32],
+    covered: &[f32],
+    grad: impl Fn(usize) -> Vec3,
+    out: &mut Vec<(Option<Sample>, Vec3)>,
+    attribute: impl Fn(usize, f32) -> Attribute,
+) {
+    let n = density.len().min(covered.len());
+    out.extend((0..n).map(|j| {
+        let d = density[j];
+        let sample = (covered[j] > 0.0).then(|| Sample {
+            value: d,
+            attribute: if d > 0.0 {
+                attribute(j, d)
+            } else {
+                Attribute::None
+            },
+        });
+        (sample, grad(j))
+    }));
 }
