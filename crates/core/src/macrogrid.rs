@@ -174,15 +174,18 @@ impl MacroGrid {
         // Whether the last pushed interval ends where the current cell starts,
         // so a visible cell extends it rather than opening a new one.
         let mut open = false;
-        // The block the walk is in and whether it may hold visible cells
-        // (asked once per block entered).
-        let mut block = usize::MAX;
+        // Whether the walk has entered another block, whose visibility is
+        // then asked (once per block entered); the cell's index in
+        // `ranges`, kept up to date step by step (both were recomputed
+        // from the cell's coordinates at every step: a fifth of the walk).
+        let mut new_block = true;
+        let cell = |idx: [i64; 3]| self.index(idx[0] as usize, idx[1] as usize, idx[2] as usize);
+        let stride = [1, self.dims[0] as i64, (self.dims[0] * self.dims[1]) as i64];
+        let mut lin = cell(idx) as i64;
         let mut seen = Seen::default();
         loop {
-            let b = self.block_of(idx);
-            if b != block {
-                block = b;
-                let r = self.coarse[b];
+            if new_block {
+                let r = self.coarse[self.block_of(idx)];
                 if !seen.visible(r, query) {
                     // Nothing to see in this block: jump to where the ray
                     // leaves it, the earliest of its three exit faces.
@@ -230,13 +233,15 @@ impl MacroGrid {
                     if idx[axis] < 0 || idx[axis] >= self.dims[axis] as i64 {
                         break;
                     }
+                    lin = cell(idx) as i64;
+                    new_block = true;
                     continue;
                 }
             }
             let axis = argmin(t_next);
             let t_exit = t_next[axis].min(tr.hi);
             if t_exit > t_cur {
-                let r = self.ranges[self.index(idx[0] as usize, idx[1] as usize, idx[2] as usize)];
+                let r = self.ranges[lin as usize];
                 if seen.visible(r, query) {
                     match out.last_mut() {
                         Some(last) if open => {
@@ -254,10 +259,13 @@ impl MacroGrid {
             if t_exit >= tr.hi {
                 break;
             }
+            let from = idx[axis];
             idx[axis] += step[axis];
             if idx[axis] < 0 || idx[axis] >= self.dims[axis] as i64 {
                 break;
             }
+            lin += step[axis] * stride[axis];
+            new_block = from >> BLOCK_SHIFT != idx[axis] >> BLOCK_SHIFT;
             t_next[axis] += t_delta[axis];
         }
     }

@@ -83,6 +83,11 @@ impl Lane {
 /// What a ray of a packet does with its samples, front to back.
 pub(crate) trait Integrator {
     fn lane(&mut self) -> &mut Lane;
+    /// Whether [`Integrator::feed`] reads the gradient (the batch computes
+    /// it only then).
+    fn needs_gradient(ctx: &Ctx) -> bool {
+        ctx.needs_gradient()
+    }
     /// One segment and its sample; true when the ray needs no more
     /// (opaque, or its scattering event found).
     #[allow(clippy::too_many_arguments)]
@@ -219,7 +224,7 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
     s: &mut PassScratch,
 ) {
     let settings = ctx.settings;
-    let gradient = ctx.needs_gradient();
+    let gradient = I::needs_gradient(ctx);
     loop {
         // The window starts at the ray that is furthest behind.
         let Some((t0, dt)) = items

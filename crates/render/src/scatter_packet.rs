@@ -30,6 +30,11 @@ impl Integrator for FlightRay {
     fn lane(&mut self) -> &mut Lane {
         &mut self.lane
     }
+    /// A free flight sums `σ·len` and an event's colour is its sample's:
+    /// no gradient (the per-ray flights ask for none either).
+    fn needs_gradient(_: &Ctx) -> bool {
+        false
+    }
     #[inline]
     fn feed<V: Volume>(
         &mut self,
