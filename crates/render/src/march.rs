@@ -358,6 +358,13 @@ impl RayState {
             let s = Sample::scalar(v);
             return self.composite(&s, seg.len, gradient, ctx);
         }
+        if settings.iso.is_empty() {
+            // No iso-surfaces: the bookkeeping below only serves them.
+            return match sample {
+                Some(s) if settings.volume => self.composite(&s, seg.len, gradient, ctx),
+                _ => false,
+            };
+        }
         if seg.reset {
             // A gap: leaving a constant interval into it is a step to zero.
             if let Some((t_end, v0)) = self.last_constant.take()
@@ -465,10 +472,18 @@ impl RayState {
     fn composite(&mut self, s: &Sample, len: f32, gradient: Vec3, ctx: &Ctx) -> bool {
         let settings = ctx.settings;
         let x = settings.normalize(s.value);
-        let opacity = ctx.opacity_of(s, x);
+        // A plain scalar sample takes colour and opacity from one LUT
+        // position.
+        let (opacity, colour) = match (ctx.classified, s.attribute) {
+            (false, Attribute::None) => {
+                let (c, o) = ctx.tf.color_and_opacity(x);
+                (o, Some(c))
+            }
+            _ => (ctx.opacity_of(s, x), None),
+        };
         if opacity > 0.0 {
             let a = 1.0 - (-opacity * settings.opacity_scale * len).exp();
-            let mut c = ctx.colour_of(s, x);
+            let mut c = colour.unwrap_or_else(|| ctx.colour_of(s, x));
             if let Some(light) = settings.light {
                 c = c * shade(gradient, light);
             }

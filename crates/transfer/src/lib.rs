@@ -283,8 +283,10 @@ impl TransferFunction {
     #[inline]
     fn lut_pos(x: f32) -> (usize, f32) {
         let f = x.clamp(0.0, 1.0) * (LUT - 1) as f32;
-        // NaN clamps to NaN; `as usize` maps it to 0.
-        let i = (f as usize).min(LUT - 2);
+        // NaN clamps to NaN; `as i32` maps it to 0. (Through `i32`, not
+        // `usize`: a float-to-`u64` conversion is a dozen instructions on
+        // x86-64, and this runs twice per sample.)
+        let i = (f as i32 as usize).min(LUT - 2);
         (i, (f - i as f32).clamp(0.0, 1.0))
     }
 
@@ -293,6 +295,17 @@ impl TransferFunction {
     pub fn color(&self, x: f32) -> Vec3 {
         let (i, s) = Self::lut_pos(x);
         self.color_lut[i] * (1.0 - s) + self.color_lut[i + 1] * s
+    }
+
+    /// [`TransferFunction::color`] and [`TransferFunction::opacity`] at
+    /// normalised `x`, the same bits, with one LUT position for both.
+    #[inline]
+    pub fn color_and_opacity(&self, x: f32) -> (Vec3, f32) {
+        let (i, s) = Self::lut_pos(x);
+        (
+            self.color_lut[i] * (1.0 - s) + self.color_lut[i + 1] * s,
+            self.opacity_lut[i] * (1.0 - s) + self.opacity_lut[i + 1] * s,
+        )
     }
 
     /// Opacity in [0, 1] at normalised `x`.
