@@ -315,16 +315,12 @@ impl AmrVolume {
             if !keep(range) {
                 return true;
             }
-            // A region touching the last one of the same brick list goes
-            // on with its interval: the same field, the same step, and the
-            // sample lattice is not cut at the seam anyway. (Only within
-            // this call, so chunks cut the list where a whole walk puts a
-            // new interval.)
+            // A region going on with the last interval extends it (only
+            // within this call, so chunks cut the list where a whole walk
+            // puts a new interval).
             if out.len() > start {
                 let last = out.last_mut().expect("pushed in this call");
-                if last.t.hi == hit.lo
-                    && self.region_group[last.hint as usize] == self.region_group[r]
-                {
+                if self.goes_on(last, hit.lo, r) {
                     last.t.hi = hit.hi;
                     last.value_range = last.value_range.union(range);
                     return true;
@@ -345,6 +341,15 @@ impl AmrVolume {
             true
         });
         refused.or(rest)
+    }
+
+    /// Whether region `r`, whose part of the ray starts at `lo`, goes on
+    /// with interval `last`: it touches it and has the same brick list
+    /// (the same field and step; the sample lattice is not cut at the seam
+    /// anyway).
+    #[inline]
+    fn goes_on(&self, last: &Interval, lo: f32, r: usize) -> bool {
+        last.t.hi == lo && self.region_group[last.hint as usize] == self.region_group[r]
     }
 
     /// The same intervals as [`AmrVolume::region_intervals`] found the
@@ -382,9 +387,7 @@ impl AmrVolume {
             let iv = out[i];
             if merged > start {
                 let last = &mut out[merged - 1];
-                if last.t.hi == iv.t.lo
-                    && self.region_group[last.hint as usize] == self.region_group[iv.hint as usize]
-                {
+                if self.goes_on(last, iv.t.lo, iv.hint as usize) {
                     last.t.hi = iv.t.hi;
                     last.value_range = last.value_range.union(iv.value_range);
                     continue;

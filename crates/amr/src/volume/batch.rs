@@ -130,7 +130,7 @@ impl AmrVolume {
                 let grid = BrickGrid::new(&self.bricks[b as usize]);
                 for (k, s) in sums.iter_mut().enumerate() {
                     let pu = Vec3::new(run.x[k], run.y[k], run.z[k]);
-                    brick_sums(&grid, pu, true, fields, s);
+                    brick_sums(&grid, pu, fields, s);
                 }
             }
             for (s, &slot) in sums.iter().zip(&run.slot) {
@@ -138,18 +138,21 @@ impl AmrVolume {
             }
             return;
         }
-        for at in (0..n).step_by(LANES) {
-            let p = [
-                L::load(&run.x, at),
-                L::load(&run.y, at),
-                L::load(&run.z, at),
-            ];
-            let live = L::first(n - at);
-            let mut acc = ValueLanes::zero();
-            for &b in bricks {
-                let grid = BrickGrid::new(&self.bricks[b as usize]);
-                brick_value_lanes(&grid, p, live, fields, &mut acc);
+        // Bricks outside, lane groups inside: each brick's constants once
+        // per run; every sample still adds its bricks in the region's order.
+        let mut acc = [ValueLanes::zero(); RUN / LANES];
+        for &b in bricks {
+            let grid = BrickGrid::new(&self.bricks[b as usize]);
+            for (acc, at) in acc.iter_mut().zip((0..n).step_by(LANES)) {
+                let p = [
+                    L::load(&run.x, at),
+                    L::load(&run.y, at),
+                    L::load(&run.z, at),
+                ];
+                brick_value_lanes(&grid, p, L::first(n - at), fields, acc);
             }
+        }
+        for (acc, at) in acc.iter().zip((0..n).step_by(LANES)) {
             for k in 0..LANES.min(n - at) {
                 let s = ValueSums {
                     sw: acc.sw[k],

@@ -47,7 +47,7 @@ impl AmrVolume {
             return self.finish_values(sums, fields.1.is_some());
         }
         let mut sums = BasisSums::default();
-        grids.for_each(|grid| brick_sums(&grid, pu, true, fields, &mut sums));
+        grids.for_each(|grid| brick_sums(&grid, pu, fields, &mut sums));
         self.finish(&sums, gradient, fields.1.is_some())
     }
 
@@ -325,7 +325,9 @@ impl Stencil {
 }
 
 /// Adds the terms of brick `g` at unit-space point `pu` to `s`: the values
-/// of `fields` (the opacity field, and the colour field when it differs).
+/// of `fields` (the opacity field, and the colour field when it differs)
+/// and the value field's derivatives (value-only sums are
+/// [`brick_value_sums`]).
 ///
 /// The tents factor per axis, `Ĥ = hx·hy·hz`, so the eight-cell sums are
 /// nested linear interpolations — x within each of the four rows, then y,
@@ -338,36 +340,43 @@ impl Stencil {
 pub(super) fn brick_sums(
     g: &BrickGrid,
     pu: Vec3,
-    gradient: bool,
     fields: (&[f32], Option<&[f32]>),
     s: &mut BasisSums,
 ) {
-    let Some(st) = Stencil::new(g, pu, gradient) else {
+    let Some(st) = Stencil::new(g, pu, true) else {
         return;
     };
-    let [[wx0, wx1], [wy0, wy1], [wz0, wz1]] = st.w;
-    let (wx0, wx1, wy0, wy1) = (wx0 as f64, wx1 as f64, wy0 as f64, wy1 as f64);
-    let (wz0, wz1) = (wz0 as f64, wz1 as f64);
-    let [[x0, x1], _, _] = st.c;
-    let (rows, r, p0, p1) = add_values(g, fields, st.c, [[wx0, wx1], [wy0, wy1], [wz0, wz1]], s);
+    let [[wx0, wx1], [wy0, wy1], [wz0, wz1]] = st.w.map(|w| w.map(|w| w as f64));
+    let [[x0, x1], [y0, y1], [z0, z1]] = st.c;
+    // The four rows along x, (ky, kz) = (0, 0), (1, 0), (0, 1), (1, 1).
+    let rows = [
+        g.base + z0 * g.sxy + y0 * g.sx,
+        g.base + z0 * g.sxy + y1 * g.sx,
+        g.base + z1 * g.sxy + y0 * g.sx,
+        g.base + z1 * g.sxy + y1 * g.sx,
+    ];
+    let lerp = |v: &[f32]| lerp_rows(v, &rows, [x0, x1], [wx0, wx1], [wy0, wy1]);
+    let (r, p0, p1) = lerp(fields.0);
     let (ax, ay, az) = (wx0 + wx1, wy0 + wy1, wz0 + wz1);
-    if gradient {
-        let [[dx0, dx1], [dy0, dy1], [dz0, dz1]] = st.dw;
-        let (dx0, dx1, dy0, dy1) = (dx0 as f64, dx1 as f64, dy0 as f64, dy1 as f64);
-        let (dz0, dz1) = (dz0 as f64, dz1 as f64);
-        let v = fields.0;
-        // ∂/∂x: the x weights replaced by their derivatives.
-        let drow = |k: usize| dx0 * v[rows[k] + x0] as f64 + dx1 * v[rows[k] + x1] as f64;
-        let d = [drow(0), drow(1), drow(2), drow(3)];
-        s.sdv[0] += wz0 * (wy0 * d[0] + wy1 * d[1]) + wz1 * (wy0 * d[2] + wy1 * d[3]);
-        // ∂/∂y: the y weights replaced.
-        s.sdv[1] += wz0 * (dy0 * r[0] + dy1 * r[1]) + wz1 * (dy0 * r[2] + dy1 * r[3]);
-        // ∂/∂z: the z weights replaced.
-        s.sdv[2] += dz0 * p0 + dz1 * p1;
-        s.sdw[0] += (dx0 + dx1) * ay * az;
-        s.sdw[1] += ax * (dy0 + dy1) * az;
-        s.sdw[2] += ax * ay * (dz0 + dz1);
+    s.sw += ax * ay * az;
+    s.sv += wz0 * p0 + wz1 * p1;
+    if let Some(color) = fields.1 {
+        let (_, c0, c1) = lerp(color);
+        s.sc += wz0 * c0 + wz1 * c1;
     }
+    let [[dx0, dx1], [dy0, dy1], [dz0, dz1]] = st.dw.map(|d| d.map(|d| d as f64));
+    let v = fields.0;
+    // ∂/∂x: the x weights replaced by their derivatives.
+    let drow = |k: usize| dx0 * v[rows[k] + x0] as f64 + dx1 * v[rows[k] + x1] as f64;
+    let d = [drow(0), drow(1), drow(2), drow(3)];
+    s.sdv[0] += wz0 * (wy0 * d[0] + wy1 * d[1]) + wz1 * (wy0 * d[2] + wy1 * d[3]);
+    // ∂/∂y: the y weights replaced.
+    s.sdv[1] += wz0 * (dy0 * r[0] + dy1 * r[1]) + wz1 * (dy0 * r[2] + dy1 * r[3]);
+    // ∂/∂z: the z weights replaced.
+    s.sdv[2] += dz0 * p0 + dz1 * p1;
+    s.sdw[0] += (dx0 + dx1) * ay * az;
+    s.sdw[1] += ax * (dy0 + dy1) * az;
+    s.sdw[2] += ax * ay * (dz0 + dz1);
 }
 
 /// The value-only terms of brick `g` at unit-space point `pu`, added to
@@ -440,38 +449,6 @@ fn tent_axis(g: &BrickGrid, a: usize, p: f32) -> Option<([usize; 2], f32, f32)> 
     }
     let c = [i0.max(0.0).min(last), (i0 + 1.0).max(0.0).min(last)];
     Some((c.map(|c| c as usize), w0 + w1, f))
-}
-
-/// Adds the weight, value and colour terms of the eight cells `c` (per
-/// axis) with tent weights `w` to `s`, as nested lerps; returns the row
-/// starts, the four x lerps of the value field and its two y lerps, which
-/// the derivative terms reuse.
-#[inline(always)]
-fn add_values(
-    g: &BrickGrid,
-    fields: (&[f32], Option<&[f32]>),
-    c: [[usize; 2]; 3],
-    w: [[f64; 2]; 3],
-    s: &mut BasisSums,
-) -> ([usize; 4], [f64; 4], f64, f64) {
-    let [x, [y0, y1], [z0, z1]] = c;
-    let [wx, wy, [wz0, wz1]] = w;
-    // The four rows along x, (ky, kz) = (0, 0), (1, 0), (0, 1), (1, 1).
-    let rows = [
-        g.base + z0 * g.sxy + y0 * g.sx,
-        g.base + z0 * g.sxy + y1 * g.sx,
-        g.base + z1 * g.sxy + y0 * g.sx,
-        g.base + z1 * g.sxy + y1 * g.sx,
-    ];
-    let lerp = |v: &[f32]| lerp_rows(v, &rows, x, wx, wy);
-    let (r, p0, p1) = lerp(fields.0);
-    s.sw += (wx[0] + wx[1]) * (wy[0] + wy[1]) * (wz0 + wz1);
-    s.sv += wz0 * p0 + wz1 * p1;
-    if let Some(color) = fields.1 {
-        let (_, c0, c1) = lerp(color);
-        s.sc += wz0 * c0 + wz1 * c1;
-    }
-    (rows, r, p0, p1)
 }
 
 /// The x lerps of four rows of cells (row starts `rows`, columns `x`,
