@@ -227,6 +227,32 @@ pub trait Lanes:
     }
 }
 
+/// [`Lanes::exp`] of one value: the same operations in the same order, so
+/// the same bits as every lane type gives (tested) — for scalar code whose
+/// results must equal a lane kernel's (compositing: the packet path
+/// classifies a pass's samples in lanes, the per-sample path one by one).
+/// About a dozen instructions inlined, against a call into libm.
+#[inline(always)]
+pub fn exp(x: f32) -> f32 {
+    // `min`/`max` as the lanes do them (`minps`/`maxps`): NaN passes.
+    let flush = x < EXP_MIN;
+    let x = if EXP_MIN > x { EXP_MIN } else { x };
+    let x = if 89.0 < x { 89.0 } else { x };
+    let y = x * std::f32::consts::LOG2_E;
+    let t = y + EXP_MAGIC;
+    let n = t - EXP_MAGIC;
+    let r = (x - n * 0.693_359_4) - n * -2.121_944_4e-4;
+    let mut p = 1.987_569_1e-4;
+    p = p * r + 1.398_199_9e-3;
+    p = p * r + 8.333_452e-3;
+    p = p * r + 4.166_579_6e-2;
+    p = p * r + 0.166_666_66;
+    p = p * r + 0.5;
+    let e = (p * r * r + r) + 1.0;
+    let v = e * f32::from_bits(t.to_bits() << 23);
+    if flush { 0.0 } else { v }
+}
+
 /// The float just above `ln 2^−126`: below it `e^x` is subnormal, and
 /// [`Lanes::exp`] flushes.
 const EXP_MIN: f32 = -87.336_54;

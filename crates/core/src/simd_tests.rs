@@ -315,3 +315,31 @@ fn exp_is_within_two_ulp_of_wides_and_the_same_on_every_backend() {
     assert_eq!(e[6], f32::INFINITY);
     assert!(ulps(e[7], std::f32::consts::E) <= 1);
 }
+
+#[test]
+fn scalar_exp_gives_the_bits_of_the_lanes() {
+    let mut xs = sweep(-100.0, 90.0, 1 << 18);
+    xs.extend(sweep(-1e-3, 1e-3, 1 << 12));
+    xs.extend([
+        0.0,
+        -0.0,
+        f32::NEG_INFINITY,
+        f32::INFINITY,
+        f32::NAN,
+        EXP_MIN,
+        -87.4,
+        88.38,
+        89.0,
+        f32::MIN_POSITIVE,
+        -f32::MIN_POSITIVE,
+    ]);
+    xs.resize(xs.len().next_multiple_of(LANES), 1.0);
+    let lanes = dispatch(Simd::Portable, ExpSweep(xs.clone()));
+    for (x, l) in xs.iter().zip(&lanes) {
+        let e = exp(*x);
+        assert!(
+            e.to_bits() == l.to_bits() || (e.is_nan() && l.is_nan()),
+            "exp({x}): scalar {e}, lanes {l}"
+        );
+    }
+}

@@ -300,7 +300,10 @@ pub fn check_contract<V: Volume>(volume: &V, c: &Contract) -> Vec<String> {
         hints: None,
     };
     for gradient in [false, true] {
-        let mut out = Vec::new();
+        // What an earlier batch left in the caller's buffer (longer than
+        // this batch, and wrong): every element must be replaced.
+        let stale = (Some(Sample::scalar(f32::NAN)), Vec3::splat(f32::NAN));
+        let mut out = vec![stale; batch_t.len() + 5];
         volume.sample_batch(&batch, gradient, &mut out);
         if out.len() != batch_t.len() {
             bad.push(format!(

@@ -201,18 +201,22 @@ pub trait Volume: Send + Sync {
         false
     }
 
-    /// Samples every point of a packet at once: `out` (cleared by the caller)
-    /// receives, for each `t` of `batch` in order, the sample at
-    /// `rays[r].at(t)` (`None` where no data covers it) and, when `gradient`,
-    /// the gradient there (zero otherwise). A packet path must give exactly
-    /// what [`Volume::sample`]/[`Volume::sample_with_gradient`] give; the
-    /// default is that slow path.
+    /// Samples every point of a packet at once: `out` — the caller's buffer,
+    /// holding whatever an earlier batch left there — ends up holding, for
+    /// each `t` of `batch` in order, the sample at `rays[r].at(t)` (`None`
+    /// where no data covers it) and, when `gradient`, the gradient there
+    /// (zero otherwise): exactly that many elements. (The caller does not
+    /// clear it, so a volume that writes its results out of order can size
+    /// it without filling it first.) A packet path must give exactly what
+    /// [`Volume::sample`]/[`Volume::sample_with_gradient`] give; the default
+    /// is that slow path.
     fn sample_batch(
         &self,
         batch: &SampleBatch,
         gradient: bool,
         out: &mut Vec<(Option<Sample>, Vec3)>,
     ) {
+        out.clear();
         for (r, ray) in batch.rays.iter().enumerate() {
             for &t in batch.samples(r) {
                 let p = ray.at(t);

@@ -112,6 +112,7 @@ impl MaterialVolume {
                 v
             })
             .collect();
+        out.clear();
         out.extend(
             (0..batch.t.len())
                 .map(|j| self.blend(parts.iter().enumerate().map(|(m, p)| (m, p[j].0, p[j].1)))),

@@ -40,6 +40,7 @@
 //! thread count or tile scheduling.
 
 pub mod bluenoise;
+mod classify;
 pub mod colorbar;
 mod cursor;
 pub mod font;

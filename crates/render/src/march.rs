@@ -243,6 +243,13 @@ impl<'a> Ctx<'a> {
         self.settings.light.is_some() && self.settings.volume
     }
 
+    /// Whether a packet pass may classify its plain samples in lanes
+    /// ([`crate::classify`]): emission–absorption of the volume, values
+    /// classified here, no iso-surfaces (which need every sample in order).
+    pub fn classifies_in_lanes(&self) -> bool {
+        !self.classified && self.settings.volume && self.settings.iso.is_empty()
+    }
+
     /// The colour of a sample whose normalised value is `x`.
     #[inline(always)]
     pub fn colour_of(&self, s: &Sample, x: f32) -> Vec3 {
@@ -482,7 +489,9 @@ impl RayState {
             _ => (ctx.opacity_of(s, x), None),
         };
         if opacity > 0.0 {
-            let a = 1.0 - (-opacity * settings.opacity_scale * len).exp();
+            // The lanes' `exp` (same bits): packet passes classify their
+            // samples in lanes ([`crate::classify`]).
+            let a = 1.0 - voxless_core::simd::exp(-opacity * settings.opacity_scale * len);
             let mut c = colour.unwrap_or_else(|| ctx.colour_of(s, x));
             if let Some(light) = settings.light {
                 c = c * shade(gradient, light);
@@ -490,6 +499,24 @@ impl RayState {
             return self.acc.add(c, a, settings.early_termination);
         }
         false
+    }
+
+    /// A plain sample's segment (a scalar value, no attribute, not
+    /// pre-classified; no iso-surfaces) whose colour `c` and opacity `a`
+    /// were computed in lanes ([`crate::classify`]; `a < 0`: the transfer
+    /// function's opacity is not positive): what [`RayState::feed`] does
+    /// with it, the same bits.
+    #[inline(always)]
+    pub fn feed_classified(&mut self, c: Vec3, a: f32, gradient: Vec3, ctx: &Ctx) -> bool {
+        if !(a >= 0.0) {
+            return false;
+        }
+        let settings = ctx.settings;
+        let c = match settings.light {
+            Some(light) => c * shade(gradient, light),
+            None => c,
+        };
+        self.acc.add(c, a, settings.early_termination)
     }
 
     /// Iso-surfaces where a piecewise-constant field steps from `v0` to `v1`

@@ -184,7 +184,6 @@ impl<V: Volume> Volume for Mirrored<'_, V> {
                 offsets.push(ts.len() as u32);
             }
         }
-        let start = out.len();
         self.inner.sample_batch(
             &SampleBatch {
                 rays: &rays,
@@ -200,7 +199,7 @@ impl<V: Volume> Volume for Mirrored<'_, V> {
         if gradient {
             for (k, &f) in folds.iter().enumerate() {
                 let (a, b) = (offsets[k] as usize, offsets[k + 1] as usize);
-                for o in &mut out[start + a..start + b] {
+                for o in &mut out[a..b] {
                     o.1 = self.vector(f, o.1);
                 }
             }

@@ -16,9 +16,10 @@
 //! samples ([`Integrator`]): emission–absorption here, free flights of
 //! single scattering in [`crate::scatter_packet`].
 
-use voxless_core::{Interval, IntervalQuery, Ray, Sample, SampleBatch, Vec3, Volume};
+use voxless_core::{Attribute, Interval, IntervalQuery, Ray, Sample, SampleBatch, Vec3, Volume};
 
 use crate::Tile;
+use crate::classify::Classified;
 use crate::cursor::{Cursor, RayIntervals, Segment};
 use crate::march::{Ctx, RaySpans, RayState, RayStats};
 use crate::sampling::PixelRng;
@@ -88,6 +89,16 @@ pub(crate) trait Integrator {
     fn needs_gradient(ctx: &Ctx) -> bool {
         ctx.needs_gradient()
     }
+    /// Whether plain samples (a scalar value, no attribute) go to
+    /// [`Integrator::feed_classified`], classified in lanes.
+    fn classifies_in_lanes(_: &Ctx) -> bool {
+        false
+    }
+    /// A plain sample's segment with its colour `c` and opacity `a` from
+    /// [`Classified`] (only called when [`Integrator::classifies_in_lanes`]).
+    fn feed_classified(&mut self, _c: Vec3, _a: f32, _gradient: Vec3, _ctx: &Ctx) -> bool {
+        unreachable!("an integrator that classifies in lanes takes its samples")
+    }
     /// One segment and its sample; true when the ray needs no more
     /// (opaque, or its scattering event found).
     #[allow(clippy::too_many_arguments)]
@@ -114,6 +125,13 @@ struct PacketRay {
 impl Integrator for PacketRay {
     fn lane(&mut self) -> &mut Lane {
         &mut self.lane
+    }
+    fn classifies_in_lanes(ctx: &Ctx) -> bool {
+        ctx.classifies_in_lanes()
+    }
+    #[inline(always)]
+    fn feed_classified(&mut self, c: Vec3, a: f32, gradient: Vec3, ctx: &Ctx) -> bool {
+        self.state.feed_classified(c, a, gradient, ctx)
     }
     #[inline]
     fn feed<V: Volume>(
@@ -146,6 +164,12 @@ pub(crate) struct PassScratch {
     /// Per ray gathered in a pass: (packet ray, its first and end segment).
     gathered: Vec<(usize, usize, usize)>,
     out: Vec<(Option<Sample>, Vec3)>,
+    /// Per sample in `t`, its segment's length and normalised value, and
+    /// what the lanes made of them (when the integrator classifies in
+    /// lanes).
+    len: Vec<f32>,
+    x: Vec<f32>,
+    classified: Classified,
 }
 
 /// Scratch reused across the packets of a tile.
@@ -225,6 +249,7 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
 ) {
     let settings = ctx.settings;
     let gradient = I::needs_gradient(ctx);
+    let lanes = I::classifies_in_lanes(ctx);
     loop {
         // The window starts at the ray that is furthest behind.
         let Some((t0, dt)) = items
@@ -243,6 +268,7 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
         s.offsets.clear();
         s.t.clear();
         s.hints.clear();
+        s.len.clear();
         s.segs.clear();
         s.gathered.clear();
         s.offsets.push(0);
@@ -269,6 +295,7 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
                 } else {
                     s.segs.push((seg, s.t.len() as u32));
                     s.t.push(seg.t);
+                    s.len.push(seg.len);
                     s.hints.push(iv.hint);
                 }
                 true
@@ -294,7 +321,7 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
             }
             s.gathered.push((i, first_seg, s.segs.len()));
         }
-        s.out.clear();
+        // `out` is not cleared: the volume sizes it (see `sample_batch`).
         if !s.t.is_empty() {
             volume.sample_batch(
                 &SampleBatch {
@@ -306,6 +333,22 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
                 gradient,
                 &mut s.out,
             );
+            if lanes {
+                // Colour and opacity of every sample at once; the rays below
+                // only accumulate them in order.
+                s.x.clear();
+                s.x.extend(s.out.iter().map(|(sample, _)| match sample {
+                    Some(v) => settings.normalize(v.value),
+                    None => 0.0,
+                }));
+                s.classified.compute(
+                    settings.simd,
+                    ctx.tf,
+                    settings.opacity_scale,
+                    &mut s.x,
+                    &mut s.len,
+                );
+            }
         }
         // Every ray takes its samples front to back from the buffer.
         for &(i, lo, hi) in &s.gathered {
@@ -320,6 +363,24 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
                     Some(v) => (Some(Sample::scalar(v)), Vec3::ZERO),
                     None => s.out[slot as usize],
                 };
+                if lanes
+                    && slot != CONSTANT
+                    && matches!(
+                        sample,
+                        Some(Sample {
+                            attribute: Attribute::None,
+                            ..
+                        })
+                    )
+                {
+                    let (k, cl) = (slot as usize, &s.classified);
+                    let c = Vec3::new(cl.rgb[0][k], cl.rgb[1][k], cl.rgb[2][k]);
+                    if item.feed_classified(c, cl.alpha[k], g, ctx) {
+                        done = true;
+                        break;
+                    }
+                    continue;
+                }
                 if item.feed(volume, ray, iv, seg, sample, g, ctx) {
                     done = true;
                     break;

@@ -26,7 +26,7 @@ pub use import::{
     ColorSpace, ImportError, ImportedColormap, parse_colormap_json, read_colormap_file,
 };
 
-use voxless_core::{Vec3, srgb_to_linear};
+use voxless_core::{Lanes, Vec3, srgb_to_linear};
 
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum TransferError {
@@ -228,6 +228,17 @@ impl OpacityMap {
 /// Entries in the colour and opacity lookup tables.
 const LUT: usize = 1024;
 
+/// `2^23`: adding and subtracting it rounds a float in `[0, 2^23)` to an
+/// integer.
+const ROUND: f32 = 8_388_608.0;
+
+/// `t[i]·w0 + t[i1]·w1` per lane (a function, not a closure: lane kernels
+/// inline into their SIMD entry).
+#[inline(always)]
+fn lerp<L: Lanes>(t: &[f32], (i, i1, w0, w1): (L, L, L, L)) -> L {
+    L::gather(t, i) * w0 + L::gather(t, i1) * w1
+}
+
 /// A colormap and opacity map baked for fast lookup.
 #[derive(Clone, Debug)]
 pub struct TransferFunction {
@@ -235,6 +246,8 @@ pub struct TransferFunction {
     opacity_map: OpacityMap,
     color_lut: Vec<Vec3>,
     opacity_lut: Vec<f32>,
+    /// `color_lut` by channel, for lane gathers.
+    color_planes: [Vec<f32>; 3],
     /// `max_table[level][i]` = max of `opacity_lut[i .. i + 2^level]`.
     max_table: Vec<Vec<f32>>,
 }
@@ -256,11 +269,13 @@ impl TransferFunction {
             max_table.push(next);
             width *= 2;
         }
+        let color_planes = [0, 1, 2].map(|c| color_lut.iter().map(|v| v[c]).collect());
         TransferFunction {
             colormap,
             opacity_map,
             color_lut,
             opacity_lut,
+            color_planes,
             max_table,
         }
     }
@@ -305,6 +320,31 @@ impl TransferFunction {
         (
             self.color_lut[i] * (1.0 - s) + self.color_lut[i + 1] * s,
             self.opacity_lut[i] * (1.0 - s) + self.opacity_lut[i + 1] * s,
+        )
+    }
+
+    /// [`TransferFunction::color_and_opacity`] of eight values at once,
+    /// the same bits in every lane where `x` is not NaN (NaN lanes give
+    /// NaN opacity there and here, colours unspecified): the table position
+    /// with the same arithmetic (the integer part by rounding and
+    /// correcting, which is the truncation for `f` in `[0, LUT)`), the
+    /// knots by gathers from the colour table's channels.
+    #[inline(always)]
+    pub fn color_and_opacity_lanes<L: Lanes>(&self, x: L) -> ([L; 3], L) {
+        let s = L::splat;
+        // `clamp(0, 1)` as `f32::clamp` does it, NaN passing through.
+        let f = s(1.0).min(s(0.0).max(x)) * s((LUT - 1) as f32);
+        // Round to the nearest integer (f < 2^23), then one down where
+        // that rounded up: floor, which is truncation for f ≥ 0.
+        let r = (f + s(ROUND)) - s(ROUND);
+        let i = r - r.gt(f).select(s(1.0), s(0.0));
+        let i = i.lt(s((LUT - 2) as f32)).select(i, s((LUT - 2) as f32));
+        let w = s(1.0).min(s(0.0).max(f - i));
+        let at = (i, i + s(1.0), s(1.0) - w, w);
+        let [r, g, b] = &self.color_planes;
+        (
+            [lerp(r, at), lerp(g, at), lerp(b, at)],
+            lerp(&self.opacity_lut, at),
         )
     }
 
@@ -428,5 +468,66 @@ mod tests {
         assert!(ControlPoints::new("radius map", &[(0.5, 1.0), (0.1, 0.5)]).is_err());
         assert!(ControlPoints::new("radius map", &[(f32::NAN, 1.0)]).is_err());
         assert!(OpacityMap::from_points(&[(0.0, 2.0)]).is_err());
+    }
+}
+
+#[cfg(test)]
+mod lane_tests {
+    use super::*;
+    use voxless_core::simd::{LANES, Simd, WithLanes, dispatch};
+
+    /// Colour and opacity of `x`, eight at a time.
+    struct Lookup<'a>(&'a TransferFunction, &'a [f32]);
+
+    impl WithLanes for Lookup<'_> {
+        type Output = Vec<(Vec3, f32)>;
+        #[inline(always)]
+        fn run<L: Lanes>(self) -> Self::Output {
+            let mut out = Vec::new();
+            for at in (0..self.1.len()).step_by(LANES) {
+                let ([r, g, b], o) = self.0.color_and_opacity_lanes(L::load(self.1, at));
+                let (r, g, b, o) = (r.to_array(), g.to_array(), b.to_array(), o.to_array());
+                out.extend((0..LANES).map(|k| (Vec3::new(r[k], g[k], b[k]), o[k])));
+            }
+            out
+        }
+    }
+
+    #[test]
+    fn lane_lookups_give_the_bits_of_scalar_lookups() {
+        let tf = TransferFunction::new(
+            Colormap::preset("inferno").unwrap(),
+            OpacityMap::from_points(&[(0.0, 0.0), (0.3, 0.7), (0.31, 0.1), (1.0, 1.0)]).unwrap(),
+        );
+        // Every knot, between knots, the ends, outside [0, 1], and NaN.
+        let mut xs: Vec<f32> = (0..=40_000).map(|k| k as f32 / 40_000.0).collect();
+        xs.extend((0..LUT).map(|i| i as f32 / (LUT - 1) as f32));
+        xs.extend([
+            -1.0,
+            -0.0,
+            1.0,
+            1.0 + 1e-7,
+            7.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ]);
+        xs.extend([f32::NAN, f32::MIN_POSITIVE, 1.0 - f32::EPSILON]);
+        xs.resize(xs.len().next_multiple_of(LANES), 0.5);
+        for simd in Simd::ALL.into_iter().filter(|s| s.available()) {
+            let lanes = dispatch(simd, Lookup(&tf, &xs));
+            for (&x, &(c, o)) in xs.iter().zip(&lanes) {
+                let (cs, os) = tf.color_and_opacity(x);
+                if x.is_nan() {
+                    assert!(o.is_nan() && os.is_nan(), "{simd:?}: NaN opacity");
+                    continue;
+                }
+                let same = (0..3).all(|k| c[k].to_bits() == cs[k].to_bits())
+                    && o.to_bits() == os.to_bits();
+                assert!(
+                    same,
+                    "{simd:?}, x = {x}: lanes {c:?} {o}, scalar {cs:?} {os}"
+                );
+            }
+        }
     }
 }

@@ -304,7 +304,8 @@ impl ParticleVolume {
     /// The packet path with an explicit backend and pre-classified colours
     /// (empty: none).
     ///
-    /// Appends one `(sample, gradient)` per sample of `batch`, in order, as
+    /// Fills `out` with one `(sample, gradient)` per sample of `batch`, in
+    /// order, replacing what it held, as
     /// [`voxless_core::Volume::sample_batch`] does (the gradient is zero
     /// unless `gradient`). `colors` holds one colour per particle in volume
     /// order ([`ParticleVolume::positions`]); a slice of any other length is
@@ -319,6 +320,7 @@ impl ParticleVolume {
         gradient: bool,
         out: &mut Vec<(Option<Sample>, Vec3)>,
     ) {
+        out.clear();
         let colors = if colors.len() == self.packed.len() {
             colors
         } else {
