@@ -492,13 +492,22 @@ impl RayState {
             // The lanes' `exp` (same bits): packet passes classify their
             // samples in lanes ([`crate::classify`]).
             let a = 1.0 - voxless_core::simd::exp(-opacity * settings.opacity_scale * len);
-            let mut c = colour.unwrap_or_else(|| ctx.colour_of(s, x));
-            if let Some(light) = settings.light {
-                c = c * shade(gradient, light);
-            }
-            return self.acc.add(c, a, settings.early_termination);
+            let c = colour.unwrap_or_else(|| ctx.colour_of(s, x));
+            return self.add_shaded(c, a, gradient, ctx);
         }
         false
+    }
+
+    /// Colour `c` (shaded by the volume's light, if any) with opacity `a`
+    /// behind what the ray holds; true once it is opaque enough to stop.
+    #[inline(always)]
+    fn add_shaded(&mut self, c: Vec3, a: f32, gradient: Vec3, ctx: &Ctx) -> bool {
+        let settings = ctx.settings;
+        let c = match settings.light {
+            Some(light) => c * shade(gradient, light),
+            None => c,
+        };
+        self.acc.add(c, a, settings.early_termination)
     }
 
     /// A plain sample's segment (a scalar value, no attribute, not
@@ -508,15 +517,7 @@ impl RayState {
     /// with it, the same bits.
     #[inline(always)]
     pub fn feed_classified(&mut self, c: Vec3, a: f32, gradient: Vec3, ctx: &Ctx) -> bool {
-        if !(a >= 0.0) {
-            return false;
-        }
-        let settings = ctx.settings;
-        let c = match settings.light {
-            Some(light) => c * shade(gradient, light),
-            None => c,
-        };
-        self.acc.add(c, a, settings.early_termination)
+        a >= 0.0 && self.add_shaded(c, a, gradient, ctx)
     }
 
     /// Iso-surfaces where a piecewise-constant field steps from `v0` to `v1`

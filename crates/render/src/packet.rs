@@ -295,7 +295,9 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
                 } else {
                     s.segs.push((seg, s.t.len() as u32));
                     s.t.push(seg.t);
-                    s.len.push(seg.len);
+                    if lanes {
+                        s.len.push(seg.len);
+                    }
                     s.hints.push(iv.hint);
                 }
                 true

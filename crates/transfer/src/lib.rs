@@ -244,10 +244,9 @@ fn lerp<L: Lanes>(t: &[f32], (i, i1, w0, w1): (L, L, L, L)) -> L {
 pub struct TransferFunction {
     colormap: Colormap,
     opacity_map: OpacityMap,
-    color_lut: Vec<Vec3>,
+    /// The colour table by channel (lanes gather from each).
+    color_lut: [Vec<f32>; 3],
     opacity_lut: Vec<f32>,
-    /// `color_lut` by channel, for lane gathers.
-    color_planes: [Vec<f32>; 3],
     /// `max_table[level][i]` = max of `opacity_lut[i .. i + 2^level]`.
     max_table: Vec<Vec<f32>>,
 }
@@ -255,7 +254,8 @@ pub struct TransferFunction {
 impl TransferFunction {
     pub fn new(colormap: Colormap, opacity_map: OpacityMap) -> Self {
         let at = |i: usize| i as f32 / (LUT - 1) as f32;
-        let color_lut: Vec<Vec3> = (0..LUT).map(|i| colormap.linear(at(i))).collect();
+        let colors: Vec<Vec3> = (0..LUT).map(|i| colormap.linear(at(i))).collect();
+        let color_lut = [0, 1, 2].map(|c| colors.iter().map(|v| v[c]).collect());
         let opacity_lut: Vec<f32> = (0..LUT).map(|i| opacity_map.0.eval(at(i))).collect();
         // A sparse table over the LUT's knots: the maximum of any run of
         // them is two overlapping power-of-two windows.
@@ -269,13 +269,11 @@ impl TransferFunction {
             max_table.push(next);
             width *= 2;
         }
-        let color_planes = [0, 1, 2].map(|c| color_lut.iter().map(|v| v[c]).collect());
         TransferFunction {
             colormap,
             opacity_map,
             color_lut,
             opacity_lut,
-            color_planes,
             max_table,
         }
     }
@@ -305,11 +303,18 @@ impl TransferFunction {
         (i, (f - i as f32).clamp(0.0, 1.0))
     }
 
+    /// Knot `i` of the colour table.
+    #[inline(always)]
+    fn knot(&self, i: usize) -> Vec3 {
+        let [r, g, b] = &self.color_lut;
+        Vec3::new(r[i], g[i], b[i])
+    }
+
     /// Linear-RGB colour at normalised `x`.
     #[inline]
     pub fn color(&self, x: f32) -> Vec3 {
         let (i, s) = Self::lut_pos(x);
-        self.color_lut[i] * (1.0 - s) + self.color_lut[i + 1] * s
+        self.knot(i) * (1.0 - s) + self.knot(i + 1) * s
     }
 
     /// [`TransferFunction::color`] and [`TransferFunction::opacity`] at
@@ -318,7 +323,7 @@ impl TransferFunction {
     pub fn color_and_opacity(&self, x: f32) -> (Vec3, f32) {
         let (i, s) = Self::lut_pos(x);
         (
-            self.color_lut[i] * (1.0 - s) + self.color_lut[i + 1] * s,
+            self.knot(i) * (1.0 - s) + self.knot(i + 1) * s,
             self.opacity_lut[i] * (1.0 - s) + self.opacity_lut[i + 1] * s,
         )
     }
@@ -341,7 +346,7 @@ impl TransferFunction {
         let i = i.lt(s((LUT - 2) as f32)).select(i, s((LUT - 2) as f32));
         let w = s(1.0).min(s(0.0).max(f - i));
         let at = (i, i + s(1.0), s(1.0) - w, w);
-        let [r, g, b] = &self.color_planes;
+        let [r, g, b] = &self.color_lut;
         (
             [lerp(r, at), lerp(g, at), lerp(b, at)],
             lerp(&self.opacity_lut, at),
