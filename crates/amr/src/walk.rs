@@ -49,6 +49,9 @@ pub(crate) struct RegionTree {
     nodes: Vec<Node>,
     /// The box the tree cuts (the union of the regions).
     root: Aabb,
+    /// Inner nodes on the longest path from the root: a walk never holds
+    /// more far children than that.
+    depth: usize,
 }
 
 /// Per node of a [`RegionTree`], whether its subtree holds a region that
@@ -78,7 +81,7 @@ impl RegionTree {
     /// units)` — the mapping the region boxes `region_bounds` were made
     /// with, so planes and boxes agree to the bit.
     pub fn new(tree: &[KdNode], region_bounds: &[Aabb], world: impl Fn(usize, i64) -> f32) -> Self {
-        let nodes = tree
+        let nodes: Vec<Node> = tree
             .iter()
             .map(|n| match *n {
                 KdNode::Inner { axis, at, right } => Node {
@@ -99,7 +102,8 @@ impl RegionTree {
             })
             .collect();
         let root = region_bounds.iter().fold(Aabb::EMPTY, |b, &r| b.union(r));
-        RegionTree { nodes, root }
+        let depth = inner_depth(&nodes);
+        RegionTree { nodes, root, depth }
     }
 
     /// The mask of the subtrees holding a region `visible` accepts.
@@ -142,7 +146,6 @@ impl RegionTree {
         }
         // Taken out of the thread-local (not borrowed) for the walk.
         let mut stack = STACK.take();
-        stack.clear();
         let rest = self.walk_with(ray, t, mask, &mut leaf, &mut stack);
         STACK.set(stack);
         rest
@@ -191,6 +194,13 @@ impl RegionTree {
         }
     }
 
+    /// The walk: the near child first, the far one onto the stack when the
+    /// ray reaches both. The stack is a slice of `depth + 1` entries (more
+    /// than the far children a walk can hold), written at every inner node
+    /// and kept only where the ray reaches both sides: no growth check and
+    /// no branch for the push. (Choosing the child without branches as
+    /// well was slower: the predictor guesses the walk's turns well, and
+    /// selects put every node load behind the previous node's test.)
     #[inline]
     fn walk_with(
         &self,
@@ -201,6 +211,20 @@ impl RegionTree {
         stack: &mut Vec<(u32, f32, f32)>,
     ) -> Option<f32> {
         let inv = ray.inv_dir();
+        let (org, inv) = (
+            [ray.origin.x, ray.origin.y, ray.origin.z],
+            [inv.x, inv.y, inv.z],
+        );
+        // The child below a plane is the near one when the ray goes up the
+        // axis. Judged by the sign of `1/d`: a ray with `d = ±0` then meets
+        // the plane at `±∞` and goes to the side its origin is on (in the
+        // plane, at NaN: handled below).
+        let below_near = inv.map(|v| v.is_sign_positive());
+        // Entries are written before they are read: only the length counts.
+        if stack.len() <= self.depth {
+            stack.resize(self.depth + 1, (0, 0.0, 0.0));
+        }
+        let mut sp = 0;
         let (mut i, mut lo, mut hi) = (0usize, t.lo, t.hi);
         loop {
             let n = self.nodes[i];
@@ -208,39 +232,53 @@ impl RegionTree {
             if keep && n.kind < LEAF {
                 let a = n.kind as usize;
                 let (left, right) = (i + 1, i + n.index as usize);
-                let (o, d) = (ray.origin[a], ray.dir[a]);
-                let ts = (n.at - o) * inv[a];
-                if d == 0.0 || ts.is_nan() {
-                    // Parallel to the plane (or in it: upper side).
-                    i = if o < n.at { left } else { right };
+                let ts = (n.at - org[a]) * inv[a];
+                if ts.is_nan() {
+                    // In the plane: the upper side.
+                    i = if org[a] < n.at { left } else { right };
                     continue;
                 }
-                // The near child holds the part of the ray before the
-                // plane; a side the ray does not reach inside [lo, hi) is
-                // skipped.
-                let (near, far) = if d > 0.0 {
+                let (near, far) = if below_near[a] {
                     (left, right)
                 } else {
                     (right, left)
                 };
-                if ts >= hi {
-                    i = near;
-                } else if ts <= lo {
-                    i = far;
-                } else {
-                    stack.push((far as u32, ts, hi));
-                    i = near;
-                    hi = ts;
-                }
+                // Only the far side when the plane lies before `lo`, only
+                // the near one when past `hi`; both: the far part waits.
+                let to_far = ts <= lo;
+                let both = !(ts >= hi) & !to_far;
+                stack[sp] = (far as u32, ts, hi);
+                sp += both as usize;
+                hi = if both { ts } else { hi };
+                i = if to_far { far } else { near };
                 continue;
             }
             if keep && n.kind == LEAF && lo < hi && !leaf(n.index, Range1::new(lo, hi)) {
-                return (!stack.is_empty()).then_some(hi);
+                return (sp > 0).then_some(hi);
             }
-            match stack.pop() {
-                Some((next, a, b)) => (i, lo, hi) = (next as usize, a, b),
-                None => return None,
+            if sp == 0 {
+                return None;
             }
+            sp -= 1;
+            let (next, a, b) = stack[sp];
+            (i, lo, hi) = (next as usize, a, b);
         }
     }
+}
+
+/// Inner nodes on the longest path from the root of `nodes` (a pre-order
+/// k-d tree: the left child follows its parent).
+fn inner_depth(nodes: &[Node]) -> usize {
+    let mut deepest = 0;
+    let mut todo = vec![(0usize, 0usize)];
+    while let Some((i, d)) = todo.pop() {
+        let Some(n) = nodes.get(i) else { continue };
+        if n.kind < LEAF {
+            todo.push((i + 1, d + 1));
+            todo.push((i + n.index as usize, d + 1));
+        } else {
+            deepest = deepest.max(d);
+        }
+    }
+    deepest
 }

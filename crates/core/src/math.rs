@@ -141,24 +141,30 @@ impl Range1 {
     pub const fn new(lo: f32, hi: f32) -> Self {
         Range1 { lo, hi }
     }
+    #[inline]
     pub fn is_empty(&self) -> bool {
         !(self.lo <= self.hi)
     }
+    #[inline]
     pub fn extend(&mut self, v: f32) {
         self.lo = self.lo.min(v);
         self.hi = self.hi.max(v);
     }
+    #[inline]
     pub fn union(self, o: Range1) -> Range1 {
         Range1::new(self.lo.min(o.lo), self.hi.max(o.hi))
     }
+    #[inline]
     pub fn contains(&self, v: f32) -> bool {
         v >= self.lo && v <= self.hi
     }
+    #[inline]
     pub fn span(&self) -> f32 {
         self.hi - self.lo
     }
     /// Maps `v` to `[0, 1]` over this range (clamped). A degenerate range maps
     /// everything to 0 so a constant field still gets a defined colour.
+    #[inline]
     pub fn normalize(&self, v: f32) -> f32 {
         let s = self.span();
         if s > 0.0 {
