@@ -14,16 +14,22 @@ use std::time::{Duration, Instant};
 
 use voxless_bvh::Bvh;
 use voxless_core::{
-    Aabb, Camera, Cancelled, Control, Interval, IntervalQuery, Range1, Ray, Sample, SampleBatch,
-    Vec3, Volume,
+    Aabb, Camera, Cancelled, Control, Interval, IntervalLists, IntervalQuery, Range1, Ray, Sample,
+    SampleBatch, Vec3, Volume,
 };
 
 use crate::AmrError;
 use crate::bricks::{self, Brick};
 use crate::regions::{self, Region, Regions};
-use crate::walk::{NodeMask, RegionTree};
+use crate::walk::{NodeMask, PACKET_RAYS, RegionTree, same_octant};
 
 pub use locator::CellLocator;
+
+thread_local! {
+    /// Per ray of a packet, its intervals while a tile's packets walk
+    /// ([`AmrVolume::tile_intervals`]), kept between tiles.
+    static TILE_LISTS: std::cell::Cell<Vec<Vec<Interval>>> = const { std::cell::Cell::new(Vec::new()) };
+}
 
 /// Cells and fields as read from a file.
 #[derive(Clone, Debug, Default)]
@@ -278,6 +284,7 @@ impl AmrVolume {
         self.region_bounds[r]
     }
     /// Value range of `field` in region `r`.
+    #[inline]
     pub fn region_range(&self, r: usize, field: usize) -> Range1 {
         self.region_ranges[r * self.values.len() + field]
     }
@@ -300,7 +307,6 @@ impl AmrVolume {
         out: &mut Vec<Interval>,
         max: usize,
     ) -> Option<f32> {
-        let nf = self.values.len();
         let t = self.bounds.clip_ray(ray, t);
         if t.is_empty() || max == 0 {
             return None;
@@ -311,36 +317,117 @@ impl AmrVolume {
         let mut refused = None;
         let rest = self.tree.walk(ray, t, mask, |r, hit| {
             let r = r as usize;
-            let range = self.region_ranges[r * nf + self.settings.field];
-            if !keep(range) {
+            let range = self.region_range(r, self.settings.field);
+            if !keep(range) || self.extend_last(&mut out[start..], r, hit, range) {
                 return true;
-            }
-            // A region going on with the last interval extends it (only
-            // within this call, so chunks cut the list where a whole walk
-            // puts a new interval).
-            if out.len() > start {
-                let last = out.last_mut().expect("pushed in this call");
-                if self.goes_on(last, hit.lo, r) {
-                    last.t.hi = hit.hi;
-                    last.value_range = last.value_range.union(range);
-                    return true;
-                }
             }
             if left == 0 {
                 refused = Some(hit.lo);
                 return false;
             }
-            // Two samples per finest cell at sampling rate 1: adaptive
-            // sampling (ExaBricks §4.2).
-            let dt = 0.5 * self.region_finest[r] as f32 * self.h;
-            out.push(Interval {
-                hint: r as u32,
-                ..Interval::sampled(hit, range, dt)
-            });
+            out.push(self.region_interval(r, hit, range));
             left -= 1;
             true
         });
         refused.or(rest)
+    }
+
+    /// The intervals of every ray of a tile at once (see
+    /// [`crate::AmrContext`]'s tile view): each ray's list as
+    /// [`AmrVolume::region_intervals`] gives it whole, the rays walked
+    /// through the region tree eight at a time (by octant of direction
+    /// within each eight).
+    pub(crate) fn tile_intervals(
+        &self,
+        mask: Option<&NodeMask>,
+        (rays, t, w): (&[Ray], &[Range1], usize),
+        out: &mut IntervalLists,
+    ) {
+        let n = rays.len().min(t.len());
+        let w = w.clamp(1, n.max(1));
+        let mut lists = TILE_LISTS.take();
+        lists.resize_with(n.max(lists.len()), Vec::new);
+        lists[..n].iter_mut().for_each(Vec::clear);
+        // Packets of 4 × 2 pixels (closer together than a row of eight).
+        let blocks = (0..n.div_ceil(w))
+            .step_by(2)
+            .flat_map(|y| (0..w).step_by(4).map(move |x| (x, y)));
+        for (bx, by) in blocks {
+            let mut members = [0usize; PACKET_RAYS];
+            let mut count = 0;
+            for dy in 0..2 {
+                for dx in 0..4 {
+                    let (x, y) = (bx + dx, by + dy);
+                    if x < w && y * w + x < n {
+                        members[count] = y * w + x;
+                        count += 1;
+                    }
+                }
+            }
+            // Rays of one octant walk together; a packet that straddles an
+            // axis direction walks once per octant.
+            let mut todo = (1u32 << count) - 1;
+            while todo != 0 {
+                let lead = rays[members[todo.trailing_zeros() as usize]];
+                let (mut lanes, mut sub, mut sub_t) = (
+                    [0; PACKET_RAYS],
+                    [lead; PACKET_RAYS],
+                    [Range1::EMPTY; PACKET_RAYS],
+                );
+                let mut m = 0;
+                for (k, &r) in members[..count].iter().enumerate() {
+                    if todo >> k & 1 != 0 && same_octant(&rays[r], &lead) {
+                        (lanes[m], sub[m], sub_t[m]) =
+                            (r, rays[r], self.bounds.clip_ray(&rays[r], t[r]));
+                        todo &= !(1 << k);
+                        m += 1;
+                    }
+                }
+                self.tree
+                    .walk_packet(&sub[..m], &sub_t[..m], mask, |j, r, hit| {
+                        let (list, r) = (&mut lists[lanes[j]], r as usize);
+                        let range = self.region_range(r, self.settings.field);
+                        if !self.extend_last(list, r, hit, range) {
+                            list.push(self.region_interval(r, hit, range));
+                        }
+                    });
+            }
+        }
+        for list in &lists[..n] {
+            out.intervals.extend_from_slice(list);
+            out.end_ray();
+        }
+        TILE_LISTS.set(lists);
+    }
+
+    /// Region `r`'s part `hit` of a ray as the next entry of `list` (the
+    /// ray's intervals so far): when the region goes on with the last one,
+    /// extends it and returns true; else returns false (the caller adds
+    /// [`AmrVolume::region_interval`]). Extending happens only within one
+    /// list, so chunks cut a ray's intervals where a whole walk puts a new
+    /// one.
+    #[inline]
+    fn extend_last(&self, list: &mut [Interval], r: usize, hit: Range1, range: Range1) -> bool {
+        match list.last_mut() {
+            Some(last) if self.goes_on(last, hit.lo, r) => {
+                last.t.hi = hit.hi;
+                last.value_range = last.value_range.union(range);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Region `r`'s part `hit` of a ray as an interval: sampled at two
+    /// samples per finest cell at sampling rate 1 (adaptive sampling,
+    /// ExaBricks §4.2), the region as its hint.
+    #[inline]
+    fn region_interval(&self, r: usize, hit: Range1, range: Range1) -> Interval {
+        let dt = 0.5 * self.region_finest[r] as f32 * self.h;
+        Interval {
+            hint: r as u32,
+            ..Interval::sampled(hit, range, dt)
+        }
     }
 
     /// Whether region `r`, whose part of the ray starts at `lo`, goes on

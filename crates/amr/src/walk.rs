@@ -24,10 +24,17 @@
 //! region a transfer function can see; the walk skips the others whole
 //! (TF space skipping, ExaBricks §4.1, without a tree per transfer
 //! function).
+//!
+//! **Packets.** [`RegionTree::walk_packet`] (in `packet`) takes up to
+//! eight rays of one octant through the tree together, each with the
+//! steps and ranges of its own walk; a renderer's tile view uses it.
 
 use voxless_core::{Aabb, Range1, Ray};
 
 use crate::regions::KdNode;
+
+mod packet;
+pub(crate) use packet::{PACKET_RAYS, same_octant};
 
 /// A node in world coordinates, 12 bytes.
 #[derive(Clone, Copy, Debug)]

@@ -5,8 +5,8 @@
 //! intervals against the sorted lists — pixel for pixel.
 
 use voxless_core::{
-    Aabb, Camera, Control, Interval, IntervalQuery, Prepare, PrepareQuery, Range1, Ray, Sample,
-    SampleBatch, Simd, Vec3, Volume,
+    Aabb, Camera, Control, Interval, IntervalLists, IntervalQuery, Prepare, PrepareQuery, Range1,
+    Ray, Sample, SampleBatch, Simd, TileRays, Vec3, View, Volume,
 };
 use voxless_render::{Light, RenderSettings, render};
 use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
@@ -250,6 +250,63 @@ fn a_context_walks_exactly_the_regions_its_transfer_function_sees() {
             assert_eq!(got, want);
         }
     }
+}
+
+#[test]
+fn a_tile_walked_in_packets_gets_every_rays_own_list() {
+    // Rays in every octant, axis rays in cut planes (±0 components), rays
+    // that miss, empty and partial ranges; packets cut short by a tile's
+    // edges, and packets that straddle octants.
+    let mut rng = Lcg(43);
+    let seen = |r: Range1| r.hi > 1.2;
+    let mut compared = 0;
+    for vol in volumes() {
+        for ctx in [
+            AmrContext::new(&vol, &|_| true),
+            AmrContext::new(&vol, &seen),
+        ] {
+            let view = View {
+                camera: Camera::framing(&vol.bounds(), 1.0),
+                width: 8,
+                height: 8,
+            };
+            let tiles = ctx
+                .tile_view(&view)
+                .expect("an AMR context has a tile view");
+            let all = rays(&vol, &mut rng, 1300);
+            // Tiles of 5 × 3 rays (the last 5 × 2): packets of 4 × 2 cut
+            // at the tile's edges.
+            for chunk in all.chunks(15) {
+                let t: Vec<Range1> = chunk
+                    .iter()
+                    .map(|_| match (rng.f() * 4.0) as u32 {
+                        0 => Range1::EMPTY,
+                        1 => Range1::new(rng.f() * 2.0, 2.0 + rng.f() * 3.0),
+                        _ => Range1::new(0.0, f32::INFINITY),
+                    })
+                    .collect();
+                let mut got = IntervalLists::default();
+                let tile = TileRays {
+                    x0: 0,
+                    y0: 0,
+                    w: 5,
+                    h: chunk.len() as u32 / 5,
+                    rays: chunk,
+                    t: &t,
+                    centred: true,
+                };
+                tiles.intervals(&tile, &IntervalQuery::all(), &mut got);
+                assert_eq!(got.rays(), chunk.len());
+                for (k, (ray, &t)) in chunk.iter().zip(&t).enumerate() {
+                    let mut want = Vec::new();
+                    ctx.intervals(ray, t, &IntervalQuery::all(), &mut want);
+                    assert_eq!(got.of(k), &want[..], "{ray:?} {t:?}");
+                    compared += want.len();
+                }
+            }
+        }
+    }
+    assert!(compared > 20_000, "only {compared} intervals compared");
 }
 
 #[test]
