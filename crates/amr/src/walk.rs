@@ -50,6 +50,38 @@ struct Node {
 const LEAF: u32 = 3;
 const HOLE: u32 = 4;
 
+/// An inner node's axis and children as a walk meets them: below and
+/// above the plane, and the same two in the walk's order.
+struct Cut {
+    axis: usize,
+    left: usize,
+    right: usize,
+    near: usize,
+    far: usize,
+}
+
+impl Node {
+    /// This node (number `i`, an inner node) for a walk whose near child
+    /// lies below the plane on the axes where `below_near` says so.
+    #[inline(always)]
+    fn cut(&self, i: usize, below_near: [bool; 3]) -> Cut {
+        let axis = self.kind as usize;
+        let (left, right) = (i + 1, i + self.index as usize);
+        let (near, far) = if below_near[axis] {
+            (left, right)
+        } else {
+            (right, left)
+        };
+        Cut {
+            axis,
+            left,
+            right,
+            near,
+            far,
+        }
+    }
+}
+
 /// The region k-d tree, ready to walk.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct RegionTree {
@@ -237,19 +269,19 @@ impl RegionTree {
             let n = self.nodes[i];
             let keep = mask.is_none_or(|m| m.get(i));
             if keep && n.kind < LEAF {
-                let a = n.kind as usize;
-                let (left, right) = (i + 1, i + n.index as usize);
+                let Cut {
+                    axis: a,
+                    left,
+                    right,
+                    near,
+                    far,
+                } = n.cut(i, below_near);
                 let ts = (n.at - org[a]) * inv[a];
                 if ts.is_nan() {
                     // In the plane: the upper side.
                     i = if org[a] < n.at { left } else { right };
                     continue;
                 }
-                let (near, far) = if below_near[a] {
-                    (left, right)
-                } else {
-                    (right, left)
-                };
                 // Only the far side when the plane lies before `lo`, only
                 // the near one when past `hi`; both: the far part waits.
                 let to_far = ts <= lo;

@@ -15,7 +15,7 @@
 
 use voxless_core::{Range1, Ray};
 
-use super::{LEAF, NodeMask, RegionTree};
+use super::{Cut, LEAF, NodeMask, RegionTree};
 
 /// Rays walked together at most.
 pub(crate) const PACKET_RAYS: usize = 8;
@@ -113,13 +113,13 @@ impl RegionTree {
             let node = self.nodes[i];
             let keep = mask.is_none_or(|m| m.get(i));
             if keep && node.kind < LEAF {
-                let a = node.kind as usize;
-                let (left, right) = (i + 1, i + node.index as usize);
-                let (near, far) = if below_near[a] {
-                    (left, right)
-                } else {
-                    (right, left)
-                };
+                let Cut {
+                    axis: a,
+                    left,
+                    near,
+                    far,
+                    ..
+                } = node.cut(i, below_near);
                 // Per ray, as the single-ray walk: the near part ends at
                 // the plane when the plane lies inside `(lo, hi)`, the far
                 // part starts there; a ray in the plane (NaN) keeps its
@@ -130,7 +130,7 @@ impl RegionTree {
                     let ts = (node.at - org[a][k]) * inv[a][k];
                     let (n_k, f_k) = if ts.is_nan() {
                         let below = org[a][k] < node.at;
-                        (below == below_near[a], below != below_near[a])
+                        (below == (near == left), below != (near == left))
                     } else {
                         (ts > lo[k], ts < hi[k])
                     };
