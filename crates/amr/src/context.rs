@@ -15,8 +15,8 @@ use std::time::{Duration, Instant};
 
 use voxless_core::{
     Aabb, Camera, Cancelled, Control, Interval, IntervalLists, IntervalQuery, Prepare,
-    PrepareQuery, Range1, Ray, Sample, SampleBatch, Simd, TileIntervals, TileRays, Vec3, View,
-    Volume,
+    PrepareQuery, Range1, Ray, Sample, SampleBatch, Simd, TILE, TileIntervals, TileRays, Vec3,
+    View, Volume,
 };
 
 use crate::AmrVolume;
@@ -164,9 +164,9 @@ struct AmrTileView<'a> {
 }
 
 impl TileIntervals for AmrTileView<'_> {
-    /// The renderer's own tile size (its default without a view).
+    /// The integrators' own tile size (their default without a view).
     fn tile_size(&self) -> u32 {
-        16
+        TILE
     }
     fn intervals(&self, tile: &TileRays, _: &IntervalQuery, out: &mut IntervalLists) {
         self.volume

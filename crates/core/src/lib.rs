@@ -33,7 +33,7 @@ pub use mirror::Mirror;
 pub use prepare::{EventBudget, Prepare, PrepareQuery};
 pub use rng::SmallRng;
 pub use simd::{Lanes, Simd};
-pub use tiles::{IntervalLists, TileIntervals, TileRays, View};
+pub use tiles::{IntervalLists, TILE, TileIntervals, TileRays, View};
 pub use volume::{
     Attribute, Interval, IntervalKind, IntervalQuery, Sample, SampleBatch, Volume,
     quadrature_line_integral, simpson,

@@ -13,6 +13,10 @@ use crate::camera::Camera;
 use crate::math::{Range1, Ray};
 use crate::volume::{Interval, IntervalQuery};
 
+/// Side of a square render tile in pixels: what integrators use unless a
+/// volume's tile view asks for another.
+pub const TILE: u32 = 16;
+
 /// What a tile view is prepared for: the camera and the image size.
 #[derive(Clone, Copy, Debug)]
 pub struct View {

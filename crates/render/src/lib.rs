@@ -253,7 +253,7 @@ impl RenderSettings {
 
 /// Side of a square render tile in pixels, unless the volume's tile view
 /// asks for another.
-pub const TILE: u32 = 16;
+pub use voxless_core::TILE;
 
 /// `volume` prepared for `tf` and `settings`: what the integrators sample.
 pub fn prepare<'a, P: Prepare>(

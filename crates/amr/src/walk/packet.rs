@@ -72,16 +72,20 @@ impl RegionTree {
         mask: Option<&NodeMask>,
         mut leaf: impl FnMut(usize, u32, Range1),
     ) {
-        let n = rays.len().min(t.len()).min(PACKET_RAYS);
+        assert!(
+            rays.len() == t.len() && rays.len() <= PACKET_RAYS,
+            "a packet walk takes one range per ray and at most {PACKET_RAYS} rays"
+        );
+        let n = rays.len();
         if self.nodes.is_empty() || n == 0 {
             return;
         }
-        debug_assert!(rays[..n].iter().all(|r| same_octant(r, &rays[0])));
+        debug_assert!(rays.iter().all(|r| same_octant(r, &rays[0])));
         // Lanes without a ray (or whose ray misses the tree) stay inactive.
         let (mut org, mut inv) = ([[0.0; PACKET_RAYS]; 3], [[1.0; PACKET_RAYS]; 3]);
         let (mut lo, mut hi) = ([0.0; PACKET_RAYS], [0.0; PACKET_RAYS]);
         let mut active = 0u8;
-        for (k, ray) in rays[..n].iter().enumerate() {
+        for (k, ray) in rays.iter().enumerate() {
             let tk = self.root.clip_ray(ray, t[k]);
             let d = ray.inv_dir();
             for (a, (o, i)) in [
