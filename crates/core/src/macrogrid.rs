@@ -230,7 +230,7 @@ impl MacroGrid {
                             t_next[a] = self.face_after(ray, a, idx[a], step[a]);
                         }
                     }
-                    if idx[axis] < 0 || idx[axis] >= self.dims[axis] as i64 {
+                    if !self.inside(idx) {
                         break;
                     }
                     lin = cell(idx) as i64;
@@ -238,8 +238,20 @@ impl MacroGrid {
                     continue;
                 }
             }
-            let axis = argmin(t_next);
-            let t_exit = t_next[axis].min(tr.hi);
+            // The step's axis as three flags, not an index: the per-axis
+            // state then stays in registers (indexing `t_next` by the axis
+            // kept it on the stack, and every cell waited on a store to
+            // load forwarding).
+            let x = t_next[0] <= t_next[1] && t_next[0] <= t_next[2];
+            let y = !x && t_next[1] <= t_next[2];
+            let t_face = if x {
+                t_next[0]
+            } else if y {
+                t_next[1]
+            } else {
+                t_next[2]
+            };
+            let t_exit = t_face.min(tr.hi);
             if t_exit > t_cur {
                 let r = self.ranges[lin as usize];
                 if seen.visible(r, query) {
@@ -259,15 +271,27 @@ impl MacroGrid {
             if t_exit >= tr.hi {
                 break;
             }
-            let from = idx[axis];
-            idx[axis] += step[axis];
-            if idx[axis] < 0 || idx[axis] >= self.dims[axis] as i64 {
+            // Ties go to the first axis, as `argmin` breaks them.
+            let moved = [x, y, !x && !y];
+            let from = idx;
+            for a in 0..3 {
+                if moved[a] {
+                    idx[a] += step[a];
+                    lin += step[a] * stride[a];
+                    t_next[a] += t_delta[a];
+                }
+            }
+            if !self.inside(idx) {
                 break;
             }
-            lin += step[axis] * stride[axis];
-            new_block = from >> BLOCK_SHIFT != idx[axis] >> BLOCK_SHIFT;
-            t_next[axis] += t_delta[axis];
+            new_block = (0..3).any(|a| from[a] >> BLOCK_SHIFT != idx[a] >> BLOCK_SHIFT);
         }
+    }
+
+    /// Whether cell index `idx` lies in the grid.
+    #[inline]
+    fn inside(&self, idx: [i64; 3]) -> bool {
+        (0..3).all(|a| idx[a] >= 0 && idx[a] < self.dims[a] as i64)
     }
 
     /// Distance along `ray` to the face cell `idx` of axis `a` is left
