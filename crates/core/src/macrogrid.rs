@@ -241,7 +241,8 @@ impl MacroGrid {
             // The step's axis as three flags, not an index: the per-axis
             // state then stays in registers (indexing `t_next` by the axis
             // kept it on the stack, and every cell waited on a store to
-            // load forwarding).
+            // load forwarding). Ties go to the first axis, as `argmin`
+            // breaks them.
             let x = t_next[0] <= t_next[1] && t_next[0] <= t_next[2];
             let y = !x && t_next[1] <= t_next[2];
             let t_face = if x {
@@ -271,7 +272,6 @@ impl MacroGrid {
             if t_exit >= tr.hi {
                 break;
             }
-            // Ties go to the first axis, as `argmin` breaks them.
             let moved = [x, y, !x && !y];
             let from = idx;
             for a in 0..3 {
