@@ -113,6 +113,9 @@ impl Volume for AmrContext<'_> {
     ) {
         self.volume.sample_batch_on(self.simd, batch, gradient, out)
     }
+    fn sample_batch_values(&self, batch: &SampleBatch, out: &mut Vec<f32>) -> bool {
+        self.volume.sample_batch_values_on(self.simd, batch, out)
+    }
     /// The regions the context's transfer function sees (see
     /// [`AmrContext`]): only the subtrees holding them are walked, and the
     /// query is not asked again per region.

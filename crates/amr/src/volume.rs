@@ -624,6 +624,10 @@ impl Volume for AmrVolume {
         self.sample_batch_on(voxless_core::Simd::Auto, batch, gradient, out);
     }
 
+    fn sample_batch_values(&self, batch: &SampleBatch, out: &mut Vec<f32>) -> bool {
+        self.sample_batch_values_on(voxless_core::Simd::Auto, batch, out)
+    }
+
     /// One interval per visible region the ray crosses, in order; the step is
     /// half the region's finest cell width (two samples per finest cell at
     /// sampling rate 1: adaptive sampling, ExaBricks §4.2). The regions are

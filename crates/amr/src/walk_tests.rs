@@ -383,6 +383,26 @@ fn a_batch_gives_the_bits_of_point_samples() {
                         i += 1;
                     }
                 }
+                if gradient {
+                    continue;
+                }
+                // Values alone: the same bits, NaN where there is no
+                // sample; refused (and `values` untouched) with a colour
+                // field, whose samples carry more than a value.
+                let mut values = vec![7.0; 3];
+                let plain = vol.sample_batch_values_on(simd, &b, &mut values);
+                assert_eq!(plain, vol.settings().color_field.is_none());
+                if !plain {
+                    assert_eq!(values, [7.0; 3]);
+                    continue;
+                }
+                assert_eq!(values.len(), out.len());
+                for (k, (v, (want, _))) in values.iter().zip(&out).enumerate() {
+                    match want {
+                        Some(s) => assert_eq!(v.to_bits(), s.value.to_bits(), "{simd:?}: {k}"),
+                        None => assert!(v.is_nan(), "{simd:?}: {k} has no sample"),
+                    }
+                }
             }
         }
     }

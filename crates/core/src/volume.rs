@@ -201,6 +201,17 @@ pub trait Volume: Send + Sync {
         false
     }
 
+    /// [`Volume::sample_batch`] for integrators that read a plain value and
+    /// nothing else: `out` (sized, not cleared, as there) ends up holding
+    /// each sample's value, NaN where no data covers the point. Returns
+    /// false, leaving `out` alone, where samples carry more than a value
+    /// (an attribute) or the volume has no such path; the caller then uses
+    /// [`Volume::sample_batch`]. Where it returns true the values are
+    /// exactly those of [`Volume::sample_batch`].
+    fn sample_batch_values(&self, _batch: &SampleBatch, _out: &mut Vec<f32>) -> bool {
+        false
+    }
+
     /// Samples every point of a packet at once: `out` — the caller's buffer,
     /// holding whatever an earlier batch left there — ends up holding, for
     /// each `t` of `batch` in order, the sample at `rays[r].at(t)` (`None`
@@ -394,6 +405,9 @@ impl<V: Volume + ?Sized> Volume for &V {
         out: &mut Vec<(Option<Sample>, Vec3)>,
     ) {
         (**self).sample_batch(batch, gradient, out)
+    }
+    fn sample_batch_values(&self, batch: &SampleBatch, out: &mut Vec<f32>) -> bool {
+        (**self).sample_batch_values(batch, out)
     }
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
         (**self).intervals(ray, t, query, out)

@@ -164,6 +164,10 @@ pub(crate) struct PassScratch {
     /// Per ray gathered in a pass: (packet ray, its first and end segment).
     gathered: Vec<(usize, usize, usize)>,
     out: Vec<(Option<Sample>, Vec3)>,
+    /// Per sample in `t`, its value alone (NaN: no sample), when `plain`:
+    /// the volume gave values instead of filling `out`.
+    values: Vec<f32>,
+    plain: bool,
     /// Per sample in `t`, its segment's length and normalised value, and
     /// what the lanes made of them (when the integrator classifies in
     /// lanes).
@@ -324,25 +328,35 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
             s.gathered.push((i, first_seg, s.segs.len()));
         }
         // `out` is not cleared: the volume sizes it (see `sample_batch`).
+        // An integrator that classifies in lanes reads plain values only,
+        // so a volume that can give them alone does.
+        s.plain = false;
         if !s.t.is_empty() {
-            volume.sample_batch(
-                &SampleBatch {
-                    rays: &s.batch_rays,
-                    offsets: &s.offsets,
-                    t: &s.t,
-                    hints: Some(&s.hints),
-                },
-                gradient,
-                &mut s.out,
-            );
+            let batch = SampleBatch {
+                rays: &s.batch_rays,
+                offsets: &s.offsets,
+                t: &s.t,
+                hints: Some(&s.hints),
+            };
+            s.plain = lanes && !gradient && volume.sample_batch_values(&batch, &mut s.values);
+            if !s.plain {
+                volume.sample_batch(&batch, gradient, &mut s.out);
+            }
             if lanes {
                 // Colour and opacity of every sample at once; the rays below
                 // only accumulate them in order.
                 s.x.clear();
-                s.x.extend(s.out.iter().map(|(sample, _)| match sample {
-                    Some(v) => settings.normalize(v.value),
-                    None => 0.0,
-                }));
+                if s.plain {
+                    s.x.extend(s.values.iter().map(|&v| match v.is_nan() {
+                        false => settings.normalize(v),
+                        true => 0.0,
+                    }));
+                } else {
+                    s.x.extend(s.out.iter().map(|(sample, _)| match sample {
+                        Some(v) => settings.normalize(v.value),
+                        None => 0.0,
+                    }));
+                }
                 s.classified.compute(
                     settings.simd,
                     ctx.tf,
@@ -350,6 +364,14 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
                     &mut s.x,
                     &mut s.len,
                 );
+                if s.plain {
+                    // No sample adds nothing, as an opacity below zero does.
+                    for (a, v) in s.classified.alpha.iter_mut().zip(&s.values) {
+                        if v.is_nan() {
+                            *a = -1.0;
+                        }
+                    }
+                }
             }
         }
         // Every ray takes its samples front to back from the buffer.
@@ -360,6 +382,16 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
             let ivs = &ivs[r].list;
             let mut done = false;
             for &(seg, slot) in &s.segs[lo..hi] {
+                if s.plain && slot != CONSTANT {
+                    // A plain value, classified above.
+                    let (k, cl) = (slot as usize, &s.classified);
+                    let c = Vec3::new(cl.rgb[0][k], cl.rgb[1][k], cl.rgb[2][k]);
+                    if item.feed_classified(c, cl.alpha[k], Vec3::ZERO, ctx) {
+                        done = true;
+                        break;
+                    }
+                    continue;
+                }
                 let iv = &ivs[seg.interval as usize];
                 let (sample, g) = match iv.constant_value() {
                     Some(v) => (Some(Sample::scalar(v)), Vec3::ZERO),

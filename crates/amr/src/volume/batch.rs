@@ -26,7 +26,7 @@ use voxless_core::simd::{LANES, Lanes, Simd, WithLanes, dispatch};
 use voxless_core::{Interval, Sample, SampleBatch, Vec3};
 
 use super::lanes::{ValueLanes, brick_value_lanes};
-use super::recon::{BasisSums, BrickGrid, ValueSums, brick_sums};
+use super::recon::{BasisSums, BrickGrid, Recon, ValueSums, brick_sums};
 use super::{AmrVolume, Reconstruction};
 
 /// Samples per run at most (a run of one region longer than this is cut);
@@ -58,8 +58,37 @@ impl AmrVolume {
         )
     }
 
+    /// [`voxless_core::Volume::sample_batch_values`] on the SIMD backend
+    /// `simd`: the same reconstruction, each result's value alone (false
+    /// when samples carry a colour field).
+    pub(crate) fn sample_batch_values_on(
+        &self,
+        simd: Simd,
+        batch: &SampleBatch,
+        out: &mut Vec<f32>,
+    ) -> bool {
+        if self.settings.color_field.is_some() {
+            return false;
+        }
+        dispatch(
+            simd,
+            BatchJob {
+                volume: self,
+                batch,
+                gradient: false,
+                out: Values(out),
+            },
+        );
+        true
+    }
+
     #[inline(always)]
-    fn sample_batch_lanes<L: Lanes>(&self, batch: &SampleBatch, gradient: bool, out: &mut Out) {
+    fn sample_batch_lanes<L: Lanes, O: BatchOut>(
+        &self,
+        batch: &SampleBatch,
+        gradient: bool,
+        out: &mut O,
+    ) {
         let field = self.settings.field;
         let nearest = self.settings.reconstruction == Reconstruction::Nearest;
         // Results go to their sample's slot, so runs may gather samples of
@@ -70,7 +99,7 @@ impl AmrVolume {
             (Some(&a), Some(&b)) => (b - a) as usize,
             _ => 0,
         };
-        out.resize(total, (None, Vec3::ZERO));
+        out.size(total);
         let mut runs = Runs::default();
         let mut slot = 0;
         for (r, ray) in batch.rays.iter().enumerate() {
@@ -88,7 +117,7 @@ impl AmrVolume {
                     Some(region) => {
                         let run = runs.for_region(region);
                         if run.region != region || run.len == RUN {
-                            self.flush::<L>(run, gradient, out);
+                            self.flush::<L, O>(run, gradient, out);
                             run.region = region;
                         }
                         let (k, pu) = (run.len, self.to_units(p));
@@ -100,14 +129,14 @@ impl AmrVolume {
                     // share. No region: no data.
                     None => {
                         let x = region.and_then(|reg| self.reconstruct(p, reg, field, gradient));
-                        out[slot] = self.output(x);
+                        out.put(self, slot, x);
                     }
                 }
                 slot += 1;
             }
         }
         for run in &mut runs.0 {
-            self.flush::<L>(run, gradient, out);
+            self.flush::<L, O>(run, gradient, out);
         }
     }
 
@@ -115,7 +144,7 @@ impl AmrVolume {
     /// `out`: values only, eight samples at a time through each brick; with
     /// the gradient, sample by sample in `f64`.
     #[inline(always)]
-    fn flush<L: Lanes>(&self, run: &mut Run, gradient: bool, out: &mut Out) {
+    fn flush<L: Lanes, O: BatchOut>(&self, run: &mut Run, gradient: bool, out: &mut O) {
         let n = run.len;
         if n == 0 {
             return;
@@ -135,7 +164,7 @@ impl AmrVolume {
                 }
             }
             for (s, &slot) in sums.iter().zip(&run.slot) {
-                out[slot as usize] = self.output(self.finish(s, true, two_fields));
+                out.put(self, slot as usize, self.finish(s, true, two_fields));
             }
             return;
         }
@@ -161,34 +190,59 @@ impl AmrVolume {
                     sc: acc.sc[k],
                 };
                 let slot = run.slot[at + k] as usize;
-                out[slot] = self.output(self.finish_values(s, two_fields));
+                out.put(self, slot, self.finish_values(s, two_fields));
             }
         }
     }
+}
 
-    #[inline]
-    fn output(&self, x: Option<super::recon::Recon>) -> (Option<Sample>, Vec3) {
-        match x {
-            Some(x) => (Some(self.to_sample(x)), x.gradient),
+/// Where a batch's results go, by slot: whole samples, or values alone.
+trait BatchOut {
+    /// Sized for `n` results (every slot is written, so not filled).
+    fn size(&mut self, n: usize);
+    fn put(&mut self, volume: &AmrVolume, slot: usize, x: Option<Recon>);
+}
+
+impl BatchOut for &mut Out {
+    fn size(&mut self, n: usize) {
+        self.resize(n, (None, Vec3::ZERO));
+    }
+    #[inline(always)]
+    fn put(&mut self, volume: &AmrVolume, slot: usize, x: Option<Recon>) {
+        self[slot] = match x {
+            Some(x) => (Some(volume.to_sample(x)), x.gradient),
             None => (None, Vec3::ZERO),
-        }
+        };
+    }
+}
+
+/// Values alone, NaN where there is no sample.
+struct Values<'a>(&'a mut Vec<f32>);
+
+impl BatchOut for Values<'_> {
+    fn size(&mut self, n: usize) {
+        self.0.resize(n, f32::NAN);
+    }
+    #[inline(always)]
+    fn put(&mut self, _: &AmrVolume, slot: usize, x: Option<Recon>) {
+        self.0[slot] = x.map_or(f32::NAN, |x| x.value);
     }
 }
 
 /// [`AmrVolume::sample_batch_on`]'s loop, instantiated per lane type.
-struct BatchJob<'a, 'b> {
+struct BatchJob<'a, 'b, O> {
     volume: &'a AmrVolume,
     batch: &'a SampleBatch<'b>,
     gradient: bool,
-    out: &'a mut Out,
+    out: O,
 }
 
-impl WithLanes for BatchJob<'_, '_> {
+impl<O: BatchOut> WithLanes for BatchJob<'_, '_, O> {
     type Output = ();
     #[inline(always)]
-    fn run<L: Lanes>(self) {
+    fn run<L: Lanes>(mut self) {
         self.volume
-            .sample_batch_lanes::<L>(self.batch, self.gradient, self.out)
+            .sample_batch_lanes::<L, O>(self.batch, self.gradient, &mut self.out)
     }
 }
 
