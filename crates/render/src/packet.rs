@@ -347,9 +347,12 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
                 // only accumulate them in order.
                 s.x.clear();
                 if s.plain {
-                    s.x.extend(s.values.iter().map(|&v| match v.is_nan() {
-                        false => settings.normalize(v),
-                        true => 0.0,
+                    s.x.extend(s.values.iter().map(|&v| {
+                        if v.is_nan() {
+                            0.0
+                        } else {
+                            settings.normalize(v)
+                        }
                     }));
                 } else {
                     s.x.extend(s.out.iter().map(|(sample, _)| match sample {
@@ -382,11 +385,24 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
             let ivs = &ivs[r].list;
             let mut done = false;
             for &(seg, slot) in &s.segs[lo..hi] {
-                if s.plain && slot != CONSTANT {
-                    // A plain value, classified above.
+                // A plain sample (from `values`, or one without attribute in
+                // `out`) was classified in lanes above: its colour and
+                // opacity are ready, with no interval to look at.
+                let classified = lanes
+                    && slot != CONSTANT
+                    && (s.plain
+                        || matches!(
+                            s.out[slot as usize].0,
+                            Some(Sample {
+                                attribute: Attribute::None,
+                                ..
+                            })
+                        ));
+                if classified {
                     let (k, cl) = (slot as usize, &s.classified);
                     let c = Vec3::new(cl.rgb[0][k], cl.rgb[1][k], cl.rgb[2][k]);
-                    if item.feed_classified(c, cl.alpha[k], Vec3::ZERO, ctx) {
+                    let g = if s.plain { Vec3::ZERO } else { s.out[k].1 };
+                    if item.feed_classified(c, cl.alpha[k], g, ctx) {
                         done = true;
                         break;
                     }
@@ -397,24 +413,6 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
                     Some(v) => (Some(Sample::scalar(v)), Vec3::ZERO),
                     None => s.out[slot as usize],
                 };
-                if lanes
-                    && slot != CONSTANT
-                    && matches!(
-                        sample,
-                        Some(Sample {
-                            attribute: Attribute::None,
-                            ..
-                        })
-                    )
-                {
-                    let (k, cl) = (slot as usize, &s.classified);
-                    let c = Vec3::new(cl.rgb[0][k], cl.rgb[1][k], cl.rgb[2][k]);
-                    if item.feed_classified(c, cl.alpha[k], g, ctx) {
-                        done = true;
-                        break;
-                    }
-                    continue;
-                }
                 if item.feed(volume, ray, iv, seg, sample, g, ctx) {
                     done = true;
                     break;
