@@ -144,6 +144,7 @@ impl Volume for AmrContext<'_> {
         Some(Box::new(AmrTileView {
             volume: self.volume,
             mask: self.visible.as_ref(),
+            simd: self.simd,
         }))
     }
     fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
@@ -164,6 +165,8 @@ impl Volume for AmrContext<'_> {
 struct AmrTileView<'a> {
     volume: &'a AmrVolume,
     mask: Option<&'a NodeMask>,
+    /// The SIMD backend of the packet walk.
+    simd: Simd,
 }
 
 impl TileIntervals for AmrTileView<'_> {
@@ -172,7 +175,10 @@ impl TileIntervals for AmrTileView<'_> {
         TILE
     }
     fn intervals(&self, tile: &TileRays, _: &IntervalQuery, out: &mut IntervalLists) {
-        self.volume
-            .tile_intervals(self.mask, (tile.rays, tile.t, tile.w as usize), out);
+        self.volume.tile_intervals(
+            (self.mask, self.simd),
+            (tile.rays, tile.t, tile.w as usize),
+            out,
+        );
     }
 }

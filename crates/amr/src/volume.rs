@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 use voxless_bvh::Bvh;
 use voxless_core::{
     Aabb, Camera, Cancelled, Control, Interval, IntervalLists, IntervalQuery, Range1, Ray, Sample,
-    SampleBatch, Vec3, Volume,
+    SampleBatch, Simd, Vec3, Volume,
 };
 
 use crate::AmrError;
@@ -339,7 +339,7 @@ impl AmrVolume {
     /// within each eight).
     pub(crate) fn tile_intervals(
         &self,
-        mask: Option<&NodeMask>,
+        (mask, simd): (Option<&NodeMask>, Simd),
         (rays, t, w): (&[Ray], &[Range1], usize),
         out: &mut IntervalLists,
     ) {
@@ -384,7 +384,7 @@ impl AmrVolume {
                     }
                 }
                 self.tree
-                    .walk_packet(&sub[..m], &sub_t[..m], mask, |j, r, hit| {
+                    .walk_packet(simd, &sub[..m], &sub_t[..m], mask, |j, r, hit| {
                         let (list, r) = (&mut lists[lanes[j]], r as usize);
                         let range = self.region_range(r, self.settings.field);
                         if !self.extend_last(list, r, hit, range) {

@@ -261,10 +261,15 @@ fn a_tile_walked_in_packets_gets_every_rays_own_list() {
     let seen = |r: Range1| r.hi > 1.2;
     let mut compared = 0;
     for vol in volumes() {
-        for ctx in [
-            AmrContext::new(&vol, &|_| true),
-            AmrContext::new(&vol, &seen),
-        ] {
+        // The walk's lanes on every SIMD backend this CPU has.
+        let backends = Simd::ALL.into_iter().filter(|s| s.available());
+        let contexts = backends.flat_map(|simd| {
+            [
+                AmrContext::new(&vol, &|_| true).with_simd(simd),
+                AmrContext::new(&vol, &seen).with_simd(simd),
+            ]
+        });
+        for ctx in contexts {
             let view = View {
                 camera: Camera::framing(&vol.bounds(), 1.0),
                 width: 8,

@@ -11,8 +11,17 @@
 //! gets its regions in its own front-to-back order with bit-identical
 //! ranges. What is shared is the node's load and the walk's bookkeeping,
 //! which were most of a per-ray walk's cost (~40 instructions per node per
-//! ray; here the per-ray part is a handful of lane operations).
+//! ray).
+//!
+//! The rays' steps at a cut run in SIMD lanes, one ray per lane: the plane
+//! times, both comparisons and both new ends are a few vector operations,
+//! and the rays that go to each side are the comparisons' bit masks. IEEE
+//! arithmetic is the same in a lane as in a scalar, so the lanes give the
+//! scalar walk's bits. (Written as a loop over eight rays, the compiler
+//! left this step scalar; in lanes the walk costs 3 % less of an AMR
+//! frame, docs/benchmarks.md.)
 
+use voxless_core::simd::{LANES, Lanes, Simd, WithLanes, dispatch};
 use voxless_core::{Range1, Ray};
 
 use super::{Cut, LEAF, NodeMask, RegionTree};
@@ -20,17 +29,14 @@ use super::{Cut, LEAF, NodeMask, RegionTree};
 /// Rays walked together at most.
 pub(crate) const PACKET_RAYS: usize = 8;
 
-/// Per ray of a packet.
-type Lanes = [f32; PACKET_RAYS];
-
 /// A subtree waiting for the packet: its node, the rays that reach it and
 /// their parts of it.
 #[derive(Clone, Copy)]
 struct Pending {
     node: u32,
     active: u8,
-    lo: Lanes,
-    hi: Lanes,
+    lo: [f32; PACKET_RAYS],
+    hi: [f32; PACKET_RAYS],
 }
 
 const EMPTY: Pending = Pending {
@@ -64,23 +70,46 @@ impl RegionTree {
     /// one octant ([`same_octant`]), never stopping: calls `leaf(k, region,
     /// t)` for every region (of those `mask` keeps) that ray `rays[k]`
     /// crosses within `t[k]`, each ray's regions front to back, with the
-    /// range [`RegionTree::walk`] gives it.
+    /// range [`RegionTree::walk`] gives it. The rays' steps at a cut run in
+    /// lanes on the SIMD backend `simd` (every backend gives the same bits).
     pub fn walk_packet(
+        &self,
+        simd: Simd,
+        rays: &[Ray],
+        t: &[Range1],
+        mask: Option<&NodeMask>,
+        leaf: impl FnMut(usize, u32, Range1),
+    ) {
+        assert!(
+            rays.len() == t.len() && rays.len() <= PACKET_RAYS,
+            "a packet walk takes one range per ray and at most {PACKET_RAYS} rays"
+        );
+        if self.nodes.is_empty() || rays.is_empty() {
+            return;
+        }
+        debug_assert!(rays.iter().all(|r| same_octant(r, &rays[0])));
+        dispatch(
+            simd,
+            PacketWalk {
+                tree: self,
+                rays,
+                t,
+                mask,
+                leaf,
+            },
+        );
+    }
+
+    /// The walk on lanes `L` (one lane per ray).
+    #[inline(always)]
+    fn walk_packet_lanes<L: Lanes>(
         &self,
         rays: &[Ray],
         t: &[Range1],
         mask: Option<&NodeMask>,
         mut leaf: impl FnMut(usize, u32, Range1),
     ) {
-        assert!(
-            rays.len() == t.len() && rays.len() <= PACKET_RAYS,
-            "a packet walk takes one range per ray and at most {PACKET_RAYS} rays"
-        );
         let n = rays.len();
-        if self.nodes.is_empty() || n == 0 {
-            return;
-        }
-        debug_assert!(rays.iter().all(|r| same_octant(r, &rays[0])));
         // Lanes without a ray (or whose ray misses the tree) stay inactive.
         let (mut org, mut inv) = ([[0.0; PACKET_RAYS]; 3], [[1.0; PACKET_RAYS]; 3]);
         let (mut lo, mut hi) = ([0.0; PACKET_RAYS], [0.0; PACKET_RAYS]);
@@ -107,6 +136,8 @@ impl RegionTree {
             return;
         }
         let below_near = [0, 1, 2].map(|a| inv[a][0].is_sign_positive());
+        let (org_l, inv_l) = (org.map(L::from_array), inv.map(L::from_array));
+        let (mut lo, mut hi) = (L::from_array(lo), L::from_array(hi));
         let mut stack = STACK.take();
         if stack.len() <= self.depth {
             stack.resize(self.depth + 1, EMPTY);
@@ -126,23 +157,24 @@ impl RegionTree {
                 } = node.cut(i, below_near);
                 // Per ray, as the single-ray walk: the near part ends at
                 // the plane when the plane lies inside `(lo, hi)`, the far
-                // part starts there; a ray in the plane (NaN) keeps its
-                // part and goes to the side its origin is on.
-                let (mut to_near, mut to_far) = (0u8, 0u8);
-                let (mut near_hi, mut far_lo) = (hi, lo);
-                for k in 0..PACKET_RAYS {
-                    let ts = (node.at - org[a][k]) * inv[a][k];
-                    let (n_k, f_k) = if ts.is_nan() {
+                // part starts there (the same product and comparisons, in
+                // lanes).
+                let ts = (L::splat(node.at) - org_l[a]) * inv_l[a];
+                let (before_hi, after_lo) = (ts.lt(hi), ts.gt(lo));
+                let mut to_near = after_lo.bitmask() as u8;
+                let mut to_far = before_hi.bitmask() as u8;
+                // A ray in the plane (NaN: no comparison holds, so it keeps
+                // its part) goes to the side its origin is on.
+                let in_plane = !(ts.le(ts).bitmask() as u8) & active;
+                if in_plane != 0 {
+                    for k in (0..PACKET_RAYS).filter(|k| in_plane >> k & 1 != 0) {
                         let below = org[a][k] < node.at;
-                        (below == (near == left), below != (near == left))
-                    } else {
-                        (ts > lo[k], ts < hi[k])
-                    };
-                    to_near |= (n_k as u8) << k;
-                    to_far |= (f_k as u8) << k;
-                    near_hi[k] = if ts < hi[k] { ts } else { hi[k] };
-                    far_lo[k] = if ts > lo[k] { ts } else { lo[k] };
+                        to_near |= ((below == (near == left)) as u8) << k;
+                        to_far |= ((below != (near == left)) as u8) << k;
+                    }
                 }
+                let near_hi = before_hi.select(ts, hi);
+                let far_lo = after_lo.select(ts, lo);
                 (to_near, to_far) = (to_near & active, to_far & active);
                 if to_far != 0 {
                     if to_near == 0 {
@@ -152,8 +184,8 @@ impl RegionTree {
                     stack[sp] = Pending {
                         node: far as u32,
                         active: to_far,
-                        lo: far_lo,
-                        hi,
+                        lo: far_lo.to_array(),
+                        hi: hi.to_array(),
                     };
                     sp += 1;
                 }
@@ -162,8 +194,10 @@ impl RegionTree {
                     continue;
                 }
             } else if keep && node.kind == LEAF {
-                for k in 0..n {
-                    if active >> k & 1 != 0 && lo[k] < hi[k] {
+                let open = lo.lt(hi).bitmask() as u8 & active;
+                if open != 0 {
+                    let (lo, hi) = (lo.to_array(), hi.to_array());
+                    for k in (0..n).filter(|k| open >> k & 1 != 0) {
                         leaf(k, node.index, Range1::new(lo[k], hi[k]));
                     }
                 }
@@ -173,8 +207,30 @@ impl RegionTree {
             }
             sp -= 1;
             let p = stack[sp];
-            (i, active, lo, hi) = (p.node as usize, p.active, p.lo, p.hi);
+            (i, active) = (p.node as usize, p.active);
+            (lo, hi) = (L::from_array(p.lo), L::from_array(p.hi));
         }
         STACK.set(stack);
     }
 }
+
+/// [`RegionTree::walk_packet`]'s walk, instantiated per lane type.
+struct PacketWalk<'a, F> {
+    tree: &'a RegionTree,
+    rays: &'a [Ray],
+    t: &'a [Range1],
+    mask: Option<&'a NodeMask>,
+    leaf: F,
+}
+
+impl<F: FnMut(usize, u32, Range1)> WithLanes for PacketWalk<'_, F> {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Lanes>(self) {
+        self.tree
+            .walk_packet_lanes::<L>(self.rays, self.t, self.mask, self.leaf)
+    }
+}
+
+// One lane per ray of a packet.
+const _: () = assert!(PACKET_RAYS == LANES);
