@@ -42,6 +42,7 @@
 pub mod bluenoise;
 mod classify;
 pub mod colorbar;
+mod composite;
 mod cursor;
 pub mod font;
 mod march;

@@ -571,6 +571,13 @@ impl RayState {
     pub fn rgba(&self) -> [f32; 4] {
         self.acc.rgba()
     }
+
+    /// The pixel so far, for compositing plain samples in lanes
+    /// ([`crate::composite`], the arithmetic of
+    /// [`RayState::feed_classified`] without a light).
+    pub fn pixel(&mut self) -> &mut Accumulator {
+        &mut self.acc
+    }
 }
 
 /// The shading of an iso-surface hit: the volume's light, else a headlight.
@@ -585,9 +592,9 @@ fn iso_shade(ray: &Ray, gradient: Vec3, ctx: &Ctx) -> f32 {
 
 /// Front-to-back compositing of premultiplied colour.
 #[derive(Default)]
-struct Accumulator {
-    color: Vec3,
-    alpha: f32,
+pub(crate) struct Accumulator {
+    pub color: Vec3,
+    pub alpha: f32,
 }
 
 impl Accumulator {

@@ -20,8 +20,9 @@ use voxless_core::{Attribute, Interval, IntervalQuery, Ray, Sample, SampleBatch,
 
 use crate::Tile;
 use crate::classify::Classified;
+use crate::composite::{self, Run};
 use crate::cursor::{Cursor, RayIntervals, Segment};
-use crate::march::{Ctx, RaySpans, RayState, RayStats};
+use crate::march::{Accumulator, Ctx, RaySpans, RayState, RayStats};
 use crate::sampling::PixelRng;
 
 /// Side of a packet in pixels.
@@ -99,6 +100,12 @@ pub(crate) trait Integrator {
     fn feed_classified(&mut self, _c: Vec3, _a: f32, _gradient: Vec3, _ctx: &Ctx) -> bool {
         unreachable!("an integrator that classifies in lanes takes its samples")
     }
+    /// The ray's pixel, when its plain samples may be composited in lanes
+    /// ([`crate::composite`]: [`Integrator::feed_classified`] is then
+    /// emission–absorption without a light).
+    fn pixel(&mut self) -> Option<&mut Accumulator> {
+        None
+    }
     /// One segment and its sample; true when the ray needs no more
     /// (opaque, or its scattering event found).
     #[allow(clippy::too_many_arguments)]
@@ -132,6 +139,9 @@ impl Integrator for PacketRay {
     #[inline(always)]
     fn feed_classified(&mut self, c: Vec3, a: f32, gradient: Vec3, ctx: &Ctx) -> bool {
         self.state.feed_classified(c, a, gradient, ctx)
+    }
+    fn pixel(&mut self) -> Option<&mut Accumulator> {
+        Some(self.state.pixel())
     }
     #[inline]
     fn feed<V: Volume>(
@@ -174,6 +184,9 @@ pub(crate) struct PassScratch {
     len: Vec<f32>,
     x: Vec<f32>,
     classified: Classified,
+    /// Per ray composited in lanes: its index in `gathered`, and its run.
+    lane_rays: Vec<usize>,
+    runs: Vec<Run>,
 }
 
 /// Scratch reused across the packets of a tile.
@@ -377,8 +390,15 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
                 }
             }
         }
-        // Every ray takes its samples front to back from the buffer.
-        for &(i, lo, hi) in &s.gathered {
+        // Rays whose samples here were all classified composite eight at
+        // a time; the rest go one by one below.
+        composite_in_lanes(volume, ctx, rays, items, s, lanes);
+        // Every other ray takes its samples front to back from the buffer.
+        let mut in_lanes = s.lane_rays.iter().peekable();
+        for (g, &(i, lo, hi)) in s.gathered.iter().enumerate() {
+            if in_lanes.next_if(|&&l| l == g).is_some() {
+                continue;
+            }
             let item = &mut items[i];
             let r = item.lane().r;
             let ray = &rays[r];
@@ -388,17 +408,7 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
                 // A plain sample (from `values`, or one without attribute in
                 // `out`) was classified in lanes above: its colour and
                 // opacity are ready, with no interval to look at.
-                let classified = lanes
-                    && slot != CONSTANT
-                    && (s.plain
-                        || matches!(
-                            s.out[slot as usize].0,
-                            Some(Sample {
-                                attribute: Attribute::None,
-                                ..
-                            })
-                        ));
-                if classified {
+                if s.is_classified(lanes, slot) {
                     let (k, cl) = (slot as usize, &s.classified);
                     let c = Vec3::new(cl.rgb[0][k], cl.rgb[1][k], cl.rgb[2][k]);
                     let g = if s.plain { Vec3::ZERO } else { s.out[k].1 };
@@ -424,5 +434,85 @@ pub(crate) fn run_passes<V: Volume, I: Integrator>(
             }
             item.lane().done = done;
         }
+    }
+}
+
+impl PassScratch {
+    /// Whether the sample in `slot` was classified in lanes: a plain value,
+    /// or an `out` sample without an attribute (`lanes`: the integrator
+    /// classifies in lanes).
+    #[inline(always)]
+    fn is_classified(&self, lanes: bool, slot: u32) -> bool {
+        lanes
+            && slot != CONSTANT
+            && (self.plain
+                || matches!(
+                    self.out[slot as usize].0,
+                    Some(Sample {
+                        attribute: Attribute::None,
+                        ..
+                    })
+                ))
+    }
+}
+
+/// Composites the rays of a pass whose samples were all classified in
+/// lanes eight at a time ([`crate::composite`]), when there is no light
+/// (so [`Integrator::feed_classified`] is plain compositing), and lists
+/// them in `s.lane_rays` (indices into `s.gathered`, ascending). A ray
+/// with a constant segment, or a sample that is missing or carries an
+/// attribute, stays with the one-by-one loop.
+fn composite_in_lanes<V: Volume, I: Integrator>(
+    volume: &V,
+    ctx: &Ctx,
+    rays: &[Ray],
+    items: &mut [I],
+    s: &mut PassScratch,
+    lanes: bool,
+) {
+    s.lane_rays.clear();
+    s.runs.clear();
+    if !lanes || ctx.settings.light.is_some() {
+        return;
+    }
+    for (g, &(i, lo, hi)) in s.gathered.iter().enumerate() {
+        let segs = &s.segs[lo..hi];
+        // A ray's slots are consecutive when none of its segments is
+        // constant (a constant segment takes no slot).
+        if !segs.iter().all(|&(_, slot)| s.is_classified(lanes, slot)) {
+            continue;
+        }
+        let Some(px) = items[i].pixel() else {
+            continue;
+        };
+        s.runs.push(Run {
+            first: segs.first().map_or(0, |&(_, slot)| slot),
+            n: segs.len() as u32,
+            color: [px.color.x, px.color.y, px.color.z],
+            alpha: px.alpha,
+            done: false,
+        });
+        s.lane_rays.push(g);
+    }
+    let settings = ctx.settings;
+    composite::composite(
+        settings.simd,
+        &mut s.runs,
+        &s.classified,
+        settings.early_termination,
+    );
+    for (&g, run) in s.lane_rays.iter().zip(&s.runs) {
+        let item = &mut items[s.gathered[g].0];
+        if let Some(px) = item.pixel() {
+            px.color = Vec3::new(run.color[0], run.color[1], run.color[2]);
+            px.alpha = run.alpha;
+        }
+        let mut done = run.done;
+        if !done && item.lane().next.is_none() {
+            let r = item.lane().r;
+            item.finish(volume, &rays[r], ctx);
+            done = true;
+        }
+        item.lane().done = done;
     }
 }
