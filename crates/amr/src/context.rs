@@ -116,6 +116,18 @@ impl Volume for AmrContext<'_> {
     fn sample_batch_values(&self, batch: &SampleBatch, out: &mut Vec<f32>) -> bool {
         self.volume.sample_batch_values_on(self.simd, batch, out)
     }
+    fn samples_in_lanes(&self) -> bool {
+        self.volume.samples_in_lanes()
+    }
+    #[inline(always)]
+    fn sample_values_lanes<L: voxless_core::Lanes>(
+        &self,
+        hints: &[u32; voxless_core::simd::LANES],
+        p: [L; 3],
+        live: u32,
+    ) -> L {
+        self.volume.values_lanes(hints, p, live)
+    }
     /// The regions the context's transfer function sees (see
     /// [`AmrContext`]): only the subtrees holding them are walked, and the
     /// query is not asked again per region.

@@ -58,6 +58,7 @@ pub struct Regions {
 
 impl Regions {
     /// The bricks active in region `r`.
+    #[inline]
     pub fn bricks_of(&self, r: usize) -> &[u32] {
         let range = &self.regions[r].bricks;
         &self.brick_ids[range.start as usize..range.end as usize]

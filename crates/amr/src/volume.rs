@@ -83,6 +83,8 @@ pub struct AmrVolume {
     h: f32,
     settings: AmrSettings,
     bricks: Vec<Brick>,
+    /// What the reconstruction reads of each brick, derived once.
+    grids: Vec<recon::BrickGrid>,
     /// Per field, values in brick order.
     values: Vec<Vec<f32>>,
     regions: Regions,
@@ -96,6 +98,9 @@ pub struct AmrVolume {
     /// brick list (which reconstruct the same field): a ray's consecutive
     /// regions of one group are one interval.
     region_group: Vec<u32>,
+    /// Per region, what a lane step reads of it in one load: its slice of
+    /// the brick list (`start..end` in `regions.brick_ids`) and its group.
+    region_lists: Vec<[u32; 3]>,
     field_ranges: Vec<Range1>,
     /// The k-d tree the regions were cut by: ray intervals, front to back
     /// (a prepared [`crate::AmrContext`] masks the subtrees it cannot see).
@@ -235,18 +240,24 @@ impl AmrVolume {
         // The data's domain is the cells, not the tents' half-cell margin
         // around them: bounds, intervals and samples stop at the cells.
         let bounds = brick_bounds.iter().fold(Aabb::EMPTY, |b, &x| b.union(x));
+        let grids = bricks.iter().map(recon::BrickGrid::new).collect();
+        let region_lists = (regions.regions.iter().zip(&region_group))
+            .map(|(r, &g)| [r.bricks.start, r.bricks.end, g])
+            .collect();
         Ok(AmrVolume {
             names,
             origin,
             h,
             settings,
             bricks,
+            grids,
             values,
             regions,
             region_bounds,
             region_ranges,
             region_finest,
             region_group,
+            region_lists,
             field_ranges,
             tree,
             region_bvh,
@@ -626,6 +637,21 @@ impl Volume for AmrVolume {
 
     fn sample_batch_values(&self, batch: &SampleBatch, out: &mut Vec<f32>) -> bool {
         self.sample_batch_values_on(voxless_core::Simd::Auto, batch, out)
+    }
+
+    /// Eight rays' samples at once, region by region ([`batch`]).
+    fn samples_in_lanes(&self) -> bool {
+        self.offers_lanes()
+    }
+
+    #[inline(always)]
+    fn sample_values_lanes<L: voxless_core::Lanes>(
+        &self,
+        hints: &[u32; voxless_core::simd::LANES],
+        p: [L; 3],
+        live: u32,
+    ) -> L {
+        self.values_lanes(hints, p, live)
     }
 
     /// One interval per visible region the ray crosses, in order; the step is

@@ -1,8 +1,9 @@
 //! The fast paths against the slow paths they replaced: the front-to-back
 //! walk of the region tree against every region the BVH hits, sorted; the
-//! walk a chunk at a time against the whole list; the packet batch against
-//! point samples; and whole renders — packets against point by point, lazy
-//! intervals against the sorted lists — pixel for pixel.
+//! walk a chunk at a time against the whole list; the packet batch and
+//! eight samples in lanes against point samples; and whole renders — rays
+//! in lanes and packet passes against point by point, lazy intervals
+//! against the sorted lists — pixel for pixel.
 
 use voxless_core::{
     Aabb, Camera, Control, Interval, IntervalLists, IntervalQuery, Prepare, PrepareQuery, Range1,
@@ -491,6 +492,7 @@ fn packets_and_lazy_intervals_draw_the_image_of_sorted_lists_sampled_point_by_po
         ("shaded", AmrSettings::default(), 1),
         ("iso-surfaces, 2 spp", AmrSettings::default(), 2),
         ("clip box, opaque", AmrSettings::default(), 3),
+        ("a box of a decomposition", AmrSettings::default(), 4),
         (
             "nearest",
             AmrSettings {
@@ -522,6 +524,14 @@ fn packets_and_lazy_intervals_draw_the_image_of_sorted_lists_sampled_point_by_po
                 settings.clip = Some(Aabb::new(b.min, b.center() + b.extent() * 0.2));
                 settings.opacity_scale *= 20.0;
             }
+            4 => {
+                // One box of a decomposition: only the samples it owns.
+                let b = vol.bounds();
+                settings.domain = Some(voxless_render::Domain {
+                    owned: Aabb::new(b.min - b.extent(), b.center() + b.extent() * 0.2),
+                    bounds: b,
+                });
+            }
             _ => {}
         }
         let run = |v: &dyn Fn(&RenderSettings) -> voxless_core::Image, packets: bool| {
@@ -536,8 +546,16 @@ fn packets_and_lazy_intervals_draw_the_image_of_sorted_lists_sampled_point_by_po
         let lit = reference.pixels.iter().filter(|p| p[3] > 0.05).count();
         assert!(lit > 100, "{what}: too little is visible ({lit} pixels)");
         // The same samples, evaluated with the same arithmetic: identical.
+        let passes = |s: &RenderSettings| {
+            let s = RenderSettings {
+                lanes: false,
+                ..s.clone()
+            };
+            fast(&s)
+        };
         for (name, image) in [
-            ("packets", run(&fast, true)),
+            ("packets (rays in lanes where they apply)", run(&fast, true)),
+            ("packet passes", run(&passes, true)),
             ("point by point", run(&fast, false)),
         ] {
             let d = max_diff(&reference, &image);
@@ -596,5 +614,131 @@ fn a_constant_field_reconstructs_to_the_constant_exactly() {
             }
         }
         assert!(seen > 1000, "too few samples ({seen})");
+    }
+}
+
+/// Groups of eight points, one per lane, sampled in lanes on `simd`.
+struct LaneSamples<'a> {
+    vol: &'a AmrVolume,
+    groups: &'a [([u32; 8], [Vec3; 8], u32)],
+}
+
+impl voxless_core::simd::WithLanes for LaneSamples<'_> {
+    type Output = Vec<[f32; 8]>;
+    #[inline(always)]
+    fn run<L: voxless_core::Lanes>(self) -> Vec<[f32; 8]> {
+        self.groups
+            .iter()
+            .map(|(hints, p, live)| {
+                let axis = |a: usize| L::from_array(p.map(|q| q[a]));
+                let p = [axis(0), axis(1), axis(2)];
+                self.vol
+                    .sample_values_lanes::<L>(hints, p, *live)
+                    .to_array()
+            })
+            .collect()
+    }
+}
+
+#[test]
+fn eight_lanes_give_the_bits_of_point_samples() {
+    let input = cells_with(synthetic(34, true), smooth);
+    for (settings, offered) in [
+        (AmrSettings::default(), true),
+        (
+            AmrSettings {
+                color_field: Some(1),
+                ..Default::default()
+            },
+            false,
+        ),
+        (
+            AmrSettings {
+                reconstruction: Reconstruction::Nearest,
+                ..Default::default()
+            },
+            false,
+        ),
+    ] {
+        let vol = AmrVolume::new(input.clone(), settings).unwrap();
+        assert_eq!(vol.samples_in_lanes(), offered);
+        if !offered {
+            continue;
+        }
+        // Points along rays, each with its interval's hint, in order.
+        let mut rng = Lcg(71);
+        let mut points = Vec::new();
+        for ray in rays(&vol, &mut rng, 64) {
+            let mut list = Vec::new();
+            let all = Range1::new(0.0, f32::INFINITY);
+            vol.intervals(&ray, all, &IntervalQuery::all(), &mut list);
+            for iv in &list {
+                for k in 0..3 {
+                    let p = ray.at(iv.t.lo + iv.t.span() * (0.1 + 0.4 * k as f32));
+                    points.push((iv.hint, p));
+                }
+            }
+        }
+        // Eight consecutive points (a few regions, often one list for all
+        // lanes), eight picked at random (regions all different: lists
+        // merged), lanes left out, and lanes with no region named (found
+        // point by point).
+        let mut groups = Vec::new();
+        for (g, chunk) in points.chunks(8).enumerate() {
+            let mut hints = [Interval::NO_HINT; 8];
+            let mut p = [Vec3::ZERO; 8];
+            for (k, &(h, q)) in chunk.iter().enumerate() {
+                (hints[k], p[k]) = (h, q);
+            }
+            let live = (1u32 << chunk.len()) - 1;
+            groups.push((hints, p, live));
+            let mut mixed = (hints, p, 0u32);
+            for k in 0..8 {
+                let (h, q) = points[(rng.f() * points.len() as f32) as usize % points.len()];
+                (mixed.0[k], mixed.1[k]) = (h, q);
+                if rng.f() < 0.85 {
+                    mixed.2 |= 1 << k;
+                }
+                if g % 5 == 0 && k == 3 {
+                    mixed.0[k] = Interval::NO_HINT;
+                }
+            }
+            groups.push(mixed);
+        }
+        let backends = Simd::ALL.into_iter().filter(|s| s.available());
+        let mut compared = 0;
+        for simd in backends {
+            let got = voxless_core::simd::dispatch(
+                simd,
+                LaneSamples {
+                    vol: &vol,
+                    groups: &groups,
+                },
+            );
+            for ((hints, p, live), got) in groups.iter().zip(&got) {
+                for k in 0..8 {
+                    if live >> k & 1 == 0 {
+                        assert!(got[k].is_nan(), "{simd:?}: lane {k} has no sample");
+                        continue;
+                    }
+                    let want = match hints[k] {
+                        Interval::NO_HINT => vol.sample(p[k]),
+                        h => {
+                            let iv = Interval {
+                                hint: h,
+                                ..Interval::sampled(Range1::EMPTY, Range1::EMPTY, 1.0)
+                            };
+                            vol.sample_in(p[k], &iv)
+                        }
+                    };
+                    match want {
+                        Some(s) => assert_eq!(got[k].to_bits(), s.value.to_bits(), "{simd:?}"),
+                        None => assert!(got[k].is_nan(), "{simd:?}: no data at {:?}", p[k]),
+                    }
+                    compared += 1;
+                }
+            }
+        }
+        assert!(compared > 10_000, "only {compared} lanes compared");
     }
 }

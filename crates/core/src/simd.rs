@@ -163,6 +163,10 @@ pub trait Lanes:
     /// exact (an f32 × f32 product fits an f64), the sum rounded once — for
     /// sums that must stay exact where the terms' weights add up to one.
     fn add_product_f64(acc: &mut [f64; LANES], a: Self, b: Self);
+    /// `(num[k] / den[k]) as f32` in every lane where `den[k] > 0`, NaN
+    /// elsewhere: the quotient of two such sums, rounded once to `f64` and
+    /// once to `f32`, as scalar code does it.
+    fn quotient_f64(num: &[f64; LANES], den: &[f64; LANES]) -> Self;
 
     /// Whether any lane of the mask is set.
     #[inline(always)]
@@ -403,6 +407,16 @@ impl Lanes for wide::f32x8 {
             acc[k] += a[k] as f64 * b[k] as f64;
         }
     }
+    #[inline(always)]
+    fn quotient_f64(num: &[f64; LANES], den: &[f64; LANES]) -> Self {
+        let mut q = [f32::NAN; LANES];
+        for k in 0..LANES {
+            if den[k] > 0.0 {
+                q[k] = (num[k] / den[k]) as f32;
+            }
+        }
+        wide::f32x8::new(q)
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -555,6 +569,24 @@ mod avx2 {
                 let p = acc.as_mut_ptr();
                 _mm256_storeu_pd(p, _mm256_add_pd(_mm256_loadu_pd(p), lo));
                 _mm256_storeu_pd(p.add(4), _mm256_add_pd(_mm256_loadu_pd(p.add(4)), hi));
+            }
+        }
+        #[inline(always)]
+        fn quotient_f64(num: &[f64; LANES], den: &[f64; LANES]) -> Self {
+            // Four f64 lanes at a time: divide, round to f32, NaN where the
+            // denominator is not positive (`den > 0` is false on NaN).
+            unsafe {
+                let half = |at: usize| {
+                    let (n, d) = (
+                        _mm256_loadu_pd(num.as_ptr().add(at)),
+                        _mm256_loadu_pd(den.as_ptr().add(at)),
+                    );
+                    let q = _mm256_div_pd(n, d);
+                    let ok = _mm256_cmp_pd::<_CMP_GT_OQ>(d, _mm256_setzero_pd());
+                    _mm256_blendv_pd(_mm256_set1_pd(f64::NAN), q, ok)
+                };
+                let (lo, hi) = (_mm256_cvtpd_ps(half(0)), _mm256_cvtpd_ps(half(4)));
+                Avx2Lanes(_mm256_set_m128(hi, lo))
             }
         }
         #[inline(always)]

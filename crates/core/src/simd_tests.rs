@@ -104,6 +104,14 @@ impl WithLanes for AllOps {
                     L::add_product_f64(&mut acc, y, x);
                     acc.map(|v| (v.to_bits() ^ (v.to_bits() >> 32)) as u32)
                 }),
+                ("quotient_f64", {
+                    // Sums as the reconstruction forms them, and the
+                    // edge cases themselves as denominators (zeros,
+                    // negatives, NaN, infinities).
+                    let num = a.map(|v| v as f64 * 3.0 + 0.1);
+                    let den = b.map(|v| v as f64);
+                    bits(L::quotient_f64(&num, &den))
+                }),
                 ("bitmask/any", mask),
             ] {
                 out.push((format!("{name} #{i}"), v));
@@ -168,6 +176,27 @@ fn avx2_lanes_equal_portable_lanes_bit_for_bit() {
             canonical(&a[..]),
             "{name}: portable {p:08x?} vs avx2 {a:08x?}"
         );
+    }
+}
+
+#[test]
+fn the_quotient_of_f64_sums_is_the_scalar_one() {
+    // `(n / d) as f32` where `d > 0`, NaN elsewhere: the reconstruction's
+    // `finish_values` on every lane (the backends agree with the portable
+    // lanes in the test above).
+    let num = [1.0, -2.5, 1e300, 7.0, 0.0, 3.0, 1.0, f64::NAN];
+    let den = [3.0, 0.1, 1e-300, 0.0, 2.0, -1.0, f64::NAN, 1.0];
+    let got = PortableLanes::quotient_f64(&num, &den).to_array();
+    for k in 0..LANES {
+        if den[k] > 0.0 {
+            let want = (num[k] / den[k]) as f32;
+            assert!(
+                got[k].to_bits() == want.to_bits() || (got[k].is_nan() && want.is_nan()),
+                "lane {k}"
+            );
+        } else {
+            assert!(got[k].is_nan(), "lane {k}: no weight, no value");
+        }
     }
 }
 

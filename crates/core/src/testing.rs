@@ -11,6 +11,7 @@ use crate::camera::Camera;
 use crate::control::{Cancelled, Control};
 use crate::math::{Aabb, Range1, Ray, Vec3};
 use crate::prepare::{Prepare, PrepareQuery};
+use crate::simd::{LANES, Lanes, WithLanes};
 use crate::tiles::{TileIntervals, View};
 use crate::volume::{Interval, IntervalKind, IntervalQuery, Sample, SampleBatch, Volume};
 
@@ -181,7 +182,9 @@ impl Default for Contract {
 /// 3. [`Volume::sample_batch`] equals [`Volume::sample`] (and the gradients
 ///    of `sample_with_gradient`) at the same points;
 /// 4. gradients agree with central differences of the samples;
-/// 5. [`Volume::line_integral`] agrees with quadrature of the samples.
+/// 5. [`Volume::line_integral`] agrees with quadrature of the samples;
+/// 6. where offered, [`Volume::sample_values_lanes`] gives the values of
+///    [`Volume::sample_in`], bit for bit, on every SIMD backend.
 pub fn check_contract<V: Volume>(volume: &V, c: &Contract) -> Vec<String> {
     let mut bad = Vec::new();
     let b = volume.bounds();
@@ -198,6 +201,7 @@ pub fn check_contract<V: Volume>(volume: &V, c: &Contract) -> Vec<String> {
     };
     let mut integrals = Vec::new();
     let (mut constant_samples, mut constant_misses) = (0usize, Vec::new());
+    let mut lane_points = Vec::new();
     let mut batch_rays = Vec::new();
     let mut batch_t = Vec::new();
     let mut offsets = vec![0u32];
@@ -263,6 +267,9 @@ pub fn check_contract<V: Volume>(volume: &V, c: &Contract) -> Vec<String> {
                     ));
                 }
                 ts.push(tt);
+                if iv.constant_value().is_none() && lane_points.len() < 4096 {
+                    lane_points.push((ray.at(tt), *iv));
+                }
             }
         }
         if !ts.is_empty() && batch_rays.len() < 16 {
@@ -343,6 +350,30 @@ pub fn check_contract<V: Volume>(volume: &V, c: &Contract) -> Vec<String> {
             }
         }
     }
+    // 6. Eight samples in lanes against point samples in their intervals,
+    // bit for bit, on every SIMD backend.
+    if volume.samples_in_lanes() {
+        for simd in crate::Simd::ALL.into_iter().filter(|s| s.available()) {
+            let got = crate::simd::dispatch(
+                simd,
+                LaneSamples {
+                    volume,
+                    points: &lane_points,
+                },
+            );
+            for (k, ((p, iv), v)) in lane_points.iter().zip(got).enumerate() {
+                let want = volume.sample_in(*p, iv).map_or(f32::NAN, |s| s.value);
+                // Every third group leaves its last lane out (NaN).
+                let out = k % (3 * LANES) == 3 * LANES - 1;
+                let same = v.to_bits() == want.to_bits() || (v.is_nan() && (out || want.is_nan()));
+                if !same {
+                    bad.push(format!(
+                        "sample_values_lanes ({simd:?}) gave {v}, sample_in {want} at {p:?}"
+                    ));
+                }
+            }
+        }
+    }
     // 4. Gradients against central differences.
     if let Some((step, tol)) = c.gradient {
         let h = step * b.diagonal();
@@ -378,6 +409,41 @@ pub fn check_contract<V: Volume>(volume: &V, c: &Contract) -> Vec<String> {
         }
     }
     bad
+}
+
+/// Points sampled eight at a time with [`Volume::sample_values_lanes`]
+/// (each with its interval's hint), every third group with its last lane
+/// left out.
+struct LaneSamples<'a, V> {
+    volume: &'a V,
+    points: &'a [(Vec3, Interval)],
+}
+
+impl<V: Volume> WithLanes for LaneSamples<'_, V> {
+    type Output = Vec<f32>;
+    #[inline(always)]
+    fn run<L: Lanes>(self) -> Vec<f32> {
+        let mut out = Vec::with_capacity(self.points.len());
+        for (g, group) in self.points.chunks(LANES).enumerate() {
+            let (mut hints, mut p) = ([Interval::NO_HINT; LANES], [[0.0; LANES]; 3]);
+            for (k, (q, iv)) in group.iter().enumerate() {
+                hints[k] = iv.hint;
+                (p[0][k], p[1][k], p[2][k]) = (q.x, q.y, q.z);
+            }
+            let mut live = (1u32 << group.len()) - 1;
+            if g % 3 == 2 {
+                live &= !(1 << (LANES - 1));
+            }
+            let p = [
+                L::from_array(p[0]),
+                L::from_array(p[1]),
+                L::from_array(p[2]),
+            ];
+            let v = self.volume.sample_values_lanes::<L>(&hints, p, live);
+            out.extend_from_slice(&v.to_array()[..group.len()]);
+        }
+        out
+    }
 }
 
 /// Panics listing the violations of [`check_contract`], if any.

@@ -23,6 +23,7 @@
 use crate::camera::Camera;
 use crate::control::{Cancelled, Control};
 use crate::math::{Range1, Ray, Vec3};
+use crate::simd::{LANES, Lanes};
 use crate::tiles::{TileIntervals, View};
 
 /// A piece of a ray over which a volume is (possibly) non-zero.
@@ -210,6 +211,36 @@ pub trait Volume: Send + Sync {
     /// exactly those of [`Volume::sample_batch`].
     fn sample_batch_values(&self, _batch: &SampleBatch, _out: &mut Vec<f32>) -> bool {
         false
+    }
+
+    /// Whether [`Volume::sample_values_lanes`] is a real lane path: the
+    /// renderer then marches eight rays in SIMD lanes, one sample per ray
+    /// per step, where it composites plain values.
+    fn samples_in_lanes(&self) -> bool {
+        false
+    }
+
+    /// The plain values at eight points at once, one per lane: lane `k`'s
+    /// point `(p[0][k], p[1][k], p[2][k])` (world) lies in the interval
+    /// whose [`Interval::hint`] is `hints[k]`. Lanes whose bit is set in
+    /// `live` get exactly the value [`Volume::sample_in`] gives there, NaN
+    /// where no data covers the point; the others are NaN. The default
+    /// samples point by point.
+    #[inline(always)]
+    fn sample_values_lanes<L: Lanes>(&self, hints: &[u32; LANES], p: [L; 3], live: u32) -> L {
+        let [x, y, z] = p.map(L::to_array);
+        let mut out = [f32::NAN; LANES];
+        for (k, v) in out.iter_mut().enumerate() {
+            if live >> k & 1 != 0 {
+                let iv = Interval {
+                    hint: hints[k],
+                    ..Interval::sampled(Range1::EMPTY, Range1::EMPTY, 1.0)
+                };
+                let at = Vec3::new(x[k], y[k], z[k]);
+                *v = self.sample_in(at, &iv).map_or(f32::NAN, |s| s.value);
+            }
+        }
+        L::from_array(out)
     }
 
     /// Samples every point of a packet at once: `out` — the caller's buffer,
@@ -408,6 +439,13 @@ impl<V: Volume + ?Sized> Volume for &V {
     }
     fn sample_batch_values(&self, batch: &SampleBatch, out: &mut Vec<f32>) -> bool {
         (**self).sample_batch_values(batch, out)
+    }
+    fn samples_in_lanes(&self) -> bool {
+        (**self).samples_in_lanes()
+    }
+    #[inline(always)]
+    fn sample_values_lanes<L: Lanes>(&self, hints: &[u32; LANES], p: [L; 3], live: u32) -> L {
+        (**self).sample_values_lanes(hints, p, live)
     }
     fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
         (**self).intervals(ray, t, query, out)

@@ -58,6 +58,16 @@ pub(crate) enum Walk {
     Done,
 }
 
+/// How [`Cursor::whole_cells`] stopped.
+enum Cells {
+    /// The taker refused a segment.
+    Stopped,
+    /// At a cell the one-by-one loop handles.
+    Edge,
+    /// At a gap before interval `k`, which is to be entered.
+    Gap,
+}
+
 /// Walks the segments of a ray's intervals in order; resumable, so the
 /// packet path can take them a window at a time, and lazy, so the list may
 /// grow as the walk goes (it looks at most one lattice cell ahead).
@@ -97,6 +107,8 @@ pub(crate) struct Cursor {
     open: bool,
     /// Where the last returned segment ended.
     prev_end: f32,
+    /// Intervals `k..=run_last` are known to go on with the open run.
+    run_last: usize,
     /// Whether interval `k` has been entered: its run is open with its step
     /// and `n` is at or past its start, so the next call goes straight to
     /// its cells.
@@ -118,6 +130,7 @@ impl Cursor {
             run_lo: span.lo,
             open: false,
             prev_end: span.lo,
+            run_last: 0,
             entered: false,
         }
     }
@@ -216,6 +229,7 @@ impl Cursor {
                     self.run_lo = if self.k == 0 { self.span.lo } else { iv.t.lo };
                     self.n = self.cell_before(self.run_lo);
                     self.open = true;
+                    self.run_last = self.k;
                 }
                 // Skip the cells before this interval and before what is owned
                 // without walking them (a gap of skipped space can be long).
@@ -231,8 +245,17 @@ impl Cursor {
             // The cells of this interval. Each boundary is computed from its
             // index (never accumulated); the far one of a cell is the near
             // one of the next, so it is computed once.
+            let mut iv = iv;
             let mut b_near = self.boundary(self.n);
             loop {
+                if b_near >= self.own.lo.max(self.run_lo) {
+                    match self.whole_cells(intervals, settings, &mut b_near, &mut take) {
+                        Cells::Stopped => return Walk::Stopped,
+                        // The walk enters interval `k` at the top.
+                        Cells::Gap => break,
+                        Cells::Edge => iv = &intervals[self.k],
+                    }
+                }
                 let b0 = b_near.max(self.run_lo);
                 // A cell starting at or past the interval's end (or the
                 // span's) has its midpoint beyond the interval: done here.
@@ -275,10 +298,83 @@ impl Cursor {
                     return Walk::Stopped;
                 }
             }
-            // This interval is done; the run stays open for the next one.
+            // This interval is done (or, after a gap, interval `k` is yet to
+            // be entered); the run stays open for the next one.
+            if !self.entered {
+                continue;
+            }
             self.k += 1;
             self.entered = false;
         }
+    }
+
+    /// The whole cells from cell `n` on (`b_near`: its near boundary, at
+    /// or past the run's start and what is owned) that lie inside the open
+    /// run's known intervals, the span and what is owned: no cell among
+    /// them is cut, so each is emitted as the one-by-one loop would emit
+    /// it, with the interval its midpoint lies in — entering the run's
+    /// next intervals on the way without leaving the loop (short regions
+    /// make that the common way from one interval to the next). Stops at
+    /// a cell that is not whole ([`Cells::Edge`], for the one-by-one loop
+    /// at interval `k`) or whose midpoint falls in a gap before interval
+    /// `k` ([`Cells::Gap`]: that cell is passed over, and `k` is left to
+    /// be entered, which jumps the rest of the gap).
+    #[inline(always)]
+    fn whole_cells<F: FnMut(Segment, &Interval) -> bool>(
+        &mut self,
+        intervals: &[Interval],
+        settings: &RenderSettings,
+        b_near: &mut f32,
+        take: &mut F,
+    ) -> Cells {
+        // The run's intervals known so far: `k..=run_last` (each checked
+        // once).
+        let mut j = self.run_last.max(self.k);
+        while let Some(nx) = intervals.get(j + 1)
+            && self.continues(nx, settings)
+        {
+            j += 1;
+        }
+        self.run_last = j;
+        let lim = intervals[j].t.hi.min(self.span.hi).min(self.own.hi);
+        // The walk's state in registers (the taker may not be seen
+        // through), written back after.
+        let (xi, dt) = (self.xi, self.dt as f64);
+        let (mut n, mut prev_end, mut k) = (self.n, self.prev_end, self.k);
+        let mut near = *b_near;
+        let mut iv = &intervals[k];
+        let out = loop {
+            let far = (((n + 1) as f64 + xi) * dt) as f32;
+            if !(far <= lim && near < far) {
+                break Cells::Edge;
+            }
+            let m = near + 0.5 * (far - near);
+            // `m < far <= intervals[j].t.hi`: this ends by `j`.
+            while m >= iv.t.hi {
+                k += 1;
+                iv = &intervals[k];
+            }
+            if m < iv.t.lo {
+                // Skipped, as the one-by-one loop skips it; entering `k`
+                // jumps the rest of a long gap.
+                (n, near) = (n + 1, far);
+                self.entered = false;
+                break Cells::Gap;
+            }
+            n += 1;
+            let seg = Segment {
+                t: m,
+                len: far - near,
+                interval: k as u32,
+                reset: near != prev_end,
+            };
+            (near, prev_end) = (far, far);
+            if !take(seg, iv) {
+                break Cells::Stopped;
+            }
+        };
+        (self.n, self.prev_end, self.k, *b_near) = (n, prev_end, k, near);
+        out
     }
 
     /// `min(b, run end)` for the run holding interval `k`, where `b` lies

@@ -48,6 +48,7 @@ pub mod font;
 mod march;
 pub mod mirror;
 mod packet;
+mod ray_lanes;
 pub mod sampling;
 pub mod scatter;
 mod scatter_packet;
@@ -117,6 +118,10 @@ pub struct RenderSettings {
     /// Use the volume's packet path when it has one (module `packet`); the
     /// per-sample path otherwise. Both give the same image.
     pub packets: bool,
+    /// On the packet path, march eight rays in SIMD lanes where the
+    /// render and the volume allow (module `ray_lanes`); off: packet
+    /// passes. Both give the same image.
+    pub lanes: bool,
     /// Single scattering with volumetric shadows instead of emission–
     /// absorption (module [`scatter`]); `light` and iso-surfaces are then
     /// not used.
@@ -217,6 +222,7 @@ impl RenderSettings {
             volume: true,
             log_scale: false,
             packets: true,
+            lanes: true,
             scatter: None,
             frame: 0,
             event_budget: None,

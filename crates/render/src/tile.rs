@@ -9,6 +9,7 @@ use voxless_core::{IntervalLists, IntervalQuery, Range1, Ray, TileRays, Volume};
 use crate::cursor::RayIntervals;
 use crate::march::{Ctx, RaySpans, RayStats, march_intervals, region};
 use crate::packet::{self, PacketScratch};
+use crate::ray_lanes;
 use crate::sampling::PixelRng;
 use crate::scatter::FreeFlight;
 use crate::scatter_packet::{self, ScatterScratch};
@@ -178,6 +179,8 @@ fn render_with<V: Volume>(
                 ));
             }
         }
+    } else if packets && ray_lanes::applies(volume, &ctx) {
+        ray_lanes::render_tile(volume, &ctx, tile, input, ivs, &mut out);
     } else if packets {
         packet::render_tile(
             volume,

@@ -26,7 +26,7 @@ use voxless_core::simd::{LANES, Lanes, Simd, WithLanes, dispatch};
 use voxless_core::{Interval, Sample, SampleBatch, Vec3};
 
 use super::lanes::{ValueLanes, brick_value_lanes};
-use super::recon::{BasisSums, BrickGrid, Recon, ValueSums, brick_sums};
+use super::recon::{BasisSums, Recon, ValueSums, brick_sums};
 use super::{AmrVolume, Reconstruction};
 
 /// Samples per run at most (a run of one region longer than this is cut);
@@ -100,7 +100,13 @@ impl AmrVolume {
             _ => 0,
         };
         out.size(total);
-        let mut runs = Runs::default();
+        // The open runs are 17 kB: reused, not built afresh per batch
+        // (taken out of the thread-local, so nothing is borrowed across
+        // the reconstruction).
+        let mut runs = RUNS_SCRATCH.take().unwrap_or_default();
+        for run in &mut runs.0 {
+            (run.region, run.len) = (usize::MAX, 0);
+        }
         let mut slot = 0;
         for (r, ray) in batch.rays.iter().enumerate() {
             for &t in batch.samples(r) {
@@ -138,6 +144,7 @@ impl AmrVolume {
         for run in &mut runs.0 {
             self.flush::<L, O>(run, gradient, out);
         }
+        RUNS_SCRATCH.set(Some(runs));
     }
 
     /// Reconstructs the samples of `run` (one region) into their slots of
@@ -157,10 +164,10 @@ impl AmrVolume {
             let mut sums = [BasisSums::default(); RUN];
             let sums = &mut sums[..n];
             for &b in bricks {
-                let grid = BrickGrid::new(&self.bricks[b as usize]);
+                let grid = &self.grids[b as usize];
                 for (k, s) in sums.iter_mut().enumerate() {
                     let pu = Vec3::new(run.x[k], run.y[k], run.z[k]);
-                    brick_sums(&grid, pu, fields, s);
+                    brick_sums(grid, pu, fields, s);
                 }
             }
             for (s, &slot) in sums.iter().zip(&run.slot) {
@@ -172,14 +179,14 @@ impl AmrVolume {
         // per run; every sample still adds its bricks in the region's order.
         let mut acc = [ValueLanes::zero(); RUN / LANES];
         for &b in bricks {
-            let grid = BrickGrid::new(&self.bricks[b as usize]);
+            let grid = &self.grids[b as usize];
             for (acc, at) in acc.iter_mut().zip((0..n).step_by(LANES)) {
                 let p = [
                     L::load(&run.x, at),
                     L::load(&run.y, at),
                     L::load(&run.z, at),
                 ];
-                brick_value_lanes(&grid, p, L::first(n - at), fields, acc);
+                brick_value_lanes(grid, p, L::first(n - at), fields, acc);
             }
         }
         for (acc, at) in acc.iter().zip((0..n).step_by(LANES)) {
@@ -275,6 +282,10 @@ impl Default for Run {
 /// rays of a packet cross the same regions, so a region's run collects
 /// samples from several rays and fills more lanes.
 struct Runs([Run; RUNS]);
+
+thread_local! {
+    static RUNS_SCRATCH: std::cell::Cell<Option<Box<Runs>>> = const { std::cell::Cell::new(None) };
+}
 
 /// Open runs at most (a power of two).
 const RUNS: usize = 64;

@@ -1,7 +1,12 @@
 //! The value-only basis reconstruction on eight samples at once.
 //!
-//! A run holds samples of one region (of one ray or several); every sample
-//! adds the same bricks' terms. Here eight of them go through a brick
+//! Two users: a packet pass's run holds samples of one region (of one ray
+//! or several), every one adding the same bricks' terms; a step of eight
+//! rays in lanes ([`AmrVolume::values_lanes`]) holds one sample per ray,
+//! each in its own region — their brick lists are merged, and each brick
+//! of the union goes through with the lanes whose list holds it (half the
+//! steps of the AMRClaw frame have one list for all eight). Eight samples
+//! go through a brick
 //! together: the per-axis tent stencils (a clamp, a floor, the weights, two
 //! clamped cells) in lanes, the eight cells' values gathered (one
 //! instruction each on AVX2), the trilinear lerp in lanes, and the brick's
@@ -11,9 +16,110 @@
 //! every SIMD backend). Lanes whose sample the brick does not reach — or
 //! that hold no sample — add exact zeros, as the scalar path adds nothing.
 
+use voxless_core::Vec3;
 use voxless_core::simd::{LANES, Lanes};
 
 use super::recon::BrickGrid;
+use super::{AmrVolume, Reconstruction};
+
+impl AmrVolume {
+    /// Whether [`AmrVolume::values_lanes`] serves: basis reconstruction of
+    /// plain values (no colour field).
+    pub(crate) fn offers_lanes(&self) -> bool {
+        self.settings.color_field.is_none() && self.settings.reconstruction == Reconstruction::Basis
+    }
+
+    /// [`voxless_core::Volume::sample_values_lanes`]: eight points, each in
+    /// the region its hint names (a lane with no region is located point
+    /// by point). Each lane adds its own region's bricks' terms in its
+    /// list's order with [`brick_value_lanes`], so it gets the bits of
+    /// [`AmrVolume::reconstruct`].
+    #[inline(always)]
+    pub(crate) fn values_lanes<L: Lanes>(&self, hints: &[u32; LANES], p: [L; 3], live: u32) -> L {
+        let s = L::splat;
+        let inv = 1.0 / self.h;
+        let o = self.origin;
+        let pu = [
+            (p[0] - s(o.x)) * s(inv),
+            (p[1] - s(o.y)) * s(inv),
+            (p[2] - s(o.z)) * s(inv),
+        ];
+        let fields = self.basis_fields(self.settings.field);
+        let mut acc = ValueLanes::zero();
+        // Every live lane's brick list (sorted by brick), merged: each brick
+        // of the union goes through the kernel once, for the lanes whose
+        // list holds it, so every lane meets its own bricks in its list's
+        // order.
+        let mut located = 0u32;
+        let mut lists: [&[u32]; LANES] = [&[]; LANES];
+        let mut same = None;
+        for (k, list) in lists.iter_mut().enumerate() {
+            if live >> k & 1 == 0 {
+                continue;
+            }
+            match self.region_lists.get(hints[k] as usize) {
+                Some(&[a, b, g]) => {
+                    *list = &self.regions.brick_ids[a as usize..b as usize];
+                    same = match same {
+                        None => Some(Some(g)),
+                        Some(s) => Some(s.filter(|&s| s == g)),
+                    };
+                }
+                // No region named: found point by point below.
+                _ => located |= 1 << k,
+            }
+        }
+        if let Some(Some(_)) = same {
+            // One brick list for every lane (the common case): its bricks
+            // in order, all lanes at once.
+            let mut bits = [0u32; LANES];
+            for (k, bit) in bits.iter_mut().enumerate() {
+                if (live & !located) >> k & 1 != 0 {
+                    *bit = u32::MAX;
+                }
+            }
+            let mask = L::from_bits(bits);
+            let first = (live & !located).trailing_zeros() as usize;
+            for &b in lists[first] {
+                brick_value_lanes(&self.grids[b as usize], pu, mask, fields, &mut acc);
+            }
+        } else {
+            loop {
+                let b = lists.iter().filter_map(|l| l.first()).min().copied();
+                let Some(b) = b else {
+                    break;
+                };
+                let mut bits = [0u32; LANES];
+                for (list, bit) in lists.iter_mut().zip(&mut bits) {
+                    if list.first() == Some(&b) {
+                        *bit = u32::MAX;
+                        *list = &list[1..];
+                    }
+                }
+                let mask = L::from_bits(bits);
+                brick_value_lanes(&self.grids[b as usize], pu, mask, fields, &mut acc);
+            }
+        }
+        // `B = Σ Ĥ v / Σ Ĥ`, NaN where no tent reaches (the lanes without a
+        // sample have zero sums).
+        let v = L::quotient_f64(&acc.sv, &acc.sw);
+        if located == 0 {
+            return v;
+        }
+        let mut out = v.to_array();
+        let [x, y, z] = [p[0].to_array(), p[1].to_array(), p[2].to_array()];
+        for (k, v) in out.iter_mut().enumerate() {
+            if located >> k & 1 != 0 {
+                let at = Vec3::new(x[k], y[k], z[k]);
+                *v = self
+                    .locate(at)
+                    .and_then(|r| self.reconstruct(at, r, self.settings.field, false))
+                    .map_or(f32::NAN, |x| x.value);
+            }
+        }
+        L::from_array(out)
+    }
+}
 
 /// `1.5 · 2²³`: for |t| < 2²², `(t + ROUND) − ROUND` is `t` rounded to an
 /// integer (the float spacing there is 1).

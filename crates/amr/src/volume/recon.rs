@@ -40,14 +40,14 @@ impl AmrVolume {
         }
         let fields = self.basis_fields(field);
         let bricks = self.regions.bricks_of(region).iter();
-        let grids = bricks.map(|&b| BrickGrid::new(&self.bricks[b as usize]));
+        let grids = bricks.map(|&b| &self.grids[b as usize]);
         if !gradient {
             let mut sums = ValueSums::default();
-            grids.for_each(|grid| brick_value_sums(&grid, pu, fields, &mut sums));
+            grids.for_each(|grid| brick_value_sums(grid, pu, fields, &mut sums));
             return self.finish_values(sums, fields.1.is_some());
         }
         let mut sums = BasisSums::default();
-        grids.for_each(|grid| brick_sums(&grid, pu, fields, &mut sums));
+        grids.for_each(|grid| brick_sums(grid, pu, fields, &mut sums));
         self.finish(&sums, gradient, fields.1.is_some())
     }
 
@@ -127,8 +127,8 @@ impl AmrVolume {
         let two_fields = color_field != field;
         let mut terms = SortedTerms::default();
         for &b in self.regions.bricks_of(region) {
-            let grid = BrickGrid::new(&self.bricks[b as usize]);
-            let Some(st) = Stencil::new(&grid, pu, gradient) else {
+            let grid = &self.grids[b as usize];
+            let Some(st) = Stencil::new(grid, pu, gradient) else {
                 continue;
             };
             for kz in 0..2 {
@@ -144,7 +144,7 @@ impl AmrVolume {
                         if h <= 0.0 && !gradient {
                             continue;
                         }
-                        let cell = st.cell(&grid, kx, ky, kz);
+                        let cell = st.cell(grid, kx, ky, kz);
                         let d = if gradient {
                             [
                                 dwt[0][kx] * wt[1][ky] * wt[2][kz],
