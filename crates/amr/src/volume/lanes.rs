@@ -53,8 +53,12 @@ impl AmrVolume {
         let mut located = 0u32;
         let mut lists: [&[u32]; LANES] = [&[]; LANES];
         let mut same = None;
+        // Half the steps of the AMRClaw frame have every lane in one region:
+        // one lookup then.
+        let first = hints[(live.trailing_zeros() as usize).min(LANES - 1)];
+        let one_region = (0..LANES).all(|k| live >> k & 1 == 0 || hints[k] == first);
         for (k, list) in lists.iter_mut().enumerate() {
-            if live >> k & 1 == 0 {
+            if live >> k & 1 == 0 || (one_region && k > live.trailing_zeros() as usize) {
                 continue;
             }
             match self.region_lists.get(hints[k] as usize) {
@@ -68,6 +72,9 @@ impl AmrVolume {
                 // No region named: found point by point below.
                 _ => located |= 1 << k,
             }
+        }
+        if one_region && located != 0 {
+            located = live;
         }
         if let Some(Some(_)) = same {
             // One brick list for every lane (the common case): its bricks
