@@ -1,6 +1,7 @@
 """The GIL is released while Rust works; Ctrl-C cancels; threads share a volume."""
 
 import _thread
+import signal
 import threading
 import time
 
@@ -39,6 +40,18 @@ def test_a_python_thread_runs_during_a_render(big):
 
 
 def test_ctrl_c_cancels_a_render(big):
+    # A process started in the background of a non-interactive shell
+    # inherits SIGINT ignored, and `interrupt_main` then does nothing: the
+    # render would run to its end (many minutes). Python's own handler is
+    # installed for the test, as an interactive session has it.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        _ctrl_c_cancels(big)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _ctrl_c_cancels(big):
     timer = threading.Timer(0.2, _thread.interrupt_main)
     start = time.perf_counter()
     timer.start()

@@ -639,7 +639,8 @@ impl Volume for AmrVolume {
         self.sample_batch_values_on(voxless_core::Simd::Auto, batch, out)
     }
 
-    /// Eight rays' samples at once, region by region ([`batch`]).
+    /// Eight points at once, one per lane (`volume/lanes.rs`): the lanes'
+    /// brick lists merged, each brick of the union evaluated once.
     fn samples_in_lanes(&self) -> bool {
         self.offers_lanes()
     }

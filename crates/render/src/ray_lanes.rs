@@ -1,17 +1,20 @@
 //! Eight rays in SIMD lanes, one sample of each per step — for plain
-//! emission–absorption renders (no light, no iso-surfaces, a linear
-//! transfer function) of volumes that sample eight points in one call
+//! emission–absorption renders (no light, no iso-surfaces, no attribute,
+//! a linear value scale) of volumes that sample eight points in one call
 //! ([`Volume::sample_values_lanes`]: AMR).
 //!
-//! Each lane holds one ray of the tile. The ray's [`Cursor`] places its
-//! samples on the same lattice as every other path, a few segments at a
-//! time into the lane's queue. A step takes the front segment of every
-//! lane, samples the eight points at once, classifies them and composites
-//! them onto the eight pixels, all in lanes. There is no sample buffer and
-//! no per-sample bookkeeping between those stages — which is what a packet
-//! pass spends most of an AMR frame on (docs/benchmarks.md). A lane whose
-//! ray turns opaque or runs out of samples takes the tile's next ray, so
-//! the lanes stay full until the tile runs out.
+//! Each lane holds one ray of a 4×2 block of neighbouring pixels. The
+//! ray's [`Cursor`] places its samples on the same lattice as every other
+//! path, a few segments at a time into the lane's queue. A step takes the
+//! front segment of every lane, samples the eight points at once,
+//! classifies them and composites them onto the eight pixels, all in
+//! lanes. There is no sample buffer and no per-sample bookkeeping between
+//! those stages — which is what a packet pass spends most of an AMR frame
+//! on (docs/benchmarks.md). A lane whose ray turns opaque or runs out of
+//! samples idles until the block is done; the next block then comes in.
+//! (Handing such a lane the tile's next ray at once keeps the lanes fuller,
+//! but its ray then crosses other regions than its neighbours', and the
+//! step's eight samples need more bricks: measured slower.)
 //!
 //! Every ray gets the samples of [`crate::march`], each reconstructed,
 //! classified and composited front to back with the arithmetic of the
