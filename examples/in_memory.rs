@@ -113,7 +113,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 fn render(loaded: Loaded, path: &Path) -> Result<(), Box<dyn std::error::Error>> {
     let kind = loaded.volume.kind();
     let scene = Scene::with_loaded(loaded, &SceneDesc::default(), Path::new("."))?;
-    for n in &scene.notes {
+    for n in &scene.view.notes {
         eprintln!("note: {n}");
     }
     let image = scene.render(&Control::new())?;
@@ -121,7 +121,7 @@ fn render(loaded: Loaded, path: &Path) -> Result<(), Box<dyn std::error::Error>>
         path,
         image.width,
         image.height,
-        &image.to_srgb8(scene.background),
+        &image.to_srgb8(scene.view.background),
     )?;
     eprintln!("{kind} → {}", path.display());
     Ok(())

@@ -1,6 +1,7 @@
-//! Views and what an image says about itself.
+//! The camera: what a description's `[camera]` table (and its defaults)
+//! becomes, in the volume's frame ([`camera`]).
 //!
-//! - The **default view** ([`default_view`]) is a three-quarter view: the
+//! - The **default view** is a three-quarter view: the
 //!   up vector is `camera.up` (default +z, the convention of SPH,
 //!   cosmology and most CFD output), the eye looks across the data's
 //!   longest horizontal side (so it runs across the image, left to right
@@ -15,20 +16,15 @@
 //!   vector (the result stays within ±89.9° of the horizontal, so the view
 //!   never flips over the pole), and zoom divides its distance to the
 //!   look-at point (orthographic cameras: the view height instead).
-//!   [`Scene::reaim`] applies a new camera description to a resolved
-//!   scene, which is how a turntable renders without reloading the data.
-//! - [`Scene::colorbar`]: the range, scale and field name a colour bar
-//!   shows.
+//!   [`crate::Resolved::reaim`] applies a new camera description to a
+//!   resolved view, which is how a turntable renders without reloading the
+//!   data.
 
-use std::path::Path;
+use voxless_core::{Aabb, Camera, Projection, Vec3};
+use voxless_scene::{CameraDesc, ProjectionName};
 
-use voxless_core::{Aabb, Camera, Vec3};
-use voxless_render::colorbar::ColorbarSpec;
-
-use voxless_scene::{CameraDesc, SceneDesc};
-
-use crate::load::positive;
-use crate::{AnyVolume, Scene, SceneError};
+use crate::checks::positive;
+use crate::{SceneError, WorldFrame};
 
 /// Largest elevation reached, in degrees.
 const MAX_ELEVATION_DEG: f64 = 89.9;
@@ -237,78 +233,85 @@ pub(crate) fn default_light_direction(camera: &Camera) -> Vec3 {
     (camera.up * 0.6 - camera.right * 0.4 - camera.forward * 0.7).normalized()
 }
 
-/// A name for a field given as a file (`temp_%04d.npy` → `temp`) or a
-/// CSV column.
-pub(crate) fn name_of(spec: &str) -> Option<String> {
-    let p = Path::new(spec);
-    let file = p.file_name()?.to_string_lossy().into_owned();
-    let stem = match p.extension() {
-        Some(_) => p.file_stem()?.to_string_lossy().into_owned(),
-        None => file,
-    };
-    let cut = stem.find(['%', '*', '?']).unwrap_or(stem.len());
-    let name = stem[..cut].trim_end_matches(['_', '-', '.', ' ']);
-    (!name.is_empty()).then(|| name.to_string())
-}
-
-impl Scene {
-    /// Points the camera as `desc.camera` says (e.g. a turntable frame's
-    /// orbit), keeping the data, image size and settings; a default light
-    /// follows the camera.
-    pub fn reaim(&mut self, desc: &SceneDesc) -> Result<(), SceneError> {
-        let aspect = self.settings.width as f32 / self.settings.height as f32;
-        self.camera = crate::resolve::camera(&desc.camera, &self.framed, aspect, &self.frame)?;
-        let follows = desc.light.as_ref().is_some_and(|l| l.direction.is_none());
-        if let Some(light) = &mut self.settings.light
-            && follows
+/// The camera `c` describes (world positions moved into `frame`) for data
+/// within `bounds` (in the frame).
+pub(crate) fn camera(
+    c: &CameraDesc,
+    bounds: &Aabb,
+    aspect: f32,
+    frame: &WorldFrame,
+) -> Result<Camera, SceneError> {
+    let mut up = Vec3::from_array(c.up.unwrap_or(DEFAULT_UP));
+    if !(up.is_finite() && up.length_squared() > 0.0) {
+        return Err(SceneError::setting(
+            "camera.up (--up)",
+            format!("{:?} is not a finite, non-zero vector", up.to_array()),
+        ));
+    }
+    let fov = c.fov.unwrap_or(VIEW_FOV_DEG);
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(SceneError::setting(
+            "camera.fov (--fov)",
+            format!("{fov} is outside (0, 180) degrees"),
+        ));
+    }
+    for (field, p) in [
+        ("camera.eye (--eye)", c.eye),
+        ("camera.look_at (--look-at)", c.look_at),
+    ] {
+        if let Some(p) = p
+            && !p.iter().all(|v| v.is_finite())
         {
-            light.direction = default_light_direction(&self.camera);
-            if let Some(sc) = &mut self.settings.scatter
-                && let voxless_render::LightSource::Directional(d) = &mut sc.light
-            {
-                *d = light.direction;
-            }
+            return Err(SceneError::setting(field, format!("{p:?} is not finite")));
         }
-        Ok(())
     }
-
-    /// The name of the field the colours stand for, when known: the
-    /// particle attribute (its file or column name; "temperature" for the
-    /// demo) or "density", the AMR colour (else opacity) field, or "density"
-    /// for a tessellation.
-    pub fn colour_field_name(&self, desc: &SceneDesc) -> Option<String> {
-        match &self.volume {
-            AnyVolume::Particles(v) => {
-                match desc.particles.as_ref().and_then(|p| p.attribute.as_deref()) {
-                    Some(spec) => name_of(spec),
-                    None if v.has_attribute() => Some("temperature".into()),
-                    None => Some("density".into()),
+    let look_at = c
+        .look_at
+        .map(|p| frame.to_local(p))
+        .unwrap_or(bounds.center());
+    let eye = match c.eye {
+        Some(p) => frame.to_local(p),
+        None => default_eye(bounds, aspect, up, fov).ok_or_else(|| {
+            SceneError::setting(
+                "camera",
+                format!(
+                    "the data's bounds {:?}..{:?} cannot be framed; give --eye and --look-at",
+                    bounds.min.to_array(),
+                    bounds.max.to_array()
+                ),
+            )
+        })?,
+    };
+    if c.up.is_none() && eye != look_at {
+        // The default up (+z) along the line of sight of an explicit eye
+        // (looking straight down or up): +y instead, as before +z was the
+        // default.
+        let d = (look_at - eye).normalized();
+        if d.is_finite() && d.z.abs() > 0.999 {
+            up = Vec3::new(0.0, 1.0, 0.0);
+        }
+    }
+    // Orbit, elevation and zoom act on the eye the lines above chose.
+    let view = ViewAdjust::from_desc(c)?;
+    let ortho = c.projection == Some(ProjectionName::Orthographic);
+    let eye = view.place_eye(eye, look_at, up, !ortho);
+    let projection = match c.projection.unwrap_or(ProjectionName::Perspective) {
+        ProjectionName::Perspective => Projection::Perspective { fov_y_deg: fov },
+        ProjectionName::Orthographic => {
+            let h = match c.ortho_height {
+                Some(h) => {
+                    positive("camera.ortho_height (--orthographic)", h)?;
+                    frame.length_to_local(h as f64)
                 }
+                None => bounds.diagonal(),
+            };
+            let h = h / view.zoom;
+            Projection::Orthographic {
+                half_width: 0.5 * h * aspect,
+                half_height: 0.5 * h,
             }
-            AnyVolume::Amr(v) => desc
-                .amr
-                .as_ref()
-                .and_then(|a| a.color_field.clone().or_else(|| a.field.clone()))
-                .or_else(|| v.field_names().first().cloned()),
-            AnyVolume::Tets(..) => Some("density".into()),
-            AnyVolume::Materials(_) => None,
         }
-    }
-
-    /// What a colour bar for this scene shows: the attribute range when
-    /// colour comes from an attribute (or an AMR colour field), else the
-    /// value range, in log10 units when the transfer function is in log scale.
-    pub fn colorbar(&self, desc: &SceneDesc) -> ColorbarSpec {
-        let st = &self.settings;
-        let (range, log10) = match st.attribute_range {
-            Some(r) => (r, false),
-            None => (st.value_range, st.log_scale),
-        };
-        ColorbarSpec {
-            lo: range.lo,
-            hi: range.hi,
-            log10,
-            label: self.colour_field_name(desc),
-        }
-    }
+    };
+    Camera::look_at(eye, look_at, up, projection)
+        .map_err(|e| SceneError::setting("camera", e.to_string()))
 }

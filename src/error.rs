@@ -72,3 +72,27 @@ impl SceneError {
         }
     }
 }
+
+/// Why work over the ranks of a communicator failed: the scene (the same
+/// error one process gives), the ranks' communication, or a cancel.
+#[derive(Debug, thiserror::Error)]
+pub enum ParallelError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Comm(#[from] voxless_parallel::CommError),
+    #[error("cancelled")]
+    Cancelled,
+}
+
+impl From<voxless_parallel::WireError> for ParallelError {
+    fn from(e: voxless_parallel::WireError) -> Self {
+        ParallelError::Comm(e.into())
+    }
+}
+
+impl From<voxless_core::Cancelled> for ParallelError {
+    fn from(_: voxless_core::Cancelled) -> Self {
+        ParallelError::Cancelled
+    }
+}

@@ -148,6 +148,21 @@ impl WorldFrame {
         )
     }
 
+    /// A box of the volume's coordinates in the world (lower, upper corner).
+    pub fn box_to_world(&self, b: Aabb) -> ([f64; 3], [f64; 3]) {
+        (self.to_world(b.min), self.to_world(b.max))
+    }
+
+    /// Column densities integrated over local lengths in world units: each
+    /// times the scale (the field's values have no length unit).
+    pub fn columns_to_world(&self, mut columns: Vec<f32>) -> Vec<f32> {
+        if self.scale != 1.0 {
+            let s = self.scale;
+            columns.iter_mut().for_each(|c| *c = (*c as f64 * s) as f32);
+        }
+        columns
+    }
+
     /// A world length (a radius, a step, a view height) in local units.
     #[inline]
     pub fn length_to_local(&self, l: f64) -> f32 {

@@ -57,9 +57,11 @@
 pub mod autorange;
 pub mod budget;
 mod camera;
+mod checks;
 mod columns;
 pub mod demo;
 mod error;
+mod fields;
 pub mod flags;
 mod frame;
 pub mod histogram;
@@ -67,6 +69,7 @@ pub mod load;
 mod memory;
 pub mod output;
 pub mod parallel;
+mod placement;
 pub mod pose;
 pub mod progressive;
 pub mod projection;
@@ -78,18 +81,21 @@ mod surfaces;
 mod view;
 mod volume;
 
-pub use error::{Error, SceneError};
+pub use checks::set_projection_pixels;
+pub use error::{Error, ParallelError, SceneError};
+pub use fields::Fields;
 pub use flags::SceneFlags;
 pub use frame::WorldFrame;
 pub use load::AmrArrays;
-pub use load::{Loaded, frame_count, frame_numbers, load, read_points, read_scene};
+pub use load::{Loaded, Purpose, Share, frame_count, frame_numbers, load, read_points, read_scene};
 pub use memory::ParticleArrays;
+pub use placement::{Placed, PlacedData, Placement, Rendered};
 pub use projection::{ProjectionDesc, ProjectionView};
 pub use resolve::{
     Resolved, VolumeKind, VolumeSummary, resolve, resolve_in, resolve_summary, resolve_with,
     transfer_function, transfer_function_at,
 };
-pub use scene::Scene;
+pub use scene::{DistributedScene, Scene};
 pub use volume::AnyVolume;
 
 // For interactive front-ends (the browser viewer, notebooks): camera poses

@@ -205,12 +205,8 @@ impl AnyVolume {
         let mut notes = Vec::new();
         let volume = match &desc.materials {
             Some(mats) => {
-                if desc.species.is_some() {
-                    return Err(SceneError::setting(
-                        "particles.species",
-                        "give the species per material, not both",
-                    ));
-                }
+                // The species are the materials' (an error when both give one).
+                load::materials::material_descs(desc, mats)?;
                 let v = load::materials::build_materials(desc, mats, &mut notes, &mut |d, n| {
                     particle_volume(&arrays, d, n)
                 })?;

@@ -48,7 +48,7 @@ impl Pose {
         aspect: f32,
         frame: &WorldFrame,
     ) -> Result<Pose, SceneError> {
-        let camera = crate::resolve::camera(c, bounds, aspect, frame)?;
+        let camera = crate::camera::camera(c, bounds, aspect, frame)?;
         let look_at = c
             .look_at
             .map(|p| frame.to_local(p))

@@ -27,7 +27,7 @@ use voxless_core::{Camera, Cancelled, Control};
 use voxless_render::{Film, RenderSettings};
 use voxless_transfer::TransferFunction;
 
-use crate::{AnyVolume, SceneError};
+use crate::AnyVolume;
 
 /// Which image a progressive render hands out.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -162,48 +162,4 @@ pub fn render_progressive(
         };
         on_image(stage, film, settings)
     })
-}
-
-/// An error naming the iso-values when iso-surfaces were asked for but none
-/// appears anywhere in `film` — with the range of values the rays did see,
-/// in the transfer function's units — so an empty surface is never a silent
-/// image.
-pub fn check_iso(settings: &RenderSettings, film: &Film) -> Result<(), SceneError> {
-    let st = settings;
-    if st.iso.is_empty() || film.stats().iso_hits > 0 {
-        return Ok(());
-    }
-    let unit = |v: f32| {
-        if st.log_scale {
-            v.max(f32::MIN_POSITIVE).log10()
-        } else {
-            v
-        }
-    };
-    let asked: Vec<String> = st.iso.iter().map(|&v| format!("{}", unit(v))).collect();
-    let scale = if st.log_scale {
-        "log10 of the field"
-    } else {
-        "the field"
-    };
-    let seen = film.stats().values;
-    let what = if seen.is_empty() {
-        "the rays meet no data".to_string()
-    } else {
-        format!(
-            "{scale} along the rays lies in [{:.4}, {:.4}]",
-            unit(seen.lo),
-            unit(seen.hi)
-        )
-    };
-    Err(SceneError::setting(
-        "render.iso (--iso)",
-        format!(
-            "no iso-surface at {} appears in the image: {what}; the transfer function's \
-             value range is [{:.4}, {:.4}] in the same units",
-            asked.join(", "),
-            st.value_range.lo,
-            st.value_range.hi
-        ),
-    ))
 }

@@ -7,17 +7,16 @@
 
 use std::path::Path;
 
-use voxless_core::{Aabb, Camera, EventBudget, Projection, Range1, Vec3};
+use voxless_core::{Aabb, Camera, EventBudget, Range1, Vec3};
 use voxless_render::{FreeFlight, Light, LightSource, Noise, RenderSettings, Scatter};
-use voxless_scene::{
-    CameraDesc, FreeFlightName, LightDesc, NoiseName, ProjectionName, SceneDesc, TetModeName,
-    TransferDesc,
-};
+use voxless_scene::{FreeFlightName, LightDesc, NoiseName, SceneDesc, TetModeName, TransferDesc};
 use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
 
 use crate::autorange::{HIGH_PERCENTILE, LOW_PERCENTILE, Probe, TARGET_OPTICAL_DEPTH};
-use crate::camera::{DEFAULT_UP, VIEW_FOV_DEG, ViewAdjust, default_eye, default_light_direction};
-use crate::load::{positive, range};
+use crate::camera::{camera, default_light_direction};
+use crate::checks::{
+    positive, range, refuse_settings_without_effect, refuse_what_the_kind_cannot_honour,
+};
 use crate::{AnyVolume, SceneError, WorldFrame};
 
 /// How to look at a volume: everything a render, projection or sample needs
@@ -44,6 +43,19 @@ pub enum VolumeKind {
     Amr,
     Tets,
     Materials,
+}
+
+impl VolumeKind {
+    /// How the kind is called in messages: "particles", "AMR cells",
+    /// "phase-space tessellation", "multi-material particles".
+    pub fn name(self) -> &'static str {
+        match self {
+            VolumeKind::Particles => "particles",
+            VolumeKind::Amr => "AMR cells",
+            VolumeKind::Tets => "phase-space tessellation",
+            VolumeKind::Materials => "multi-material particles",
+        }
+    }
 }
 
 /// What resolving needs to know of a volume besides its field along the
@@ -117,7 +129,11 @@ pub fn resolve_with(
 /// [`resolve_with`] from what resolving needs of a volume: its summary, and
 /// the probe of its field (`probe`, or `probe_of(clip)` when the defaults
 /// need one) — for a decomposed volume, the whole data's summary and a
-/// probe its ranks sample together.
+/// probe its ranks sample together. The steps, in order: the transfer
+/// function; the image and marching settings; the probe (when a default
+/// needs one); the defaults taken from the data (value range, opacity
+/// scale); iso-surfaces and the k-buffer; surfaces and instances; the box
+/// the camera frames; the camera; the light; the refusals.
 pub fn resolve_summary(
     volume: &VolumeSummary,
     frame: &WorldFrame,
@@ -127,9 +143,67 @@ pub fn resolve_summary(
     probe_of: &mut dyn FnMut(Option<&Aabb>) -> Probe,
     framed: Option<([f64; 3], [f64; 3])>,
 ) -> Result<Resolved, SceneError> {
-    let kind = volume.kind;
     let mut notes = Vec::new();
     let tf = transfer_function_at(&desc.transfer, base, &mut notes)?;
+    let mut settings = march_settings(volume, frame, desc)?;
+    // What the data looks like along probe rays (a time series passes the
+    // probe of all its frames), for the defaults below; inside the clip box,
+    // as that is what the image shows.
+    let default_view = desc.camera.eye.is_none() && desc.camera.look_at.is_none();
+    let needs_probe =
+        desc.transfer.value_range.is_none() || desc.render.opacity_scale.is_none() || default_view;
+    let own_probe;
+    let probe = match (needs_probe, probe) {
+        (false, _) => None,
+        (true, Some(p)) => Some(p),
+        (true, None) => {
+            own_probe = probe_of(settings.clip.as_ref());
+            Some(&own_probe)
+        }
+    };
+    data_defaults(volume, frame, desc, probe, &tf, &mut settings, &mut notes)?;
+    iso_settings(volume.kind, desc, &mut settings)?;
+    crate::surfaces::resolve(desc, base, frame, &volume.bounds, &mut settings, &mut notes)?;
+    let bounds = match framed {
+        Some((lo, hi)) => Aabb::new(frame.to_local(lo), frame.to_local(hi)),
+        None => volume.bounds,
+    };
+    let framed_box = match probe {
+        Some(p) if default_view => framed_box(bounds, p, &tf, &settings, frame, &mut notes),
+        _ => bounds,
+    };
+    let framed_box = with_instances(framed_box, &settings);
+    let aspect = settings.width as f32 / settings.height as f32;
+    let camera = camera(&desc.camera, &framed_box, aspect, frame)?;
+    light_settings(desc, &camera, frame, &mut settings)?;
+    refuse_what_the_kind_cannot_honour(volume.kind, &settings)?;
+    refuse_settings_without_effect(desc)?;
+    let background = desc.render.background.unwrap_or([0.0; 3]);
+    if !background.iter().all(|c| c.is_finite() && *c >= 0.0) {
+        return Err(SceneError::setting(
+            "render.background (--background)",
+            format!("{background:?} is not a colour: give three finite linear RGB values ≥ 0"),
+        ));
+    }
+    Ok(Resolved {
+        camera,
+        tf,
+        settings,
+        background,
+        notes,
+        framed: framed_box,
+    })
+}
+
+/// The image size, samples per pixel and how rays march (step, rate, early
+/// termination, packets, log scale, clip box) the description gives, over
+/// the library's generic defaults for the data.
+fn march_settings(
+    volume: &VolumeSummary,
+    frame: &WorldFrame,
+    desc: &SceneDesc,
+) -> Result<RenderSettings, SceneError> {
+    let kind = volume.kind;
     let width = desc.image.width.unwrap_or(800);
     let height = desc.image.height.unwrap_or(600);
     if width == 0 || height == 0 || width > 32768 || height > 32768 {
@@ -146,11 +220,6 @@ pub fn resolve_summary(
             "samples per pixel must be ≥ 1",
         ));
     }
-    let bounds = match framed {
-        Some((lo, hi)) => Aabb::new(frame.to_local(lo), frame.to_local(hi)),
-        None => volume.bounds,
-    };
-
     let mut settings = RenderSettings::for_data(
         volume.bounds,
         volume.value_range,
@@ -202,21 +271,24 @@ pub fn resolve_summary(
         }
         settings.clip = Some(b);
     }
-    // What the data looks like along probe rays (a time series passes the
-    // probe of all its frames), for the defaults below; inside the clip box,
-    // as that is what the image shows.
-    let default_view = desc.camera.eye.is_none() && desc.camera.look_at.is_none();
-    let needs_probe =
-        desc.transfer.value_range.is_none() || r.opacity_scale.is_none() || default_view;
-    let own_probe;
-    let probe = match (needs_probe, probe) {
-        (false, _) => None,
-        (true, Some(p)) => Some(p),
-        (true, None) => {
-            own_probe = probe_of(settings.clip.as_ref());
-            Some(&own_probe)
-        }
-    };
+    settings.seed = r.seed.unwrap_or(0);
+    Ok(settings)
+}
+
+/// The defaults the data decides, from its `probe` when one was taken: the
+/// value range (a percentile range of the field; a constant field shown as
+/// a uniform medium) and the opacity scale (a typical ray reaches a target
+/// optical depth); each said in `notes`.
+fn data_defaults(
+    volume: &VolumeSummary,
+    frame: &WorldFrame,
+    desc: &SceneDesc,
+    probe: Option<&Probe>,
+    tf: &TransferFunction,
+    settings: &mut RenderSettings,
+    notes: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let kind = volume.kind;
     let units = if settings.log_scale { "log10 " } else { "" };
     match desc.transfer.value_range {
         Some([lo, hi]) => {
@@ -241,16 +313,16 @@ pub fn resolve_summary(
         }
     }
     if desc.transfer.value_range.is_none() && kind != VolumeKind::Materials {
-        constant_field(volume.value_range, &mut settings, &mut notes);
+        constant_field(volume.value_range, settings, notes);
     }
-    match r.opacity_scale {
+    match desc.render.opacity_scale {
         Some(s) => {
             positive("render.opacity_scale (--opacity-scale)", s)?;
             // Extinction per world length → per local length.
             settings.opacity_scale = (s as f64 * frame.scale) as f32;
         }
         None => {
-            if let Some(s) = probe.and_then(|p| p.opacity_scale(&tf, &settings)) {
+            if let Some(s) = probe.and_then(|p| p.opacity_scale(tf, settings)) {
                 settings.opacity_scale = s;
                 notes.push(format!(
                     "opacity scale {:.4e} per unit length (a typical ray through the data \
@@ -260,7 +332,17 @@ pub fn resolve_summary(
             }
         }
     }
-    settings.seed = r.seed.unwrap_or(0);
+    Ok(())
+}
+
+/// Iso-surfaces (values in the transfer function's units), whether the
+/// volume shows, and a tessellation's k-buffer budget.
+fn iso_settings(
+    kind: VolumeKind,
+    desc: &SceneDesc,
+    settings: &mut RenderSettings,
+) -> Result<(), SceneError> {
+    let r = &desc.render;
     if let Some(iso) = &r.iso {
         if let Some(v) = iso.iter().find(|v| !v.is_finite()) {
             return Err(SceneError::setting(
@@ -305,88 +387,93 @@ pub fn resolve_summary(
             ));
         }
     }
-    crate::surfaces::resolve(desc, base, frame, &volume.bounds, &mut settings, &mut notes)?;
-    // The default view frames what the transfer function shows (the whole
-    // bounds with iso-surfaces, whose visibility the probe cannot tell).
-    let mut framed_box = bounds;
-    if default_view
-        && settings.volume
-        && settings.iso.is_empty()
-        && let Some(v) = probe.and_then(|p| p.visible_box(&tf, &settings))
-    {
-        let v = Aabb::new(v.min.max(bounds.min), v.max.min(bounds.max));
-        let shrinks = (0..3).any(|a| v.extent()[a] < 0.9 * bounds.extent()[a]);
-        if !v.is_empty() && shrinks {
-            framed_box = v;
-            let (lo, hi) = (frame.to_world(v.min), frame.to_world(v.max));
-            notes.push(format!(
-                "the view frames the part of the data the transfer function shows, \
-                 [{:.4e}, {:.4e}, {:.4e}]..[{:.4e}, {:.4e}, {:.4e}] (give --eye/--look-at to \
-                 frame otherwise)",
-                lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
-            ));
-        }
+    Ok(())
+}
+
+/// The box a default view frames: the part of `bounds` the transfer
+/// function shows (the whole bounds with iso-surfaces, whose visibility
+/// the probe cannot tell, or when it would barely shrink), said in `notes`
+/// when it is smaller.
+fn framed_box(
+    bounds: Aabb,
+    probe: &Probe,
+    tf: &TransferFunction,
+    settings: &RenderSettings,
+    frame: &WorldFrame,
+    notes: &mut Vec<String>,
+) -> Aabb {
+    if !settings.volume || !settings.iso.is_empty() {
+        return bounds;
     }
-    // Mirror instances belong in the picture.
+    let Some(v) = probe.visible_box(tf, settings) else {
+        return bounds;
+    };
+    let v = Aabb::new(v.min.max(bounds.min), v.max.min(bounds.max));
+    let shrinks = (0..3).any(|a| v.extent()[a] < 0.9 * bounds.extent()[a]);
+    if v.is_empty() || !shrinks {
+        return bounds;
+    }
+    let (lo, hi) = (frame.to_world(v.min), frame.to_world(v.max));
+    notes.push(format!(
+        "the view frames the part of the data the transfer function shows, \
+         [{:.4e}, {:.4e}, {:.4e}]..[{:.4e}, {:.4e}, {:.4e}] (give --eye/--look-at to \
+         frame otherwise)",
+        lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
+    ));
+    v
+}
+
+/// `framed` grown to hold the mirror instances: they belong in the picture.
+fn with_instances(mut framed: Aabb, settings: &RenderSettings) -> Aabb {
     for m in &settings.mirrors {
-        let (p, q) = (m.point(framed_box.min), m.point(framed_box.max));
-        framed_box = framed_box.union(Aabb::new(p.min(q), p.max(q)));
+        let (p, q) = (m.point(framed.min), m.point(framed.max));
+        framed = framed.union(Aabb::new(p.min(q), p.max(q)));
     }
-    let camera = camera(
-        &desc.camera,
-        &framed_box,
-        width as f32 / height as f32,
-        frame,
-    )?;
-    if let Some(l) = &desc.light {
-        let dir = match l.direction {
-            Some(d) => Vec3::from_array(d).normalized(),
-            None => default_light_direction(&camera),
-        };
-        if !(dir.is_finite() && dir.length_squared() > 0.5) {
-            return Err(SceneError::setting(
-                "light.direction",
-                "must be a finite, non-zero vector",
-            ));
-        }
-        let ambient = l.ambient.unwrap_or(0.3);
-        if !(0.0..=1.0).contains(&ambient) {
-            return Err(SceneError::setting(
-                "light.ambient",
-                format!("{ambient} is outside [0, 1]"),
-            ));
-        }
-        settings.light = Some(Light {
-            direction: dir,
-            ambient,
-        });
-        if l.shadows.unwrap_or(false) {
-            settings.scatter = Some(scatter_settings(l, dir, ambient, frame)?);
-            if !settings.iso.is_empty() {
-                return Err(SceneError::setting(
-                    "light.shadows",
-                    "iso-surfaces are not rendered with shadows; drop one of them",
-                ));
-            }
-        }
-    }
-    refuse_what_the_kind_cannot_honour(kind, &settings)?;
-    refuse_settings_without_effect(desc)?;
-    let background = r.background.unwrap_or([0.0; 3]);
-    if !background.iter().all(|c| c.is_finite() && *c >= 0.0) {
+    framed
+}
+
+/// The light the description gives (its direction by default over the
+/// camera's shoulder), with single scattering when it casts shadows.
+fn light_settings(
+    desc: &SceneDesc,
+    camera: &Camera,
+    frame: &WorldFrame,
+    settings: &mut RenderSettings,
+) -> Result<(), SceneError> {
+    let Some(l) = &desc.light else {
+        return Ok(());
+    };
+    let dir = match l.direction {
+        Some(d) => Vec3::from_array(d).normalized(),
+        None => default_light_direction(camera),
+    };
+    if !(dir.is_finite() && dir.length_squared() > 0.5) {
         return Err(SceneError::setting(
-            "render.background (--background)",
-            format!("{background:?} is not a colour: give three finite linear RGB values ≥ 0"),
+            "light.direction",
+            "must be a finite, non-zero vector",
         ));
     }
-    Ok(Resolved {
-        camera,
-        tf,
-        settings,
-        background,
-        notes,
-        framed: framed_box,
-    })
+    let ambient = l.ambient.unwrap_or(0.3);
+    if !(0.0..=1.0).contains(&ambient) {
+        return Err(SceneError::setting(
+            "light.ambient",
+            format!("{ambient} is outside [0, 1]"),
+        ));
+    }
+    settings.light = Some(Light {
+        direction: dir,
+        ambient,
+    });
+    if l.shadows.unwrap_or(false) {
+        settings.scatter = Some(scatter_settings(l, dir, ambient, frame)?);
+        if !settings.iso.is_empty() {
+            return Err(SceneError::setting(
+                "light.shadows",
+                "iso-surfaces are not rendered with shadows; drop one of them",
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A value range of one value (a constant field) maps everything to 0,
@@ -518,255 +605,4 @@ pub fn transfer_function_at(
         (None, None, None) => OpacityMap::preset("linear")?,
     };
     Ok(TransferFunction::new(colormap, opacity))
-}
-
-/// The camera `c` describes (world positions moved into `frame`) for data
-/// within `bounds` (in the frame).
-pub(crate) fn camera(
-    c: &CameraDesc,
-    bounds: &Aabb,
-    aspect: f32,
-    frame: &WorldFrame,
-) -> Result<Camera, SceneError> {
-    let mut up = Vec3::from_array(c.up.unwrap_or(DEFAULT_UP));
-    if !(up.is_finite() && up.length_squared() > 0.0) {
-        return Err(SceneError::setting(
-            "camera.up (--up)",
-            format!("{:?} is not a finite, non-zero vector", up.to_array()),
-        ));
-    }
-    let fov = c.fov.unwrap_or(VIEW_FOV_DEG);
-    if !(fov > 0.0 && fov < 180.0) {
-        return Err(SceneError::setting(
-            "camera.fov (--fov)",
-            format!("{fov} is outside (0, 180) degrees"),
-        ));
-    }
-    for (field, p) in [
-        ("camera.eye (--eye)", c.eye),
-        ("camera.look_at (--look-at)", c.look_at),
-    ] {
-        if let Some(p) = p
-            && !p.iter().all(|v| v.is_finite())
-        {
-            return Err(SceneError::setting(field, format!("{p:?} is not finite")));
-        }
-    }
-    let look_at = c
-        .look_at
-        .map(|p| frame.to_local(p))
-        .unwrap_or(bounds.center());
-    let eye = match c.eye {
-        Some(p) => frame.to_local(p),
-        None => default_eye(bounds, aspect, up, fov).ok_or_else(|| {
-            SceneError::setting(
-                "camera",
-                format!(
-                    "the data's bounds {:?}..{:?} cannot be framed; give --eye and --look-at",
-                    bounds.min.to_array(),
-                    bounds.max.to_array()
-                ),
-            )
-        })?,
-    };
-    if c.up.is_none() && eye != look_at {
-        // The default up (+z) along the line of sight of an explicit eye
-        // (looking straight down or up): +y instead, as before +z was the
-        // default.
-        let d = (look_at - eye).normalized();
-        if d.is_finite() && d.z.abs() > 0.999 {
-            up = Vec3::new(0.0, 1.0, 0.0);
-        }
-    }
-    // Orbit, elevation and zoom act on the eye the lines above chose.
-    let view = ViewAdjust::from_desc(c)?;
-    let ortho = c.projection == Some(ProjectionName::Orthographic);
-    let eye = view.place_eye(eye, look_at, up, !ortho);
-    let projection = match c.projection.unwrap_or(ProjectionName::Perspective) {
-        ProjectionName::Perspective => Projection::Perspective { fov_y_deg: fov },
-        ProjectionName::Orthographic => {
-            let h = match c.ortho_height {
-                Some(h) => {
-                    positive("camera.ortho_height (--orthographic)", h)?;
-                    frame.length_to_local(h as f64)
-                }
-                None => bounds.diagonal(),
-            };
-            let h = h / view.zoom;
-            Projection::Orthographic {
-                half_width: 0.5 * h * aspect,
-                half_height: 0.5 * h,
-            }
-        }
-    };
-    Camera::look_at(eye, look_at, up, projection)
-        .map_err(|e| SceneError::setting("camera", e.to_string()))
-}
-
-/// Mean samples per camera ray beyond which a render is refused: real data
-/// needs thousands (10⁹ particles: ~8,000 at the default radius); a
-/// quarter of a million means a radius or step far below the data's scale,
-/// and minutes for even a thumbnail.
-pub const MAX_SAMPLES_PER_RAY: f64 = (1u64 << 18) as f64;
-/// Samples in all beyond which a render is refused (about a day at 10⁸
-/// samples per second).
-pub const MAX_SAMPLES: f64 = 1e13;
-
-/// A render whose estimated work (see [`AnyVolume::estimate_work`]) is
-/// absurd is an error with the estimate and the flags that change it,
-/// before any work starts. Otherwise returns a note when the step was
-/// raised to what f32 can resolve along the rays.
-pub(crate) fn check_work(
-    volume: &AnyVolume,
-    frame: &WorldFrame,
-    desc: &SceneDesc,
-    camera: &Camera,
-    tf: &TransferFunction,
-    settings: &RenderSettings,
-) -> Result<Option<String>, SceneError> {
-    let data = volume.value_range();
-    let materials = matches!(volume, AnyVolume::Materials(_));
-    if !(materials || data.hi > 0.0 || data.lo < 0.0) {
-        let (field, why) = match volume {
-            AnyVolume::Particles(_) => (
-                "particles.weights (--weights)",
-                "every particle's weight is 0 (or a weight or radius map hides it)",
-            ),
-            AnyVolume::Amr(_) => ("amr.field (--field)", "every cell's value is 0"),
-            _ => ("data", "it holds no mass"),
-        };
-        return Err(SceneError::setting(
-            field,
-            format!("the field is 0 everywhere, so there is nothing to render: {why}"),
-        ));
-    }
-    let work = volume.estimate_work(camera, tf, settings);
-    let extent = frame.length_to_world(volume.bounds().diagonal());
-    if work.per_ray <= MAX_SAMPLES_PER_RAY && work.total <= MAX_SAMPLES {
-        return Ok(work.step_raised.then(|| {
-            format!(
-                "the ray-marching step is finer than float32 can resolve along the rays \
-                 (data extent {extent:.3e}); it was raised to {} units in the last place of \
-                 the distance along each ray",
-                voxless_render::MIN_STEP_ULPS
-            )
-        }));
-    }
-    let given_radius = desc
-        .particles
-        .as_ref()
-        .is_some_and(|p| p.radius.is_some() || p.radii.is_some());
-    let (field, fix) = if let Some(step) = desc.render.step {
-        (
-            "render.step (--step)",
-            format!(
-                "the step {step} is tiny against the data (extent {extent:.3e}): give a \
-                 larger --step"
-            ),
-        )
-    } else if given_radius && work.per_ray > MAX_SAMPLES_PER_RAY {
-        (
-            "particles.radius (--radius)",
-            format!(
-                "the particles' supports are tiny against the data (extent {extent:.3e}), and \
-                 rays step 1/8 of a support: give a larger --radius (or omit it for one from \
-                 the particle spacing), or a --step"
-            ),
-        )
-    } else if work.per_ray > MAX_SAMPLES_PER_RAY {
-        (
-            "render.step (--step)",
-            format!(
-                "the data's own step is tiny against its extent ({extent:.3e}) — outliers far \
-                 from the rest, or a sampling rate too high: give a --step (e.g. {:.3e}), a \
-                 smaller --sampling-rate, or leave out the outliers",
-                extent / 2000.0
-            ),
-        )
-    } else {
-        (
-            "image (--size, --spp)",
-            "give a smaller --size or fewer --spp".to_string(),
-        )
-    };
-    Err(SceneError::setting(
-        field,
-        format!(
-            "this render would take about {:.1e} samples per ray, {:.1e} in all (limits \
-             {MAX_SAMPLES_PER_RAY:.1e} per ray, {MAX_SAMPLES:.0e} in all): {fix}",
-            work.per_ray, work.total
-        ),
-    ))
-}
-
-/// Settings that only act together with another one, given without it,
-/// are errors naming both: they would silently do nothing.
-fn refuse_settings_without_effect(desc: &SceneDesc) -> Result<(), SceneError> {
-    let r = &desc.render;
-    let no_iso = r.iso.as_ref().is_none_or(|v| v.is_empty());
-    if no_iso && r.iso_opacity.is_some() {
-        return Err(SceneError::setting(
-            "render.iso_opacity (--iso-opacity)",
-            "applies to iso-surfaces: add --iso V",
-        ));
-    }
-    if no_iso && r.volume == Some(false) {
-        return Err(SceneError::setting(
-            "render.volume (--iso-only)",
-            "with the volume off and no iso-surface the image would be empty: add --iso V",
-        ));
-    }
-    if let Some(l) = &desc.light
-        && !l.shadows.unwrap_or(false)
-    {
-        let only_with_shadows = [
-            ("light.position (--light-pos)", l.position.is_some()),
-            ("light.intensity (--light-intensity)", l.intensity.is_some()),
-            ("light.free_flight (--free-flight)", l.free_flight.is_some()),
-            ("light.noise (--noise)", l.noise.is_some()),
-        ];
-        if let Some((field, _)) = only_with_shadows.iter().find(|f| f.1) {
-            return Err(SceneError::setting(
-                field,
-                "applies to single scattering: add --shadows (scene: light.shadows = true)",
-            ));
-        }
-    }
-    if let Some(p) = &desc.particles
-        && p.kernel != Some(voxless_scene::KernelName::Gaussian)
-    {
-        for (field, given) in [
-            ("particles.kappa (--kappa)", p.kappa.is_some()),
-            ("particles.sigma (--sigma)", p.sigma.is_some()),
-        ] {
-            if given {
-                return Err(SceneError::setting(
-                    field,
-                    "applies to the gaussian kernel only: add --kernel gaussian",
-                ));
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Settings the volume's kind cannot honour are errors naming them.
-fn refuse_what_the_kind_cannot_honour(
-    kind: VolumeKind,
-    settings: &RenderSettings,
-) -> Result<(), SceneError> {
-    if kind == VolumeKind::Tets
-        && settings.light.is_some()
-        && settings.scatter.is_none()
-        && settings.volume
-        && settings.iso.is_empty()
-    {
-        return Err(SceneError::setting(
-            "light (--shade)",
-            "a phase-space tessellation's density is constant inside every tet, so the volume \
-             has no gradient to shade with; use --shadows for lighting, or --iso V for shaded \
-             iso-surfaces",
-        ));
-    }
-    Ok(())
 }

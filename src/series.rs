@@ -2,20 +2,21 @@
 //!
 //! A series' first frame is often unlike the rest (a dam break at rest has
 //! speed 0 everywhere; the water then leaves the box the first frame
-//! fills). So [`Scene::open_series`] makes a cheap first pass over up to
-//! [`SERIES_SAMPLES`] frames spread evenly over the range (first and last
-//! included): the camera frames the union of their bounds, the value range
-//! and opacity scale come from one probe merged over them, and the
-//! attribute range is the union of theirs. All of it stays fixed for every
-//! frame, so the sequence does not flicker.
+//! fills). So opening a series ([`crate::Scene::open_series`], and
+//! [`crate::DistributedScene::open_series`] over ranks) makes a cheap first
+//! pass over up to [`SERIES_SAMPLES`] frames spread evenly over the range
+//! (first and last included): the camera frames the union of their bounds,
+//! the value range and opacity scale come from one probe merged over them,
+//! and the attribute range is the union of theirs. All of it stays fixed
+//! for every frame, so the sequence does not flicker. One pass
+//! ([`over_series`]) serves one process and the ranks alike; only how a
+//! frame is loaded and probed differs ([`SeriesFrames`]).
 
-use std::path::Path;
-
+use voxless_core::Aabb;
 use voxless_scene::SceneDesc;
 
 use crate::autorange::Probe;
-use crate::load::{self, Loaded};
-use crate::{AnyVolume, Range1, Scene, SceneError, WorldFrame};
+use crate::{Range1, SceneError, WorldFrame};
 
 /// Frames the first pass over a series loads at most.
 pub const SERIES_SAMPLES: usize = 8;
@@ -32,91 +33,119 @@ pub(crate) fn spread(frames: &[usize], k: usize) -> Vec<usize> {
     picked
 }
 
-pub(crate) fn union(a: Option<Range1>, b: Option<Range1>) -> Option<Range1> {
+fn union(a: Option<Range1>, b: Option<Range1>) -> Option<Range1> {
     match (a, b) {
         (Some(a), Some(b)) => Some(Range1::new(a.lo.min(b.lo), a.hi.max(b.hi))),
         (a, b) => a.or(b),
     }
 }
 
-impl Scene {
-    /// Opens the first of `frames` (frame numbers, see
-    /// [`crate::frame_numbers`]) with the defaults taken over the series
-    /// (module docs). Returns the scene and the description to load the
-    /// other frames with ([`Scene::load_frame`]): `desc` with the series'
-    /// attribute range filled in.
-    pub fn open_series(
+/// How the frames of a series are loaded and probed: whole by one process,
+/// or in shares by the ranks of a communicator.
+pub(crate) trait SeriesFrames {
+    /// A loaded frame, before its view is resolved.
+    type Part;
+    type Error: From<SceneError>;
+
+    /// Frame `frame` of the data `desc` names, in the world frame `world`
+    /// (`None`: the one the placement policy picks).
+    fn load(
+        &mut self,
         desc: &SceneDesc,
-        base: &Path,
-        frames: &[usize],
-    ) -> Result<(Scene, SceneDesc), SceneError> {
-        let Some(&first) = frames.first() else {
-            return Err(SceneError::setting("frames", "no frames to render"));
-        };
-        if frames.len() == 1 {
-            return Ok((Scene::open(desc, base, first)?, desc.clone()));
-        }
-        let Loaded {
-            volume,
-            frame: world,
-            notes: mut loading,
-        } = load::load(desc, base, first)?;
-        let clip = desc.render.clip.map(|c| world.box_to_local(c));
-        let sampled = spread(frames, SERIES_SAMPLES);
-        let mut probe = Probe::default();
-        let mut bounds = world_bounds(&volume, &world);
-        let mut attribute = volume.attribute_range();
-        for &f in &sampled {
-            let v = if f == first {
-                None
-            } else {
-                Some(load::load_in(desc, base, f, Some(&world))?.volume)
-            };
-            let v = v.as_ref().unwrap_or(&volume);
-            probe.merge(Probe::of(v, clip.as_ref()));
-            let (lo, hi) = world_bounds(v, &world);
-            bounds = (
-                std::array::from_fn(|a| bounds.0[a].min(lo[a])),
-                std::array::from_fn(|a| bounds.1[a].max(hi[a])),
-            );
-            attribute = union(attribute, v.attribute_range());
-        }
-        let mut series = desc.clone();
-        let which = crate::frames::list_numbers(&sampled);
-        let mut what = vec!["value range", "opacity scale", "framing"];
-        if let (Some(p), Some(r)) = (series.particles.as_mut(), attribute)
-            && p.attribute_range.is_none()
-            && p.materials.is_none()
-        {
-            p.attribute_range = Some([r.lo, r.hi]);
-            what.push("attribute range");
-        }
-        // The first frame again, now with the series' attribute range (which
-        // pre-classification and the later frames take from the volume).
-        let volume = if series.particles.as_ref().and_then(|p| p.attribute_range)
-            != desc.particles.as_ref().and_then(|p| p.attribute_range)
-        {
-            load::load_in(&series, base, first, Some(&world))?.volume
-        } else {
-            volume
-        };
-        let mut scene =
-            Scene::in_frame_with(volume, world, &series, base, Some(&probe), Some(bounds))?;
-        loading.push(format!(
-            "time series of {} frames: {} over frames {which}",
-            frames.len(),
-            what.join(", ")
-        ));
-        loading.append(&mut scene.notes);
-        scene.notes = loading;
-        Ok((scene, series))
-    }
+        frame: usize,
+        world: Option<&WorldFrame>,
+    ) -> Result<Self::Part, Self::Error>;
+
+    /// The probe of a loaded frame's field inside `clip` (local).
+    fn probe(&mut self, part: &Self::Part, clip: Option<&Aabb>) -> Result<Probe, Self::Error>;
+
+    /// A loaded frame's world frame, local bounds and attribute range.
+    fn extent(part: &Self::Part) -> (WorldFrame, Aabb, Option<Range1>);
+
+    /// Where a loaded frame's notes go (the series' note joins them).
+    fn notes(part: &mut Self::Part) -> &mut Vec<String>;
 }
 
-/// The world box of a volume in `frame`.
-fn world_bounds(v: &AnyVolume, frame: &WorldFrame) -> ([f64; 3], [f64; 3]) {
-    let b = v.bounds();
-    (frame.to_world(b.min), frame.to_world(b.max))
+/// The first frame of a series with the defaults taken over it (see the
+/// module docs).
+pub(crate) struct OverSeries<P> {
+    /// The first frame, loaded with `desc`, its notes ending with what the
+    /// series decided.
+    pub first: P,
+    /// The description to load every frame with: the series' attribute
+    /// range filled in.
+    pub desc: SceneDesc,
+    /// The probe merged over the sampled frames.
+    pub probe: Probe,
+    /// The union of the sampled frames' world bounds.
+    pub framed: ([f64; 3], [f64; 3]),
+}
+
+/// The first pass over `frames` (frame numbers, at least two; see the
+/// module docs).
+pub(crate) fn over_series<F: SeriesFrames>(
+    f: &mut F,
+    desc: &SceneDesc,
+    frames: &[usize],
+) -> Result<OverSeries<F::Part>, F::Error> {
+    let Some(&first) = frames.first() else {
+        return Err(SceneError::setting("frames", "no frames to render").into());
+    };
+    let part = f.load(desc, first, None)?;
+    let (world, b, mut attribute) = F::extent(&part);
+    let clip = desc.render.clip.map(|c| world.box_to_local(c));
+    let sampled = spread(frames, SERIES_SAMPLES);
+    let mut probe = Probe::default();
+    let mut framed = world.box_to_world(b);
+    for &k in &sampled {
+        let other = if k == first {
+            None
+        } else {
+            Some(f.load(desc, k, Some(&world))?)
+        };
+        let v = other.as_ref().unwrap_or(&part);
+        probe.merge(f.probe(v, clip.as_ref())?);
+        let (lo, hi) = world.box_to_world(F::extent(v).1);
+        framed = (
+            std::array::from_fn(|a| framed.0[a].min(lo[a])),
+            std::array::from_fn(|a| framed.1[a].max(hi[a])),
+        );
+        attribute = union(attribute, F::extent(v).2);
+    }
+    let mut series = desc.clone();
+    let which = crate::frames::list_numbers(&sampled);
+    let mut what = vec!["value range", "opacity scale", "framing"];
+    if let (Some(p), Some(r)) = (series.particles.as_mut(), attribute)
+        && p.attribute_range.is_none()
+        && p.materials.is_none()
+    {
+        p.attribute_range = Some([r.lo, r.hi]);
+        what.push("attribute range");
+    }
+    // The first frame again, now with the series' attribute range (which
+    // pre-classification and the later frames take from the volume); the
+    // notes of loading it are those of the first load.
+    let mut first_part = if series.particles.as_ref().and_then(|p| p.attribute_range)
+        != desc.particles.as_ref().and_then(|p| p.attribute_range)
+    {
+        let mut again = f.load(&series, first, Some(&world))?;
+        let mut part = part;
+        std::mem::swap(F::notes(&mut again), F::notes(&mut part));
+        again
+    } else {
+        part
+    };
+    F::notes(&mut first_part).push(format!(
+        "time series of {} frames: {} over frames {which}",
+        frames.len(),
+        what.join(", ")
+    ));
+    Ok(OverSeries {
+        first: first_part,
+        desc: series,
+        probe,
+        framed,
+    })
 }
 
 #[cfg(test)]

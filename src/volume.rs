@@ -47,6 +47,8 @@ macro_rules! with_volume {
     };
 }
 
+pub(crate) use with_volume;
+
 impl AnyVolume {
     pub fn bounds(&self) -> Aabb {
         with_volume!(self, v => v.bounds())
@@ -60,25 +62,26 @@ impl AnyVolume {
     /// The kind, bounds and ranges resolving a view needs.
     pub fn summary(&self) -> crate::VolumeSummary {
         crate::VolumeSummary {
-            kind: match self {
-                AnyVolume::Particles(_) => crate::VolumeKind::Particles,
-                AnyVolume::Amr(_) => crate::VolumeKind::Amr,
-                AnyVolume::Tets(_) => crate::VolumeKind::Tets,
-                AnyVolume::Materials(_) => crate::VolumeKind::Materials,
-            },
+            kind: self.volume_kind(),
             bounds: self.bounds(),
             value_range: self.value_range(),
             attribute_range: self.attribute_range(),
         }
     }
 
-    pub fn kind(&self) -> &'static str {
+    /// The data kind.
+    pub fn volume_kind(&self) -> crate::VolumeKind {
         match self {
-            AnyVolume::Particles(_) => "particles",
-            AnyVolume::Amr(_) => "AMR cells",
-            AnyVolume::Tets(..) => "phase-space tessellation",
-            AnyVolume::Materials(_) => "multi-material particles",
+            AnyVolume::Particles(_) => crate::VolumeKind::Particles,
+            AnyVolume::Amr(_) => crate::VolumeKind::Amr,
+            AnyVolume::Tets(_) => crate::VolumeKind::Tets,
+            AnyVolume::Materials(_) => crate::VolumeKind::Materials,
         }
+    }
+
+    /// The kind's name in messages (see [`crate::VolumeKind::name`]).
+    pub fn kind(&self) -> &'static str {
+        self.volume_kind().name()
     }
 
     /// Render settings with the library's generic defaults for this volume
@@ -136,46 +139,6 @@ impl AnyVolume {
         with_volume!(self, v => voxless_render::project(v, camera, width, height, control))
     }
 
-    /// This rank's passes of a decomposed render, composited with the other
-    /// ranks' for the tiles it owns (see [`crate::parallel`]).
-    pub(crate) fn render_part(
-        &self,
-        comm: &dyn voxless_parallel::Comm,
-        s: &crate::parallel::DistributedScene,
-        grid: &voxless_parallel::TileGrid,
-        order: &[usize],
-        control: &Control,
-        timings: &mut crate::parallel::Timings,
-    ) -> Result<voxless_parallel::composite::OwnedTiles, crate::parallel::ParallelError> {
-        with_volume!(self, v => {
-            crate::parallel::render_part(v, comm, s, grid, order, control, timings)
-        })
-    }
-
-    /// This rank's share of a decomposed projection over the part `t` of
-    /// every pixel's line (`None`: the whole line): the part of each line
-    /// integral inside the half-open box `owned`; a tessellation (which
-    /// holds each tet in one box only) projects its tets whole.
-    pub(crate) fn project_part(
-        &self,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-        owned: &Aabb,
-        t: Option<Range1>,
-        control: &Control,
-    ) -> Result<Vec<f32>, Cancelled> {
-        match (self, t) {
-            (AnyVolume::Tets(_), None) => self.project(camera, width, height, control),
-            (AnyVolume::Tets(_), Some(t)) => self.project_in(camera, width, height, t, control),
-            _ => with_volume!(self, v => {
-                let all = Range1::new(f32::NEG_INFINITY, f32::INFINITY);
-                let t = t.unwrap_or(all);
-                voxless_render::project_in(v, camera, width, height, Some(owned), t, control)
-            }),
-        }
-    }
-
     /// [`AnyVolume::project`] over the part `t` of every pixel's line (one
     /// line integral per pixel; the volume's whole-image path integrates
     /// whole lines).
@@ -203,36 +166,10 @@ impl AnyVolume {
         }
     }
 
-    /// Names of the columns [`AnyVolume::sample_points`] writes.
+    /// Names of the columns [`AnyVolume::sample_points`] writes (see
+    /// [`crate::Fields::columns`]).
     pub fn sample_columns(&self, gradient: bool) -> Vec<String> {
-        let grad = |name: &str| ["x", "y", "z"].map(|a| format!("d{name}/d{a}"));
-        match self {
-            AnyVolume::Particles(v) => {
-                let mut c = vec!["density".to_string()];
-                if v.has_attribute() {
-                    c.push("attribute".into());
-                }
-                if gradient {
-                    c.extend(grad("density"));
-                }
-                c
-            }
-            AnyVolume::Tets(..) => vec!["density".into(), "streams".into()],
-            AnyVolume::Materials(v) => v
-                .materials()
-                .iter()
-                .map(|m| format!("density ({})", m.name))
-                .collect(),
-            AnyVolume::Amr(v) => {
-                let mut c: Vec<String> = v.field_names().to_vec();
-                if gradient {
-                    for n in v.field_names() {
-                        c.extend(grad(n));
-                    }
-                }
-                c
-            }
-        }
+        crate::Fields::of(self).columns(gradient)
     }
 
     /// The fields at every point, row-major `points.len() × columns`. Each

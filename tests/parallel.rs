@@ -11,8 +11,9 @@ mod common;
 use std::path::Path;
 
 use common::{Lcg, Scratch, write_values};
-use voxless::parallel::{Comm, DistributedScene, Purpose, run_local};
+use voxless::parallel::{Comm, run_local};
 use voxless::{AmrDesc, Camera, Control, Image, ParticlesDesc, Scene, SceneDesc, TetsDesc, Vec3};
+use voxless::{DistributedScene, Purpose};
 
 /// Renders `desc` with one process and with `ranks` simulated ranks; the
 /// largest per-channel difference of the linear RGBA images.
@@ -45,7 +46,7 @@ fn max_difference(a: &Image, b: &Image) -> f32 {
 fn project_difference(desc: &SceneDesc, base: &Path, ranks: usize, axis: usize) -> f64 {
     let one = Scene::open(desc, base, 0).unwrap();
     let camera = Camera::axis_projection(&one.volume.bounds(), axis).unwrap();
-    let (w, h) = (one.settings.width, one.settings.height);
+    let (w, h) = (one.view.settings.width, one.view.settings.height);
     let want = one.volume.project(&camera, w, h, &Control::new()).unwrap();
     let mut out = run_local(ranks, |comm| {
         let s = DistributedScene::open(comm, desc, base, 0, Purpose::Project).unwrap();
@@ -562,9 +563,9 @@ fn whole_data_defaults_far_away_and_tiny_are_the_one_process_ones() {
         (
             s.frame,
             s.part.as_ref().map(radius),
-            s.settings.value_range,
-            s.settings.opacity_scale,
-            s.camera.eye,
+            s.view.settings.value_range,
+            s.view.settings.opacity_scale,
+            s.view.camera.eye,
         )
     });
     for (frame, r, vr, os, eye) in got {
@@ -572,12 +573,16 @@ fn whole_data_defaults_far_away_and_tiny_are_the_one_process_ones() {
         assert_eq!(r.map(f32::to_bits), Some(want.to_bits()), "default radius");
         let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs());
         assert!(
-            close(vr.lo, one.settings.value_range.lo) && close(vr.hi, one.settings.value_range.hi),
+            close(vr.lo, one.view.settings.value_range.lo)
+                && close(vr.hi, one.view.settings.value_range.hi),
             "value range {vr:?} vs {:?}",
-            one.settings.value_range
+            one.view.settings.value_range
         );
-        assert!(close(os, one.settings.opacity_scale), "opacity scale {os}");
-        assert_eq!(eye, one.camera.eye, "camera");
+        assert!(
+            close(os, one.view.settings.opacity_scale),
+            "opacity scale {os}"
+        );
+        assert_eq!(eye, one.view.camera.eye, "camera");
     }
     let d = render_difference(&desc, &dir.0, 3);
     assert!(d <= 1.0 / 255.0, "render differs by {d}");
@@ -615,7 +620,7 @@ fn a_time_series_by_space_renders_as_one_process() {
         if f > 0 {
             one.load_frame(&series, &dir.0, f).unwrap();
         }
-        one.settings.frame = f as u32;
+        one.view.settings.frame = f as u32;
         want.push(one.render(&Control::new()).unwrap());
     }
     let mut got = run_local(3, |comm| {
@@ -625,7 +630,7 @@ fn a_time_series_by_space_renders_as_one_process() {
             if f > 0 {
                 s.load_frame(comm, &series, &dir.0, f).unwrap();
             }
-            s.settings.frame = f as u32;
+            s.view.settings.frame = f as u32;
             images.push(s.render(comm, &Control::new()).unwrap());
         }
         images
@@ -659,7 +664,7 @@ fn off_axis_slab_projections_equal_one_process() {
         };
         let view =
             voxless::ProjectionView::new(&projection, &one.volume.bounds(), &one.frame).unwrap();
-        let (w, h) = (one.settings.width, one.settings.height);
+        let (w, h) = (one.view.settings.width, one.view.settings.height);
         let want = view.project(&one.volume, w, h, &Control::new()).unwrap();
         let mut got = run_local(3, |comm| {
             let s = DistributedScene::open(comm, &desc, &dir.0, 0, Purpose::Project).unwrap();

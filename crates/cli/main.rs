@@ -9,8 +9,8 @@ mod info;
 mod mpi;
 mod out;
 mod progress;
+mod render;
 mod sequence;
-mod view;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -18,7 +18,7 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::{Parser, Subcommand, ValueEnum};
 use voxless::output::OutputKind;
-use voxless::{Control, ParticlesDesc, ProjectionDesc, ProjectionView, Scene};
+use voxless::{Control, ParticlesDesc, Placement, ProjectionDesc, Purpose};
 
 use args::{DataArgs, KindArgs, SceneArgs, ViewArgs};
 use progress::Progress;
@@ -68,7 +68,7 @@ enum Command {
         frame: Option<usize>,
         /// Render N frames of a full 360° orbit about the look-at point
         /// (out.png → out_0000.png … ), starting from the scene's camera.
-        #[arg(long, value_name = "N", conflicts_with = "frames", value_parser = view::frame_count)]
+        #[arg(long, value_name = "N", conflicts_with = "frames", value_parser = render::frame_count)]
         turntable: Option<u32>,
         /// Draw a labelled colour bar at the right edge of the image.
         #[arg(long)]
@@ -191,7 +191,7 @@ fn main() {
     if voxless::parallel::MpiComm::launched() {
         mpi::main(cli);
     }
-    if let Err(e) = run(cli) {
+    if let Err(e) = run(cli, Placement::Process) {
         eprintln!("error: {}", describe(&e));
         std::process::exit(1);
     }
@@ -213,8 +213,138 @@ fn describe(e: &anyhow::Error) -> String {
     text
 }
 
-fn run(cli: Cli) -> Result<()> {
+/// Runs a command with its data held as `placement` says (one process,
+/// or the ranks of `mpirun`: every rank runs the data commands together;
+/// the others run on rank 0 alone).
+fn run(cli: Cli, placement: Placement) -> Result<()> {
+    let root = placement.is_root();
     match cli.command {
+        Command::Render {
+            output,
+            frames,
+            frame,
+            turntable,
+            colorbar,
+            data,
+            kind,
+            view,
+        } => {
+            let (desc, base) = SceneArgs { data, kind, view }.scene()?;
+            if let Some(n) = turntable {
+                let outputs: Vec<PathBuf> = (0..n as usize)
+                    .map(|k| out::frame_path(&output, k))
+                    .collect::<Result<_>>()?;
+                out::check(&outputs, OutputKind::Image, &desc, &base, &[])?;
+                let f = frame.unwrap_or(0);
+                return render::render_turntable(placement, &desc, &base, f, &outputs, colorbar);
+            }
+            if let Some(range) = frames {
+                return sequence::render(placement, &desc, &base, &range, &output, colorbar);
+            }
+            out::check(
+                std::slice::from_ref(&output),
+                OutputKind::Image,
+                &desc,
+                &base,
+                &[],
+            )?;
+            let s = render::open(placement, &desc, &base, frame.unwrap_or(0))?;
+            render::render_to(&s, &desc, &output, colorbar)
+        }
+        Command::Sample {
+            points,
+            output,
+            gradient,
+            frame,
+            data,
+        } => {
+            let args = SceneArgs {
+                data,
+                ..Default::default()
+            };
+            let (desc, base) = args.scene()?;
+            out::check(
+                std::slice::from_ref(&output),
+                OutputKind::Columns,
+                &desc,
+                &base,
+                std::slice::from_ref(&points),
+            )?;
+            let s = render::open(placement, &desc, &base, frame.unwrap_or(0))?;
+            // Rank 0 reads the points; the library hands them out.
+            let read = if root {
+                voxless::read_points(&points).map_err(anyhow::Error::from)
+            } else {
+                Ok(Vec::new())
+            };
+            let pts = render::agree(placement, read)?;
+            let cols = s.fields().columns(gradient);
+            let t = Instant::now();
+            let values = s.sample(&pts, gradient)?;
+            let written = values.map_or(Ok(()), |v| {
+                voxless::io::write_npy_f32(&output, &[pts.len(), cols.len()], &v)?;
+                eprintln!(
+                    "sampled {} points{} in {:.2}s → {} (columns: {})",
+                    pts.len(),
+                    render::on_ranks(placement),
+                    t.elapsed().as_secs_f64(),
+                    output.display(),
+                    cols.join(", ")
+                );
+                Ok(())
+            });
+            render::agree(placement, written)?;
+            render::say(placement.memory_report(s.counts())?);
+            Ok(())
+        }
+        Command::Project {
+            axis,
+            bounds,
+            normal,
+            north,
+            center,
+            width,
+            depth,
+            output,
+            size,
+            pixels,
+            frame,
+            data,
+        } => {
+            let args = SceneArgs {
+                data,
+                view: ViewArgs {
+                    size,
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
+            let (mut desc, base) = args.scene()?;
+            let projection = projection_desc(axis, bounds, normal, north, center, width, depth);
+            voxless::set_projection_pixels(&mut desc, pixels, &projection)?;
+            out::check(
+                std::slice::from_ref(&output),
+                OutputKind::Map,
+                &desc,
+                &base,
+                &[],
+            )?;
+            // A projection needs the data and the image size, not a render's
+            // defaults (camera, transfer function, and the probe of the
+            // field they are chosen from).
+            let size = voxless::projection::image_size(&desc.image)?;
+            project(
+                placement,
+                &desc,
+                &base,
+                frame.unwrap_or(0),
+                size,
+                &projection,
+                &output,
+            )
+        }
+        // Commands without data to share run on rank 0.
+        _ if !root => Ok(()),
         Command::Demo {
             output,
             colorbar,
@@ -250,135 +380,8 @@ fn run(cli: Cli) -> Result<()> {
                 &base,
                 &[],
             )?;
-            let s = resolve(&desc, &base, 0)?;
-            render_to(&s, &desc, &output, colorbar)
-        }
-        Command::Render {
-            output,
-            frames,
-            frame,
-            turntable,
-            colorbar,
-            data,
-            kind,
-            view,
-        } => {
-            let (desc, base) = SceneArgs { data, kind, view }.scene()?;
-            if let Some(n) = turntable {
-                let outputs: Vec<PathBuf> = (0..n as usize)
-                    .map(|k| out::frame_path(&output, k))
-                    .collect::<Result<_>>()?;
-                out::check(&outputs, OutputKind::Image, &desc, &base, &[])?;
-                let f = frame.unwrap_or(0);
-                return view::render_turntable(&desc, &base, f, n, &output, colorbar);
-            }
-            match frames {
-                Some(range) => sequence::render(&desc, &base, &range, &output, colorbar),
-                None => {
-                    out::check(
-                        std::slice::from_ref(&output),
-                        OutputKind::Image,
-                        &desc,
-                        &base,
-                        &[],
-                    )?;
-                    let s = resolve(&desc, &base, frame.unwrap_or(0))?;
-                    render_to(&s, &desc, &output, colorbar)
-                }
-            }
-        }
-        Command::Sample {
-            points,
-            output,
-            gradient,
-            frame,
-            data,
-        } => {
-            let args = SceneArgs {
-                data,
-                ..Default::default()
-            };
-            let (desc, base) = args.scene()?;
-            out::check(
-                std::slice::from_ref(&output),
-                OutputKind::Columns,
-                &desc,
-                &base,
-                std::slice::from_ref(&points),
-            )?;
-            let s = resolve(&desc, &base, frame.unwrap_or(0))?;
-            let pts = voxless::read_points(&points)?;
-            let cols = s.volume.sample_columns(gradient);
-            let t = Instant::now();
-            let values = s.sample(&pts, gradient);
-            voxless::io::write_npy_f32(&output, &[pts.len(), cols.len()], &values)?;
-            eprintln!(
-                "sampled {} points in {:.2}s → {} (columns: {})",
-                pts.len(),
-                t.elapsed().as_secs_f64(),
-                output.display(),
-                cols.join(", ")
-            );
-            Ok(())
-        }
-        Command::Project {
-            axis,
-            bounds,
-            normal,
-            north,
-            center,
-            width,
-            depth,
-            output,
-            size,
-            pixels,
-            frame,
-            data,
-        } => {
-            let args = SceneArgs {
-                data,
-                view: ViewArgs {
-                    size,
-                    ..Default::default()
-                },
-                ..Default::default()
-            };
-            let (mut desc, base) = args.scene()?;
-            if let Some(p) = pixels {
-                let Some(t) = desc.tets.as_mut() else {
-                    anyhow::bail!(
-                        "pixels: --pixels applies to phase-space tessellations (--lagrangian, \
-                         --box, or a [tets] scene); other data is projected through pixel \
-                         centres"
-                    );
-                };
-                t.pixels = Some(p);
-            }
-            if depth.is_some()
-                && desc.tets.as_ref().and_then(|t| t.pixels) == Some(voxless::PixelsName::Area)
-            {
-                anyhow::bail!(
-                    "pixels: area integrates whole lines of sight; with --depth a projection \
-                     integrates the slab through pixel centres (leave out --pixels area, or \
-                     tets.pixels in the scene)"
-                );
-            }
-            out::check(
-                std::slice::from_ref(&output),
-                OutputKind::Map,
-                &desc,
-                &base,
-                &[],
-            )?;
-            let projection = projection_desc(axis, bounds, normal, north, center, width, depth);
-            // A projection needs the data and the image size, not a render's
-            // defaults (camera, transfer function, and the probe of the
-            // field they are chosen from).
-            let size = voxless::projection::image_size(&desc.image)?;
-            let t = Instant::now();
-            let loaded = voxless::load(&desc, &base, frame.unwrap_or(0))?;
-            report_volume(&loaded.notes, &loaded.volume, &loaded.frame, t);
-            project(&loaded, size, &projection, &output)
+            let s = render::open(Placement::Process, &desc, &base, 0)?;
+            render::render_to(&s, &desc, &output, colorbar)
         }
         Command::Serve {
             port,
@@ -419,35 +422,43 @@ fn projection_desc(
     }
 }
 
+/// Projects frame `frame` of the data `desc` names and writes the column
+/// densities (rank 0).
 fn project(
-    loaded: &voxless::Loaded,
+    placement: Placement,
+    desc: &voxless::SceneDesc,
+    base: &Path,
+    frame: usize,
     (w, h): (u32, u32),
     projection: &ProjectionDesc,
     output: &Path,
 ) -> Result<()> {
-    let view = ProjectionView::new(projection, &loaded.volume.bounds(), &loaded.frame)?;
-    let progress = Progress::new("projecting", 1);
+    let t = Instant::now();
+    let data = placement.load(desc, base, frame, Purpose::Project)?;
+    let kind = data.kind().name();
+    render::report_loaded(placement, data.notes(), kind, data.world_bounds(), t);
+    let progress = Progress::new("projecting", 1, placement.is_root());
     let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
     let t = Instant::now();
-    let column = view.project(&loaded.volume, w, h, &Control::new().with_progress(&report))?;
+    let (view, column) = data.project(projection, w, h, &Control::new().with_progress(&report))?;
     progress.finish();
-    out::write_gray(output, w, h, &column)?;
-    let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * view.pixel_area(w, h);
-    let mass = loaded
-        .volume
-        .total_mass()
-        .map(|m| {
-            format!(
-                ", exact ∫ field dV = {:.6e}",
-                m * loaded.frame.scale.powi(3)
-            )
-        })
-        .unwrap_or_default();
-    eprintln!(
-        "projected {w}×{h} in {:.3}s → {} (Σ column × pixel area = {integral:.6e}{mass})",
-        t.elapsed().as_secs_f64(),
-        output.display()
-    );
+    let written = column.map_or(Ok(()), |column| {
+        out::write_gray(output, w, h, &column)?;
+        let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * view.pixel_area(w, h);
+        let mass = data
+            .total_mass()
+            .map(|m| format!(", exact ∫ field dV = {m:.6e}"))
+            .unwrap_or_default();
+        eprintln!(
+            "projected {w}×{h}{} in {:.3}s → {} (Σ column × pixel area = {integral:.6e}{mass})",
+            render::on_ranks(placement),
+            t.elapsed().as_secs_f64(),
+            output.display()
+        );
+        Ok(())
+    });
+    render::agree(placement, written)?;
+    render::say(placement.memory_report(data.counts())?);
     Ok(())
 }
 
@@ -483,71 +494,5 @@ fn serve(scene: &SceneArgs, port: u16, host: String) -> Result<()> {
         println!("voxless serve: open {}", bound.url());
         eprintln!("press Ctrl-C to stop");
     })?;
-    Ok(())
-}
-
-/// Opens frame `frame` of the scene and prints its notes and a summary.
-fn resolve(desc: &voxless::SceneDesc, base: &Path, frame: usize) -> Result<Scene> {
-    let t = Instant::now();
-    let s = Scene::open(desc, base, frame)?;
-    report_loaded(&s, t);
-    Ok(s)
-}
-
-/// Prints a scene's notes and what was loaded.
-fn report_loaded(s: &Scene, t: Instant) {
-    report_volume(&s.notes, &s.volume, &s.frame, t);
-}
-
-/// Prints `notes` and what was loaded (a volume placed in `frame`).
-fn report_volume(
-    notes: &[String],
-    volume: &voxless::AnyVolume,
-    frame: &voxless::WorldFrame,
-    t: Instant,
-) {
-    for n in notes {
-        eprintln!("note: {n}");
-    }
-    let b = volume.bounds();
-    let (lo, hi) = (frame.to_world(b.min), frame.to_world(b.max));
-    eprintln!(
-        "loaded {} in {:.2}s: bounds [{:.4e}, {:.4e}, {:.4e}]..[{:.4e}, {:.4e}, {:.4e}]",
-        volume.kind(),
-        t.elapsed().as_secs_f64(),
-        lo[0],
-        lo[1],
-        lo[2],
-        hi[0],
-        hi[1],
-        hi[2],
-    );
-}
-
-/// Checks the scene's render work (printing a note if the step was
-/// raised), renders it with a progress bar, and writes `output`.
-fn render_to(s: &Scene, desc: &voxless::SceneDesc, output: &Path, colorbar: bool) -> Result<()> {
-    if let Some(note) = s.check_work(desc)? {
-        eprintln!("note: {note}");
-    }
-    let st = &s.settings;
-    let progress = Progress::new("rendering", 1);
-    let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
-    let t = Instant::now();
-    let film = s.render_film(&Control::new().with_progress(&report))?;
-    progress.finish();
-    s.check_iso(&film)?;
-    let mut image = film.resolve();
-    s.check_visible(&film, &image)?;
-    let secs = t.elapsed().as_secs_f64();
-    view::decorate(&mut image, s, view::colorbar(s, desc, colorbar).as_ref());
-    out::write_image(output, &image, s.background)?;
-    eprintln!(
-        "rendered {}×{} at {} spp in {secs:.3}s → {}",
-        st.width,
-        st.height,
-        st.spp,
-        output.display()
-    );
     Ok(())
 }

@@ -46,11 +46,14 @@ pub struct Progress {
     /// terminal) yet, when the last line was printed, and whether it said
     /// 100 %.
     state: Mutex<(bool, Instant, bool)>,
+    /// Says nothing at all (a rank other than 0 of an MPI run).
+    silent: bool,
 }
 
 impl Progress {
-    /// Progress over `units` units of work (frames, or 1 for one render).
-    pub fn new(what: &str, units: u64) -> Self {
+    /// Progress over `units` units of work (frames, or 1 for one render),
+    /// shown when `shown` (rank 0 of a run; silent on the other ranks).
+    pub fn new(what: &str, units: u64, shown: bool) -> Self {
         let bar = ProgressBar::with_draw_target(Some(units * SUB), ProgressDrawTarget::hidden());
         bar.set_style(
             ProgressStyle::with_template(
@@ -67,6 +70,7 @@ impl Progress {
             terminal: std::io::stderr().is_terminal(),
             every: intervals(),
             state: Mutex::new((false, Instant::now(), false)),
+            silent: !shown,
         }
     }
 
@@ -82,6 +86,9 @@ impl Progress {
     }
 
     fn set_position(&self, pos: u64) {
+        if self.silent {
+            return;
+        }
         self.bar.set_position(pos);
         let elapsed = self.start.elapsed();
         let Ok(mut state) = self.state.lock() else {
@@ -123,6 +130,9 @@ impl Progress {
 
     /// Prints a line without tearing the bar.
     pub fn println(&self, text: &str) {
+        if self.silent {
+            return;
+        }
         if self.terminal {
             self.bar.suspend(|| eprintln!("{text}"));
         } else {
@@ -131,6 +141,9 @@ impl Progress {
     }
 
     pub fn finish(&self) {
+        if self.silent {
+            return;
+        }
         self.bar.finish_and_clear();
         if !self.terminal && self.state.lock().is_ok_and(|s| s.0 && !s.2) {
             self.line(1.0, self.start.elapsed());

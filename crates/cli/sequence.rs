@@ -6,56 +6,109 @@ use std::time::Instant;
 
 use anyhow::{Result, bail};
 use voxless::output::OutputKind;
-use voxless::{Control, Scene, SceneDesc};
+use voxless::parallel::{FramePlan, Timings};
+use voxless::{Control, Placement, SceneDesc};
 
 use crate::progress::Progress;
-use crate::{out, view};
+use crate::{out, render};
 
 /// Renders the frames numbered in `range` (A..B, inclusive) to numbered
 /// images. Value range, opacity scale, attribute range and camera come
-/// from a first pass over the series (see [`Scene::open_series`]) and stay
-/// fixed, so the sequence does not flicker.
+/// from a first pass over the series (see [`voxless::Scene::open_series`])
+/// and stay fixed, so the sequence does not flicker. Under `mpirun` the
+/// ranks either render whole frames each, one process per frame, or each
+/// frame together, decomposed (see [`Placement::frame_plan`]).
 pub fn render(
+    placement: Placement,
     desc: &SceneDesc,
     base: &Path,
     range: &str,
     output: &Path,
     colorbar: bool,
 ) -> Result<()> {
-    let (frames, outputs) = frames_and_outputs(desc, base, range, output, true)?;
+    let (frames, outputs) = frames_and_outputs(desc, base, range, output, placement.is_root())?;
+    let plan = placement.frame_plan(desc, base, &frames)?;
+    // Whole frames per rank: each rank holds its frames in one process,
+    // and a round renders as many frames as there are ranks.
+    let (held, per_round) = match plan {
+        FramePlan::ByFrame => (Placement::Process, placement.ranks()),
+        FramePlan::BySpace => (placement, 1),
+    };
     let t = Instant::now();
-    let (mut scene, series) = Scene::open_series(desc, base, &frames)?;
-    crate::report_loaded(&scene, t);
-    if let Some(note) = scene.check_work(desc)? {
+    let opened = held
+        .open_series(desc, base, &frames)
+        .map_err(anyhow::Error::from);
+    let (mut scene, series) = render::agree(placement, opened)?;
+    render::report_placed(&scene, t);
+    let checked = scene.check_work(desc).map_err(anyhow::Error::from);
+    if let (true, Some(note)) = (placement.is_root(), render::agree(placement, checked)?) {
         eprintln!("note: {note}");
     }
-    let bar = view::colorbar(&scene, desc, colorbar);
-    let progress = Progress::new("rendering frames", frames.len() as u64);
+    let bar = render::colorbar(&scene, desc, colorbar);
+    let progress = Progress::new("rendering frames", frames.len() as u64, placement.is_root());
     let t = Instant::now();
-    for (k, (&f, path)) in frames.iter().zip(&outputs).enumerate() {
-        if k > 0 {
-            scene.load_frame(&series, base, f)?;
-        }
-        // Blue noise advances with the frame (spatiotemporal).
-        scene.settings.frame = f as u32;
-        let report = |d: u64, total: u64| progress.set_fraction(k as u64, d, total);
-        let film = scene.render_film(&Control::new().with_progress(&report))?;
-        let mut image = film.resolve();
-        if let Err(e) = scene.check_visible(&film, &image) {
-            progress.println(&format!("note: frame {f}: {e}"));
-        }
-        view::decorate(&mut image, &scene, bar.as_ref());
-        out::write_image(path, &image, scene.background)?;
-        progress.set(k as u64 + 1);
+    let mut timings = Timings::default();
+    for (round, chunk) in frames.chunks(per_round).enumerate() {
+        let first = round * per_round;
+        let mine = match plan {
+            FramePlan::ByFrame => chunk
+                .get(placement.rank())
+                .map(|&f| (first + placement.rank(), f)),
+            FramePlan::BySpace => Some((first, chunk[0])),
+        };
+        let rendered = match mine {
+            Some((k, f)) => (|| {
+                if k > 0 {
+                    scene.load_frame(&series, base, f)?;
+                }
+                // Blue noise advances with the frame (spatiotemporal).
+                scene.view_mut().settings.frame = f as u32;
+                let report = |d: u64, total: u64| progress.set_fraction(k as u64, d, total);
+                let r = scene.render(&Control::new().with_progress(&report), &mut timings)?;
+                Ok(r.map(|mut r| {
+                    if let Err(e) = scene.check_rendered(&r) {
+                        progress.println(&format!("note: frame {f}: {e}"));
+                    }
+                    render::decorate(&mut r.image, scene.view(), bar.as_ref());
+                    r.image
+                }))
+            })(),
+            None => Ok(None),
+        };
+        let rendered = match plan {
+            FramePlan::ByFrame => render::agree(placement, rendered)?,
+            FramePlan::BySpace => rendered?,
+        };
+        let images = match plan {
+            FramePlan::ByFrame => placement.gather_images(rendered)?,
+            FramePlan::BySpace => vec![rendered],
+        };
+        let written: Result<()> = images
+            .into_iter()
+            .enumerate()
+            .filter_map(|(r, image)| Some((outputs.get(first + r)?, image?)))
+            .try_for_each(|(path, image)| out::write_image(path, &image, scene.view().background));
+        render::agree(placement, written)?;
+        progress.set((first + chunk.len()) as u64);
     }
     progress.finish();
-    eprintln!(
-        "rendered {} frames in {:.2}s → {} … {}",
-        frames.len(),
-        t.elapsed().as_secs_f64(),
-        outputs[0].display(),
-        outputs[outputs.len() - 1].display()
-    );
+    render::say(placement.memory_report(scene.counts())?);
+    if placement.is_root() {
+        let how = match (placement.ranks(), plan) {
+            (1, _) => String::new(),
+            (k, FramePlan::ByFrame) => format!(" on {k} ranks (whole frames per rank)"),
+            (k, FramePlan::BySpace) => {
+                format!(" on {k} ranks (each frame decomposed over all ranks)")
+            }
+        };
+        eprintln!(
+            "rendered {} frames{how} in {:.2}s → {} … {}",
+            frames.len(),
+            t.elapsed().as_secs_f64(),
+            outputs[0].display(),
+            outputs[outputs.len() - 1].display()
+        );
+    }
     Ok(())
 }
 
@@ -63,7 +116,7 @@ pub fn render(
 /// output paths, checked before any work; an error when no frame is in the
 /// range, and (with `note`) a note when the range reaches past the data.
 /// One process and `mpirun` (its root notes) select frames alike.
-pub(crate) fn frames_and_outputs(
+fn frames_and_outputs(
     desc: &SceneDesc,
     base: &Path,
     range: &str,

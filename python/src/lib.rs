@@ -368,9 +368,10 @@ impl Volume {
                 r.notes.push(note);
             }
             let film = r.render_film(held.volume(), control)?;
-            r.check_iso(&film)?;
+            r.check_iso(film.stats())?;
             let image = film.resolve();
-            r.check_visible(held.volume(), held.frame(), &film, &image)?;
+            let bounds = held.frame().box_to_world(held.volume().bounds());
+            r.check_visible(bounds, film.stats(), &image)?;
             Ok((image, r.background, r.notes))
         })?;
         let (image, background, notes) = done.map_err(|f| raise(py, f))?;
@@ -405,6 +406,10 @@ impl Volume {
             bounds,
             depth,
         };
+        // The CLI's refusals: a pixel-area tessellation integrates whole
+        // lines, not a slab.
+        voxless::set_projection_pixels(&mut desc, None, &projection)
+            .map_err(|e| errors::scene(py, e))?;
         let held = self.held.clone();
         let done = run::cancellable(py, move |control| -> Result<_, Failure> {
             let (w, h) = voxless::projection::image_size(&desc.image)?;

@@ -1,9 +1,12 @@
 """Projections: mass conservation, equality with the CLI, float64 offsets."""
 
+import os
+import subprocess
+
 import numpy as np
 import pytest
 import voxless
-from conftest import sph_flags
+from conftest import _cli, sph_flags
 
 
 def covering_bounds(pos, h, factor=2.2):
@@ -89,3 +92,33 @@ def test_a_slab_holds_part_of_the_column(blob):
     whole = vol.project(size=(64, 64), axis="z", center=(0, 0, 0), width=4.0)
     slab = vol.project(size=(64, 64), axis="z", center=(0, 0, 0), width=4.0, depth=0.2)
     assert 0 < slab.mass() < 0.5 * whole.mass()
+
+
+def test_pixel_area_with_a_slab_is_refused_as_the_cli_refuses_it(tmp_path):
+    # A displaced 8³ lattice loaded with the exact pixel-area integral.
+    n, box = 8, 8.0
+    g = (np.arange(n) + 0.5) * box / n
+    lattice = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)
+    moved = (lattice + np.random.default_rng(1).normal(scale=0.2, size=lattice.shape)) % box
+    path = tmp_path / "pos.npy"
+    np.save(path, moved.astype(np.float32))
+    tets = {"file": str(path), "lagrangian": n, "box_size": box, "pixels": "area"}
+    vol = voxless.load({"tets": tets})
+    with pytest.raises(ValueError, match="area integrates whole lines of sight") as python:
+        vol.project(size=(32, 32), axis="z", depth=2.0)
+    # The CLI refuses it in the same words.
+    exe = _cli()
+    if exe is None:
+        if os.environ.get("CI") == "true":
+            pytest.fail("no voxless CLI: build it with cargo build --release or set VOXLESS_CLI")
+        pytest.skip("no voxless CLI (cargo build --release, or set VOXLESS_CLI)")
+    run = subprocess.run(
+        [str(exe), "project", "--particles", str(path), "--lagrangian", str(n), "--box", str(box),
+         "--pixels", "area", "--depth", "2", "-o", str(tmp_path / "col.npy")],
+        capture_output=True, text=True,
+    )
+    assert run.returncode == 1
+    assert str(python.value).split(": ", 1)[-1] in run.stderr
+    # Whole lines of sight conserve the mass exactly.
+    col = vol.project(size=(32, 32), axis="z")
+    assert abs(col.mass() - vol.total_mass) <= 1e-4 * vol.total_mass

@@ -7,6 +7,7 @@ use voxless_amr::{AmrCells, AmrSettings, AmrVolume, Reconstruction};
 use voxless_core::Vec3;
 use voxless_scene::{AmrDesc, ReconstructionName};
 
+use super::Share;
 use crate::{SceneError, WorldFrame};
 
 /// Leaf cells in memory: `(x, y, z, level)` per cell (lower corner in
@@ -24,7 +25,30 @@ pub struct AmrArrays {
 }
 
 pub(crate) fn load_amr(a: &AmrDesc, base: &Path) -> Result<(AmrVolume, WorldFrame), SceneError> {
-    let (data, path) = match (&a.cells, &a.amrclaw) {
+    let run = read_cells(a, base, Share::WHOLE)?;
+    let arrays = AmrArrays {
+        cells: run.data.cells,
+        fields: run.data.fields,
+        origin: run.data.origin,
+        cell_size: run.data.finest_cell_size as f32,
+    };
+    build_amr(arrays, a, &run.source)
+}
+
+/// A run of cells a process read: the cells and their fields, the run's
+/// first index and the file's cell count, and the file (errors name it).
+pub(crate) struct CellRun {
+    pub data: voxless_io::AmrCellData,
+    pub offset: usize,
+    pub total: usize,
+    pub source: PathBuf,
+}
+
+/// Share `share` of the cells `a` names: ExaBricks cells by offset (whole,
+/// with every check of the whole-file reader, for one process); AMRClaw
+/// output is read whole and cut.
+pub(crate) fn read_cells(a: &AmrDesc, base: &Path, share: Share) -> Result<CellRun, SceneError> {
+    match (&a.cells, &a.amrclaw) {
         (Some(cells), None) => {
             let scalars: Vec<PathBuf> = a.scalars.iter().flatten().map(|s| base.join(s)).collect();
             if scalars.is_empty() {
@@ -34,32 +58,58 @@ pub(crate) fn load_amr(a: &AmrDesc, base: &Path) -> Result<(AmrVolume, WorldFram
                 ));
             }
             let path = base.join(cells);
-            (voxless_io::read_exabricks(&path, &scalars)?, path)
+            if share.is_whole() {
+                let data = voxless_io::read_exabricks(&path, &scalars)?;
+                let total = data.cells.len();
+                return Ok(CellRun {
+                    data,
+                    offset: 0,
+                    total,
+                    source: path,
+                });
+            }
+            let len = std::fs::metadata(&path)
+                .map_err(|source| voxless_io::IoError::Io {
+                    path: path.clone(),
+                    source,
+                })?
+                .len();
+            let rows = share.rows((len / 16) as usize);
+            let (data, total) = voxless_io::read_exabricks_rows(&path, &scalars, rows.clone())?;
+            Ok(CellRun {
+                data,
+                offset: rows.start,
+                total,
+                source: path,
+            })
         }
         (None, Some(q)) => {
             let path = base.join(q);
-            (voxless_io::read_amrclaw(&path)?, path)
+            let mut data = voxless_io::read_amrclaw(&path)?;
+            let total = data.cells.len();
+            let rows = share.rows(total);
+            if !share.is_whole() {
+                data.cells = data.cells[rows.clone()].to_vec();
+                for f in &mut data.fields {
+                    f.1 = f.1[rows.clone()].to_vec();
+                }
+            }
+            Ok(CellRun {
+                data,
+                offset: rows.start,
+                total,
+                source: path,
+            })
         }
-        (Some(_), Some(_)) => {
-            return Err(SceneError::setting(
-                "amr",
-                "give either cells (ExaBricks) or amrclaw, not both",
-            ));
-        }
-        (None, None) => {
-            return Err(SceneError::setting(
-                "amr",
-                "no cells: give cells + scalars (ExaBricks) or amrclaw (fort.qNNNN)",
-            ));
-        }
-    };
-    let arrays = AmrArrays {
-        cells: data.cells,
-        fields: data.fields,
-        origin: data.origin,
-        cell_size: data.finest_cell_size as f32,
-    };
-    build_amr(arrays, a, &path)
+        (Some(_), Some(_)) => Err(SceneError::setting(
+            "amr",
+            "give either cells (ExaBricks) or amrclaw, not both",
+        )),
+        (None, None) => Err(SceneError::setting(
+            "amr",
+            "no cells: give cells + scalars (ExaBricks) or amrclaw (fort.qNNNN)",
+        )),
+    }
 }
 
 /// An AMR volume from cell arrays, with the description's field choices,

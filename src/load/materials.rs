@@ -10,7 +10,8 @@ use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
 
 use voxless_scene::{MaterialDesc, ParticlesDesc};
 
-use super::particles::{FrameData, build_frame, frame_for, range, read_frame};
+use super::particles::{FrameData, build_frame, frame_for, read_frame};
+use crate::checks::range;
 use crate::{SceneError, WorldFrame};
 
 /// Loads every material of `p` at `frame`: the particle file filtered to
@@ -26,8 +27,7 @@ pub(crate) fn load_materials(
 ) -> Result<(MaterialVolume, WorldFrame), SceneError> {
     // Every material's particles first, so the frame fits them all.
     let mut read: Vec<(ParticlesDesc, FrameData)> = Vec::new();
-    for m in mats {
-        let desc = material_desc(p, m);
+    for desc in material_descs(p, mats)? {
         let mut fd = read_frame(&desc, base, frame)?;
         notes.append(&mut fd.notes);
         read.push((desc, fd));
@@ -54,9 +54,19 @@ pub(crate) fn load_materials(
     Ok((v, world))
 }
 
-/// Every material's particle description (see [`material_desc`]).
-pub(crate) fn material_descs(p: &ParticlesDesc, mats: &[MaterialDesc]) -> Vec<ParticlesDesc> {
-    mats.iter().map(|m| material_desc(p, m)).collect()
+/// Every material's particle description (see [`material_desc`]); the
+/// species are the materials', not the particles'.
+pub(crate) fn material_descs(
+    p: &ParticlesDesc,
+    mats: &[MaterialDesc],
+) -> Result<Vec<ParticlesDesc>, SceneError> {
+    if p.species.is_some() {
+        return Err(SceneError::setting(
+            "particles.species",
+            "give the species per material ([[particles.materials]] species = ...), not both",
+        ));
+    }
+    Ok(mats.iter().map(|m| material_desc(p, m)).collect())
 }
 
 /// The particle description of material `m` of `p`: its species, its radius
@@ -84,12 +94,6 @@ pub(crate) fn build_materials(
     notes: &mut Vec<String>,
     volume_of: &mut VolumeOf,
 ) -> Result<MaterialVolume, SceneError> {
-    if p.species.is_some() {
-        return Err(SceneError::setting(
-            "particles.species",
-            "give the species per material ([[particles.materials]] species = ...), not both",
-        ));
-    }
     let mut out = Vec::with_capacity(mats.len());
     for (k, m) in mats.iter().enumerate() {
         let field = |key: &str| format!("particles.materials[{k}].{key}");

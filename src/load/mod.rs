@@ -1,11 +1,22 @@
-//! Loading: files named by a scene description become a volume. Every
-//! reader's failure is a [`SceneError`] naming the file; the data's own
-//! defaults (a particle radius from the spacing, SPH kernels for SPH files)
-//! are filled here and said in the notes. Defaults of the view (camera,
-//! transfer function, settings) are not: [`crate::resolve`] fills those, for
-//! loaded and in-memory volumes alike.
+//! Loading: files named by a scene description become a volume — the front
+//! half every front-end shares, one process or many.
+//!
+//! - **Which data** ([`source`]): the description's one data source, a
+//!   JaxPM `.h5` given as particles recognised as its tessellation.
+//! - **Which part of it** ([`Share`]): one process reads everything; the
+//!   ranks of a decomposed scene read one share each (rows of a `.npy`,
+//!   cells of an ExaBricks file, Lagrangian slabs), through the same
+//!   readers, with the same checks and error texts.
+//! - **The data's own defaults** (a particle radius from the spacing, SPH
+//!   kernels for SPH files, the world frame), filled here and said in the
+//!   notes; over ranks from statistics the ranks merge, so they equal the
+//!   one-process defaults.
+//!
+//! Every reader's failure is a [`SceneError`] naming the file. Defaults of
+//! the view (camera, transfer function, settings) are not filled here:
+//! resolving does that, for loaded and in-memory volumes alike.
 
-mod amr;
+pub(crate) mod amr;
 pub mod formats;
 pub mod frames;
 pub(crate) mod jaxpm;
@@ -16,16 +27,18 @@ pub(crate) mod spacing;
 mod sph;
 pub(crate) mod table;
 pub(crate) mod tets;
+pub(crate) mod whole_set;
 
+use std::borrow::Cow;
+use std::ops::Range;
 use std::path::Path;
 
 use voxless_io::IoError;
-use voxless_scene::SceneDesc;
+use voxless_scene::{AmrDesc, ParticlesDesc, SceneDesc, TetsDesc};
 
 pub use amr::AmrArrays;
 pub(crate) use amr::{amr_settings, build_amr, cells_reach};
 pub use particles::{SUPPORT_PER_SPACING, default_radius, frame_count, frame_numbers};
-pub(crate) use particles::{positive, range};
 
 use crate::{AnyVolume, SceneError, WorldFrame};
 
@@ -35,6 +48,87 @@ pub struct Loaded {
     pub volume: AnyVolume,
     pub frame: WorldFrame,
     pub notes: Vec<String>,
+}
+
+/// The part of a data set one process reads: share `rank` of `ranks`, rows
+/// `n·rank/ranks .. n·(rank+1)/ranks` of `n` (every row in exactly one
+/// share, shares in rank order). One process reads [`Share::WHOLE`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Share {
+    pub rank: usize,
+    pub ranks: usize,
+}
+
+impl Share {
+    /// Everything, for one process.
+    pub const WHOLE: Share = Share { rank: 0, ranks: 1 };
+
+    /// Whether this share is all of the data.
+    pub fn is_whole(self) -> bool {
+        self.ranks <= 1
+    }
+
+    /// This share's rows of `n`.
+    pub fn rows(self, n: usize) -> Range<usize> {
+        let ranks = self.ranks.max(1) as u128;
+        let at = |r: usize| (n as u128 * r as u128 / ranks) as usize;
+        at(self.rank)..at(self.rank + 1)
+    }
+}
+
+/// What a scene is loaded for; it decides what each box of a decomposed
+/// scene keeps (one process keeps everything either way).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Purpose {
+    /// Everything reaching into the box (renders and point samples).
+    Render,
+    /// Column densities: tessellations keep each tet in one box only (the
+    /// box holding its centroid), so the boxes' projections add up; the
+    /// other kinds keep what reaches into the box and integrate inside it.
+    Project,
+}
+
+/// The one data source a description names.
+pub(crate) enum Source<'a> {
+    /// Particles (with `materials`, several species of one file).
+    Particles(&'a ParticlesDesc),
+    Amr(&'a AmrDesc),
+    /// A phase-space tessellation: a `[tets]` table, or a JaxPM run given
+    /// as particles.
+    Tets(Cow<'a, TetsDesc>),
+}
+
+/// The data source `desc` names (paths relative to `base`): an error when
+/// it names none or more than one.
+pub(crate) fn source<'a>(desc: &'a SceneDesc, base: &Path) -> Result<Source<'a>, SceneError> {
+    let sources = [
+        desc.particles.is_some(),
+        desc.amr.is_some(),
+        desc.tets.is_some(),
+    ];
+    if sources.iter().filter(|&&s| s).count() > 1 {
+        return Err(SceneError::setting(
+            "scene",
+            "more than one data source ([particles], [amr], [tets]) is given; pick one",
+        ));
+    }
+    if let Some(p) = &desc.particles {
+        // `--particles run.h5` of a JaxPM run: its tessellation.
+        return Ok(match jaxpm::as_tessellation(p, base)? {
+            Some(t) => Source::Tets(Cow::Owned(t)),
+            None => Source::Particles(p),
+        });
+    }
+    match (&desc.amr, &desc.tets) {
+        (Some(a), _) => Ok(Source::Amr(a)),
+        (_, Some(t)) => Ok(Source::Tets(Cow::Borrowed(t))),
+        (None, None) => Err(SceneError::setting(
+            "scene",
+            "no data source: add a [particles], [amr] or [tets] table to the scene, or pass \
+             --particles FILE (with --lagrangian N --box L for a phase-space tessellation), \
+             --cells FILE --scalars FILE, or --amrclaw FILE (or use `voxless demo`)",
+        )),
+    }
 }
 
 /// Loads the data `desc` names (paths relative to `base`) at frame `frame`
@@ -53,51 +147,24 @@ pub fn load_in(
     world: Option<&WorldFrame>,
 ) -> Result<Loaded, SceneError> {
     let mut notes = Vec::new();
-    let sources = [
-        desc.particles.is_some(),
-        desc.amr.is_some(),
-        desc.tets.is_some(),
-    ];
-    if sources.iter().filter(|&&s| s).count() > 1 {
-        return Err(SceneError::setting(
-            "scene",
-            "more than one data source ([particles], [amr], [tets]) is given; pick one",
-        ));
-    }
-    // `--particles run.h5` of a JaxPM run: its tessellation.
-    let jaxpm = match &desc.particles {
-        Some(p) => jaxpm::as_tessellation(p, base)?,
-        None => None,
-    };
-    let particles = if jaxpm.is_some() {
-        None
-    } else {
-        desc.particles.as_ref()
-    };
-    let tets = desc.tets.as_ref().or(jaxpm.as_ref());
-    let (volume, world) = match (particles, &desc.amr, tets) {
-        (Some(p), _, _) if p.materials.is_some() => {
-            let mats = p.materials.as_deref().unwrap_or_default();
-            let (v, f) = materials::load_materials(p, mats, base, &mut notes, frame, world)?;
-            (AnyVolume::Materials(Box::new(v)), f)
-        }
-        (Some(p), _, _) => {
-            let (v, f) = particles::load_particles(p, base, &mut notes, frame, world)?;
-            (AnyVolume::Particles(Box::new(v)), f)
-        }
-        (_, Some(a), _) => {
+    let (volume, world) = match source(desc, base)? {
+        Source::Particles(p) => match &p.materials {
+            Some(mats) => {
+                let (v, f) = materials::load_materials(p, mats, base, &mut notes, frame, world)?;
+                (AnyVolume::Materials(Box::new(v)), f)
+            }
+            None => {
+                let (v, f) = particles::load_particles(p, base, &mut notes, frame, world)?;
+                (AnyVolume::Particles(Box::new(v)), f)
+            }
+        },
+        Source::Amr(a) => {
             let (v, f) = amr::load_amr(a, base)?;
             (AnyVolume::Amr(Box::new(v)), f)
         }
-        (_, _, Some(t)) => {
-            let (v, f) = tets::load_tets(t, base, &mut notes)?;
+        Source::Tets(t) => {
+            let (v, f) = tets::load_tets(&t, base, &mut notes)?;
             (AnyVolume::Tets(Box::new(v)), f)
-        }
-        (None, None, None) => {
-            return Err(SceneError::setting(
-                "scene",
-                "no data source: add a [particles], [amr] or [tets] table to the scene, or pass --particles FILE (with --lagrangian N --box L for a phase-space tessellation), --cells FILE --scalars FILE, or --amrclaw FILE (or use `voxless demo`)",
-            ));
         }
     };
     Ok(Loaded {

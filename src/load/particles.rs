@@ -12,40 +12,18 @@
 
 use std::path::{Path, PathBuf};
 
-use voxless_core::{Range1, Vec3};
+use voxless_core::Vec3;
 use voxless_particles::{
-    Classification, Kernel, ParticleData, ParticleError, ParticleSettings, ParticleVolume,
+    Classification, Kernel, ParticleData, ParticleError, ParticleSettings, ParticleVolume, median,
 };
 use voxless_scene::{ClassificationName, KernelName, ParticlesDesc};
 use voxless_transfer::ControlPoints;
 
 use super::formats::{self, ParticleFormat, TableOptions};
 use super::spacing;
-use super::{frames, table as load};
-use crate::frame::bounds_of;
+use super::{Share, frames, table as load};
+use crate::checks::{positive, range};
 use crate::{SceneError, WorldFrame, demo};
-
-pub(crate) fn positive(field: &str, v: f32) -> Result<(), SceneError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(SceneError::setting(
-            field,
-            format!("{v} must be finite and > 0"),
-        ))
-    }
-}
-
-pub(crate) fn range(field: &str, lo: f32, hi: f32) -> Result<Range1, SceneError> {
-    if lo.is_finite() && hi.is_finite() && lo <= hi {
-        Ok(Range1::new(lo, hi))
-    } else {
-        Err(SceneError::setting(
-            field,
-            format!("[{lo}, {hi}] is not a finite, increasing range"),
-        ))
-    }
-}
 
 pub(crate) fn kernel_of(p: &ParticlesDesc, name: KernelName) -> Kernel {
     match name {
@@ -89,9 +67,10 @@ pub(crate) struct FrameData {
     /// The kernel of the SPH defaults (SPH data and no kernel given).
     pub sph_defaults: Option<Kernel>,
     pub notes: Vec<String>,
-    /// When only a share of the rows was read (see [`read_frame_share`]):
-    /// the first row and the file's particle count.
-    pub rows: Option<(usize, usize)>,
+    /// The row number of the first row read, and the set's row count: a
+    /// share of a decomposed set holds rows `offset..` of `total`.
+    pub offset: usize,
+    pub total: usize,
 }
 
 impl FrameData {
@@ -106,24 +85,7 @@ impl FrameData {
     /// largest support the description or the radii give), for choosing a
     /// frame; `None` for non-finite positions (reported when building).
     pub fn world_reach(&self, p: &ParticlesDesc) -> Option<([f64; 3], [f64; 3])> {
-        let (lo, hi) = bounds_of(&self.positions)?;
-        let factor = self.kernel(p).support_factor() as f64;
-        let radius = match (p.radius, &self.data.radii) {
-            (Some(r), _) => r as f64,
-            (None, Some(r)) => r.iter().fold(0.0f32, |m, &v| m.max(v)) as f64,
-            (None, None) => 0.0,
-        };
-        let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
-        // A support beyond the data's extent is refused when there are many
-        // particles (see `ParticleError::HugeRadius`): placing the frame
-        // around it would only blur the positions the error reports.
-        let refused = self.positions.len() > 1000 && factor * radius > extent;
-        let grow = if radius.is_finite() && !refused {
-            factor * radius
-        } else {
-            0.0
-        };
-        Some((lo.map(|v| v - grow), hi.map(|v| v + grow)))
+        Reach::of(self).world_box(p, self.kernel(p), self.total)
     }
 
     /// The arrays with positions in `frame`'s local coordinates (radii and
@@ -136,6 +98,78 @@ impl FrameData {
         (self.data, self.main_file, self.files)
     }
 }
+
+/// What fixes the world box a particle set's supports reach, in pieces
+/// that merge over the shares of a decomposed set: the positions' bounds
+/// (NaN passed over) and the largest radius (when the rows have radii).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Reach {
+    pub lo: [f64; 3],
+    pub hi: [f64; 3],
+    pub max_radius: Option<f32>,
+}
+
+impl Reach {
+    /// The pieces of the rows read.
+    pub fn of(fd: &FrameData) -> Reach {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for q in &fd.positions {
+            for a in 0..3 {
+                lo[a] = lo[a].min(q[a]);
+                hi[a] = hi[a].max(q[a]);
+            }
+        }
+        let max_radius = fd
+            .data
+            .radii
+            .as_ref()
+            .map(|r| r.iter().fold(0.0f32, |m, &v| m.max(v)));
+        Reach { lo, hi, max_radius }
+    }
+
+    /// The pieces of two shares together.
+    pub fn merge(self, o: Reach) -> Reach {
+        Reach {
+            lo: std::array::from_fn(|a| self.lo[a].min(o.lo[a])),
+            hi: std::array::from_fn(|a| self.hi[a].max(o.hi[a])),
+            max_radius: match (self.max_radius, o.max_radius) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                (a, b) => a.or(b),
+            },
+        }
+    }
+
+    /// The world box the set's supports reach (`total` particles of
+    /// `kernel`): the positions' bounds grown by the largest support the
+    /// description or the radii give; `None` for non-finite positions.
+    pub fn world_box(&self, p: &ParticlesDesc, kernel: Kernel, total: usize) -> Option<WorldBox> {
+        let (lo, hi) = (self.lo, self.hi);
+        if !lo.iter().chain(&hi).all(|v| v.is_finite()) {
+            return None;
+        }
+        let factor = kernel.support_factor() as f64;
+        let radius = match (p.radius, self.max_radius) {
+            (Some(r), _) => r as f64,
+            (None, Some(r)) => r as f64,
+            (None, None) => 0.0,
+        };
+        let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+        // A support beyond the data's extent is refused when there are many
+        // particles (see `ParticleError::HugeRadius`): placing the frame
+        // around it would only blur the positions the error reports.
+        let refused = total > 1000 && factor * radius > extent;
+        let grow = if radius.is_finite() && !refused {
+            factor * radius
+        } else {
+            0.0
+        };
+        Some((lo.map(|v| v - grow), hi.map(|v| v + grow)))
+    }
+}
+
+/// A world box: lower and upper corner (float64).
+pub(crate) type WorldBox = ([f64; 3], [f64; 3]);
 
 /// The frame for data reaching over the world box `reach` (see
 /// [`WorldFrame::fit`]).
@@ -194,26 +228,139 @@ fn sph_columns(p: &ParticlesDesc, source: &load::Source) -> Option<(String, Stri
         .map(|(h, m)| (h.to_string(), m.to_string()))
 }
 
+/// Every row of frame `frame` of the particles `p` names.
 pub(crate) fn read_frame(
     p: &ParticlesDesc,
     base: &Path,
     frame: usize,
 ) -> Result<FrameData, SceneError> {
-    read_frame_share(p, base, frame, None)
+    read_rows(p, base, frame, Share::WHOLE)
+}
+
+/// Share `share` of the rows of frame `frame` (world positions; no local
+/// positions yet): by offset when the positions and every per-particle
+/// array are `.npy` files, by hyperslab from HDF5 columns, else the frame
+/// read whole and cut (its rows are not at known offsets).
+pub(crate) fn read_rows(
+    p: &ParticlesDesc,
+    base: &Path,
+    frame: usize,
+    share: Share,
+) -> Result<FrameData, SceneError> {
+    if share.is_whole() {
+        return Ok(read_frame_share(p, base, frame, None)?.0);
+    }
+    if let Some(rows) = npy_rows(p, base, frame, share)? {
+        return Ok(rows);
+    }
+    // HDF5 files read only the share's rows (hyperslabs) when the
+    // per-particle arrays are columns of the file.
+    let columns_only = [&p.attribute, &p.radii, &p.weights]
+        .into_iter()
+        .flatten()
+        .all(|spec| !is_npy(&base.join(spec)));
+    let part = (p.species.is_none() && columns_only).then_some((share.rank, share.ranks));
+    let (mut fd, shared) = read_frame_share(p, base, frame, part)?;
+    if shared {
+        return Ok(fd);
+    }
+    let r = share.rows(fd.total);
+    let cut = |v: Option<Vec<f32>>| v.map(|v| v[r.clone()].to_vec());
+    fd.positions = fd.positions[r.clone()].to_vec();
+    fd.data.radii = cut(fd.data.radii);
+    fd.data.attribute = cut(fd.data.attribute);
+    fd.data.weights = cut(fd.data.weights);
+    fd.offset = r.start;
+    Ok(fd)
+}
+
+fn is_npy(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npy"))
+}
+
+/// Share `share` of the rows read by offset, when the positions and every
+/// per-particle array are `.npy` files of the right shapes; `None` sends
+/// the read down the general path (which also words any error).
+fn npy_rows(
+    p: &ParticlesDesc,
+    base: &Path,
+    frame: usize,
+    share: Share,
+) -> Result<Option<FrameData>, SceneError> {
+    let Some(f) = &p.file else {
+        return Ok(None);
+    };
+    if p.species.is_some() {
+        return Ok(None);
+    }
+    let (path, _) = locate(f, base, frame)?;
+    if !is_npy(&path) {
+        return Ok(None);
+    }
+    let (_, shape) = voxless_io::read_npy_rows(&path, 0..0)?;
+    if shape.len() != 2 || shape[1] != 3 || shape[0] == 0 {
+        return Ok(None);
+    }
+    let total = shape[0];
+    let rows = share.rows(total);
+    let mut files = Vec::new();
+    let mut per = |spec: &Option<String>,
+                   what: &'static str|
+     -> Result<Option<Option<Vec<f32>>>, SceneError> {
+        let Some(s) = spec else {
+            return Ok(Some(None));
+        };
+        let spec = frame_file(s, base, frame)?;
+        if !is_npy(&spec) || !spec.is_file() {
+            return Ok(None);
+        }
+        let (a, shape) = voxless_io::read_npy_rows(&spec, rows.clone())?;
+        if !matches!(shape.as_slice(), [n] | [n, 1] if *n == total) {
+            return Ok(None);
+        }
+        files.push((what, spec));
+        Ok(Some(Some(a.data.iter().map(|&v| v as f32).collect())))
+    };
+    let (Some(attribute), Some(radii), Some(weights)) = (
+        per(&p.attribute, "attribute")?,
+        per(&p.radii, "radii")?,
+        per(&p.weights, "weights")?,
+    ) else {
+        return Ok(None);
+    };
+    let (a, _) = voxless_io::read_npy_rows(&path, rows.clone())?;
+    let positions = a.data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    Ok(Some(FrameData {
+        positions,
+        data: ParticleData {
+            positions: Vec::new(),
+            radii,
+            attribute,
+            weights,
+        },
+        main_file: path,
+        files,
+        sph_defaults: None,
+        notes: Vec::new(),
+        offset: rows.start,
+        total,
+    }))
 }
 
 /// [`read_frame`], asking for share `r` of `k` of the rows (`share =
 /// Some((r, k))`; see `TableOptions::share`): formats that can read part of
-/// their rows (HDF5) read only those and say so in [`FrameData::rows`]; the
-/// others read every row. Per-particle arrays must then be columns of the
-/// file, not files of their own.
-pub(crate) fn read_frame_share(
+/// their rows (HDF5) read only those and say so in [`FrameData::offset`]
+/// and [`FrameData::total`]; the others read every row. Per-particle arrays
+/// must then be columns of the file, not files of their own. Says whether
+/// only the share was read.
+fn read_frame_share(
     p: &ParticlesDesc,
     base: &Path,
     frame: usize,
     share: Option<(usize, usize)>,
-) -> Result<FrameData, SceneError> {
-    let mut rows = None;
+) -> Result<(FrameData, bool), SceneError> {
+    let mut rows: Option<(usize, usize)> = None;
     let mut files: Vec<(&'static str, PathBuf)> = Vec::new();
     let mut notes = Vec::new();
     let mut sph_defaults = None;
@@ -305,15 +452,18 @@ pub(crate) fn read_frame_share(
             ));
         }
     };
-    Ok(FrameData {
+    let (offset, total) = rows.unwrap_or((0, world_positions.len()));
+    let fd = FrameData {
         positions: world_positions,
         data,
         main_file,
         files,
         sph_defaults,
         notes,
-        rows,
-    })
+        offset,
+        total,
+    };
+    Ok((fd, rows.is_some()))
 }
 
 /// Attributes a particle error to the file that holds the bad values.
@@ -543,50 +693,90 @@ pub fn frame_numbers(
 /// particle 10³⁸ away from the rest, say) would collapse the particles onto
 /// each other: an error naming the particle farthest from the rest.
 fn check_resolvable(data: &ParticleData, support: f32, scale: f64) -> Result<(), BuildError> {
-    let median = |v: &[f32]| {
-        let mut v = v.to_vec();
-        let mid = v.len() / 2;
-        v.select_nth_unstable_by(mid, f32::total_cmp);
-        v[mid]
-    };
-    let support = match &data.radii {
-        Some(r) if !r.is_empty() => support * median(r),
-        _ => support,
-    } as f64;
-    let mut b = voxless_core::Aabb::EMPTY;
-    data.positions.iter().for_each(|p| b.grow(*p));
-    let extent = (0..3)
-        .map(|a| (b.max[a] - b.min[a]) as f64)
-        .fold(0.0, f64::max);
-    // Non-finite positions are reported as such when the volume is built.
-    if data.positions.len() < 2 || !extent.is_finite() || !(support < extent * 1e-6) {
+    let mut radii = data.radii.clone();
+    let bounds = spacing::bounds(&data.positions);
+    let n = data.positions.len();
+    let Some(centre) =
+        Unresolvable::find(support, radii.as_deref_mut(), &data.positions, bounds, n)
+    else {
         return Ok(());
-    }
-    let centre: [f32; 3] =
-        std::array::from_fn(|a| median(&data.positions.iter().map(|p| p[a]).collect::<Vec<_>>()));
-    let dist = |p: &Vec3| {
-        (0..3)
-            .map(|a| (p[a] - centre[a]).abs() as f64)
-            .fold(0.0, f64::max)
     };
-    let (far, _) = data
-        .positions
-        .iter()
-        .enumerate()
-        .fold(
+    let (far, _) = centre.farthest(&data.positions);
+    Err(BuildError::Setting(centre.error(far, scale)))
+}
+
+/// Supports too small for float32 across the data's extent (see
+/// [`check_resolvable`]), found from the medians of `radii` and of
+/// `centres` — every particle's, or a decomposed set's probes (every k-th
+/// row, so exact up to that many particles).
+pub(crate) struct Unresolvable {
+    support: f64,
+    extent: f64,
+    centre: [f32; 3],
+}
+
+impl Unresolvable {
+    /// `Some` when the supports (`support` times the median radius, when
+    /// there are radii) are below what float32 resolves across `bounds`
+    /// (the positions' bounds) for a set of `total` particles.
+    pub fn find(
+        support: f32,
+        radii: Option<&mut [f32]>,
+        centres: &[Vec3],
+        bounds: voxless_core::Aabb,
+        total: usize,
+    ) -> Option<Unresolvable> {
+        let support = match radii {
+            Some(r) if !r.is_empty() => support * median(r),
+            _ => support,
+        } as f64;
+        let extent = (0..3)
+            .map(|a| (bounds.max[a] - bounds.min[a]) as f64)
+            .fold(0.0, f64::max);
+        // Non-finite positions are reported as such when the volume is built.
+        if total < 2 || !extent.is_finite() || !(support < extent * 1e-6) {
+            return None;
+        }
+        let centre: [f32; 3] = std::array::from_fn(|a| {
+            let mut v: Vec<f32> = centres.iter().map(|p| p[a]).collect();
+            median(&mut v)
+        });
+        Some(Unresolvable {
+            support,
+            extent,
+            centre,
+        })
+    }
+
+    /// The first of `positions` farthest from the centre, and its distance.
+    pub fn farthest(&self, positions: &[Vec3]) -> (usize, f64) {
+        let dist = |p: &Vec3| {
+            (0..3)
+                .map(|a| (p[a] - self.centre[a]).abs() as f64)
+                .fold(0.0, f64::max)
+        };
+        positions.iter().enumerate().fold(
             (0, -1.0),
-            |m, (i, p)| if dist(p) > m.1 { (i, dist(p)) } else { m },
-        );
-    Err(BuildError::Setting(SceneError::setting(
-        "particles (positions)",
-        format!(
-            "the particles' supports ({:.3e}) are too small for float32 to resolve across the \
-             data's extent ({:.3e}): particle {far} lies farthest from the rest; leave out \
-             outliers like it (or give a larger --radius)",
-            support * scale,
-            extent * scale
-        ),
-    )))
+            |m, (i, p)| {
+                if dist(p) > m.1 { (i, dist(p)) } else { m }
+            },
+        )
+    }
+
+    /// The error naming particle `far` (lengths in world units: the frame's
+    /// scale is `scale`).
+    pub fn error(&self, far: usize, scale: f64) -> SceneError {
+        SceneError::setting(
+            "particles (positions)",
+            format!(
+                "the particles' supports ({:.3e}) are too small for float32 to resolve across \
+                 the data's extent ({:.3e}): particle {far} lies farthest from the rest; leave \
+                 out outliers like it (or give a larger --radius)",
+                self.support * scale,
+                self.extent * scale
+            ),
+        )
+    }
 }
 
 /// Number of frames of the scene's data ([`frame_numbers`]).

@@ -10,8 +10,8 @@
 use voxless_particles::ParticleData;
 use voxless_scene::ParticlesDesc;
 
-use super::positive;
 use crate::SceneError;
+use crate::checks::positive;
 
 /// The validated `(radius_scale, weight_scale)` of `p` (1 when absent).
 pub(crate) fn scales(p: &ParticlesDesc) -> Result<(f32, f32), SceneError> {

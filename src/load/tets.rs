@@ -8,13 +8,15 @@
 //! overdensity 1 + δ), whatever the box size; a given mass is divided by the
 //! scale's cube so densities (mass over tet volume) stay in world units.
 
-use std::path::Path;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
 
 use voxless_scene::{PixelsName, TetsDesc};
-use voxless_tets::{LagrangianGrid, PixelIntegral, TetSettings, TetVolume};
+use voxless_tets::{BLOCK, LagrangianGrid, PixelIntegral, TetSettings, TetVolume};
 
+use super::Share;
 use super::formats::ParticleFormat;
-use super::particles::positive;
+use crate::checks::positive;
 use crate::{SceneError, WorldFrame};
 
 /// Lagrangian positions in world units, before they are placed.
@@ -29,6 +31,32 @@ pub(crate) fn load_tets(
     base: &Path,
     notes: &mut Vec<String>,
 ) -> Result<(TetVolume, WorldFrame), SceneError> {
+    let (grid, path) = read_grid(t, base, Share::WHOLE, notes)?;
+    build_world(grid, t, &path)
+}
+
+/// The block rows of share `share` of an `n`-plane Lagrangian grid (rows
+/// of [`BLOCK`] planes), their first and last plane, and how many planes
+/// the share reads: its own, plus the next plane (`last % n`), which the
+/// cells of its last row reach into (0 for an empty share).
+pub(crate) fn slab_planes(n: usize, share: Share) -> (Range<usize>, usize, usize, usize) {
+    let rows = share.rows(n.div_ceil(BLOCK));
+    let first = (rows.start * BLOCK).min(n);
+    let last = (rows.end * BLOCK).min(n);
+    let planes = if rows.is_empty() { 0 } else { last - first + 1 };
+    (rows, first, last, planes)
+}
+
+/// The world positions the run `t` names for share `share` (see
+/// [`slab_planes`]; one process reads the whole grid), with N, L and the
+/// file — every check one process makes: the file, N³ particles (from the
+/// `.npy` header when a share reads only its planes), all inside the box.
+pub(crate) fn read_grid(
+    t: &TetsDesc,
+    base: &Path,
+    share: Share,
+    notes: &mut Vec<String>,
+) -> Result<(WorldGrid, PathBuf), SceneError> {
     let file = t.file.as_ref().ok_or_else(|| {
         SceneError::setting(
             "tets.file",
@@ -37,22 +65,83 @@ pub(crate) fn load_tets(
         )
     })?;
     let path = base.join(file);
-    let grid = if ParticleFormat::detect(&path)? == Some(ParticleFormat::Hdf5) {
-        super::jaxpm::grid(t, &path, notes)?
-    } else {
-        if t.snapshot.is_some() {
-            return Err(SceneError::setting(
-                "tets.snapshot",
-                format!(
-                    "--snapshot picks a snapshot of a JaxPM .h5 run, but {} is not one",
-                    path.display()
-                ),
-            ));
+    // The share's planes of a whole grid's positions.
+    let cut = |mut g: WorldGrid| {
+        if share.is_whole() {
+            return g;
         }
-        let (positions, _) = super::table::read_positions(&path)?;
-        world_grid(positions, t, &path)?
+        let (n, nn) = (g.n, g.n * g.n);
+        let (_, first, last, planes) = slab_planes(n, share);
+        let mut slab = Vec::with_capacity(planes * nn);
+        if planes > 0 {
+            slab.extend_from_slice(&g.positions[first * nn..last * nn]);
+            let extra = last % n;
+            slab.extend_from_slice(&g.positions[extra * nn..(extra + 1) * nn]);
+        }
+        g.positions = slab;
+        g
     };
-    build_world(grid, t, &path)
+    if ParticleFormat::detect(&path)? == Some(ParticleFormat::Hdf5) {
+        // A JaxPM run: N and L come from the file.
+        return Ok((cut(super::jaxpm::grid(t, &path, notes)?), path));
+    }
+    if t.snapshot.is_some() {
+        return Err(SceneError::setting(
+            "tets.snapshot",
+            format!(
+                "--snapshot picks a snapshot of a JaxPM .h5 run, but {} is not one",
+                path.display()
+            ),
+        ));
+    }
+    if !share.is_whole()
+        && let Some(grid) = npy_planes(t, &path, share)?
+    {
+        return Ok((grid, path));
+    }
+    let (positions, _) = super::table::read_positions(&path)?;
+    Ok((cut(world_grid(positions, t, &path)?), path))
+}
+
+/// The share's planes of an N×3 `.npy`, read by offset after checking N
+/// and L as the whole grid is checked; `None` for other files (read whole).
+fn npy_planes(t: &TetsDesc, path: &Path, share: Share) -> Result<Option<WorldGrid>, SceneError> {
+    let is_npy = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
+    let shape = if is_npy {
+        voxless_io::read_npy_rows(path, 0..0)?.1
+    } else {
+        return Ok(None);
+    };
+    let Some(n) = t.lagrangian.filter(|_| shape.len() == 2 && shape[1] == 3) else {
+        return Ok(None);
+    };
+    let l = t.box_size.ok_or_else(|| {
+        SceneError::setting("tets.box_size", "the periodic box size is needed (--box L)")
+    })? as f64;
+    check_count(n, shape[0], path)?;
+    let (_, first, last, planes) = slab_planes(n, share);
+    let nn = n * n;
+    let mut positions = Vec::with_capacity(planes * nn);
+    if planes > 0 {
+        let read = |a: usize, b: usize| -> Result<Vec<[f64; 3]>, SceneError> {
+            let (arr, _) = voxless_io::read_npy_rows(path, a * nn..b * nn)?;
+            Ok(arr
+                .data
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect())
+        };
+        positions.extend(read(first, last)?);
+        check_inside(&positions, first * nn, l, path)?;
+        positions.extend(read(last % n, last % n + 1)?);
+    }
+    Ok(Some(WorldGrid {
+        n,
+        box_size: l,
+        positions,
+    }))
 }
 
 /// The Lagrangian grid of world `positions` with the description's N and

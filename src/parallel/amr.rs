@@ -1,5 +1,5 @@
-//! AMR cells over the ranks: each rank reads a run of cells (by offset from
-//! ExaBricks files; AMRClaw output is read whole and cut), the ranks agree
+//! AMR cells over the ranks: each rank reads a run of cells through the
+//! one-process reader (`crate::load::amr::read_cells`), the ranks agree
 //! on the world frame (its scale from the cells' reach), the fields' ranges
 //! and the bounds (the cells' domain, computed as the volume computes its
 //! bricks' boxes), decompose a sample of cell centres, and send every cell
@@ -9,82 +9,22 @@
 //! and a projection integrates it (the exact basis line integral) over the
 //! part of each ray inside the box, half-open like the cells.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use voxless_amr::{AmrCells, AmrError, AmrVolume};
 use voxless_core::{Aabb, Range1, Vec3};
 use voxless_parallel::{Comm, CommExt, Reader};
 use voxless_scene::AmrDesc;
 
-use super::share::{agree, decompose, exchange, outboxes, root_box, share, union_bounds};
-use super::{Columns, ParallelError, Part, PartCounts};
-use crate::load::{amr_settings, cells_reach};
-use crate::{AnyVolume, SceneError, VolumeKind, VolumeSummary};
+use super::share::{decompose, exchange, outboxes, root_box};
+use super::{ParallelError, Part, PartCounts};
+use crate::load::amr::read_cells;
+use crate::load::whole_set::{agree, union_bounds};
+use crate::load::{Share, amr_settings, cells_reach};
+use crate::{AnyVolume, Fields, SceneError, VolumeKind, VolumeSummary};
 
 /// Cells sampled for the decomposition, about.
 const SAMPLE: usize = 16_384;
-
-/// This rank's run of cells: the cells, their fields, the run's first
-/// index and the file's cell count, and the data's geometry.
-struct Run {
-    data: voxless_io::AmrCellData,
-    offset: usize,
-    total: usize,
-    source: PathBuf,
-}
-
-fn read_run(a: &AmrDesc, base: &Path, rank: usize, ranks: usize) -> Result<Run, SceneError> {
-    match (&a.cells, &a.amrclaw) {
-        (Some(cells), None) => {
-            let scalars: Vec<PathBuf> = a.scalars.iter().flatten().map(|s| base.join(s)).collect();
-            if scalars.is_empty() {
-                return Err(SceneError::setting(
-                    "amr.scalars",
-                    "ExaBricks cells need at least one .scalars file (--scalars FILE)",
-                ));
-            }
-            let path = base.join(cells);
-            let len = std::fs::metadata(&path)
-                .map_err(|source| voxless_io::IoError::Io {
-                    path: path.clone(),
-                    source,
-                })?
-                .len();
-            let rows = share((len / 16) as usize, rank, ranks);
-            let (data, total) = voxless_io::read_exabricks_rows(&path, &scalars, rows.clone())?;
-            Ok(Run {
-                data,
-                offset: rows.start,
-                total,
-                source: path,
-            })
-        }
-        (None, Some(q)) => {
-            let path = base.join(q);
-            let mut data = voxless_io::read_amrclaw(&path)?;
-            let total = data.cells.len();
-            let rows = share(total, rank, ranks);
-            data.cells = data.cells[rows.clone()].to_vec();
-            for f in &mut data.fields {
-                f.1 = f.1[rows.clone()].to_vec();
-            }
-            Ok(Run {
-                data,
-                offset: rows.start,
-                total,
-                source: path,
-            })
-        }
-        (Some(_), Some(_)) => Err(SceneError::setting(
-            "amr",
-            "give either cells (ExaBricks) or amrclaw, not both",
-        )),
-        (None, None) => Err(SceneError::setting(
-            "amr",
-            "no cells: give cells + scalars (ExaBricks) or amrclaw (fort.qNNNN)",
-        )),
-    }
-}
 
 /// The box of a cell's basis support (its tent reaches half a cell beyond
 /// it), computed as the volume computes its regions' boxes.
@@ -108,7 +48,11 @@ fn cell_box(c: &[i32; 4], h: f32) -> Aabb {
 }
 
 pub(crate) fn open(comm: &dyn Comm, a: &AmrDesc, base: &Path) -> Result<Part, ParallelError> {
-    let run = agree(comm, read_run(a, base, comm.rank(), comm.size()))?;
+    let share = Share {
+        rank: comm.rank(),
+        ranks: comm.size(),
+    };
+    let run = agree(comm, read_cells(a, base, share))?;
     let names: Vec<String> = run.data.fields.iter().map(|f| f.0.clone()).collect();
     let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
     // The frame's scale from how far the whole data reaches (as one
@@ -214,11 +158,6 @@ pub(crate) fn open(comm: &dyn Comm, a: &AmrDesc, base: &Path) -> Result<Part, Pa
         }),
     };
     let volume = agree(comm, volume)?;
-    let colour_name = a
-        .color_field
-        .clone()
-        .or_else(|| a.field.clone())
-        .or_else(|| names.first().cloned());
     Ok(Part {
         volume,
         frame,
@@ -229,8 +168,7 @@ pub(crate) fn open(comm: &dyn Comm, a: &AmrDesc, base: &Path) -> Result<Part, Pa
             attribute_range: settings.color_field.map(range),
         },
         decomposition,
-        columns: Columns::Amr(names),
-        colour_name,
+        fields: Fields::Amr(names),
         counts: PartCounts { read, held },
         notes: Vec::new(),
     })

@@ -1,50 +1,8 @@
-//! Which part of a file each rank reads, and the exchange of items to the
-//! boxes they reach into.
-
-use std::ops::Range;
+//! The decomposition the ranks build from a sample of the data, and the
+//! exchange of items to the boxes they reach into.
 
 use voxless_core::{Aabb, Vec3};
-use voxless_parallel::{Comm, CommError, CommExt, Decomposition, Reader, Writer};
-
-use super::ParallelError;
-
-/// Rows `n·r/K .. n·(r+1)/K` of `n`: rank `r`'s share of `K` (every row in
-/// exactly one share, shares in rank order).
-pub(crate) fn share(n: usize, rank: usize, ranks: usize) -> Range<usize> {
-    let ranks = ranks.max(1) as u128;
-    let at = |r: usize| (n as u128 * r as u128 / ranks) as usize;
-    at(rank)..at(rank + 1)
-}
-
-/// Every rank's outcome of a local step: `Ok` everywhere or an error
-/// everywhere (this rank's own, or the failing rank's).
-pub(crate) fn agree<T, E>(comm: &dyn Comm, local: Result<T, E>) -> Result<T, ParallelError>
-where
-    E: std::fmt::Display + Into<ParallelError>,
-{
-    match comm.agree(local)? {
-        Ok(v) => Ok(v),
-        Err(e) => Err(e.into()),
-    }
-}
-
-/// The union over all ranks of their boxes.
-pub(crate) fn union_bounds(comm: &dyn Comm, b: Aabb) -> Result<Aabb, CommError> {
-    let (lo, hi) = if b.is_empty() {
-        ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3])
-    } else {
-        (
-            [b.min.x as f64, b.min.y as f64, b.min.z as f64],
-            [b.max.x as f64, b.max.y as f64, b.max.z as f64],
-        )
-    };
-    let lo = comm.all_min(&lo)?;
-    let hi = comm.all_max(&hi)?;
-    Ok(Aabb::new(
-        Vec3::new(lo[0] as f32, lo[1] as f32, lo[2] as f32),
-        Vec3::new(hi[0] as f32, hi[1] as f32, hi[2] as f32),
-    ))
-}
+use voxless_parallel::{Comm, CommError, Decomposition, Reader, Writer};
 
 /// The root box a decomposition tiles: the data's bounds grown a little,
 /// so that the half-open boxes hold every point of the data.

@@ -1,6 +1,7 @@
 //! Phase-space tessellations over the ranks.
 //!
-//! Each rank reads a slab of Lagrangian planes — the block rows
+//! Each rank reads a slab of Lagrangian planes through the one-process
+//! reader (`crate::load::tets::read_grid`) — the block rows
 //! `nb·r/K .. nb·(r+1)/K` of 8-cell blocks, plus the next plane, which the
 //! cells of the last row reach into — and tessellates it exactly as one
 //! process would ([`TetMesh::from_slab`]): the whole mesh is the slabs'
@@ -17,15 +18,16 @@ use voxless_core::{Aabb, Vec3};
 use voxless_parallel::{Comm, CommExt, Reader, Writer};
 use voxless_scene::TetsDesc;
 use voxless_tets::{
-    BLOCK, LagrangianSlab, Tet, TetMesh, TetMeshBuilder, TetSettings, TetVolume, density_range,
+    LagrangianSlab, Tet, TetMesh, TetMeshBuilder, TetSettings, TetVolume, density_range,
     density_stride,
 };
 
-use super::share::{agree, exchange, outboxes, root_box, share};
-use super::{Columns, ParallelError, Part, PartCounts, Purpose};
-use crate::load::formats::ParticleFormat;
-use crate::load::tets::{box_frame, check_count, check_inside, particle_mass, world_grid};
-use crate::{AnyVolume, SceneError, VolumeKind, VolumeSummary, WorldFrame};
+use super::share::{exchange, outboxes, root_box};
+use super::{ParallelError, Part, PartCounts};
+use crate::load::tets::{box_frame, particle_mass, pixel_integral, read_grid, slab_planes};
+use crate::load::whole_set::agree;
+use crate::load::{Purpose, Share};
+use crate::{AnyVolume, Fields, SceneError, VolumeKind, VolumeSummary, WorldFrame};
 
 /// This rank's slab of the run `t` names, placed in the frame its box
 /// picks (as one process places the whole grid), with that frame and the
@@ -33,110 +35,21 @@ use crate::{AnyVolume, SceneError, VolumeKind, VolumeSummary, WorldFrame};
 fn read_slab(
     t: &TetsDesc,
     base: &Path,
-    rank: usize,
-    ranks: usize,
+    share: Share,
     notes: &mut Vec<String>,
 ) -> Result<(LagrangianSlab, WorldFrame, f64, PathBuf), SceneError> {
-    let file = t.file.as_ref().ok_or_else(|| {
-        SceneError::setting(
-            "tets.file",
-            "no positions file given (--particles FILE.npy with --lagrangian N --box L, or a \
-             JaxPM FILE.h5)",
-        )
-    })?;
-    let path = base.join(file);
-    let planes_of = |n: usize| {
-        let rows = share(n.div_ceil(BLOCK), rank, ranks);
-        let first = (rows.start * BLOCK).min(n);
-        let last = (rows.end * BLOCK).min(n);
-        let planes = if rows.is_empty() { 0 } else { last - first + 1 };
-        (rows, first, last, planes)
-    };
-    // The slab's planes of the whole grid's world positions: planes
-    // `first..last`, then plane `last % n`, which the last row reaches into.
-    let cut = |positions: &[[f64; 3]], n: usize| {
-        let (_, first, last, planes) = planes_of(n);
-        let nn = n * n;
-        let mut slab = Vec::with_capacity(planes * nn);
-        if planes > 0 {
-            slab.extend_from_slice(&positions[first * nn..last * nn]);
-            let extra = last % n;
-            slab.extend_from_slice(&positions[extra * nn..(extra + 1) * nn]);
-        }
-        slab
-    };
-    let (n, box_size, world) = if ParticleFormat::detect(&path)? == Some(ParticleFormat::Hdf5) {
-        // A JaxPM run: read whole (N and L come from the file), then cut.
-        let grid = crate::load::jaxpm::grid(t, &path, notes)?;
-        let world = cut(&grid.positions, grid.n);
-        (grid.n, grid.box_size, world)
-    } else {
-        if t.snapshot.is_some() {
-            return Err(SceneError::setting(
-                "tets.snapshot",
-                format!(
-                    "--snapshot picks a snapshot of a JaxPM .h5 run, but {} is not one",
-                    path.display()
-                ),
-            ));
-        }
-        let is_npy = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
-        let shape = if is_npy {
-            Some(voxless_io::read_npy_rows(&path, 0..0)?.1)
-        } else {
-            None
-        };
-        match (shape, t.lagrangian) {
-            (Some(shape), Some(n)) if shape.len() == 2 && shape[1] == 3 => {
-                // Checks N and L as one process does, then reads the slab's
-                // rows only.
-                let l = t.box_size.ok_or_else(|| {
-                    SceneError::setting(
-                        "tets.box_size",
-                        "the periodic box size is needed (--box L)",
-                    )
-                })? as f64;
-                check_count(n, shape[0], &path)?;
-                let (_, first, last, planes) = planes_of(n);
-                let nn = n * n;
-                let mut world = Vec::with_capacity(planes * nn);
-                if planes > 0 {
-                    let read = |a: usize, b: usize| -> Result<Vec<[f64; 3]>, SceneError> {
-                        let (arr, _) = voxless_io::read_npy_rows(&path, a * nn..b * nn)?;
-                        Ok(arr
-                            .data
-                            .chunks_exact(3)
-                            .map(|c| [c[0], c[1], c[2]])
-                            .collect())
-                    };
-                    world.extend(read(first, last)?);
-                    check_inside(&world, first * nn, l, &path)?;
-                    world.extend(read(last % n, last % n + 1)?);
-                }
-                (n, l, world)
-            }
-            _ => {
-                // Any other file: read whole (the general reader words errors).
-                let (positions, _) = crate::load::table::read_positions(&path)?;
-                let grid = world_grid(positions, t, &path)?;
-                let world = cut(&grid.positions, grid.n);
-                (grid.n, grid.box_size, world)
-            }
-        }
-    };
-    let frame = box_frame(box_size);
-    let local_box = (box_size / frame.scale) as f32;
-    let mass = particle_mass(t, n, local_box, box_size, frame.scale)?;
-    let (rows, first, _, planes) = planes_of(n);
+    let (grid, path) = read_grid(t, base, share, notes)?;
+    let frame = box_frame(grid.box_size);
+    let local_box = (grid.box_size / frame.scale) as f32;
+    let mass = particle_mass(t, grid.n, local_box, grid.box_size, frame.scale)?;
+    let (rows, first, _, planes) = slab_planes(grid.n, share);
     let slab = LagrangianSlab {
-        n,
+        n: grid.n,
         box_size: local_box,
         rows,
         first_plane: first,
         planes,
-        positions: world.iter().map(|&p| frame.to_local(p)).collect(),
+        positions: grid.positions.iter().map(|&p| frame.to_local(p)).collect(),
     };
     Ok((slab, frame, mass, path))
 }
@@ -148,10 +61,11 @@ pub(crate) fn open(
     purpose: Purpose,
 ) -> Result<Part, ParallelError> {
     let mut notes = Vec::new();
-    let (slab, frame, mass, path) = agree(
-        comm,
-        read_slab(t, base, comm.rank(), comm.size(), &mut notes),
-    )?;
+    let share = Share {
+        rank: comm.rank(),
+        ranks: comm.size(),
+    };
+    let (slab, frame, mass, path) = agree(comm, read_slab(t, base, share, &mut notes))?;
     let settings = TetSettings {
         particle_mass: Some(mass),
         ..Default::default()
@@ -266,8 +180,8 @@ pub(crate) fn open(
     }
     let held = local.tet_count() as u64;
     let local = local.build();
-    let volume = TetVolume::from_parts(local, value_range)
-        .with_pixel_integral(crate::load::tets::pixel_integral(t.pixels));
+    let volume =
+        TetVolume::from_parts(local, value_range).with_pixel_integral(pixel_integral(t.pixels));
     Ok(Part {
         volume: Some(AnyVolume::Tets(Box::new(volume))),
         frame,
@@ -278,8 +192,7 @@ pub(crate) fn open(
             attribute_range: None,
         },
         decomposition,
-        columns: Columns::Tets { box_size: l, n },
-        colour_name: Some("density".into()),
+        fields: Fields::Tets { box_size: l, n },
         counts: PartCounts { read, held },
         notes,
     })

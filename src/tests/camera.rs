@@ -1,8 +1,8 @@
 use std::path::Path;
 
 use crate::WorldFrame;
-use crate::camera::{ViewAdjust, name_of};
-use crate::resolve as defaults;
+use crate::camera::ViewAdjust;
+use crate::fields::name_of;
 
 /// The camera `c` describes in the world frame.
 fn camera(
@@ -10,7 +10,7 @@ fn camera(
     b: &Aabb,
     aspect: f32,
 ) -> Result<voxless_core::Camera, crate::SceneError> {
-    defaults::camera(c, b, aspect, &WorldFrame::default())
+    crate::camera::camera(c, b, aspect, &WorldFrame::default())
 }
 use crate::{
     CameraDesc, ParticlesDesc, Scene, SceneDesc, TransferDesc, Vec3, transfer_function_at,
@@ -298,7 +298,7 @@ fn colorbar_reports_the_range_and_name_colour_comes_from() {
     let s = resolve(&desc, &dir).unwrap();
     let bar = s.colorbar(&desc);
     assert_eq!(bar.label.as_deref(), Some("density"));
-    assert!(bar.log10 && bar.lo == s.settings.value_range.lo);
+    assert!(bar.log10 && bar.lo == s.view.settings.value_range.lo);
     assert_eq!(name_of("frames/temp_%04d.npy").as_deref(), Some("temp"));
     assert_eq!(name_of("dir/mass-*.npy").as_deref(), Some("mass"));
     assert_eq!(name_of("speed").as_deref(), Some("speed"));
@@ -324,13 +324,13 @@ fn reaim_moves_the_camera_and_a_default_light_with_it() {
         ..Default::default()
     };
     let mut s = resolve(&desc, &dir).unwrap();
-    let before = (s.camera, s.settings.light.unwrap().direction);
+    let before = (s.view.camera, s.view.settings.light.unwrap().direction);
     desc.camera.orbit = Some(120.0);
     s.reaim(&desc).unwrap();
     let again = resolve(&desc, &dir).unwrap();
-    assert_ne!(s.camera, before.0);
-    assert_eq!(s.camera, again.camera);
-    assert_eq!(s.settings.light, again.settings.light);
-    assert_ne!(s.settings.light.unwrap().direction, before.1);
+    assert_ne!(s.view.camera, before.0);
+    assert_eq!(s.view.camera, again.view.camera);
+    assert_eq!(s.view.settings.light, again.view.settings.light);
+    assert_ne!(s.view.settings.light.unwrap().direction, before.1);
     let _ = std::fs::remove_dir_all(&dir);
 }

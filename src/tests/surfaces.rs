@@ -102,7 +102,13 @@ fn scene_meshes_are_loaded_and_bad_ones_named() {
     }];
     let scene = Scene::with_volume(v, &d, &dir).unwrap();
     assert_eq!(
-        scene.settings.surfaces.as_ref().unwrap().triangle_count(),
+        scene
+            .view
+            .settings
+            .surfaces
+            .as_ref()
+            .unwrap()
+            .triangle_count(),
         1
     );
     // A field the mesh does not have names the file and the fields it has.

@@ -75,7 +75,7 @@ pub fn run(o: SurfacesArgs) -> Result<()> {
     let paint = Paint::Solid([0.6, 0.6, 0.6]);
     let surfaces = Surfaces::new(&[(&mesh, &paint)])?;
     let t_build = t.elapsed().as_secs_f64();
-    let mut with_mesh = scene.settings.clone();
+    let mut with_mesh = scene.view.settings.clone();
     with_mesh.surfaces = Some(surfaces.clone());
     let mut with_ao = with_mesh.clone();
     with_ao.ao = Some(AmbientOcclusion {
@@ -83,7 +83,7 @@ pub fn run(o: SurfacesArgs) -> Result<()> {
         distance: 0.1 * scene.volume.bounds().diagonal(),
     });
     let variants = [
-        ("volume alone", &scene.settings),
+        ("volume alone", &scene.view.settings),
         ("+ mesh", &with_mesh),
         ("+ mesh + AO 2 rays", &with_ao),
     ];
@@ -93,7 +93,7 @@ pub fn run(o: SurfacesArgs) -> Result<()> {
             let t = Instant::now();
             scene
                 .volume
-                .render(&scene.camera, &scene.tf, s, &Control::new())?;
+                .render(&scene.view.camera, &scene.view.tf, s, &Control::new())?;
             times[i].push(t.elapsed().as_secs_f64());
             eprintln!("surfaces: rep {rep}: {name} {:.2} s", times[i][rep]);
         }

@@ -34,10 +34,14 @@ pub mod composite;
 pub mod kdtree;
 mod local;
 pub mod memory;
+#[cfg(feature = "mpi")]
+mod mpi_comm;
 pub mod wire;
 
 pub use comm::{Comm, CommError, CommExt, SingleComm};
 pub use composite::TileGrid;
 pub use kdtree::Decomposition;
 pub use local::{LocalComm, run_local};
+#[cfg(feature = "mpi")]
+pub use mpi_comm::MpiComm;
 pub use wire::{Reader, WireError, Writer};

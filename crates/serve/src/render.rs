@@ -17,7 +17,6 @@ use std::time::Instant;
 
 use serde_json::json;
 use voxless::histogram::Histogram;
-use voxless::progressive::check_iso;
 use voxless::{
     AnyVolume, CancelToken, CoarseBudget, Control, Film, RenderSettings, Resolved, SceneDesc, Stage,
 };
@@ -178,7 +177,7 @@ fn run_job(
             }
             // The controls follow the first image.
             send_state(memory);
-            if converged && let Err(e) = check_iso(settings, film) {
+            if converged && let Err(e) = resolved.check_iso(film.stats()) {
                 fail(e.to_string());
             }
             !job.drag && outbox.is_current(seq)

@@ -11,7 +11,7 @@ use mpi::environment::Universe;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
-use super::{Comm, CommError};
+use crate::{Comm, CommError};
 
 /// At most about this many bytes leave a rank per round (split evenly over
 /// the destinations), so the round's send and receive buffers stay small

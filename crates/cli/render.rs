@@ -1,0 +1,203 @@
+//! The render commands' work over a scene however it is held (one
+//! process, or the ranks of `mpirun`): one image, a turntable, and what
+//! every command prints — notes, what was loaded, timings, memory.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Result;
+use voxless::core::Image;
+use voxless::parallel::Timings;
+use voxless::render::colorbar::{ColorbarSpec, draw_colorbar};
+use voxless::{Control, Placed, Placement, Resolved, SceneDesc};
+
+use crate::out;
+use crate::progress::Progress;
+
+/// A turntable's frame count: at least 1.
+pub fn frame_count(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(0) => Err("a turntable needs at least 1 frame".into()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!("'{s}' is not a whole number of frames")),
+    }
+}
+
+/// Every rank's outcome of a step only some ranks take (rank 0 writing a
+/// file): an error anywhere is an error everywhere, with its message.
+pub fn agree<T>(placement: Placement, local: Result<T>) -> Result<T> {
+    let local = local.map_err(|e| crate::describe(&e));
+    placement.agree(local)?.map_err(anyhow::Error::msg)
+}
+
+/// " on K ranks" under `mpirun`, else nothing.
+pub fn on_ranks(placement: Placement) -> String {
+    match placement.ranks() {
+        1 => String::new(),
+        k => format!(" on {k} ranks"),
+    }
+}
+
+/// Prints (rank 0) `notes` and what was loaded: its kind and world bounds.
+pub fn report_loaded(
+    placement: Placement,
+    notes: &[String],
+    kind: &str,
+    (lo, hi): ([f64; 3], [f64; 3]),
+    t: Instant,
+) {
+    if !placement.is_root() {
+        return;
+    }
+    for n in notes {
+        eprintln!("note: {n}");
+    }
+    eprintln!(
+        "loaded {kind}{} in {:.2}s: bounds [{:.4e}, {:.4e}, {:.4e}]..[{:.4e}, {:.4e}, {:.4e}]",
+        on_ranks(placement),
+        t.elapsed().as_secs_f64(),
+        lo[0],
+        lo[1],
+        lo[2],
+        hi[0],
+        hi[1],
+        hi[2],
+    );
+}
+
+/// Opens frame `frame` of the scene and prints its notes and a summary.
+pub fn open<'c>(
+    placement: Placement<'c>,
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+) -> Result<Placed<'c>> {
+    let t = Instant::now();
+    let s = placement.open(desc, base, frame)?;
+    report_placed(&s, t);
+    Ok(s)
+}
+
+/// [`report_loaded`] for a resolved scene.
+pub fn report_placed(s: &Placed, t: Instant) {
+    let notes = &s.view().notes;
+    report_loaded(s.placement(), notes, s.kind().name(), s.world_bounds(), t);
+}
+
+/// Prints (rank 0) a report a placement gives (timings, memory).
+pub fn say(report: Option<String>) {
+    if let Some(r) = report {
+        eprintln!("{r}");
+    }
+}
+
+/// Checks the render's work (printing a note if the step was raised).
+pub fn check_work(s: &Placed, desc: &SceneDesc) -> Result<()> {
+    if let (true, Some(note)) = (s.placement().is_root(), s.check_work(desc)?) {
+        eprintln!("note: {note}");
+    }
+    Ok(())
+}
+
+/// The colour bar to draw, when asked for.
+pub fn colorbar(s: &Placed, desc: &SceneDesc, on: bool) -> Option<ColorbarSpec> {
+    on.then(|| s.colorbar(desc))
+}
+
+/// Draws the colour bar (if any) into a rendered image.
+pub fn decorate(image: &mut Image, view: &Resolved, bar: Option<&ColorbarSpec>) {
+    if let Some(spec) = bar
+        && draw_colorbar(image, &view.tf, spec).is_none()
+    {
+        eprintln!(
+            "note: a {}×{} image is too small for a colour bar",
+            image.width, image.height
+        );
+    }
+}
+
+/// Checks the scene's render work, renders it with a progress bar, checks
+/// the image shows something, and writes `output` (rank 0).
+pub fn render_to(s: &Placed, desc: &SceneDesc, output: &Path, with_colorbar: bool) -> Result<()> {
+    let placement = s.placement();
+    check_work(s, desc)?;
+    let progress = Progress::new("rendering", 1, placement.is_root());
+    let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
+    let t = Instant::now();
+    let mut timings = Timings::default();
+    let rendered = s.render(&Control::new().with_progress(&report), &mut timings)?;
+    progress.finish();
+    let secs = t.elapsed().as_secs_f64();
+    say(placement.timings_report(timings)?);
+    let bar = colorbar(s, desc, with_colorbar);
+    let written = rendered.map_or(Ok(()), |mut r| {
+        s.check_rendered(&r)?;
+        decorate(&mut r.image, s.view(), bar.as_ref());
+        out::write_image(output, &r.image, s.view().background)
+    });
+    agree(placement, written)?;
+    say(placement.memory_report(s.counts())?);
+    if placement.is_root() {
+        let st = &s.view().settings;
+        eprintln!(
+            "rendered {}×{} at {} spp{} in {secs:.3}s → {}",
+            st.width,
+            st.height,
+            st.spp,
+            on_ranks(placement),
+            output.display()
+        );
+    }
+    Ok(())
+}
+
+/// Renders `frames` images of a full orbit about the look-at point,
+/// starting from the scene's camera (its `orbit` included), to `outputs`,
+/// with one progress bar. The data is loaded once.
+pub fn render_turntable(
+    placement: Placement,
+    desc: &SceneDesc,
+    base: &Path,
+    data_frame: usize,
+    outputs: &[PathBuf],
+    with_colorbar: bool,
+) -> Result<()> {
+    let mut scene = open(placement, desc, base, data_frame)?;
+    check_work(&scene, desc)?;
+    let bar = colorbar(&scene, desc, with_colorbar);
+    let frames = outputs.len();
+    let progress = Progress::new("rendering turntable", frames as u64, placement.is_root());
+    let start = desc.camera.orbit.unwrap_or(0.0);
+    let mut view = desc.clone();
+    let t = Instant::now();
+    let mut timings = Timings::default();
+    for (k, path) in outputs.iter().enumerate() {
+        view.camera.orbit = Some(start + 360.0 * k as f32 / frames as f32);
+        scene.reaim(&view)?;
+        // Blue noise advances with the frame (spatiotemporal).
+        scene.view_mut().settings.frame = k as u32;
+        // Each frame's tiles are one unit of the bar, in fractions.
+        let report = |d: u64, total: u64| progress.set_fraction(k as u64, d, total);
+        let rendered = scene.render(&Control::new().with_progress(&report), &mut timings)?;
+        let written = rendered.map_or(Ok(()), |mut r| {
+            decorate(&mut r.image, scene.view(), bar.as_ref());
+            out::write_image(path, &r.image, scene.view().background)
+        });
+        agree(placement, written)?;
+    }
+    progress.finish();
+    say(placement.memory_report(scene.counts())?);
+    if placement.is_root() {
+        let st = &scene.view().settings;
+        eprintln!(
+            "rendered a {frames}-frame turntable ({}×{}){} in {:.2}s → {} … {}",
+            st.width,
+            st.height,
+            on_ranks(placement),
+            t.elapsed().as_secs_f64(),
+            outputs[0].display(),
+            outputs[frames - 1].display()
+        );
+    }
+    Ok(())
+}
