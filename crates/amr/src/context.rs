@@ -14,9 +14,8 @@
 use std::time::{Duration, Instant};
 
 use voxless_core::{
-    Aabb, Camera, Cancelled, Control, Interval, IntervalLists, IntervalQuery, Prepare,
-    PrepareQuery, Range1, Ray, Sample, SampleBatch, Simd, TILE, TileIntervals, TileRays, Vec3,
-    View, Volume,
+    Interval, IntervalLists, IntervalQuery, Prepare, PrepareQuery, Range1, Ray, Sample,
+    SampleBatch, Simd, TILE, TileIntervals, TileRays, Vec3, View, Volume,
 };
 
 use crate::AmrVolume;
@@ -78,33 +77,12 @@ impl Prepare for AmrVolume {
 }
 
 impl Volume for AmrContext<'_> {
-    fn bounds(&self) -> Aabb {
-        self.volume.bounds()
+    voxless_core::forward_volume! {
+        to self.volume;
+        except sample_batch, sample_batch_values, sample_values_lanes, intervals,
+            intervals_chunk, tile_view;
     }
-    fn value_range(&self) -> Range1 {
-        self.volume.value_range()
-    }
-    fn attribute_range(&self) -> Option<Range1> {
-        self.volume.attribute_range()
-    }
-    fn sample(&self, p: Vec3) -> Option<Sample> {
-        self.volume.sample(p)
-    }
-    fn gradient(&self, p: Vec3) -> Vec3 {
-        self.volume.gradient(p)
-    }
-    fn sample_with_gradient(&self, p: Vec3) -> Option<(Sample, Vec3)> {
-        self.volume.sample_with_gradient(p)
-    }
-    fn sample_in(&self, p: Vec3, iv: &Interval) -> Option<Sample> {
-        self.volume.sample_in(p, iv)
-    }
-    fn sample_with_gradient_in(&self, p: Vec3, iv: &Interval) -> Option<(Sample, Vec3)> {
-        self.volume.sample_with_gradient_in(p, iv)
-    }
-    fn packet_sampling(&self) -> bool {
-        self.volume.packet_sampling()
-    }
+    /// The volume's packet path on the context's SIMD backend.
     fn sample_batch(
         &self,
         batch: &SampleBatch,
@@ -115,9 +93,6 @@ impl Volume for AmrContext<'_> {
     }
     fn sample_batch_values(&self, batch: &SampleBatch, out: &mut Vec<f32>) -> bool {
         self.volume.sample_batch_values_on(self.simd, batch, out)
-    }
-    fn samples_in_lanes(&self) -> bool {
-        self.volume.samples_in_lanes()
     }
     #[inline(always)]
     fn sample_values_lanes<L: voxless_core::Lanes>(
@@ -158,18 +133,6 @@ impl Volume for AmrContext<'_> {
             mask: self.visible.as_ref(),
             simd: self.simd,
         }))
-    }
-    fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
-        self.volume.line_integral(ray, t)
-    }
-    fn project_image(
-        &self,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-        control: &Control,
-    ) -> Option<Result<Vec<f32>, Cancelled>> {
-        self.volume.project_image(camera, width, height, control)
     }
 }
 

@@ -12,6 +12,7 @@
 
 pub mod camera;
 pub mod control;
+mod forward;
 pub mod image;
 pub mod macrogrid;
 pub mod math;

@@ -1,5 +1,7 @@
 //! Test adapters and the contract every [`Volume`] honours (feature
-//! `testing`), so a new data kind gets the same checks for free.
+//! `testing`), so a new data kind gets the same checks for free; and
+//! [`check_same_hooks`], whether a prepared context offers the hooks its
+//! volume offers.
 //!
 //! Adapters turn a fast path off, so tests can compare it with the slow path
 //! it replaces: [`PerRay`] hides a volume's tile view (integrators then ask
@@ -14,6 +16,9 @@ use crate::prepare::{Prepare, PrepareQuery};
 use crate::simd::{LANES, Lanes, WithLanes};
 use crate::tiles::{TileIntervals, View};
 use crate::volume::{Interval, IntervalKind, IntervalQuery, Sample, SampleBatch, Volume};
+
+mod hooks;
+pub use hooks::{HOOKS, Hook, assert_same_hooks, check_same_hooks};
 
 /// Forwards every method of `V` but [`Volume::tile_view`]: intervals come
 /// ray by ray.

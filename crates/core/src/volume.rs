@@ -139,6 +139,15 @@ impl Sample {
 }
 
 /// A renderable field. See the module docs for the contract.
+///
+/// A new hook must be added to [`forward_volume!`](crate::forward_volume)
+/// too, which writes the forwarding of every hook for `&V` and the
+/// prepared contexts (a context that did not forward it would fall back
+/// to the default and lose the volume's fast path), and to the hooks the
+/// contract suite knows (`testing::HOOKS`; a capability — whether a fast
+/// path is there — with a `testing::Hook` that `check_same_hooks`
+/// compares between a context and its volume). A test of `testing` fails
+/// until both are done.
 pub trait Volume: Send + Sync {
     /// Where the field can be non-zero.
     fn bounds(&self) -> crate::Aabb;
@@ -399,80 +408,5 @@ pub fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64, n: usize) -> f64 {
 /// their own are plain references ([`crate::Prepare`]). Every method
 /// forwards, so a volume's overrides are kept.
 impl<V: Volume + ?Sized> Volume for &V {
-    fn bounds(&self) -> crate::Aabb {
-        (**self).bounds()
-    }
-    fn value_range(&self) -> Range1 {
-        (**self).value_range()
-    }
-    fn attribute_range(&self) -> Option<Range1> {
-        (**self).attribute_range()
-    }
-    fn sample(&self, p: Vec3) -> Option<Sample> {
-        (**self).sample(p)
-    }
-    fn gradient(&self, p: Vec3) -> Vec3 {
-        (**self).gradient(p)
-    }
-    fn sample_with_gradient(&self, p: Vec3) -> Option<(Sample, Vec3)> {
-        (**self).sample_with_gradient(p)
-    }
-    fn sample_in(&self, p: Vec3, interval: &Interval) -> Option<Sample> {
-        (**self).sample_in(p, interval)
-    }
-    fn sample_with_gradient_in(&self, p: Vec3, interval: &Interval) -> Option<(Sample, Vec3)> {
-        (**self).sample_with_gradient_in(p, interval)
-    }
-    fn classified(&self) -> bool {
-        (**self).classified()
-    }
-    fn packet_sampling(&self) -> bool {
-        (**self).packet_sampling()
-    }
-    fn sample_batch(
-        &self,
-        batch: &SampleBatch,
-        gradient: bool,
-        out: &mut Vec<(Option<Sample>, Vec3)>,
-    ) {
-        (**self).sample_batch(batch, gradient, out)
-    }
-    fn sample_batch_values(&self, batch: &SampleBatch, out: &mut Vec<f32>) -> bool {
-        (**self).sample_batch_values(batch, out)
-    }
-    fn samples_in_lanes(&self) -> bool {
-        (**self).samples_in_lanes()
-    }
-    #[inline(always)]
-    fn sample_values_lanes<L: Lanes>(&self, hints: &[u32; LANES], p: [L; 3], live: u32) -> L {
-        (**self).sample_values_lanes(hints, p, live)
-    }
-    fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
-        (**self).intervals(ray, t, query, out)
-    }
-    fn intervals_chunk(
-        &self,
-        ray: &Ray,
-        t: Range1,
-        query: &IntervalQuery,
-        out: &mut Vec<Interval>,
-        max: usize,
-    ) -> Option<f32> {
-        (**self).intervals_chunk(ray, t, query, out, max)
-    }
-    fn tile_view(&self, view: &View) -> Option<Box<dyn TileIntervals + '_>> {
-        (**self).tile_view(view)
-    }
-    fn project_image(
-        &self,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-        control: &Control,
-    ) -> Option<Result<Vec<f32>, Cancelled>> {
-        (**self).project_image(camera, width, height, control)
-    }
-    fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
-        (**self).line_integral(ray, t)
-    }
+    crate::forward_volume!(to * self);
 }

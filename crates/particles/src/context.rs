@@ -4,10 +4,7 @@
 //! itself holds neither, so renders with different transfer functions or
 //! backends can share it.
 
-use voxless_core::{
-    Aabb, Camera, Cancelled, Control, Interval, IntervalQuery, Prepare, PrepareQuery, Range1, Ray,
-    Sample, SampleBatch, Simd, Vec3, Volume,
-};
+use voxless_core::{Prepare, PrepareQuery, Sample, SampleBatch, Simd, Vec3, Volume};
 
 use crate::volume::to_sample;
 use crate::{MaterialVolume, ParticleVolume};
@@ -44,28 +41,21 @@ impl Prepare for ParticleVolume {
 }
 
 impl Volume for ParticleContext<'_> {
-    fn bounds(&self) -> Aabb {
-        self.volume.bounds()
-    }
-    fn value_range(&self) -> Range1 {
-        self.volume.value_range()
-    }
-    fn attribute_range(&self) -> Option<Range1> {
-        self.volume.attribute_range()
+    voxless_core::forward_volume! {
+        to self.volume;
+        // Samples carry the pre-classified colours, if any.
+        except sample, sample_with_gradient, sample_batch;
+        // Built on the context's own `sample` (the volume's would leave
+        // the colours out).
+        default sample_in, sample_with_gradient_in;
     }
     fn sample(&self, p: Vec3) -> Option<Sample> {
         let f = self.volume.field_with(&self.colors, p, false);
         f.covered.then(|| to_sample(&f))
     }
-    fn gradient(&self, p: Vec3) -> Vec3 {
-        self.volume.gradient(p)
-    }
     fn sample_with_gradient(&self, p: Vec3) -> Option<(Sample, Vec3)> {
         let f = self.volume.field_with(&self.colors, p, true);
         f.covered.then(|| (to_sample(&f), f.gradient))
-    }
-    fn packet_sampling(&self) -> bool {
-        true
     }
     fn sample_batch(
         &self,
@@ -75,21 +65,6 @@ impl Volume for ParticleContext<'_> {
     ) {
         self.volume
             .sample_batch_with(&self.colors, self.simd, batch, gradient, out);
-    }
-    fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
-        self.volume.intervals(ray, t, query, out)
-    }
-    fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
-        self.volume.line_integral(ray, t)
-    }
-    fn project_image(
-        &self,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-        control: &Control,
-    ) -> Option<Result<Vec<f32>, Cancelled>> {
-        self.volume.project_image(camera, width, height, control)
     }
 }
 
@@ -113,27 +88,11 @@ impl Prepare for MaterialVolume {
 }
 
 impl Volume for MaterialContext<'_> {
-    fn bounds(&self) -> Aabb {
-        self.volume.bounds()
+    voxless_core::forward_volume! {
+        to self.volume;
+        except sample_batch;
     }
-    fn value_range(&self) -> Range1 {
-        self.volume.value_range()
-    }
-    fn classified(&self) -> bool {
-        true
-    }
-    fn sample(&self, p: Vec3) -> Option<Sample> {
-        self.volume.sample(p)
-    }
-    fn gradient(&self, p: Vec3) -> Vec3 {
-        self.volume.gradient(p)
-    }
-    fn sample_with_gradient(&self, p: Vec3) -> Option<(Sample, Vec3)> {
-        self.volume.sample_with_gradient(p)
-    }
-    fn packet_sampling(&self) -> bool {
-        true
-    }
+    /// The materials' packet paths on the context's SIMD backend.
     fn sample_batch(
         &self,
         batch: &SampleBatch,
@@ -141,11 +100,5 @@ impl Volume for MaterialContext<'_> {
         out: &mut Vec<(Option<Sample>, Vec3)>,
     ) {
         self.volume.sample_batch_on(self.simd, batch, gradient, out)
-    }
-    fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
-        self.volume.intervals(ray, t, query, out)
-    }
-    fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
-        self.volume.line_integral(ray, t)
     }
 }

@@ -118,14 +118,20 @@ impl<'a, V: Volume> Mirrored<'a, V> {
 }
 
 impl<V: Volume> Volume for Mirrored<'_, V> {
+    voxless_core::forward_volume! {
+        to self.inner;
+        // Folded: each point or ray piece reflected onto the data's side.
+        except bounds, sample, gradient, sample_with_gradient, sample_in,
+            sample_with_gradient_in, sample_batch, intervals, line_integral;
+        // The inner volume's would see only the unreflected data: the
+        // trait's defaults build these on the folded methods above (a hook
+        // added to the trait that takes points or rays belongs here, or
+        // above, too).
+        default sample_batch_values, samples_in_lanes, sample_values_lanes, intervals_chunk,
+            tile_view, project_image;
+    }
     fn bounds(&self) -> Aabb {
         self.bounds
-    }
-    fn value_range(&self) -> Range1 {
-        self.inner.value_range()
-    }
-    fn attribute_range(&self) -> Option<Range1> {
-        self.inner.attribute_range()
     }
     fn sample(&self, p: Vec3) -> Option<Sample> {
         self.inner.sample(self.point(self.fold_of(p), p))
@@ -149,12 +155,6 @@ impl<V: Volume> Volume for Mirrored<'_, V> {
         self.inner
             .sample_with_gradient_in(self.point(f, p), interval)
             .map(|(s, g)| (s, self.vector(f, g)))
-    }
-    fn classified(&self) -> bool {
-        self.inner.classified()
-    }
-    fn packet_sampling(&self) -> bool {
-        self.inner.packet_sampling()
     }
     fn sample_batch(
         &self,

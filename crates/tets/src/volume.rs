@@ -276,21 +276,12 @@ impl Prepare for TetVolume {
 }
 
 impl Volume for TetContext<'_> {
-    fn bounds(&self) -> Aabb {
-        self.volume.bounds()
+    voxless_core::forward_volume! {
+        to self.volume;
+        except tile_view;
     }
-    fn value_range(&self) -> Range1 {
-        self.volume.value_range()
-    }
-    fn sample(&self, p: Vec3) -> Option<Sample> {
-        self.volume.sample(p)
-    }
-    fn gradient(&self, p: Vec3) -> Vec3 {
-        self.volume.gradient(p)
-    }
-    fn intervals(&self, ray: &Ray, t: Range1, query: &IntervalQuery, out: &mut Vec<Interval>) {
-        self.volume.intervals(ray, t, query, out)
-    }
+    /// The mesh rasterised per tile with the render's level of detail and
+    /// k-buffer budget.
     fn tile_view(&self, view: &View) -> Option<Box<dyn TileIntervals + '_>> {
         Some(Box::new(TetTileView::new(
             &self.volume.mesh,
@@ -300,18 +291,6 @@ impl Volume for TetContext<'_> {
             self.lod_pixels,
             self.budget,
         )))
-    }
-    fn line_integral(&self, ray: &Ray, t: Range1) -> f64 {
-        self.volume.line_integral(ray, t)
-    }
-    fn project_image(
-        &self,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-        control: &Control,
-    ) -> Option<Result<Vec<f32>, Cancelled>> {
-        self.volume.project_image(camera, width, height, control)
     }
 }
 
