@@ -1,11 +1,12 @@
 //! Emission–absorption along one ray, split into the three steps every path
-//! (per-sample [`march`], the packet path of [`crate::packet`], single
+//! (per-sample [`march`], the packets of module `packet`, single
 //! scattering) shares, so they place and integrate samples identically:
 //!
-//! 1. the ray's span inside the volume (and clip box) and the volume's
-//!    visible intervals along it, asked for a chunk at a time as the ray
-//!    goes ([`RayIntervals`]; a tile view gives whole lists per tile);
-//! 2. [`Cursor`]: the sample segments inside those intervals, in order — the
+//! 1. the ray's span inside the volume (and clip box; [`RaySpans`]) and the
+//!    volume's visible intervals along it, asked for a chunk at a time as
+//!    the ray goes ([`RayIntervals`]; a tile view gives whole lists per
+//!    tile);
+//! 2. [`Cursor`](crate::cursor::Cursor): the sample segments inside those intervals, in order — the
 //!    cells of a lattice of step `dt` fixed on the ray (offset by one random
 //!    number per pixel sample: jitter), each sampled at its midpoint; a
 //!    constant interval is one segment, whole;
@@ -13,12 +14,14 @@
 //!    segment-length opacity correction and iso-surface crossings.
 
 use voxless_core::{
-    Aabb, Attribute, Interval, IntervalKind, IntervalQuery, Range1, Ray, Sample, Vec3, Volume,
+    Attribute, Interval, IntervalKind, IntervalQuery, Range1, Ray, Sample, Vec3, Volume,
 };
 use voxless_transfer::TransferFunction;
 
-use crate::cursor::{Cursor, RayIntervals, Segment};
+use crate::ctx::Ctx;
+use crate::cursor::{RayIntervals, Segment};
 use crate::sampling::PixelRng;
+use crate::spans::{RaySpans, region};
 use crate::surface::iso_visibility;
 use crate::{Light, RenderSettings};
 
@@ -125,151 +128,6 @@ pub(crate) fn march_intervals<V: Volume>(
     state.finish(volume, ray, ctx);
     stats.merge(&state.stats);
     state.rgba()
-}
-
-/// The part of the world a render integrates: the volume's bounds, cut by
-/// the clip box.
-pub(crate) fn region<V: Volume>(volume: &V, settings: &RenderSettings) -> Aabb {
-    clipped(volume.bounds(), settings.clip)
-}
-
-fn clipped(b: Aabb, clip: Option<Aabb>) -> Aabb {
-    match clip {
-        Some(c) => Aabb::new(b.min.max(c.min), b.max.min(c.max)),
-        None => b,
-    }
-}
-
-/// Where one ray's samples lie.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct RaySpans {
-    /// The part `t ∈ [0, t_max]` inside the volume's bounds and the clip
-    /// box, where its intervals are asked for.
-    pub span: Range1,
-    /// Where lattice cells are cut: `span`, or under a decomposition the
-    /// ray inside the whole data's bounds and the clip box — the same for
-    /// every box, as in a one-process render.
-    pub cells: Range1,
-    /// The samples this render owns (see [`own_range`]).
-    pub own: Range1,
-}
-
-impl RaySpans {
-    /// The spans of `ray` for a volume whose integrated region (bounds and
-    /// clip box) is `region`.
-    pub fn new(region: &Aabb, settings: &RenderSettings, ray: &Ray, t_max: f32) -> RaySpans {
-        let t = Range1::new(0.0, t_max);
-        let span = region.clip_ray(ray, t);
-        match &settings.domain {
-            None => RaySpans {
-                span,
-                cells: span,
-                own: Range1::new(f32::NEG_INFINITY, f32::INFINITY),
-            },
-            Some(d) => {
-                let own = own_range(Some(&d.owned), ray);
-                RaySpans {
-                    span: if own.is_empty() { Range1::EMPTY } else { span },
-                    cells: clipped(d.bounds, settings.clip).clip_ray(ray, t),
-                    own,
-                }
-            }
-        }
-    }
-
-    /// Whether the ray has nothing to integrate.
-    pub fn is_empty(&self) -> bool {
-        self.span.is_empty()
-    }
-
-    /// A cursor over this ray's segments.
-    pub fn cursor(&self, rng: &PixelRng) -> Cursor {
-        Cursor::new(self.cells, self.own, rng)
-    }
-}
-
-/// The part `[lo, hi)` of `ray` whose samples a render restricted to the
-/// half-open box `domain` owns (everything without one). Boxes that tile
-/// space split every ray's samples exactly: a shared face gives both boxes
-/// the same `t`, and a ray lying in a face belongs to the box on its upper
-/// side only.
-pub fn own_range(domain: Option<&Aabb>, ray: &Ray) -> Range1 {
-    let Some(d) = domain else {
-        return Range1::new(f32::NEG_INFINITY, f32::INFINITY);
-    };
-    let (mut lo, mut hi) = (f32::NEG_INFINITY, f32::INFINITY);
-    for a in 0..3 {
-        let (o, dir) = (ray.origin[a], ray.dir[a]);
-        if dir == 0.0 {
-            if !(d.min[a] <= o && o < d.max[a]) {
-                return Range1::EMPTY;
-            }
-            continue;
-        }
-        let inv = 1.0 / dir;
-        let t0 = (d.min[a] - o) * inv;
-        let t1 = (d.max[a] - o) * inv;
-        lo = lo.max(t0.min(t1));
-        hi = hi.min(t0.max(t1));
-    }
-    if hi > lo {
-        Range1::new(lo, hi)
-    } else {
-        Range1::EMPTY
-    }
-}
-
-/// What every sample of a frame needs besides the sample itself.
-pub(crate) struct Ctx<'a> {
-    pub tf: &'a TransferFunction,
-    pub settings: &'a RenderSettings,
-    /// Whether samples come classified ([`Volume::classified`]).
-    pub classified: bool,
-    attr_range: Range1,
-}
-
-impl<'a> Ctx<'a> {
-    pub fn new(tf: &'a TransferFunction, settings: &'a RenderSettings, classified: bool) -> Self {
-        Ctx {
-            tf,
-            settings,
-            classified,
-            attr_range: settings.attribute_range.unwrap_or(Range1::new(0.0, 1.0)),
-        }
-    }
-
-    /// Whether samples need the gradient (shading the volume).
-    pub fn needs_gradient(&self) -> bool {
-        self.settings.light.is_some() && self.settings.volume
-    }
-
-    /// Whether a packet pass may classify its plain samples in lanes
-    /// ([`crate::classify`]): emission–absorption of the volume, values
-    /// classified here, no iso-surfaces (which need every sample in order).
-    pub fn classifies_in_lanes(&self) -> bool {
-        !self.classified && self.settings.volume && self.settings.iso.is_empty()
-    }
-
-    /// The colour of a sample whose normalised value is `x`.
-    #[inline(always)]
-    pub fn colour_of(&self, s: &Sample, x: f32) -> Vec3 {
-        match s.attribute {
-            Attribute::Scalar(v) => self.tf.color(self.attr_range.normalize(v)),
-            Attribute::Rgb(c) => c,
-            Attribute::None => self.tf.color(x),
-        }
-    }
-
-    /// The opacity (before `opacity_scale`) of a sample whose normalised
-    /// value is `x`.
-    #[inline]
-    pub fn opacity_of(&self, s: &Sample, x: f32) -> f32 {
-        if self.classified {
-            s.value
-        } else {
-            self.tf.opacity(x)
-        }
-    }
 }
 
 /// What the rays of a render saw, for the caller to check: how many
@@ -490,7 +348,7 @@ impl RayState {
         };
         if opacity > 0.0 {
             // The lanes' `exp` (same bits): packet passes classify their
-            // samples in lanes ([`crate::classify`]).
+            // samples in lanes (module `classify`).
             let a = 1.0 - voxless_core::simd::exp(-opacity * settings.opacity_scale * len);
             let c = colour.unwrap_or_else(|| ctx.colour_of(s, x));
             return self.add_shaded(c, a, gradient, ctx);
@@ -512,7 +370,7 @@ impl RayState {
 
     /// A plain sample's segment (a scalar value, no attribute, not
     /// pre-classified; no iso-surfaces) whose colour `c` and opacity `a`
-    /// were computed in lanes ([`crate::classify`]; `a < 0`: the transfer
+    /// were computed in lanes (module `classify`; `a < 0`: the transfer
     /// function's opacity is not positive): what [`RayState::feed`] does
     /// with it, the same bits.
     #[inline(always)]
@@ -573,7 +431,7 @@ impl RayState {
     }
 
     /// The pixel so far, for compositing plain samples in lanes
-    /// ([`crate::composite`], the arithmetic of
+    /// (module `composite`, the arithmetic of
     /// [`RayState::feed_classified`] without a light).
     pub fn pixel(&mut self) -> &mut Accumulator {
         &mut self.acc

@@ -14,16 +14,18 @@
 //!
 //! The passes ([`run_passes`]) are generic over what a ray does with its
 //! samples ([`Integrator`]): emission–absorption here, free flights of
-//! single scattering in [`crate::scatter_packet`].
+//! single scattering in module `scatter_packet`.
 
 use voxless_core::{Attribute, Interval, IntervalQuery, Ray, Sample, SampleBatch, Vec3, Volume};
 
 use crate::Tile;
 use crate::classify::Classified;
 use crate::composite::{self, Run};
+use crate::ctx::Ctx;
 use crate::cursor::{Cursor, RayIntervals, Segment};
-use crate::march::{Accumulator, Ctx, RaySpans, RayState, RayStats};
+use crate::march::{Accumulator, RayState, RayStats};
 use crate::sampling::PixelRng;
+use crate::spans::RaySpans;
 
 /// Side of a packet in pixels.
 pub const PACKET: u32 = 8;

@@ -25,8 +25,8 @@ use voxless_core::simd::{LANES, Lanes, WithLanes, dispatch};
 use voxless_core::{Interval, IntervalQuery, Range1, Ray, Volume};
 
 use crate::Tile;
+use crate::ctx::Ctx;
 use crate::cursor::{Cursor, RayIntervals, Segment};
-use crate::march::Ctx;
 use crate::packet::TileInput;
 
 /// Segments a lane holds ahead of its ray's next sample.

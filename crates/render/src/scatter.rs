@@ -28,15 +28,17 @@
 //! The camera ray's samples lie on the same jittered lattice as the
 //! emission–absorption marcher's, and its intervals are asked for as the
 //! flight goes, so nothing behind the event is looked at. With packets
-//! ([`crate::scatter_packet`]) marching flights — camera and shadow rays —
+//! (module `scatter_packet`) marching flights — camera and shadow rays —
 //! take their samples a packet at a time; this module's per-ray path is
 //! the reference it is tested against (and delta tracking's path).
 
 use voxless_core::{Interval, IntervalQuery, Range1, Ray, Sample, Vec3, Volume};
 
+use crate::ctx::Ctx;
 use crate::cursor::{Cursor, RayIntervals, Segment};
-use crate::march::{Ctx, RaySpans, region};
+use crate::meshes::blocked;
 use crate::sampling::PixelRng;
+use crate::spans::{RaySpans, region};
 use crate::{RenderSettings, bluenoise};
 
 /// Where the light comes from.
@@ -194,7 +196,7 @@ pub(crate) fn shadow_ray<V: Volume>(
         LightSource::Point(q) => ((q - p).normalized(), (q - p).length()),
     };
     let shadow = Ray::new(p, dir);
-    if crate::surface::blocked(settings, &shadow, Range1::new(0.0, t_max)) {
+    if blocked(settings, &shadow, Range1::new(0.0, t_max)) {
         return (dir, Shadow::Known(0.0));
     }
     let span = region(volume, settings).clip_ray(&shadow, Range1::new(0.0, t_max));

@@ -13,8 +13,8 @@
 use voxless_core::{Interval, Ray, Sample, Vec3, Volume};
 
 use crate::Tile;
+use crate::ctx::Ctx;
 use crate::cursor::{Cursor, RayIntervals, Segment};
-use crate::march::Ctx;
 use crate::packet::{Integrator, Lane, PassScratch, TileInput, packets, run_passes};
 use crate::scatter::{Flight, Noises, Scatter, Shadow, scattered, shadow_cursor, shadow_ray};
 

@@ -23,7 +23,8 @@
 use voxless_core::{Range1, Ray, Vec3, Volume};
 use voxless_mesh::{Hit, cosine_direction};
 
-use crate::march::Ctx;
+use crate::ctx::Ctx;
+use crate::meshes::blocked;
 use crate::sampling::PixelRng;
 use crate::{Light, scatter};
 
@@ -41,51 +42,6 @@ pub struct AmbientOcclusion {
 const AO_DIMS: u32 = 1 << 24;
 /// Samples per occlusion ray when looking for an iso-surface crossing.
 const ISO_STEPS: u32 = 16;
-
-/// `ray` reflected about the mirrors whose bit is set in `fold`.
-#[inline]
-fn reflected(mirrors: &[voxless_core::Mirror], fold: usize, ray: &Ray) -> Ray {
-    let mut r = *ray;
-    for (i, m) in mirrors.iter().enumerate() {
-        if fold & (1 << i) != 0 {
-            r = m.ray(&r);
-        }
-    }
-    r
-}
-
-/// The nearest mesh hit of a camera ray, when the render has meshes: over
-/// the meshes and each of their mirror instances (every combination of
-/// the mirrors), traced by reflecting the ray.
-#[inline]
-pub(crate) fn nearest(ctx: &Ctx, ray: &Ray) -> Option<Hit> {
-    let surfaces = ctx.settings.surfaces.as_ref()?;
-    let mirrors = &ctx.settings.mirrors;
-    let mut best: Option<Hit> = None;
-    for fold in 0..1usize << mirrors.len() {
-        let t = Range1::new(0.0, best.map_or(f32::INFINITY, |h| h.t));
-        if let Some(mut h) = surfaces.nearest(&reflected(mirrors, fold, ray), t) {
-            let mut n = h.normal;
-            for (i, m) in mirrors.iter().enumerate() {
-                if fold & (1 << i) != 0 {
-                    n = m.vector(n);
-                }
-            }
-            h.normal = n;
-            best = Some(h);
-        }
-    }
-    best
-}
-
-/// Whether a mesh or one of its mirror instances lies on `ray` within `t`.
-pub(crate) fn blocked(settings: &crate::RenderSettings, ray: &Ray, t: Range1) -> bool {
-    let Some(surfaces) = &settings.surfaces else {
-        return false;
-    };
-    let mirrors = &settings.mirrors;
-    (0..1usize << mirrors.len()).any(|fold| surfaces.occluded(&reflected(mirrors, fold, ray), t))
-}
 
 /// Offset along the normal that moves an occlusion ray's origin off the
 /// surface it starts on, relative to the point's magnitude and the

@@ -4,8 +4,9 @@ use super::*;
 use voxless_core::Ray;
 use voxless_transfer::{Colormap, OpacityMap};
 
-use crate::march::Ctx;
-use crate::surface::{self, occlusion};
+use crate::ctx::Ctx;
+use crate::meshes;
+use crate::surface::occlusion;
 
 use crate::test_volumes::Blob;
 
@@ -207,7 +208,7 @@ fn a_mirror_instance_of_a_mesh_is_the_mirrored_mesh() {
         let o = (rng.v() - Vec3::splat(0.5)) * 8.0;
         let target = Vec3::new(rng.f() * 3.0 - 1.5, rng.f(), rng.f());
         let ray = Ray::new(o, (target - o).normalized());
-        let (p, q) = (surface::nearest(&a, &ray), surface::nearest(&b, &ray));
+        let (p, q) = (meshes::nearest(&a, &ray), meshes::nearest(&b, &ray));
         assert_eq!(p.is_some(), q.is_some());
         if let (Some(p), Some(q)) = (p, q) {
             hits += 1;
@@ -216,8 +217,8 @@ fn a_mirror_instance_of_a_mesh_is_the_mirrored_mesh() {
         }
         let t = Range1::new(0.0, 100.0);
         assert_eq!(
-            surface::blocked(&inst, &ray, t),
-            surface::blocked(&explicit, &ray, t)
+            meshes::blocked(&inst, &ray, t),
+            meshes::blocked(&explicit, &ray, t)
         );
     }
     assert!(hits > 500, "{hits} hits");

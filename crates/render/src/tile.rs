@@ -6,14 +6,16 @@
 
 use voxless_core::{IntervalLists, IntervalQuery, Range1, Ray, TileRays, Volume};
 
+use crate::ctx::Ctx;
 use crate::cursor::RayIntervals;
-use crate::march::{Ctx, RaySpans, RayStats, march_intervals, region};
+use crate::march::{RayStats, march_intervals};
 use crate::packet::{self, PacketScratch};
 use crate::ray_lanes;
 use crate::sampling::PixelRng;
 use crate::scatter::FreeFlight;
 use crate::scatter_packet::{self, ScatterScratch};
-use crate::{Job, Tile, pixel_ray, scatter, surface};
+use crate::spans::{RaySpans, region};
+use crate::{Job, Tile, meshes, pixel_ray, scatter, surface};
 use voxless_mesh::Hit;
 
 /// Buffers reused across the tiles a thread renders.
@@ -80,7 +82,7 @@ fn render_with<V: Volume>(
     for y in tile.y..tile.y + tile.h {
         for x in tile.x..tile.x + tile.w {
             let (rng, ray) = pixel_ray(job.camera, settings, x, y, sample);
-            let mut hit = surface::nearest(&ctx, &ray);
+            let mut hit = meshes::nearest(&ctx, &ray);
             let t_max = hit.map_or(f32::INFINITY, |h| h.t);
             let mut spans = RaySpans::new(&region, settings, &ray, t_max);
             let a0 = match alpha0 {

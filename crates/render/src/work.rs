@@ -8,7 +8,7 @@ use voxless_transfer::TransferFunction;
 
 use crate::RenderSettings;
 use crate::cursor::step_in;
-use crate::march::region;
+use crate::spans::region;
 
 /// What a render is expected to cost, before it starts (see
 /// [`estimate_work`]).

@@ -38,7 +38,6 @@
 
 use voxless_core::simd::{LANES, Lanes, PortableLanes, Simd, WithLanes, dispatch};
 use voxless_core::{Camera, Projection, Vec3};
-use wide::f32x4;
 
 use crate::mesh::{Tet, TetMesh};
 use crate::raster::{BlockTets, Frame};
@@ -228,45 +227,65 @@ struct Faces {
     t_ref: f32,
 }
 
+/// The four faces' values in lanes 0–3 (repeated in lanes 4–7, which are
+/// computed alongside and ignored): each lane's arithmetic is that of one
+/// face alone.
+#[inline(always)]
+fn faces4<V: Lanes>(a: f32, b: f32, c: f32, d: f32) -> V {
+    V::from_array([a, b, c, d, a, b, c, d])
+}
+
+/// Mask of the lanes holding a finite value (false on ±∞ and NaN).
+#[inline(always)]
+fn finite<V: Lanes>(x: V) -> V {
+    x.abs().lt(V::splat(f32::INFINITY))
+}
+
+/// The faces' lanes 0–3.
+const FACES: u32 = 0b1111;
+
 impl Faces {
     /// `None` when a face is parallel to the rays (or too close to it for
-    /// finite coefficients), or the tet is flat.
+    /// finite coefficients), or the tet is flat. The four faces are
+    /// computed at once in lanes `V` (the same bits on every lane type).
     #[inline(always)]
-    fn new(t: &Local) -> Option<Faces> {
+    fn new<V: Lanes>(t: &Local) -> Option<Faces> {
         let [_, q1, q2, q3] = t.q;
+        let s = V::splat;
         // Face k (opposite vertex k) spans A × B from corner P: P = q1 for
         // face 0, vertex 0 (the origin) for the others. Pointing out of the
         // tet when det = q1·(q2 × q3) > 0, into it when det < 0.
-        let v4 = |a: f32, b: f32, c: f32, d: f32| f32x4::new([a, b, c, d]);
-        let ax = v4(q2.x - q1.x, q3.x, q1.x, q2.x);
-        let ay = v4(q2.y - q1.y, q3.y, q1.y, q2.y);
-        let az = v4(q2.z - q1.z, q3.z, q1.z, q2.z);
-        let bx = v4(q3.x - q1.x, q2.x, q3.x, q1.x);
-        let by = v4(q3.y - q1.y, q2.y, q3.y, q1.y);
-        let bz = v4(q3.z - q1.z, q2.z, q3.z, q1.z);
+        let ax = faces4::<V>(q2.x - q1.x, q3.x, q1.x, q2.x);
+        let ay = faces4::<V>(q2.y - q1.y, q3.y, q1.y, q2.y);
+        let az = faces4::<V>(q2.z - q1.z, q3.z, q1.z, q2.z);
+        let bx = faces4::<V>(q3.x - q1.x, q2.x, q3.x, q1.x);
+        let by = faces4::<V>(q3.y - q1.y, q2.y, q3.y, q1.y);
+        let bz = faces4::<V>(q3.z - q1.z, q2.z, q3.z, q1.z);
         let nx = ay * bz - az * by;
         let ny = az * bx - ax * bz;
         let nz = ax * by - ay * bx;
-        // n·((i − x0, j − y0, t) − P) = 0 solved for t.
-        let inv = f32x4::splat(1.0) / nz;
-        let b = -nx * inv;
-        let c = -ny * inv;
-        let px = f32x4::splat(t.x0 as f32) + v4(q1.x, 0.0, 0.0, 0.0);
-        let py = f32x4::splat(t.y0 as f32) + v4(q1.y, 0.0, 0.0, 0.0);
-        let a = v4(q1.z, 0.0, 0.0, 0.0) - b * px - c * py;
-        let finite = a.is_finite() & b.is_finite() & c.is_finite();
+        // n·((i − x0, j − y0, t) − P) = 0 solved for t. `−1·n` is `−n`
+        // exactly (the sign flipped, zeros included) for every non-NaN
+        // value, and a NaN fails the finiteness test below either way.
+        let inv = s(1.0) / nz;
+        let b = (s(-1.0) * nx) * inv;
+        let c = (s(-1.0) * ny) * inv;
+        let px = s(t.x0 as f32) + faces4::<V>(q1.x, 0.0, 0.0, 0.0);
+        let py = s(t.y0 as f32) + faces4::<V>(q1.y, 0.0, 0.0, 0.0);
+        let a = faces4::<V>(q1.z, 0.0, 0.0, 0.0) - b * px - c * py;
+        let finite = finite(a) & finite(b) & finite(c);
         let det = q1.dot(q2.cross(q3));
         // Entering faces: outward normal against the rays.
-        let zero = f32x4::splat(0.0);
+        let zero = s(0.0);
         let enter = if det > 0.0 {
-            nz.simd_lt(zero)
+            nz.lt(zero)
         } else if det < 0.0 {
-            nz.simd_gt(zero)
+            nz.gt(zero)
         } else {
             return None;
         };
-        let mask = enter.to_bitmask() as usize;
-        if finite.to_bitmask() != 0b1111 || mask == 0 || mask == 0b1111 {
+        let mask = (enter.bitmask() & FACES) as usize;
+        if finite.bitmask() & FACES != FACES || mask == 0 || mask == FACES as usize {
             return None;
         }
         let (a, b, c) = (a.to_array(), b.to_array(), c.to_array());
@@ -373,7 +392,7 @@ impl TileJob<'_> {
                     ny: (y1 - y0 + 1) as usize,
                 };
                 let local = Local::new(self.map, tet, x0, y0);
-                let Some(f) = Faces::new(&local) else {
+                let Some(f) = Faces::new::<V>(&local) else {
                     general(&local, tet.density, r, &buf, &mut sum, w);
                     continue;
                 };

@@ -7,8 +7,8 @@
 //! clips its ray against them (entering faces raise `t_in`, leaving faces
 //! lower `t_out`).
 
+use voxless_core::simd::{LANES, Lanes, PortableLanes};
 use voxless_core::{Aabb, Camera, Projection, Ray, Vec3};
-use wide::f32x4;
 
 pub use crate::frame::{BlockTets, Frame};
 use crate::mesh::{Tet, TetMesh};
@@ -134,17 +134,20 @@ impl Screen {
         self.rect_of(x0 - pad, x1 + pad, y0 - pad, y1 + pad)
     }
 
-    /// The continuous pixel coordinates of four points under an
-    /// orthographic camera, projected at once (f32x4; lane by lane the same
-    /// operations as one point alone).
+    /// The continuous pixel coordinates of eight points under an
+    /// orthographic camera, projected at once ([`Lanes`]; lane by lane the
+    /// same operations as one point alone).
     #[inline(always)]
-    fn ortho4(&self, v: &[Vec3; 4], half: (f32, f32)) -> ([f32; 4], [f32; 4]) {
+    fn ortho_lanes<L: Lanes>(
+        &self,
+        v: &[Vec3; LANES],
+        half: (f32, f32),
+    ) -> ([f32; LANES], [f32; LANES]) {
         let c = &self.camera;
-        let s = f32x4::splat;
-        let lanes = |f: fn(&Vec3) -> f32| f32x4::new([f(&v[0]), f(&v[1]), f(&v[2]), f(&v[3])]);
-        let x = lanes(|p| p.x) - s(c.eye.x);
-        let y = lanes(|p| p.y) - s(c.eye.y);
-        let z = lanes(|p| p.z) - s(c.eye.z);
+        let s = L::splat;
+        let x = L::from_array(v.map(|p| p.x)) - s(c.eye.x);
+        let y = L::from_array(v.map(|p| p.y)) - s(c.eye.y);
+        let z = L::from_array(v.map(|p| p.z)) - s(c.eye.z);
         let dot = |d: Vec3| x * s(d.x) + y * s(d.y) + z * s(d.z);
         let (sx, sy) = (dot(c.right) / s(half.0), dot(c.up) / s(half.1));
         let px = ((sx + s(1.0)) * s(0.5) * s(self.width as f32)).to_array();
@@ -152,21 +155,19 @@ impl Screen {
         (px, py)
     }
 
-    /// [`Screen::ortho4`] of a cell's eight corners.
+    /// [`Screen::ortho_lanes`] of a cell's eight corners.
     #[inline]
     pub(crate) fn ortho_points(&self, c: &[Vec3; 8], half: (f32, f32)) -> ([f32; 8], [f32; 8]) {
-        let (ax, ay) = self.ortho4(&[c[0], c[1], c[2], c[3]], half);
-        let (bx, by) = self.ortho4(&[c[4], c[5], c[6], c[7]], half);
-        let join =
-            |a: [f32; 4], b: [f32; 4]| std::array::from_fn(|i| if i < 4 { a[i] } else { b[i - 4] });
-        (join(ax, bx), join(ay, by))
+        self.ortho_lanes::<PortableLanes>(c, half)
     }
 
     /// The continuous pixel extent `(x0, x1, y0, y1)` of four points under
-    /// an orthographic camera, projected at once (f32x4).
+    /// an orthographic camera, projected at once (the four in lanes 0–3 of
+    /// [`Screen::ortho_lanes`], repeated in lanes 4–7).
     #[inline]
     fn ortho_extent(&self, v: &[Vec3; 4], half: (f32, f32)) -> (f32, f32, f32, f32) {
-        let (px, py) = self.ortho4(v, half);
+        let eight = [v[0], v[1], v[2], v[3], v[0], v[1], v[2], v[3]];
+        let (px, py) = self.ortho_lanes::<PortableLanes>(&eight, half);
         let (mut x0, mut x1, mut y0, mut y1) = (px[0], px[0], py[0], py[0]);
         for k in 1..4 {
             (x0, x1) = (x0.min(px[k]), x1.max(px[k]));
