@@ -9,7 +9,7 @@ use voxless_core::{Image, Range1};
 use voxless_render::{RayStats, RenderSettings, WorkEstimate};
 use voxless_scene::{PixelsName, SceneDesc, TetModeName, TetsDesc};
 
-use crate::{ProjectionDesc, Purpose, SceneError, VolumeKind, VolumeSummary, WorldFrame};
+use crate::{ProjectionDesc, SceneError, VolumeKind, VolumeSummary, WorldFrame};
 
 /// A setting that must be finite and > 0.
 pub(crate) fn positive(field: &str, v: f32) -> Result<(), SceneError> {
@@ -303,14 +303,15 @@ pub fn check_iso(settings: &RenderSettings, seen: &RayStats) -> Result<(), Scene
     ))
 }
 
-/// Settings whose result one box of a render decomposed over `ranks`
-/// cannot compute alone (`tets`: the tessellation the scene renders, also
-/// when it comes from a JaxPM file given as particles).
+/// Settings whose result one box of a render (or with `projecting`, a
+/// projection) decomposed over `ranks` cannot compute alone (`tets`: the
+/// tessellation the scene renders, also when it comes from a JaxPM file
+/// given as particles).
 pub(crate) fn check_ranks(
     desc: &SceneDesc,
     tets: Option<&TetsDesc>,
     ranks: usize,
-    purpose: Purpose,
+    projecting: bool,
 ) -> Result<(), SceneError> {
     if ranks <= 1 {
         return Ok(());
@@ -368,7 +369,7 @@ pub(crate) fn check_ranks(
             ),
         ));
     }
-    if purpose == Purpose::Project && t.pixels == Some(PixelsName::Area) {
+    if projecting && t.pixels == Some(PixelsName::Area) {
         return Err(SceneError::setting(
             "pixels",
             "the pixel-area projection (--pixels area, tets.pixels) runs in one process; under \

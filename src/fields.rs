@@ -9,9 +9,8 @@ use std::path::Path;
 use voxless_core::Vec3;
 use voxless_scene::SceneDesc;
 
-use crate::AnyVolume;
-
-/// The fields of a volume (see the module docs).
+/// The fields of a volume (see the module docs; a volume's own:
+/// [`crate::AnyVolume::fields`]).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Fields {
     /// Particle density Φ, and the attribute field Θ when particles carry
@@ -27,23 +26,6 @@ pub enum Fields {
 }
 
 impl Fields {
-    /// The fields of `volume`.
-    pub fn of(volume: &AnyVolume) -> Fields {
-        match volume {
-            AnyVolume::Particles(v) => Fields::Particles {
-                attribute: v.has_attribute(),
-            },
-            AnyVolume::Materials(v) => {
-                Fields::Materials(v.materials().iter().map(|m| m.name.clone()).collect())
-            }
-            AnyVolume::Tets(v) => Fields::Tets {
-                box_size: v.mesh.box_size,
-                n: v.mesh.n,
-            },
-            AnyVolume::Amr(v) => Fields::Amr(v.field_names().to_vec()),
-        }
-    }
-
     /// Names of the columns sampling writes: particles Φ, then Θ (with an
     /// attribute), then ∂Φ/∂x, ∂Φ/∂y, ∂Φ/∂z (with `gradient`); materials one
     /// density each; tessellations density and streams; AMR every field,

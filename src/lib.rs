@@ -92,11 +92,11 @@ pub use memory::ParticleArrays;
 pub use placement::{Placed, PlacedData, Placement, Rendered};
 pub use projection::{ProjectionDesc, ProjectionView};
 pub use resolve::{
-    Resolved, VolumeKind, VolumeSummary, resolve, resolve_in, resolve_summary, resolve_with,
-    transfer_function, transfer_function_at,
+    Resolved, resolve, resolve_in, resolve_summary, resolve_with, transfer_function,
+    transfer_function_at,
 };
 pub use scene::{DistributedScene, Scene};
-pub use volume::AnyVolume;
+pub use volume::{AnyVolume, VolumeKind, VolumeSummary};
 
 // For interactive front-ends (the browser viewer, notebooks): camera poses
 // written back into descriptions, progressive renders, histograms, saving.

@@ -17,7 +17,7 @@ use crate::camera::{camera, default_light_direction};
 use crate::checks::{
     positive, range, refuse_settings_without_effect, refuse_what_the_kind_cannot_honour,
 };
-use crate::{AnyVolume, SceneError, WorldFrame};
+use crate::{AnyVolume, SceneError, VolumeKind, VolumeSummary, WorldFrame};
 
 /// How to look at a volume: everything a render, projection or sample needs
 /// besides the volume itself.
@@ -34,40 +34,6 @@ pub struct Resolved {
     /// eye or look-at point: the part of the data the transfer function
     /// shows, within the bounds (see [`Probe::visible_box`]).
     pub framed: Aabb,
-}
-
-/// The data kinds, for what depends on the kind alone.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum VolumeKind {
-    Particles,
-    Amr,
-    Tets,
-    Materials,
-}
-
-impl VolumeKind {
-    /// How the kind is called in messages: "particles", "AMR cells",
-    /// "phase-space tessellation", "multi-material particles".
-    pub fn name(self) -> &'static str {
-        match self {
-            VolumeKind::Particles => "particles",
-            VolumeKind::Amr => "AMR cells",
-            VolumeKind::Tets => "phase-space tessellation",
-            VolumeKind::Materials => "multi-material particles",
-        }
-    }
-}
-
-/// What resolving needs to know of a volume besides its field along the
-/// probe rays: its kind, bounds and ranges. For a volume decomposed over
-/// ranks these are the whole data's, so every rank resolves the view a
-/// one-process run would.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct VolumeSummary {
-    pub kind: VolumeKind,
-    pub bounds: Aabb,
-    pub value_range: Range1,
-    pub attribute_range: Option<Range1>,
 }
 
 /// Fills every default of `desc` for `volume`, whose coordinates are the

@@ -10,6 +10,8 @@ use voxless_render::{Film, RenderSettings};
 use voxless_tets::TetVolume;
 use voxless_transfer::TransferFunction;
 
+use crate::Fields;
+
 /// Every data kind voxless renders; one variant per kind. Volumes are
 /// immutable once built and `Sync`: one volume can serve several renders at
 /// once, each with its own camera and transfer function.
@@ -60,8 +62,8 @@ impl AnyVolume {
         with_volume!(self, v => v.attribute_range())
     }
     /// The kind, bounds and ranges resolving a view needs.
-    pub fn summary(&self) -> crate::VolumeSummary {
-        crate::VolumeSummary {
+    pub fn summary(&self) -> VolumeSummary {
+        VolumeSummary {
             kind: self.volume_kind(),
             bounds: self.bounds(),
             value_range: self.value_range(),
@@ -70,16 +72,16 @@ impl AnyVolume {
     }
 
     /// The data kind.
-    pub fn volume_kind(&self) -> crate::VolumeKind {
+    pub fn volume_kind(&self) -> VolumeKind {
         match self {
-            AnyVolume::Particles(_) => crate::VolumeKind::Particles,
-            AnyVolume::Amr(_) => crate::VolumeKind::Amr,
-            AnyVolume::Tets(_) => crate::VolumeKind::Tets,
-            AnyVolume::Materials(_) => crate::VolumeKind::Materials,
+            AnyVolume::Particles(_) => VolumeKind::Particles,
+            AnyVolume::Amr(_) => VolumeKind::Amr,
+            AnyVolume::Tets(_) => VolumeKind::Tets,
+            AnyVolume::Materials(_) => VolumeKind::Materials,
         }
     }
 
-    /// The kind's name in messages (see [`crate::VolumeKind::name`]).
+    /// The kind's name in messages (see [`VolumeKind::name`]).
     pub fn kind(&self) -> &'static str {
         self.volume_kind().name()
     }
@@ -166,10 +168,27 @@ impl AnyVolume {
         }
     }
 
+    /// What the volume's field is made of (see [`Fields`]).
+    pub fn fields(&self) -> Fields {
+        match self {
+            AnyVolume::Particles(v) => Fields::Particles {
+                attribute: v.has_attribute(),
+            },
+            AnyVolume::Materials(v) => {
+                Fields::Materials(v.materials().iter().map(|m| m.name.clone()).collect())
+            }
+            AnyVolume::Tets(v) => Fields::Tets {
+                box_size: v.mesh.box_size,
+                n: v.mesh.n,
+            },
+            AnyVolume::Amr(v) => Fields::Amr(v.field_names().to_vec()),
+        }
+    }
+
     /// Names of the columns [`AnyVolume::sample_points`] writes (see
-    /// [`crate::Fields::columns`]).
+    /// [`Fields::columns`]).
     pub fn sample_columns(&self, gradient: bool) -> Vec<String> {
-        crate::Fields::of(self).columns(gradient)
+        self.fields().columns(gradient)
     }
 
     /// The fields at every point, row-major `points.len() × columns`. Each
@@ -227,4 +246,38 @@ impl AnyVolume {
             }
         }
     }
+}
+
+/// The data kinds, for what depends on the kind alone.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VolumeKind {
+    Particles,
+    Amr,
+    Tets,
+    Materials,
+}
+
+impl VolumeKind {
+    /// How the kind is called in messages: "particles", "AMR cells",
+    /// "phase-space tessellation", "multi-material particles".
+    pub fn name(self) -> &'static str {
+        match self {
+            VolumeKind::Particles => "particles",
+            VolumeKind::Amr => "AMR cells",
+            VolumeKind::Tets => "phase-space tessellation",
+            VolumeKind::Materials => "multi-material particles",
+        }
+    }
+}
+
+/// What resolving needs to know of a volume besides its field along the
+/// probe rays: its kind, bounds and ranges. For a volume decomposed over
+/// ranks these are the whole data's, so every rank resolves the view a
+/// one-process run would.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VolumeSummary {
+    pub kind: VolumeKind,
+    pub bounds: Aabb,
+    pub value_range: Range1,
+    pub attribute_range: Option<Range1>,
 }

@@ -4,7 +4,9 @@
 //! maximum, samples bit for bit — for particles, materials, AMR cells and
 //! tessellations, time series by whole frames and by space, and an error
 //! on one rank ends every rank with the error said once. Skipped with a
-//! notice where `mpirun` is not installed.
+//! notice where `mpirun` is not installed (a failure under
+//! `VOXLESS_REQUIRE_MPI=1`); without the feature this file is empty, and
+//! `tests/parallel.rs` says so (`mpi_tests_need_the_feature`).
 #![cfg(feature = "mpi")]
 
 mod common;
@@ -14,15 +16,14 @@ use std::process::Command;
 
 use common::{Lcg, Scratch, write_values};
 
+/// Whether `mpirun` runs here (a failure instead of a skip under
+/// `VOXLESS_REQUIRE_MPI=1`, which CI sets where it installed Open MPI).
 fn have_mpirun() -> bool {
     let ok = Command::new("mpirun")
         .arg("--version")
         .output()
         .is_ok_and(|o| o.status.success());
-    if !ok {
-        eprintln!("notice: no mpirun on this machine; skipping the MPI tests");
-    }
-    ok
+    voxless_core::testing::prerequisite(ok, "VOXLESS_REQUIRE_MPI", "mpirun")
 }
 
 /// `voxless args` on one process (no MPI launcher in its environment).

@@ -714,3 +714,15 @@ fn every_sph_kernel_decomposes_as_one_process() {
         assert_samples_equal(&desc, &dir.0, 2, &points);
     }
 }
+
+/// Without the `mpi` feature `tests/mpi_cli.rs` builds no test: a skip, or
+/// a failure under `VOXLESS_REQUIRE_MPI=1` (CI's feature step).
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn mpi_tests_need_the_feature() {
+    voxless_core::testing::prerequisite(
+        false,
+        "VOXLESS_REQUIRE_MPI",
+        "a build with the mpi feature (cargo test --features mpi)",
+    );
+}

@@ -301,6 +301,18 @@ fn info_describes_npy_and_amr_and_rejects_unknown_formats() {
     );
 }
 
+/// Without the feature the HDF5 tests are not built: a skip, or a failure
+/// under `VOXLESS_REQUIRE_HDF5=1` (CI's feature step).
+#[cfg(not(feature = "hdf5"))]
+#[test]
+fn hdf5_tests_need_the_feature() {
+    voxless_core::testing::prerequisite(
+        false,
+        "VOXLESS_REQUIRE_HDF5",
+        "a build with the hdf5 feature (cargo test --features hdf5)",
+    );
+}
+
 #[cfg(not(feature = "hdf5"))]
 #[test]
 fn hdf5_without_the_feature_says_how_to_build_it() {

@@ -241,15 +241,8 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             if let Some(range) = frames {
                 return sequence::render(placement, &desc, &base, &range, &output, colorbar);
             }
-            out::check(
-                std::slice::from_ref(&output),
-                OutputKind::Image,
-                &desc,
-                &base,
-                &[],
-            )?;
-            let s = render::open(placement, &desc, &base, frame.unwrap_or(0))?;
-            render::render_to(&s, &desc, &output, colorbar)
+            let f = frame.unwrap_or(0);
+            render::render_one(placement, &desc, &base, f, &output, colorbar)
         }
         Command::Sample {
             points,
@@ -373,15 +366,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             desc.render.opacity_scale.get_or_insert(10.0);
             desc.camera.look_at.get_or_insert([0.0, -0.1, 0.0]);
             desc.light.get_or_insert_with(Default::default);
-            out::check(
-                std::slice::from_ref(&output),
-                OutputKind::Image,
-                &desc,
-                &base,
-                &[],
-            )?;
-            let s = render::open(Placement::Process, &desc, &base, 0)?;
-            render::render_to(&s, &desc, &output, colorbar)
+            render::render_one(Placement::Process, &desc, &base, 0, &output, colorbar)
         }
         Command::Serve {
             port,

@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use anyhow::Result;
 use voxless::core::Image;
+use voxless::output::OutputKind;
 use voxless::parallel::Timings;
 use voxless::render::colorbar::{ColorbarSpec, draw_colorbar};
 use voxless::{Control, Placed, Placement, Resolved, SceneDesc};
@@ -32,9 +33,9 @@ pub fn agree<T>(placement: Placement, local: Result<T>) -> Result<T> {
 
 /// " on K ranks" under `mpirun`, else nothing.
 pub fn on_ranks(placement: Placement) -> String {
-    match placement.ranks() {
-        1 => String::new(),
-        k => format!(" on {k} ranks"),
+    match placement {
+        Placement::Process => String::new(),
+        Placement::Ranks(_) => format!(" on {} ranks", placement.ranks()),
     }
 }
 
@@ -74,14 +75,18 @@ pub fn open<'c>(
 ) -> Result<Placed<'c>> {
     let t = Instant::now();
     let s = placement.open(desc, base, frame)?;
-    report_placed(&s, t);
+    report_placed(placement, &s, t);
     Ok(s)
 }
 
-/// [`report_loaded`] for a resolved scene.
-pub fn report_placed(s: &Placed, t: Instant) {
-    let notes = &s.view().notes;
-    report_loaded(s.placement(), notes, s.kind().name(), s.world_bounds(), t);
+/// [`report_loaded`] for a resolved scene, said once — by rank 0 of
+/// `placement` — however the scene itself is held (time series under
+/// `mpirun` may hold whole frames per rank).
+pub fn report_placed(placement: Placement, s: &Placed, t: Instant) {
+    if placement.is_root() {
+        let notes = &s.view().notes;
+        report_loaded(s.placement(), notes, s.kind().name(), s.world_bounds(), t);
+    }
 }
 
 /// Prints (rank 0) a report a placement gives (timings, memory).
@@ -114,6 +119,20 @@ pub fn decorate(image: &mut Image, view: &Resolved, bar: Option<&ColorbarSpec>) 
             image.width, image.height
         );
     }
+}
+
+/// Renders frame `frame` of the scene to `output` (checked before loading).
+pub fn render_one(
+    placement: Placement,
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+    output: &Path,
+    with_colorbar: bool,
+) -> Result<()> {
+    out::check(&[output.to_path_buf()], OutputKind::Image, desc, base, &[])?;
+    let s = open(placement, desc, base, frame)?;
+    render_to(&s, desc, output, with_colorbar)
 }
 
 /// Checks the scene's render work, renders it with a progress bar, checks

@@ -39,7 +39,7 @@ pub fn render(
         .open_series(desc, base, &frames)
         .map_err(anyhow::Error::from);
     let (mut scene, series) = render::agree(placement, opened)?;
-    render::report_placed(&scene, t);
+    render::report_placed(placement, &scene, t);
     let checked = scene.check_work(desc).map_err(anyhow::Error::from);
     if let (true, Some(note)) = (placement.is_root(), render::agree(placement, checked)?) {
         eprintln!("note: {note}");
@@ -94,13 +94,12 @@ pub fn render(
     progress.finish();
     render::say(placement.memory_report(scene.counts())?);
     if placement.is_root() {
-        let how = match (placement.ranks(), plan) {
-            (1, _) => String::new(),
-            (k, FramePlan::ByFrame) => format!(" on {k} ranks (whole frames per rank)"),
-            (k, FramePlan::BySpace) => {
-                format!(" on {k} ranks (each frame decomposed over all ranks)")
-            }
+        let how = match (placement, plan) {
+            (Placement::Process, _) => "",
+            (_, FramePlan::ByFrame) => " (whole frames per rank)",
+            (_, FramePlan::BySpace) => " (each frame decomposed over all ranks)",
         };
+        let how = format!("{}{how}", render::on_ranks(placement));
         eprintln!(
             "rendered {} frames{how} in {:.2}s → {} … {}",
             frames.len(),

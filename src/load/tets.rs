@@ -31,7 +31,7 @@ pub(crate) fn load_tets(
     base: &Path,
     notes: &mut Vec<String>,
 ) -> Result<(TetVolume, WorldFrame), SceneError> {
-    let (grid, path) = read_grid(t, base, Share::WHOLE, notes)?;
+    let (grid, path) = read_grid(t, base, None, notes)?;
     build_world(grid, t, &path)
 }
 
@@ -47,14 +47,15 @@ pub(crate) fn slab_planes(n: usize, share: Share) -> (Range<usize>, usize, usize
     (rows, first, last, planes)
 }
 
-/// The world positions the run `t` names for share `share` (see
-/// [`slab_planes`]; one process reads the whole grid), with N, L and the
-/// file — every check one process makes: the file, N³ particles (from the
-/// `.npy` header when a share reads only its planes), all inside the box.
+/// The world positions the run `t` names: the whole grid (`slab` `None`,
+/// one process), or the planes of share `slab` of a decomposed grid (see
+/// [`slab_planes`]); with N, L and the file — every check one process
+/// makes: the file, N³ particles (from the `.npy` header when a share reads
+/// only its planes), all inside the box.
 pub(crate) fn read_grid(
     t: &TetsDesc,
     base: &Path,
-    share: Share,
+    slab: Option<Share>,
     notes: &mut Vec<String>,
 ) -> Result<(WorldGrid, PathBuf), SceneError> {
     let file = t.file.as_ref().ok_or_else(|| {
@@ -67,9 +68,9 @@ pub(crate) fn read_grid(
     let path = base.join(file);
     // The share's planes of a whole grid's positions.
     let cut = |mut g: WorldGrid| {
-        if share.is_whole() {
+        let Some(share) = slab else {
             return g;
-        }
+        };
         let (n, nn) = (g.n, g.n * g.n);
         let (_, first, last, planes) = slab_planes(n, share);
         let mut slab = Vec::with_capacity(planes * nn);
@@ -94,7 +95,7 @@ pub(crate) fn read_grid(
             ),
         ));
     }
-    if !share.is_whole()
+    if let Some(share) = slab
         && let Some(grid) = npy_planes(t, &path, share)?
     {
         return Ok((grid, path));

@@ -113,7 +113,8 @@ pub(crate) fn open_part(
         Source::Tets(t) => Some(&**t),
         _ => None,
     };
-    crate::checks::check_ranks(desc, tets, comm.size(), purpose)?;
+    let projecting = purpose == Purpose::Project;
+    crate::checks::check_ranks(desc, tets, comm.size(), projecting)?;
     match source {
         Source::Particles(p) => particles::open(comm, p, base, frame, earlier),
         Source::Amr(a) => amr::open(comm, a, base),

@@ -20,7 +20,7 @@ use crate::load::Share;
 use crate::load::materials::{build_materials, material_descs};
 use crate::load::particles::{blame, frame_for, read_rows};
 use crate::load::whole_set::{Set, agree, world_reach};
-use crate::{AnyVolume, Fields, SceneError, VolumeKind, VolumeSummary, WorldFrame};
+use crate::{AnyVolume, SceneError, VolumeKind, VolumeSummary, WorldFrame};
 
 /// What a later frame of a time series keeps of the first: its world
 /// frame, and (particles of one set) its settings, as
@@ -126,7 +126,7 @@ pub(crate) fn open(
         }
     };
     Ok(Part {
-        fields: Fields::of(&volume),
+        fields: volume.fields(),
         volume: Some(volume),
         frame: world,
         summary,

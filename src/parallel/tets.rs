@@ -38,7 +38,7 @@ fn read_slab(
     share: Share,
     notes: &mut Vec<String>,
 ) -> Result<(LagrangianSlab, WorldFrame, f64, PathBuf), SceneError> {
-    let (grid, path) = read_grid(t, base, share, notes)?;
+    let (grid, path) = read_grid(t, base, Some(share), notes)?;
     let frame = box_frame(grid.box_size);
     let local_box = (grid.box_size / frame.scale) as f32;
     let mass = particle_mass(t, grid.n, local_box, grid.box_size, frame.scale)?;

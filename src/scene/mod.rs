@@ -86,7 +86,7 @@ impl Scene {
     /// What the volume's field is made of: its sampled columns, the name
     /// its colours stand for.
     pub fn fields(&self) -> Fields {
-        Fields::of(&self.volume)
+        self.volume.fields()
     }
 
     /// Checks, before a render starts, that its estimated work is sane (see

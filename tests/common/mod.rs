@@ -123,21 +123,10 @@ pub fn read(path: &Path) -> (Vec<usize>, Vec<f64>) {
     (a.shape, a.data)
 }
 
-/// Where the project's shared real data lives next to the repository, if present.
-pub fn shared_data(sub: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data")
-        .join(sub);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!(
-            "notice: {} not found; skipping the real-data part of this test",
-            p.display()
-        );
-        None
-    }
-}
+/// The project's real data beside the checkout, when present (a failure
+/// instead of a skip under `VOXLESS_REQUIRE_DATA=1`).
+#[allow(unused_imports)]
+pub use voxless_core::testing::shared_data;
 
 /// Writes float64 N×3 positions as `.npy`.
 pub fn write_f64(path: &Path, p: &[[f64; 3]]) {

@@ -502,15 +502,9 @@ fn abutting_same_level_bricks_are_merged() {
 /// location at 10⁴; skipped with a notice when the shared data is absent.
 #[test]
 fn real_frame_matches_brute_force() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/amr-euler3d/exabricks");
-    if !dir.exists() {
-        eprintln!(
-            "notice: {} not found; skipping the real-frame test",
-            dir.display()
-        );
+    let Some(dir) = voxless_core::testing::shared_data("amr-euler3d/exabricks") else {
         return;
-    }
+    };
     let scalars: Vec<_> = ["density", "energy"]
         .iter()
         .map(|f| dir.join(format!("frame3.{f}.scalars")))

@@ -10,13 +10,14 @@
 //! page (the README's).
 
 use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use fantoccini::actions::{InputSource, MOUSE_BUTTON_LEFT, MouseActions, PointerAction};
 use fantoccini::{Client, ClientBuilder, Locator};
 use serde_json::{Value, json};
+use voxless_core::testing::{prerequisite, shared_data};
 
 /// Liveness bound of each wait (never a performance assertion).
 const PATIENCE: Duration = Duration::from_secs(240);
@@ -131,15 +132,20 @@ fn changed(a: &[u8], b: &[u8]) -> f64 {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_page_orbits_edits_and_saves_a_scene_the_cli_reproduces() {
-    let (Some(driver), Some(chromium)) = (
+    let (driver, chromium) = (
         on_path("chromedriver"),
         on_path("chromium").or_else(|| on_path("chromium-browser")),
+    );
+    let what = "chromedriver and chromium on PATH";
+    let (true, Some(driver), Some(chromium)) = (
+        prerequisite(
+            driver.is_some() && chromium.is_some(),
+            "VOXLESS_REQUIRE_BROWSER",
+            what,
+        ),
+        driver,
+        chromium,
     ) else {
-        assert!(
-            std::env::var_os("VOXLESS_REQUIRE_BROWSER").is_none(),
-            "chromedriver or chromium is not on PATH"
-        );
-        eprintln!("notice: chromedriver or chromium not on PATH; skipping the browser test");
         return;
     };
     // An unoptimised server renders the dam break at page size in minutes,
@@ -150,15 +156,9 @@ async fn the_page_orbits_edits_and_saves_a_scene_the_cli_reproduces() {
         );
         return;
     }
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let data = root.join("../shared/data/sph-dam-break/npy_01000");
-    if !data.is_dir() {
-        eprintln!(
-            "notice: {} is absent; skipping the browser test",
-            data.display()
-        );
+    let Some(data) = shared_data("sph-dam-break/npy_01000") else {
         return;
-    }
+    };
     let scratch = std::env::temp_dir().join(format!("voxless-browser-{}", std::process::id()));
     std::fs::create_dir_all(&scratch).unwrap();
     let file = |n: &str| data.join(n).to_string_lossy().into_owned();

@@ -8,6 +8,11 @@
 //! for intervals ray by ray) and [`Resampled`] makes every interval a
 //! sampled one (integrators then step through constant pieces and look the
 //! field up point by point, like any other volume).
+//!
+//! Every test of the workspace that needs something a machine may lack (the
+//! real data beside the checkout, `mpirun`, a browser, the HDF5 feature)
+//! asks [`prerequisite`] or [`shared_data`]: absent, the test skips with a
+//! notice — or fails, where CI installed the prerequisite and says so.
 
 use crate::camera::Camera;
 use crate::control::{Cancelled, Control};
@@ -18,7 +23,9 @@ use crate::tiles::{TileIntervals, View};
 use crate::volume::{Interval, IntervalKind, IntervalQuery, Sample, SampleBatch, Volume};
 
 mod hooks;
+mod prerequisites;
 pub use hooks::{HOOKS, Hook, assert_same_hooks, check_same_hooks};
+pub use prerequisites::{prerequisite, shared_data};
 
 /// Forwards every method of `V` but [`Volume::tile_view`]: intervals come
 /// ray by ray.

@@ -446,13 +446,7 @@ fn amrclaw_bad_inputs() {
 
 /// The shared real-data directory, or `None` (with a notice) if absent.
 fn real_data() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/amr-euler3d");
-    if dir.join("fort.q0003").is_file() {
-        Some(dir)
-    } else {
-        println!("skipping: real AMR data not found at {}", dir.display());
-        None
-    }
+    voxless_core::testing::shared_data("amr-euler3d")
 }
 
 /// The two files hold the same cells with the same values (within 1 ulp).

@@ -27,13 +27,7 @@ fn expected() -> Value {
 
 /// ../shared/data, or `None` (with the notice) when it is not there.
 fn shared_data() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        println!("skipped: ../shared/data not present");
-        None
-    }
+    voxless_core::testing::shared_data("")
 }
 
 fn num(v: &Value) -> f64 {

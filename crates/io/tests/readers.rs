@@ -331,12 +331,9 @@ fn lammps_malformed_inputs() {
 
 #[test]
 fn lammps_real_melt_dump() {
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/md-lammps-melt/dump.melt");
-    if !path.exists() {
-        println!("skipped: ../shared/data not present");
+    let Some(path) = voxless_core::testing::shared_data("md-lammps-melt/dump.melt") else {
         return;
-    }
+    };
     assert_eq!(lammps_frames(&path).unwrap(), 6);
     let side = 1.6795961913825074e1;
     for frame in 0..6 {
