@@ -272,7 +272,7 @@ impl Probe {
     }
 
     /// The box (local units) around the probe samples that `tf` and
-    /// `settings` make visible (opacity above [`VISIBLE_OPACITY`]), padded by
+    /// `settings` make visible (opacity above `VISIBLE_OPACITY`), padded by
     /// the probe's spacing: what a default camera frames. `None` when no
     /// sample is visible.
     pub fn visible_box(&self, tf: &TransferFunction, settings: &RenderSettings) -> Option<Aabb> {

@@ -346,7 +346,7 @@ pub struct ViewFlags {
     pub clip: Option<Vec<f64>>,
     /// An opaque triangle mesh drawn with the volume: .ply, .obj, .stl or
     /// .vtp, in the data's coordinates (repeat for more; colours and
-    /// fields in a scene file's [[meshes]]).
+    /// fields in a scene file's `[[meshes]]`).
     #[cfg_attr(
         feature = "clap",
         arg(long, value_name = "FILE", help_heading = "Surfaces")

@@ -18,7 +18,12 @@
 //! - **Resolving** ([`resolve()`]) turns a volume and a [`SceneDesc`] (a
 //!   TOML scene, the CLI's flags, a Python dictionary) into a [`Resolved`]
 //!   view: camera, transfer function, render settings — the same defaults
-//!   for every front-end. [`Scene`] holds a volume with its view.
+//!   for every front-end. [`Scene`] holds a volume with its view;
+//!   [`DistributedScene`] holds one rank's part of a volume decomposed over
+//!   a communicator with the same view ([`parallel`]). What a command does
+//!   with either is written once over a [`Placement`] (one process, or the
+//!   ranks), and every refusal it can meet is the library's, so each
+//!   front-end refuses the same things in the same words.
 //! - **Rendering** ([`AnyVolume::render`], [`AnyVolume::render_passes`]),
 //!   **projecting** ([`AnyVolume::project`]) and **sampling**
 //!   ([`AnyVolume::sample_points`]) report progress and stop when their

@@ -243,7 +243,7 @@ impl AnyVolume {
         box_size: f32,
         desc: &TetsDesc,
     ) -> Result<Loaded, SceneError> {
-        let grid = load::tets::WorldGrid {
+        let grid = load::WorldGrid {
             n,
             box_size: box_size as f64,
             positions: positions

@@ -9,8 +9,8 @@
 //! the value range and opacity scale come from one probe merged over them,
 //! and the attribute range is the union of theirs. All of it stays fixed
 //! for every frame, so the sequence does not flicker. One pass
-//! ([`over_series`]) serves one process and the ranks alike; only how a
-//! frame is loaded and probed differs ([`SeriesFrames`]).
+//! (`over_series`) serves one process and the ranks alike; only how a
+//! frame is loaded and probed differs (`SeriesFrames`).
 
 use voxless_core::Aabb;
 use voxless_scene::SceneDesc;

@@ -56,8 +56,7 @@ impl Resolved {
 
     /// An error when the render of `volume` (in `frame`) with this view
     /// would take absurdly long, naming the flag to change; else a note
-    /// when the step was raised to what f32 resolves along the rays (see
-    /// [`checks::check_work`]).
+    /// when the step was raised to what f32 resolves along the rays.
     pub fn check_work(
         &self,
         volume: &AnyVolume,

@@ -6,11 +6,12 @@ use std::path::Path;
 
 use voxless_scene::{ParticlesDesc, TetsDesc};
 
-use super::tets::WorldGrid;
+use super::WorldGrid;
 use crate::SceneError;
 
 /// The Lagrangian grid of snapshot `t.snapshot` (default: the last) of the
-/// JaxPM run at `path`; a note says which snapshot was read.
+/// JaxPM run at `path` (unchecked: the caller checks it as it checks every
+/// grid); a note says which snapshot was read.
 #[cfg(feature = "hdf5")]
 pub(crate) fn grid(
     t: &TetsDesc,
@@ -100,7 +101,6 @@ pub(crate) fn grid(
             .map(|p| p.map(f64::from))
             .collect(),
     };
-    super::tets::check_grid(&grid, path)?;
     Ok(grid)
 }
 

@@ -1,7 +1,7 @@
 //! Loading: files named by a scene description become a volume — the front
 //! half every front-end shares, one process or many.
 //!
-//! - **Which data** ([`source`]): the description's one data source, a
+//! - **Which data** (`source`): the description's one data source, a
 //!   JaxPM `.h5` given as particles recognised as its tessellation.
 //! - **Which part of it** ([`Share`]): one process reads everything; the
 //!   ranks of a decomposed scene read one share each (rows of a `.npy`,
@@ -22,6 +22,7 @@ pub mod frames;
 pub(crate) mod jaxpm;
 pub(crate) mod materials;
 pub(crate) mod particles;
+pub(crate) mod reach;
 pub(crate) mod scale;
 pub(crate) mod spacing;
 mod sph;
@@ -74,6 +75,15 @@ impl Share {
         let at = |r: usize| (n as u128 * r as u128 / ranks) as usize;
         at(self.rank)..at(self.rank + 1)
     }
+}
+
+/// Lagrangian positions in world units (a tessellation's N³ grid, or a
+/// share's planes of it), before they are placed in a frame.
+pub(crate) struct WorldGrid {
+    pub n: usize,
+    /// The periodic box's side.
+    pub box_size: f64,
+    pub positions: Vec<[f64; 3]>,
 }
 
 /// What a scene is loaded for; it decides what each box of a decomposed

@@ -14,12 +14,13 @@ use std::path::{Path, PathBuf};
 
 use voxless_core::Vec3;
 use voxless_particles::{
-    Classification, Kernel, ParticleData, ParticleError, ParticleSettings, ParticleVolume, median,
+    Classification, Kernel, ParticleData, ParticleError, ParticleSettings, ParticleVolume,
 };
 use voxless_scene::{ClassificationName, KernelName, ParticlesDesc};
 use voxless_transfer::ControlPoints;
 
 use super::formats::{self, ParticleFormat, TableOptions};
+use super::reach::{Reach, Unresolvable};
 use super::spacing;
 use super::{Share, frames, table as load};
 use crate::checks::{positive, range};
@@ -85,7 +86,8 @@ impl FrameData {
     /// largest support the description or the radii give), for choosing a
     /// frame; `None` for non-finite positions (reported when building).
     pub fn world_reach(&self, p: &ParticlesDesc) -> Option<([f64; 3], [f64; 3])> {
-        Reach::of(self).world_box(p, self.kernel(p), self.total)
+        let reach = Reach::of(&self.positions, self.data.radii.as_deref());
+        reach.world_box(p, self.kernel(p), self.total)
     }
 
     /// The arrays with positions in `frame`'s local coordinates (radii and
@@ -98,78 +100,6 @@ impl FrameData {
         (self.data, self.main_file, self.files)
     }
 }
-
-/// What fixes the world box a particle set's supports reach, in pieces
-/// that merge over the shares of a decomposed set: the positions' bounds
-/// (NaN passed over) and the largest radius (when the rows have radii).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Reach {
-    pub lo: [f64; 3],
-    pub hi: [f64; 3],
-    pub max_radius: Option<f32>,
-}
-
-impl Reach {
-    /// The pieces of the rows read.
-    pub fn of(fd: &FrameData) -> Reach {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for q in &fd.positions {
-            for a in 0..3 {
-                lo[a] = lo[a].min(q[a]);
-                hi[a] = hi[a].max(q[a]);
-            }
-        }
-        let max_radius = fd
-            .data
-            .radii
-            .as_ref()
-            .map(|r| r.iter().fold(0.0f32, |m, &v| m.max(v)));
-        Reach { lo, hi, max_radius }
-    }
-
-    /// The pieces of two shares together.
-    pub fn merge(self, o: Reach) -> Reach {
-        Reach {
-            lo: std::array::from_fn(|a| self.lo[a].min(o.lo[a])),
-            hi: std::array::from_fn(|a| self.hi[a].max(o.hi[a])),
-            max_radius: match (self.max_radius, o.max_radius) {
-                (Some(a), Some(b)) => Some(a.max(b)),
-                (a, b) => a.or(b),
-            },
-        }
-    }
-
-    /// The world box the set's supports reach (`total` particles of
-    /// `kernel`): the positions' bounds grown by the largest support the
-    /// description or the radii give; `None` for non-finite positions.
-    pub fn world_box(&self, p: &ParticlesDesc, kernel: Kernel, total: usize) -> Option<WorldBox> {
-        let (lo, hi) = (self.lo, self.hi);
-        if !lo.iter().chain(&hi).all(|v| v.is_finite()) {
-            return None;
-        }
-        let factor = kernel.support_factor() as f64;
-        let radius = match (p.radius, self.max_radius) {
-            (Some(r), _) => r as f64,
-            (None, Some(r)) => r as f64,
-            (None, None) => 0.0,
-        };
-        let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
-        // A support beyond the data's extent is refused when there are many
-        // particles (see `ParticleError::HugeRadius`): placing the frame
-        // around it would only blur the positions the error reports.
-        let refused = total > 1000 && factor * radius > extent;
-        let grow = if radius.is_finite() && !refused {
-            factor * radius
-        } else {
-            0.0
-        };
-        Some((lo.map(|v| v - grow), hi.map(|v| v + grow)))
-    }
-}
-
-/// A world box: lower and upper corner (float64).
-pub(crate) type WorldBox = ([f64; 3], [f64; 3]);
 
 /// The frame for data reaching over the world box `reach` (see
 /// [`WorldFrame::fit`]).
@@ -705,80 +635,6 @@ fn check_resolvable(data: &ParticleData, support: f32, scale: f64) -> Result<(),
     Err(BuildError::Setting(centre.error(far, scale)))
 }
 
-/// Supports too small for float32 across the data's extent (see
-/// [`check_resolvable`]), found from the medians of `radii` and of
-/// `centres` — every particle's, or a decomposed set's probes (every k-th
-/// row, so exact up to that many particles).
-pub(crate) struct Unresolvable {
-    support: f64,
-    extent: f64,
-    centre: [f32; 3],
-}
-
-impl Unresolvable {
-    /// `Some` when the supports (`support` times the median radius, when
-    /// there are radii) are below what float32 resolves across `bounds`
-    /// (the positions' bounds) for a set of `total` particles.
-    pub fn find(
-        support: f32,
-        radii: Option<&mut [f32]>,
-        centres: &[Vec3],
-        bounds: voxless_core::Aabb,
-        total: usize,
-    ) -> Option<Unresolvable> {
-        let support = match radii {
-            Some(r) if !r.is_empty() => support * median(r),
-            _ => support,
-        } as f64;
-        let extent = (0..3)
-            .map(|a| (bounds.max[a] - bounds.min[a]) as f64)
-            .fold(0.0, f64::max);
-        // Non-finite positions are reported as such when the volume is built.
-        if total < 2 || !extent.is_finite() || !(support < extent * 1e-6) {
-            return None;
-        }
-        let centre: [f32; 3] = std::array::from_fn(|a| {
-            let mut v: Vec<f32> = centres.iter().map(|p| p[a]).collect();
-            median(&mut v)
-        });
-        Some(Unresolvable {
-            support,
-            extent,
-            centre,
-        })
-    }
-
-    /// The first of `positions` farthest from the centre, and its distance.
-    pub fn farthest(&self, positions: &[Vec3]) -> (usize, f64) {
-        let dist = |p: &Vec3| {
-            (0..3)
-                .map(|a| (p[a] - self.centre[a]).abs() as f64)
-                .fold(0.0, f64::max)
-        };
-        positions.iter().enumerate().fold(
-            (0, -1.0),
-            |m, (i, p)| {
-                if dist(p) > m.1 { (i, dist(p)) } else { m }
-            },
-        )
-    }
-
-    /// The error naming particle `far` (lengths in world units: the frame's
-    /// scale is `scale`).
-    pub fn error(&self, far: usize, scale: f64) -> SceneError {
-        SceneError::setting(
-            "particles (positions)",
-            format!(
-                "the particles' supports ({:.3e}) are too small for float32 to resolve across \
-                 the data's extent ({:.3e}): particle {far} lies farthest from the rest; leave \
-                 out outliers like it (or give a larger --radius)",
-                self.support * scale,
-                self.extent * scale
-            ),
-        )
-    }
-}
-
 /// Number of frames of the scene's data ([`frame_numbers`]).
 pub fn frame_count(desc: &voxless_scene::SceneDesc, base: &Path) -> Result<usize, SceneError> {
     Ok(frame_numbers(desc, base)?.len())
@@ -808,7 +664,7 @@ pub const SUPPORT_PER_SPACING: f32 = 1.0;
 
 /// The default radius parameter of `kernel` for particles at `positions`:
 /// a support of [`SUPPORT_PER_SPACING`] × the median nearest-neighbour
-/// distance (see [`spacing`]), so neighbouring kernels overlap enough for
+/// distance (see `spacing`), so neighbouring kernels overlap enough for
 /// a continuous field while single atoms stay visible. Particles without
 /// any spacing (one particle, or all at one point) get support 1: there is
 /// no length in the data to size them by, and a render frames them

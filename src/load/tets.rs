@@ -14,17 +14,10 @@ use std::path::{Path, PathBuf};
 use voxless_scene::{PixelsName, TetsDesc};
 use voxless_tets::{BLOCK, LagrangianGrid, PixelIntegral, TetSettings, TetVolume};
 
-use super::Share;
 use super::formats::ParticleFormat;
+use super::{Share, WorldGrid};
 use crate::checks::positive;
 use crate::{SceneError, WorldFrame};
-
-/// Lagrangian positions in world units, before they are placed.
-pub(crate) struct WorldGrid {
-    pub n: usize,
-    pub box_size: f64,
-    pub positions: Vec<[f64; 3]>,
-}
 
 pub(crate) fn load_tets(
     t: &TetsDesc,
@@ -84,7 +77,9 @@ pub(crate) fn read_grid(
     };
     if ParticleFormat::detect(&path)? == Some(ParticleFormat::Hdf5) {
         // A JaxPM run: N and L come from the file.
-        return Ok((cut(super::jaxpm::grid(t, &path, notes)?), path));
+        let grid = super::jaxpm::grid(t, &path, notes)?;
+        check_grid(&grid, &path)?;
+        return Ok((cut(grid), path));
     }
     if t.snapshot.is_some() {
         return Err(SceneError::setting(

@@ -23,9 +23,9 @@ use voxless_particles::{
 use voxless_scene::ParticlesDesc;
 
 use super::particles::{
-    FrameData, Reach, Unresolvable, WorldBox, blame, in_world_units, particle_settings,
-    prepare_arrays, radius_from_spacing,
+    FrameData, blame, in_world_units, particle_settings, prepare_arrays, radius_from_spacing,
 };
+use super::reach::{Reach, Unresolvable, WorldBox};
 use super::spacing::{self, OccupancyGrid, PROBES};
 use crate::{ParallelError, WorldFrame};
 
@@ -66,7 +66,7 @@ pub(crate) fn world_reach(
     p: &ParticlesDesc,
     rows: &FrameData,
 ) -> Result<Option<WorldBox>, CommError> {
-    let own = Reach::of(rows);
+    let own = Reach::of(&rows.positions, rows.data.radii.as_deref());
     let mut mine = Vec::with_capacity(7);
     mine.extend(own.lo);
     mine.extend(own.hi);
