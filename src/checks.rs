@@ -39,11 +39,11 @@ pub(crate) fn range(field: &str, lo: f32, hi: f32) -> Result<Range1, SceneError>
 /// needs thousands (10⁹ particles: ~8,000 at the default radius); a
 /// quarter of a million means a radius or step far below the data's scale,
 /// and minutes for even a thumbnail.
-pub const MAX_SAMPLES_PER_RAY: f64 = (1u64 << 18) as f64;
+pub(crate) const MAX_SAMPLES_PER_RAY: f64 = (1u64 << 18) as f64;
 
 /// Samples in all beyond which a render is refused (about a day at 10⁸
 /// samples per second).
-pub const MAX_SAMPLES: f64 = 1e13;
+pub(crate) const MAX_SAMPLES: f64 = 1e13;
 
 /// An error when the field is 0 everywhere (a volume held whole or the
 /// whole data of a decomposed one): there would be nothing to render.
@@ -263,7 +263,7 @@ pub(crate) fn check_visible(
 /// appears anywhere in the image (`seen`: what its rays saw) — with the range of values the rays did see,
 /// in the transfer function's units — so an empty surface is never a silent
 /// image.
-pub fn check_iso(settings: &RenderSettings, seen: &RayStats) -> Result<(), SceneError> {
+pub(crate) fn check_iso(settings: &RenderSettings, seen: &RayStats) -> Result<(), SceneError> {
     let st = settings;
     if st.iso.is_empty() || seen.iso_hits > 0 {
         return Ok(());

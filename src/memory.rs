@@ -205,8 +205,7 @@ impl AnyVolume {
         let mut notes = Vec::new();
         let volume = match &desc.materials {
             Some(mats) => {
-                // The species are the materials' (an error when both give one).
-                load::materials::material_descs(desc, mats)?;
+                load::materials::check_species(desc)?;
                 let v = load::materials::build_materials(desc, mats, &mut notes, &mut |d, n| {
                     particle_volume(&arrays, d, n)
                 })?;

@@ -349,9 +349,8 @@ impl<'c> Placed<'c> {
     /// The checks of a finished render: iso-surfaces asked for but absent,
     /// an image that shows nothing at all.
     pub fn check_rendered(&self, r: &Rendered) -> Result<(), SceneError> {
-        self.view().check_iso(&r.seen)?;
         self.view()
-            .check_visible(self.world_bounds(), &r.seen, &r.image)
+            .check_image(self.world_bounds(), &r.seen, &r.image)
     }
 
     /// What a colour bar shows (see [`Resolved::colorbar`]).

@@ -105,12 +105,13 @@ pub(crate) fn over_series<F: SeriesFrames>(
         };
         let v = other.as_ref().unwrap_or(&part);
         probe.merge(f.probe(v, clip.as_ref())?);
-        let (lo, hi) = world.box_to_world(F::extent(v).1);
+        let (_, b, a) = F::extent(v);
+        let (lo, hi) = world.box_to_world(b);
         framed = (
             std::array::from_fn(|a| framed.0[a].min(lo[a])),
             std::array::from_fn(|a| framed.1[a].max(hi[a])),
         );
-        attribute = union(attribute, F::extent(v).2);
+        attribute = union(attribute, a);
     }
     let mut series = desc.clone();
     let which = crate::frames::list_numbers(&sampled);

@@ -75,6 +75,20 @@ impl Resolved {
         })
     }
 
+    /// The checks of a finished image whose rays saw `seen`: iso-surfaces
+    /// asked for but absent ([`Resolved::check_iso`]), then an image that
+    /// shows nothing at all ([`Resolved::check_visible`]; `bounds` are the
+    /// data's world bounds).
+    pub fn check_image(
+        &self,
+        bounds: ([f64; 3], [f64; 3]),
+        seen: &RayStats,
+        image: &Image,
+    ) -> Result<(), SceneError> {
+        self.check_iso(seen)?;
+        self.check_visible(bounds, seen, image)
+    }
+
     /// An error naming the iso-values when iso-surfaces were asked for but
     /// none appears in the image whose rays saw `seen`.
     pub fn check_iso(&self, seen: &RayStats) -> Result<(), SceneError> {

@@ -96,9 +96,10 @@ pub fn say(report: Option<String>) {
     }
 }
 
-/// Checks the render's work (printing a note if the step was raised).
-pub fn check_work(s: &Placed, desc: &SceneDesc) -> Result<()> {
-    if let (true, Some(note)) = (s.placement().is_root(), s.check_work(desc)?) {
+/// Checks the render's work, rank 0 of `placement` printing a note if the
+/// step was raised (however the scene itself is held).
+pub fn check_work(placement: Placement, s: &Placed, desc: &SceneDesc) -> Result<()> {
+    if let (true, Some(note)) = (placement.is_root(), s.check_work(desc)?) {
         eprintln!("note: {note}");
     }
     Ok(())
@@ -139,7 +140,7 @@ pub fn render_one(
 /// the image shows something, and writes `output` (rank 0).
 pub fn render_to(s: &Placed, desc: &SceneDesc, output: &Path, with_colorbar: bool) -> Result<()> {
     let placement = s.placement();
-    check_work(s, desc)?;
+    check_work(placement, s, desc)?;
     let progress = Progress::new("rendering", 1, placement.is_root());
     let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
     let t = Instant::now();
@@ -182,7 +183,7 @@ pub fn render_turntable(
     with_colorbar: bool,
 ) -> Result<()> {
     let mut scene = open(placement, desc, base, data_frame)?;
-    check_work(&scene, desc)?;
+    check_work(placement, &scene, desc)?;
     let bar = colorbar(&scene, desc, with_colorbar);
     let frames = outputs.len();
     let progress = Progress::new("rendering turntable", frames as u64, placement.is_root());

@@ -40,10 +40,7 @@ pub fn render(
         .map_err(anyhow::Error::from);
     let (mut scene, series) = render::agree(placement, opened)?;
     render::report_placed(placement, &scene, t);
-    let checked = scene.check_work(desc).map_err(anyhow::Error::from);
-    if let (true, Some(note)) = (placement.is_root(), render::agree(placement, checked)?) {
-        eprintln!("note: {note}");
-    }
+    render::check_work(placement, &scene, desc)?;
     let bar = render::colorbar(&scene, desc, colorbar);
     let progress = Progress::new("rendering frames", frames.len() as u64, placement.is_root());
     let t = Instant::now();

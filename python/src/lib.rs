@@ -368,10 +368,9 @@ impl Volume {
                 r.notes.push(note);
             }
             let film = r.render_film(held.volume(), control)?;
-            r.check_iso(film.stats())?;
             let image = film.resolve();
             let bounds = held.frame().box_to_world(held.volume().bounds());
-            r.check_visible(bounds, film.stats(), &image)?;
+            r.check_image(bounds, film.stats(), &image)?;
             Ok((image, r.background, r.notes))
         })?;
         let (image, background, notes) = done.map_err(|f| raise(py, f))?;

@@ -60,13 +60,20 @@ pub(crate) fn material_descs(
     p: &ParticlesDesc,
     mats: &[MaterialDesc],
 ) -> Result<Vec<ParticlesDesc>, SceneError> {
+    check_species(p)?;
+    Ok(mats.iter().map(|m| material_desc(p, m)).collect())
+}
+
+/// With materials, the species are the materials' (an error when the
+/// particles give one too).
+pub(crate) fn check_species(p: &ParticlesDesc) -> Result<(), SceneError> {
     if p.species.is_some() {
         return Err(SceneError::setting(
             "particles.species",
             "give the species per material ([[particles.materials]] species = ...), not both",
         ));
     }
-    Ok(mats.iter().map(|m| material_desc(p, m)).collect())
+    Ok(())
 }
 
 /// The particle description of material `m` of `p`: its species, its radius

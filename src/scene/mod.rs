@@ -113,9 +113,8 @@ impl Scene {
     /// and an image that shows nothing at all (see [`Resolved::check_iso`],
     /// [`Resolved::check_visible`]).
     pub fn check_visible(&self, film: &Film, image: &Image) -> Result<(), SceneError> {
-        self.view.check_iso(film.stats())?;
         self.view
-            .check_visible(self.world_bounds(), film.stats(), image)
+            .check_image(self.world_bounds(), film.stats(), image)
     }
 
     /// Points the camera as `desc.camera` says (see [`Resolved::reaim`]).
