@@ -15,7 +15,12 @@ use voxless_scene::SceneDesc;
 pub enum Fields {
     /// Particle density Φ, and the attribute field Θ when particles carry
     /// an attribute.
-    Particles { attribute: bool },
+    /// Particles, with or without an attribute, in a periodic box (local
+    /// units) or not.
+    Particles {
+        attribute: bool,
+        periodic: Option<voxless_core::Aabb>,
+    },
     /// One density per material, by name.
     Materials(Vec<String>),
     /// A phase-space tessellation: density and stream count, in a periodic
@@ -33,7 +38,7 @@ impl Fields {
     pub fn columns(&self, gradient: bool) -> Vec<String> {
         let grad = |name: &str| ["x", "y", "z"].map(|a| format!("d{name}/d{a}"));
         match self {
-            Fields::Particles { attribute } => {
+            Fields::Particles { attribute, .. } => {
                 let mut c = vec!["density".to_string()];
                 if *attribute {
                     c.push("attribute".into());
@@ -61,7 +66,7 @@ impl Fields {
     /// zero density (an undefined attribute), or NaN outside AMR cells.
     pub(crate) fn empty_row(&self, width: usize) -> Vec<f32> {
         match self {
-            Fields::Particles { attribute } => {
+            Fields::Particles { attribute, .. } => {
                 let mut row = vec![0.0; width];
                 if *attribute {
                     row[1] = f32::NAN;
@@ -78,6 +83,10 @@ impl Fields {
     pub(crate) fn query_point(&self, p: Vec3) -> Vec3 {
         match self {
             Fields::Tets { box_size, n } => voxless_tets::canonical_point(*box_size, *n, p),
+            // The box's own copy of the point (its owner holds every image).
+            Fields::Particles {
+                periodic: Some(b), ..
+            } => voxless_particles::wrap(b, p),
             _ => p,
         }
     }
@@ -88,7 +97,7 @@ impl Fields {
     /// for a tessellation; none for materials (each has its own).
     pub fn colour_name(&self, desc: &SceneDesc) -> Option<String> {
         match self {
-            Fields::Particles { attribute } => {
+            Fields::Particles { attribute, .. } => {
                 match desc.particles.as_ref().and_then(|p| p.attribute.as_deref()) {
                     Some(spec) => name_of(spec),
                     None if *attribute => Some("temperature".into()),

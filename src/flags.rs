@@ -109,18 +109,38 @@ pub struct DataFlags {
         arg(long, value_name = "K", help_heading = "Phase-space tessellation")
     )]
     pub snapshot: Option<usize>,
-    /// Periodic box size L (positions in [0, L)³; a JaxPM file's by default).
-    #[serde(rename = "box")]
+    /// Periodic box: a side L (the box [0, L)³) or its corners X0 Y0 Z0 X1 Y1
+    /// Z1. Particles: the field sums every periodic image (default: the box
+    /// the file states as periodic: SWIFT/Gadget BoxSize, LAMMPS pp bounds,
+    /// extended-XYZ Lattice with pbc). Tessellations: L (a JaxPM file's by
+    /// default).
+    #[serde(rename = "box", deserialize_with = "one_or_six")]
     #[cfg_attr(
         feature = "clap",
         arg(
             long = "box",
             value_name = "L",
-            help_heading = "Phase-space tessellation",
+            num_args = 1..=6,
             allow_negative_numbers = true
         )
     )]
-    pub box_size: Option<f32>,
+    pub box_size: Option<Vec<f64>>,
+    /// Ignore the periodic box the particle file states.
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
+    pub no_box: bool,
+    /// Wrap particles into the periodic box even when they span more than
+    /// one box (positions just outside it are always wrapped, with a note).
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "Particles"))]
+    pub wrap: bool,
+    /// Radii from neighbours: each particle's support reaches its N-th
+    /// nearest neighbour (itself counted; periodic distances in a box).
+    /// Default for cosmological snapshots' particle types without smoothing
+    /// lengths: 32.
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "N", help_heading = "Particles")
+    )]
+    pub neighbours: Option<usize>,
     /// Mass per particle, world units (default: the mean density is 1, so
     /// densities read as the overdensity 1 + δ).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Phase-space tessellation"))]
@@ -447,6 +467,9 @@ impl DataFlags {
         "lagrangian",
         "snapshot",
         "box",
+        "no_box",
+        "wrap",
+        "neighbours",
         "particle_mass",
         "cells",
         "scalars",
@@ -522,6 +545,20 @@ pub enum FlagGroup {
     Data,
     Kind,
     View,
+}
+
+/// A box given as one number (a side) or a list of them.
+fn one_or_six<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<Vec<f64>>, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum OneOrMany {
+        One(f64),
+        Many(Vec<f64>),
+    }
+    Ok(Option::<OneOrMany>::deserialize(d)?.map(|v| match v {
+        OneOrMany::One(l) => vec![l],
+        OneOrMany::Many(v) => v,
+    }))
 }
 
 /// Every flag: the three groups (a command lacking a group leaves it at its
@@ -612,7 +649,13 @@ impl SceneFlags {
     pub fn data_names() -> Vec<&'static str> {
         let none = SceneFlags::default();
         let (p, t, a) = (none.particle_flags(), none.tet_flags(), none.amr_flags());
-        p.iter().chain(&t).chain(&a).map(|f| f.0).collect()
+        let shared = none.shared_flags();
+        p.iter()
+            .chain(&t)
+            .chain(&a)
+            .chain(&shared)
+            .map(|f| f.0)
+            .collect()
     }
 
     /// The names of the given flags that describe the data — what to read,
@@ -625,11 +668,18 @@ impl SceneFlags {
         p.into_iter()
             .chain(t)
             .chain(a)
+            .chain(self.shared_flags())
             .filter_map(|(name, given)| given.then_some(name))
             .collect()
     }
 
-    fn particle_flags(&self) -> [(&'static str, bool); 14] {
+    /// Data flags of more than one kind: a periodic box holds particles or
+    /// a tessellation.
+    fn shared_flags(&self) -> [(&'static str, bool); 1] {
+        [("box", self.data.box_size.is_some())]
+    }
+
+    fn particle_flags(&self) -> [(&'static str, bool); 17] {
         let (d, k) = (&self.data, &self.kind);
         [
             ("particles", d.particles.is_some()),
@@ -646,15 +696,17 @@ impl SceneFlags {
             ("group", d.group.is_some()),
             ("part_type", d.part_type.is_some()),
             ("species", d.species.is_some()),
+            ("no_box", d.no_box),
+            ("wrap", d.wrap),
+            ("neighbours", d.neighbours.is_some()),
         ]
     }
 
-    fn tet_flags(&self) -> [(&'static str, bool); 8] {
+    fn tet_flags(&self) -> [(&'static str, bool); 7] {
         let (d, k) = (&self.data, &self.kind);
         [
             ("lagrangian", d.lagrangian.is_some()),
             ("snapshot", d.snapshot.is_some()),
-            ("box", d.box_size.is_some()),
             ("particle_mass", d.particle_mass.is_some()),
             ("tet_mode", k.tet_mode.is_some()),
             ("k", k.k.is_some()),
@@ -688,6 +740,22 @@ impl SceneFlags {
         let given = |flags: &[(&'static str, bool)]| flags.iter().find(|f| f.1).map(|f| f.0);
         let particle_flags = self.particle_flags();
         let path = |p: &PathBuf| cwd_path(cwd, &p.to_string_lossy());
+        let periodic_box = match self.data.box_size.as_deref() {
+            None => None,
+            Some(&[l]) => Some(voxless_scene::BoxDesc::Side(l)),
+            Some(&[x0, y0, z0, x1, y1, z1]) => {
+                Some(voxless_scene::BoxDesc::Corners([x0, y0, z0, x1, y1, z1]))
+            }
+            Some(other) => {
+                return Err(SceneError::setting(
+                    "box",
+                    format!(
+                        "takes 1 value (a side L) or 6 (corners X0 Y0 Z0 X1 Y1 Z1), not {}",
+                        other.len()
+                    ),
+                ));
+            }
+        };
         if given(&self.tet_flags()).is_some() || d.tets.is_some() {
             // Positions on a Lagrangian grid: a tessellation, not RBF
             // particles: the particle flags but the file would be dropped.
@@ -705,14 +773,39 @@ impl SceneFlags {
             }
             set(&mut t.lagrangian, self.data.lagrangian);
             set(&mut t.snapshot, self.data.snapshot);
-            set(&mut t.box_size, self.data.box_size);
+            match periodic_box {
+                Some(voxless_scene::BoxDesc::Side(l)) => t.box_size = Some(l as f32),
+                Some(voxless_scene::BoxDesc::Corners(_)) => {
+                    return Err(SceneError::setting(
+                        "box",
+                        "a tessellation's box is [0, L)³: give its side L",
+                    ));
+                }
+                None => {}
+            }
             set(&mut t.particle_mass, self.data.particle_mass);
             set(&mut t.mode, self.kind.tet_mode);
             set(&mut t.k, self.kind.k);
             set(&mut t.layers, self.kind.layers);
             set(&mut t.lod_pixels, self.kind.lod);
-        } else if given(&particle_flags).is_some() {
+        } else if given(&particle_flags).is_some()
+            || (periodic_box.is_some() && d.particles.is_some())
+        {
             let p = d.particles.get_or_insert_with(ParticlesDesc::default);
+            set(&mut p.periodic_box, periodic_box);
+            if self.data.no_box {
+                if periodic_box.is_some() {
+                    return Err(SceneError::setting(
+                        "no_box",
+                        "give either a box or no_box, not both",
+                    ));
+                }
+                p.periodic = Some(false);
+            }
+            if self.data.wrap {
+                p.wrap = Some(true);
+            }
+            set(&mut p.neighbours, self.data.neighbours);
             if let Some(f) = &self.data.particles {
                 p.file = Some(path(f));
                 p.demo = None;
@@ -734,6 +827,12 @@ impl SceneFlags {
                 &mut p.attribute_range,
                 fixed("attribute_range", &self.kind.attribute_range)?,
             );
+        } else if periodic_box.is_some() {
+            return Err(SceneError::setting(
+                "box",
+                "applies to particles (a periodic box) or a phase-space tessellation, and the \
+                 scene has neither",
+            ));
         }
         if given(&self.amr_flags()).is_some() {
             let a = d.amr.get_or_insert_with(AmrDesc::default);

@@ -252,6 +252,14 @@ fn frame_bytes(desc: &SceneDesc, base: &Path, frame: usize) -> u64 {
 }
 
 impl<'c> Placed<'c> {
+    /// See [`PlacedData::smoothing_lengths`].
+    pub fn smoothing_lengths(&self) -> Result<Option<Vec<f32>>, ParallelError> {
+        match self {
+            Placed::Process(s) => Ok(Some(s.volume.smoothing_lengths(&s.frame)?)),
+            Placed::Ranks(c, s) => radii_in_row_order(*c, s.radii.as_deref(), s.summary.kind),
+        }
+    }
+
     /// Where this scene's data is held.
     pub fn placement(&self) -> Placement<'c> {
         match self {
@@ -395,7 +403,51 @@ impl<'c> Placed<'c> {
     }
 }
 
+/// Every particle's radius parameter in world units, in row order, on
+/// rank 0 (`None` on the others): one process's volume, or the rows'
+/// radii the ranks of a decomposed set hold.
+fn radii_in_row_order(
+    comm: &dyn Comm,
+    mine: Option<&crate::load::whole_set::RowRadii>,
+    kind: VolumeKind,
+) -> Result<Option<Vec<f32>>, ParallelError> {
+    let local = mine.ok_or_else(|| {
+        SceneError::setting(
+            "particles",
+            format!(
+                "radii (--save-radii, smoothing_lengths) belong to one set of particles, not to {}",
+                kind.name()
+            ),
+        )
+    });
+    let mine = crate::load::whole_set::agree(comm, local)?;
+    let mut w = voxless_parallel::Writer::with_capacity(16 + 4 * mine.values.len());
+    w.u64(mine.offset as u64);
+    w.f32s(&mine.values);
+    let all = comm.all_gather(&w.into_bytes())?;
+    if comm.rank() != 0 {
+        return Ok(None);
+    }
+    let mut rows: Vec<(usize, Vec<f32>)> = Vec::new();
+    for msg in all {
+        let mut r = voxless_parallel::Reader::new(&msg);
+        rows.push((r.u64()? as usize, r.f32s()?));
+    }
+    rows.sort_by_key(|r| r.0);
+    Ok(Some(rows.into_iter().flat_map(|r| r.1).collect()))
+}
+
 impl PlacedData<'_> {
+    /// Every particle's radius parameter in world units, in the file's
+    /// row order (rank 0; `None` on the others): what `--save-radii`
+    /// writes (see [`AnyVolume::smoothing_lengths`]).
+    pub fn smoothing_lengths(&self) -> Result<Option<Vec<f32>>, ParallelError> {
+        match self {
+            PlacedData::Process(l) => Ok(Some(l.volume.smoothing_lengths(&l.frame)?)),
+            PlacedData::Ranks(c, p) => radii_in_row_order(*c, p.radii.as_deref(), p.summary.kind),
+        }
+    }
+
     /// What loading said.
     pub fn notes(&self) -> &[String] {
         match self {
@@ -450,11 +502,27 @@ impl PlacedData<'_> {
         match self {
             PlacedData::Process(l) => {
                 let view = ProjectionView::new(projection, &l.volume.bounds(), &l.frame)?;
+                view.check(&l.volume)?;
                 let column = view.project(&l.volume, width, height, control)?;
                 Ok((view, Some(column)))
             }
             PlacedData::Ranks(c, p) => {
                 let view = ProjectionView::new(projection, &p.summary.bounds, &p.frame)?;
+                let periodic = matches!(
+                    p.fields,
+                    Fields::Particles {
+                        periodic: Some(_),
+                        ..
+                    }
+                );
+                if periodic && view.t_range.is_some() {
+                    return Err(SceneError::setting(
+                        "depth",
+                        "a slab through the tiled periodic box is integrated by one process: \
+                         run it without mpirun",
+                    )
+                    .into());
+                }
                 let (part, d) = (p.volume.as_ref(), &p.decomposition);
                 let (cam, t) = (&view.camera, view.t_range);
                 let local = parallel::project(*c, part, d, cam, width, height, t, control)?;

@@ -395,6 +395,29 @@ impl ProjectionView {
         })
     }
 
+    /// Refuses what this view cannot do for `volume`: a slab through a
+    /// periodic box more than [`voxless_particles::MAX_PERIODS`] boxes deep.
+    pub fn check(&self, volume: &AnyVolume) -> Result<(), SceneError> {
+        let periodic = match volume {
+            AnyVolume::Particles(v) => v.periodic(),
+            _ => None,
+        };
+        if let (Some(b), Some(t)) = (periodic, self.t_range) {
+            let side = b.extent().min_elem() as f64;
+            let periods = (t.hi as f64 - t.lo as f64) / side;
+            if periods > voxless_particles::MAX_PERIODS {
+                return Err(SceneError::setting(
+                    "depth",
+                    format!(
+                        "the slab is {periods:.3e} periodic boxes deep; at most {} are integrated",
+                        voxless_particles::MAX_PERIODS
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The world area of one pixel of a `w`×`h` image.
     pub fn pixel_area(&self, w: u32, h: u32) -> f64 {
         (self.width[0] / w as f64) * (self.width[1] / h as f64)

@@ -2,6 +2,7 @@
 //! happens once per call (render, project, sample); below it the
 //! integrators are generic over the concrete volume.
 
+use crate::{SceneError, WorldFrame};
 use rayon::prelude::*;
 use voxless_amr::AmrVolume;
 use voxless_core::{Aabb, Camera, Cancelled, Control, Image, Range1, Vec3, Volume};
@@ -152,6 +153,12 @@ impl AnyVolume {
         t: Range1,
         control: &Control,
     ) -> Result<Vec<f32>, Cancelled> {
+        // A periodic box's slab goes through the tiled medium.
+        if let AnyVolume::Particles(v) = self
+            && v.periodic().is_some()
+        {
+            return v.project_periodic_slab(camera, width, height, t, control);
+        }
         with_volume!(self, v => voxless_render::project_per_pixel_in(v, camera, width, height, t, control))
     }
 
@@ -168,10 +175,32 @@ impl AnyVolume {
         }
     }
 
+    /// Every particle's radius parameter in world units (`frame`'s scale),
+    /// in the input's row order: the smoothing lengths h of the SPH
+    /// kernels, the support of gaussian3, σ of gaussian — after the radius
+    /// map. Refused for other kinds and for materials (several sets).
+    pub fn smoothing_lengths(&self, frame: &WorldFrame) -> Result<Vec<f32>, SceneError> {
+        match self {
+            AnyVolume::Particles(v) => Ok(v
+                .radii_in_input_order()
+                .into_iter()
+                .map(|r| (r as f64 * frame.scale) as f32)
+                .collect()),
+            other => Err(SceneError::setting(
+                "particles",
+                format!(
+                    "radii (--save-radii, smoothing_lengths) belong to one set of particles, not to {}",
+                    other.volume_kind().name()
+                ),
+            )),
+        }
+    }
+
     /// What the volume's field is made of (see [`Fields`]).
     pub fn fields(&self) -> Fields {
         match self {
             AnyVolume::Particles(v) => Fields::Particles {
+                periodic: v.periodic(),
                 attribute: v.has_attribute(),
             },
             AnyVolume::Materials(v) => {

@@ -109,11 +109,21 @@ fn flags_apply_by_the_clis_rules() {
     );
 
     let mut d = SceneDesc::default();
-    flags("size = [64, 32]\nbox = 2.0\nparticles = 'x.npy'")
+    flags("size = [64, 32]\nbox = 2.0\nlagrangian = 4\nparticles = 'x.npy'")
         .apply(&mut d, cwd)
         .unwrap();
     assert_eq!((d.image.width, d.image.height), (Some(64), Some(32)));
     assert_eq!(d.tets.as_ref().unwrap().box_size, Some(2.0));
+    // Without a Lagrangian grid, a box makes particles periodic.
+    let mut p = SceneDesc::default();
+    flags("box = [0.0, 0.0, 0.0, 1.0, 2.0, 3.0]\nparticles = 'x.npy'")
+        .apply(&mut p, cwd)
+        .unwrap();
+    assert!(p.tets.is_none());
+    assert_eq!(
+        p.particles.unwrap().periodic_box,
+        Some(voxless::BoxDesc::Corners([0.0, 0.0, 0.0, 1.0, 2.0, 3.0]))
+    );
     assert_eq!(
         SceneFlags::group_of("box"),
         Some(voxless::flags::FlagGroup::Data)
@@ -128,7 +138,7 @@ fn bad_flags_are_errors_naming_the_flag() {
     assert_eq!(field(apply("eye = [1.0, 2.0]").unwrap_err()), "eye");
     assert_eq!(field(apply("size = [1, 2, 3]").unwrap_err()), "size");
     assert_eq!(
-        field(apply("box = 1.0\nkernel = 'm4'").unwrap_err()),
+        field(apply("box = 1.0\nlagrangian = 8\nkernel = 'm4'").unwrap_err()),
         "kernel"
     );
     assert_eq!(

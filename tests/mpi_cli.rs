@@ -344,3 +344,58 @@ fn an_error_on_one_rank_ends_every_rank_with_one_message() {
     assert!(!err.contains("panicked"), "{err}");
     assert!(!Path::new(&out).exists());
 }
+
+#[test]
+fn periodic_particles_with_neighbour_radii_under_mpirun_equal_one_process() {
+    if !have_mpirun() {
+        return;
+    }
+    let dir = Scratch::new("mpi-periodic");
+    let n = 2000;
+    let mut rng = Lcg(5);
+    // A clump across the corner, so kernels and neighbours cross every face.
+    let pos: Vec<f32> = (0..n)
+        .flat_map(|i| {
+            let s = if i % 2 == 0 { 1.0 } else { 0.1 };
+            [0; 3].map(|_| (s * (rng.f() - 0.5)).rem_euclid(1.0))
+        })
+        .collect();
+    voxless_io::write_npy_f32(&dir.path("pos.npy"), &[n, 3], &pos).unwrap();
+    let speed: Vec<f32> = (0..n).map(|i| (i % 7) as f32).collect();
+    write_values(&dir.path("speed.npy"), &speed);
+    let points = write_points(&dir, -0.2, 1.2);
+    let (pos, speed) = (dir.str("pos.npy"), dir.str("speed.npy"));
+    let data = [
+        "--particles",
+        &pos,
+        "--box",
+        "1",
+        "--neighbours",
+        "16",
+        "--attribute",
+        &speed,
+        "--kernel",
+        "cubic-spline",
+    ];
+    check_kind(&dir, "periodic", &data, &["--opacity-scale", "20"], &points);
+    // The radii the ranks found are one process's, in row order.
+    let (out, one_h, k_h) = (dir.str("r.npy"), dir.str("h1.npy"), dir.str("h3.npy"));
+    let mut a: Vec<&str> = vec!["project"];
+    a.extend(data);
+    a.extend([
+        "--axis",
+        "z",
+        "--size",
+        "16",
+        "16",
+        "-o",
+        &out,
+        "--save-radii",
+    ]);
+    let (mut a1, mut a3) = (a.clone(), a);
+    a1.push(&one_h);
+    one(&a1);
+    a3.push(&k_h);
+    mpi_ok(3, &a3);
+    same_bits(Path::new(&one_h), Path::new(&k_h));
+}

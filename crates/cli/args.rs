@@ -16,6 +16,11 @@ pub struct DataArgs {
     pub scene: Option<PathBuf>,
     #[command(flatten)]
     pub flags: DataFlags,
+    /// Write the radius parameter each particle was given (float32 .npy, in
+    /// the file's row order, world units, in the kernel's convention: h for
+    /// the SPH kernels), e.g. the smoothing lengths --neighbours found.
+    #[arg(long, value_name = "OUT.npy", help_heading = "Particles")]
+    pub save_radii: Option<PathBuf>,
 }
 
 /// How `render` shows a particular data kind (particle attributes,

@@ -229,6 +229,8 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             kind,
             view,
         } => {
+            let radii = data.save_radii.clone();
+            let radii = radii.as_deref();
             let (desc, base) = SceneArgs { data, kind, view }.scene()?;
             if let Some(n) = turntable {
                 let outputs: Vec<PathBuf> = (0..n as usize)
@@ -236,13 +238,20 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
                     .collect::<Result<_>>()?;
                 out::check(&outputs, OutputKind::Image, &desc, &base, &[])?;
                 let f = frame.unwrap_or(0);
-                return render::render_turntable(placement, &desc, &base, f, &outputs, colorbar);
+                return render::render_turntable(
+                    placement, &desc, &base, f, &outputs, radii, colorbar,
+                );
             }
             if let Some(range) = frames {
+                if radii.is_some() {
+                    anyhow::bail!(
+                        "--save-radii writes one frame's radii: give --frame N instead of --frames"
+                    );
+                }
                 return sequence::render(placement, &desc, &base, &range, &output, colorbar);
             }
             let f = frame.unwrap_or(0);
-            render::render_one(placement, &desc, &base, f, &output, colorbar)
+            render::render_one(placement, &desc, &base, f, &output, radii, colorbar)
         }
         Command::Sample {
             points,
@@ -251,6 +260,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             frame,
             data,
         } => {
+            let radii = data.save_radii.clone();
             let args = SceneArgs {
                 data,
                 ..Default::default()
@@ -263,7 +273,9 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
                 &base,
                 std::slice::from_ref(&points),
             )?;
+            render::check_radii_output(radii.as_deref(), &desc, &base)?;
             let s = render::open(placement, &desc, &base, frame.unwrap_or(0))?;
+            render::save_radii(placement, radii.as_deref(), || s.smoothing_lengths())?;
             // Rank 0 reads the points; the library hands them out.
             let read = if root {
                 voxless::read_points(&points).map_err(anyhow::Error::from)
@@ -304,6 +316,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             frame,
             data,
         } => {
+            let radii = data.save_radii.clone();
             let args = SceneArgs {
                 data,
                 view: ViewArgs {
@@ -322,6 +335,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
                 &base,
                 &[],
             )?;
+            render::check_radii_output(radii.as_deref(), &desc, &base)?;
             // A projection needs the data and the image size, not a render's
             // defaults (camera, transfer function, and the probe of the
             // field they are chosen from).
@@ -334,6 +348,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
                 size,
                 &projection,
                 &output,
+                radii.as_deref(),
             )
         }
         // Commands without data to share run on rank 0.
@@ -366,7 +381,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             desc.render.opacity_scale.get_or_insert(10.0);
             desc.camera.look_at.get_or_insert([0.0, -0.1, 0.0]);
             desc.light.get_or_insert_with(Default::default);
-            render::render_one(Placement::Process, &desc, &base, 0, &output, colorbar)
+            render::render_one(Placement::Process, &desc, &base, 0, &output, None, colorbar)
         }
         Command::Serve {
             port,
@@ -407,6 +422,7 @@ fn projection_desc(
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 /// Projects frame `frame` of the data `desc` names and writes the column
 /// densities (rank 0).
 fn project(
@@ -417,11 +433,13 @@ fn project(
     (w, h): (u32, u32),
     projection: &ProjectionDesc,
     output: &Path,
+    radii: Option<&Path>,
 ) -> Result<()> {
     let t = Instant::now();
     let data = placement.load(desc, base, frame, Purpose::Project)?;
     let kind = data.kind().name();
     render::report_loaded(placement, data.notes(), kind, data.world_bounds(), t);
+    render::save_radii(placement, radii, || data.smoothing_lengths())?;
     let progress = Progress::new("projecting", 1, placement.is_root());
     let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
     let t = Instant::now();
@@ -450,6 +468,11 @@ fn project(
 /// `voxless serve`: load the scene (errors before listening), print the URL,
 /// serve until Ctrl-C.
 fn serve(scene: &SceneArgs, port: u16, host: String) -> Result<()> {
+    if scene.data.save_radii.is_some() {
+        anyhow::bail!(
+            "--save-radii is written by render, project and sample; serve shows the data only"
+        );
+    }
     let (desc, base) = scene.scene()?;
     let t = Instant::now();
     let prepared = voxless_serve::prepare(desc, base)?;

@@ -122,18 +122,52 @@ pub fn decorate(image: &mut Image, view: &Resolved, bar: Option<&ColorbarSpec>) 
     }
 }
 
-/// Renders frame `frame` of the scene to `output` (checked before loading).
+/// Renders frame `frame` of the scene to `output` (checked before loading),
+/// writing the particles' radii to `radii` if given.
+#[allow(clippy::too_many_arguments)]
 pub fn render_one(
     placement: Placement,
     desc: &SceneDesc,
     base: &Path,
     frame: usize,
     output: &Path,
+    radii: Option<&Path>,
     with_colorbar: bool,
 ) -> Result<()> {
     out::check(&[output.to_path_buf()], OutputKind::Image, desc, base, &[])?;
+    check_radii_output(radii, desc, base)?;
     let s = open(placement, desc, base, frame)?;
+    save_radii(placement, radii, || s.smoothing_lengths())?;
     render_to(&s, desc, output, with_colorbar)
+}
+
+/// Refuses a radii output that would overwrite an input.
+pub fn check_radii_output(radii: Option<&Path>, desc: &SceneDesc, base: &Path) -> Result<()> {
+    match radii {
+        Some(p) => out::check(&[p.to_path_buf()], OutputKind::Columns, desc, base, &[]),
+        None => Ok(()),
+    }
+}
+
+/// Writes the particles' radii (rank 0 of `placement`) to `path`, if given.
+pub fn save_radii(
+    placement: Placement,
+    path: Option<&Path>,
+    radii: impl FnOnce() -> Result<Option<Vec<f32>>, voxless::ParallelError>,
+) -> Result<()> {
+    let Some(path) = path else {
+        return Ok(());
+    };
+    let written = radii()?.map_or(Ok(()), |r| {
+        voxless::io::write_npy_f32(path, &[r.len()], &r)?;
+        eprintln!(
+            "wrote the radii of {} particles → {}",
+            r.len(),
+            path.display()
+        );
+        Ok(())
+    });
+    agree(placement, written)
 }
 
 /// Checks the scene's render work, renders it with a progress bar, checks
@@ -180,9 +214,12 @@ pub fn render_turntable(
     base: &Path,
     data_frame: usize,
     outputs: &[PathBuf],
+    radii: Option<&Path>,
     with_colorbar: bool,
 ) -> Result<()> {
+    check_radii_output(radii, desc, base)?;
     let mut scene = open(placement, desc, base, data_frame)?;
+    save_radii(placement, radii, || scene.smoothing_lengths())?;
     check_work(placement, &scene, desc)?;
     let bar = colorbar(&scene, desc, with_colorbar);
     let frames = outputs.len();

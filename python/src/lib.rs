@@ -149,13 +149,34 @@ fn apply_flags(
 ) -> PyResult<()> {
     let py = flags.py();
     let flags = convert::flags(flags)?;
-    if let Some(bad) = flags.data_flags().into_iter().find(|f| !data.contains(f)) {
+    if let Some(bad) = data_flags(&flags).into_iter().find(|f| !data.contains(f)) {
         return Err(PyTypeError::new_err(format!(
             "{what}() does not take {bad}=: it describes data that {what}() does not read \
              (see voxless.load for files)"
         )));
     }
     flags.apply(desc, cwd).map_err(|e| errors::scene(py, e))
+}
+
+/// The data flags among the given `flags` ([`SceneFlags::data_flags`]),
+/// `box` always among them: it describes the data (a particle set's periodic
+/// box, a tessellation's), whichever data it goes to.
+fn data_flags(flags: &SceneFlags) -> Vec<&'static str> {
+    let mut given = flags.data_flags();
+    if flags.data.box_size.is_some() && !given.contains(&"box") {
+        given.push("box");
+    }
+    given
+}
+
+/// The names of every data flag ([`SceneFlags::data_names`]), `box` among
+/// them (see [`data_flags`]).
+fn data_names() -> Vec<&'static str> {
+    let mut names = SceneFlags::data_names();
+    if !names.contains(&"box") {
+        names.push("box");
+    }
+    names
 }
 
 /// Data flags that apply to particles from arrays.
@@ -168,6 +189,9 @@ const PARTICLE_FLAGS: &[&str] = &[
     "classification",
     "attribute_range",
     "species",
+    "box",
+    "wrap",
+    "neighbours",
 ];
 /// Data flags that apply to AMR cells from arrays.
 const AMR_FLAGS: &[&str] = &["field", "color_field", "reconstruction"];
@@ -195,8 +219,8 @@ fn hold(
 
 /// Particles from arrays: `positions` N×3 float32 (used as they are) or
 /// float64 (recentred in float64 before they become float32); the optional
-/// per-particle arrays float32 of length N; the kernel, radius and the like
-/// as flags (see [`describe`]).
+/// per-particle arrays float32 of length N; the kernel, radius, periodic
+/// box, neighbour count and the like as flags (see [`describe`]).
 #[pyfunction]
 #[pyo3(signature = (positions, radii, weights, attribute, species, tables, flags, cwd))]
 #[allow(clippy::too_many_arguments)]
@@ -211,7 +235,11 @@ fn particles(
     flags: &Bound<'_, PyAny>,
     cwd: PathBuf,
 ) -> PyResult<Volume> {
-    let desc = describe(tables, flags, &cwd, "Particles", PARTICLE_FLAGS)?;
+    // A particles table from the start: the flags then apply to it even
+    // when no other particle flag is given (`box` alone).
+    let mut desc = convert::scene_desc(tables)?;
+    desc.particles.get_or_insert_with(Default::default);
+    apply_flags(&mut desc, flags, &cwd, "Particles", PARTICLE_FLAGS)?;
     let mut arrays = if let Ok(p) = positions.extract::<PyReadonlyArray2<'_, f64>>() {
         ParticleArrays::from_f64(&rows3(py, &p, "positions")?)
     } else if let Ok(p) = positions.extract::<PyReadonlyArray2<'_, f32>>() {
@@ -315,7 +343,7 @@ fn load(
     cwd: PathBuf,
     frame: usize,
 ) -> PyResult<Volume> {
-    let desc = describe(tables, flags, &cwd, "load", &SceneFlags::data_names())?;
+    let desc = describe(tables, flags, &cwd, "load", &data_names())?;
     let base_for_load = base.clone();
     hold(py, desc, base, move |d| {
         voxless::load(d, &base_for_load, frame)
@@ -413,6 +441,7 @@ impl Volume {
         let done = run::cancellable(py, move |control| -> Result<_, Failure> {
             let (w, h) = voxless::projection::image_size(&desc.image)?;
             let view = ProjectionView::new(&projection, &held.volume().bounds(), held.frame())?;
+            view.check(held.volume())?;
             let column = view.project(held.volume(), w, h, control)?;
             Ok((column, view, w, h))
         })?;
@@ -538,6 +567,28 @@ impl Volume {
         self.held.total_mass()
     }
 
+    /// Every particle's radius parameter in world units, in the input's row
+    /// order (float32): the smoothing length h of the SPH kernels, the
+    /// support of gaussian3, σ of gaussian — given, estimated, or found from
+    /// the neighbours. Particle volumes only (one set of particles).
+    #[getter]
+    fn smoothing_lengths<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f32>>> {
+        let held = &self.held;
+        if !matches!(held.volume(), AnyVolume::Particles(_)) {
+            return Err(errors::value(
+                py,
+                format!(
+                    "smoothing_lengths: only particles (one set, not materials) have \
+                     smoothing lengths; this volume is {}",
+                    held.volume().kind()
+                ),
+            ));
+        }
+        let lengths = run::detached(py, || held.volume().smoothing_lengths(held.frame()))?
+            .map_err(|e| errors::scene(py, e))?;
+        Ok(PyArray1::from_vec(py, lengths))
+    }
+
     /// Defaults chosen from the data when it was loaded.
     #[getter]
     fn notes(&self) -> Vec<String> {
@@ -633,7 +684,7 @@ fn flag_names() -> FlagNames {
         ("AmrCells", AMR_FLAGS),
         ("Tessellation", TET_FLAGS),
     ];
-    (SceneFlags::names(), SceneFlags::data_names(), constructors)
+    (SceneFlags::names(), data_names(), constructors)
 }
 
 /// The image's up direction a projection along `normal` gets by default

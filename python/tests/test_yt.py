@@ -144,7 +144,8 @@ def test_voxless_source_is_where_yt_draws(lens, width):
     m, h = np.full(len(pos), 1.0 / len(pos)), np.full(len(pos), 0.05)
     data = {("io", f"particle_position_{a}"): pos[:, i] for i, a in enumerate("xyz")}
     data.update({("io", "particle_mass"): m, ("io", "smoothing_length"): 2 * h, ("io", "density"): m / (2 * h) ** 3})
-    ds = yt.load_particles(data, length_unit="cm", mass_unit="g", bbox=[[-3, 3]] * 3)
+    # Blobs in an open box (yt's default is periodic, which would make the volume periodic).
+    ds = yt.load_particles(data, length_unit="cm", mass_unit="g", bbox=[[-3, 3]] * 3, periodicity=(False,) * 3)
     sc = Scene()
     cam = sc.add_camera(ds, lens_type=lens)
     cam.resolution = (200, 160)
@@ -182,3 +183,21 @@ def test_amr_grids_project_as_yts_own_projection():
     theirs = np.asarray(frb[("gas", "density")]).T  # the FRB is [y, x]
     assert ours.units == frb[("gas", "density")].units
     assert np.abs(np.asarray(ours) - theirs).max() <= 1e-6 * theirs.max()
+
+
+def test_a_periodic_data_set_becomes_a_periodic_volume():
+    # One particle by a corner of a periodic domain: its kernel reaches every corner.
+    data = {
+        ("io", "particle_position_x"): np.array([0.02, 0.5]), ("io", "particle_position_y"): np.array([0.02, 0.5]),
+        ("io", "particle_position_z"): np.array([0.02, 0.5]), ("io", "particle_mass"): np.array([1.0, 1.0]),
+        ("io", "smoothing_length"): np.array([0.2, 0.2]), ("io", "density"): np.array([1.0, 1.0]),
+    }  # fmt: skip
+    ds = yt.load_particles(data, length_unit="cm", mass_unit="g", bbox=np.array([[0.0, 1.0]] * 3))
+    vol = voxless.yt.volume(ds.all_data())
+    corners = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)])
+    phi = np.asarray(vol.sample(corners))[:, 0]
+    assert phi.min() > 0 and np.allclose(phi, phi[0], rtol=1e-5)
+    # Without periodicity the far corners see nothing.
+    ds = yt.load_particles(data, length_unit="cm", mass_unit="g", bbox=np.array([[0.0, 1.0]] * 3), periodicity=(False,) * 3)
+    phi = np.asarray(voxless.yt.volume(ds.all_data()).sample(corners))[:, 0]
+    assert phi[-1] == 0 and phi[0] > 0

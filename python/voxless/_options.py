@@ -11,7 +11,8 @@ module only adds what a command line cannot say, as scene tables:
 - ``log=False`` / ``linear=False`` (the other one), ``shade=False`` (no
   light), ``orthographic=True`` / ``False`` (the projection alone);
 - ``size=N`` (a square), ``iso=x`` (one value), ``scalars="f.scalars"`` (one
-  file), and paths as ``os.PathLike``.
+  file), ``box=(lo, hi)`` (a periodic box's corners, besides a side ``L`` or
+  six numbers), and paths as ``os.PathLike``.
 
 Unknown keywords are a ``TypeError`` naming the closest known one; values the
 library refuses are a :class:`voxless.VoxlessError` (a ``ValueError``) naming
@@ -84,6 +85,21 @@ def box(name, v):
     if len(v) == 2:
         return vector(f"{name}[0]", v[0], 3) + vector(f"{name}[1]", v[1], 3)
     return vector(name, v, 6)
+
+
+def periodic_box(name, v):
+    """A periodic box: a side ``L`` (the box ``[0, L)³``), six numbers or ``(lo, hi)`` corners."""
+    if isinstance(v, np.ndarray) and v.ndim == 0:
+        v = v.item()
+    if isinstance(v, (Real, np.number)) and not isinstance(v, (bool, np.bool_)):
+        return number(name, v)
+    if isinstance(v, (str, bytes)) or not hasattr(v, "__len__"):
+        raise TypeError(f"{name}: expected a side L, (x0, y0, z0, x1, y1, z1) or (lo, hi), got {type(v).__name__}")
+    if len(v) == 1:
+        return [number(f"{name}[0]", v[0])]
+    if len(v) not in (2, 6):
+        raise ValueError(f"{name}: expected a side L, (x0, y0, z0, x1, y1, z1) or (lo, hi), got {len(v)} values")
+    return box(name, v)
 
 
 def points(name, v, k):
@@ -171,6 +187,8 @@ def split(where, kwargs, data=()):
             flags["scalars"] = [os.fspath(v)]
         elif name == "clip":
             flags["clip"] = box(name, v)
+        elif name == "box":
+            flags["box"] = periodic_box(name, v)
         else:
             flags[name] = os.fspath(v) if isinstance(v, os.PathLike) else v
     return tables, flags

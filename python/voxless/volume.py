@@ -128,6 +128,19 @@ class Volume:
         return self._native.total_mass
 
     @property
+    def smoothing_lengths(self):
+        """Each particle's radius parameter: float32, world units, in the input's row order.
+
+        The smoothing length h of the SPH kernels (support 2h for the cubic
+        spline), the support of ``gaussian3``, σ of ``gaussian`` — given as
+        ``radii``/``radius``, estimated from the spacing, or found from the
+        neighbours (``neighbours=N``: the support reaches the N-th nearest
+        neighbour, periodic distances in a ``box``). Particle volumes only;
+        others raise :class:`voxless.VoxlessError`.
+        """
+        return self._native.smoothing_lengths
+
+    @property
     def notes(self):
         """Defaults chosen from the data (a radius from the particle spacing, …)."""
         return list(self._native.notes)
@@ -239,9 +252,17 @@ class Particles(Volume):
     ``"wendland-c2"``/``"-c4"``/``"-c6"`` with support 2h,
     ``"quartic-spline"`` 2.5h, ``"quintic-spline"`` 3h), ``kappa``,
     ``sigma``, ``cluster``, ``classification``, ``attribute_range``,
-    ``species`` (keep only these ``types``); ``materials`` a list of
-    ``[[particles.materials]]`` tables. Any other keyword is a view flag
-    (see :meth:`Volume.render`): this volume's default view.
+    ``species`` (keep only these ``types``); ``box`` a periodic box, its
+    side ``L`` (the box ``[0, L)³``) or its corners (six numbers ``x0, y0,
+    z0, x1, y1, z1`` or ``(lo, hi)``): the field then sums every periodic
+    image, and positions just outside the box are wrapped in (``wrap=True``
+    wraps data spanning more than one box); ``neighbours`` N: radii from
+    the neighbours, each particle's support reaching its N-th nearest
+    neighbour (itself counted; periodic distances in a ``box``; instead of
+    ``radii``/``radius``; see :attr:`Volume.smoothing_lengths`);
+    ``materials`` a list of ``[[particles.materials]]`` tables. Any other
+    keyword is a view flag (see :meth:`Volume.render`): this volume's
+    default view.
     """
 
     def __init__(self, positions, radii=None, weights=None, attribute=None, types=None, *, materials=None, **kwargs):
@@ -336,11 +357,18 @@ def load(source=None, *, frame=0, **kwargs) -> Volume:
     ``source`` is a particle file (``.npy``, CSV, VTK, XYZ, LAMMPS dump,
     ``.particles``; HDF5 when built with the ``hdf5`` feature), a ``.cells``
     file (with ``scalars=[…]``), an AMRClaw ``fort.qNNNN``, N-body positions
-    with ``lagrangian=N``/``box=L`` (a tessellation), a ``.toml`` scene, or a
-    scene dict. Keywords are the CLI's flags (``attribute="speed"``,
+    with ``lagrangian=N`` and ``box=L`` (a tessellation), a ``.toml`` scene,
+    or a scene dict. Keywords are the CLI's flags (``attribute="speed"``,
     ``radii="h.npy"``, ``kernel=…``, ``cells=``, ``scalars=``, ``amrclaw=``,
     …) applied over the scene as on the command line; view flags become the
-    volume's default view. ``frame`` picks a frame of a time series.
+    volume's default view. For particles, ``box`` (a side ``L`` or the
+    corners) makes the box periodic (default: the box the file states as
+    periodic — SWIFT/Gadget ``BoxSize``, LAMMPS ``pp`` bounds, extended-XYZ
+    ``Lattice`` with ``pbc``; ``no_box=True`` ignores it), ``wrap=True``
+    wraps data spanning more than one box, and ``neighbours=N`` sizes each
+    particle's kernel to reach its N-th nearest neighbour (the default for
+    snapshot particle types without smoothing lengths: 32). ``frame`` picks
+    a frame of a time series.
     """
     tables, base = {}, os.getcwd()
     if isinstance(source, dict):

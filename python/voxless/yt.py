@@ -158,7 +158,8 @@ def volume(data_source, field=("gas", "density"), **kwargs):
 
     SPH particles: density Σ m W (cubic spline, radius = smoothing_length / 2)
     with the particles' ``field`` as the colour attribute when it is not the
-    density. AMR: the leaf cells with ``field`` (basis reconstruction unless
+    density; a data set periodic along every axis gives a periodic volume
+    (its domain is the box; pass ``box=`` to override). AMR: the leaf cells with ``field`` (basis reconstruction unless
     ``reconstruction="nearest"``). Keywords go to the voxless constructor.
     """
     data_source = data_source_or_all(data_source)
@@ -171,6 +172,11 @@ def volume(data_source, field=("gas", "density"), **kwargs):
         if field[1] != "density":
             attribute = data_source[field].d
         keep = hsml > 0
+        if all(ds.periodicity) and "box" not in kwargs:
+            # A periodic data set: the field sums every periodic image.
+            le = ds.domain_left_edge.to("code_length").d
+            re = ds.domain_right_edge.to("code_length").d
+            kwargs["box"] = [*map(float, le), *map(float, re)]
         return voxless.Particles(
             pos[keep],
             radii=hsml[keep] / 2,

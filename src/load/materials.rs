@@ -138,7 +138,7 @@ pub(crate) fn build_materials(
             .unwrap_or_else(|| format!("species {}", m.species));
         notes.push(format!(
             "material '{name}': {} particles, density range [{:.4e}, {:.4e}]",
-            volume.len(),
+            volume.particle_count(),
             value_range.lo,
             value_range.hi
         ));

@@ -22,6 +22,7 @@ pub mod frames;
 pub(crate) mod jaxpm;
 pub(crate) mod materials;
 pub(crate) mod particles;
+pub(crate) mod periodic;
 pub(crate) mod reach;
 pub(crate) mod scale;
 pub(crate) mod spacing;

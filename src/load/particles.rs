@@ -19,7 +19,10 @@ use voxless_particles::{
 use voxless_scene::{ClassificationName, KernelName, ParticlesDesc};
 use voxless_transfer::ControlPoints;
 
+use voxless_particles::neighbours::PeriodicBox;
+
 use super::formats::{self, ParticleFormat, TableOptions};
+use super::periodic;
 use super::reach::{Reach, Unresolvable};
 use super::spacing;
 use super::{Share, frames, table as load};
@@ -72,6 +75,12 @@ pub(crate) struct FrameData {
     /// share of a decomposed set holds rows `offset..` of `total`.
     pub offset: usize,
     pub total: usize,
+    /// The periodic box (world): the file's, until [`read_rows`] settles
+    /// it with the description's.
+    pub periodic: Option<PeriodicBox>,
+    /// A cosmological snapshot (SWIFT/Gadget): its particle types without
+    /// smoothing lengths get radii from neighbours by default.
+    pub snapshot: bool,
 }
 
 impl FrameData {
@@ -86,6 +95,9 @@ impl FrameData {
     /// largest support the description or the radii give), for choosing a
     /// frame; `None` for non-finite positions (reported when building).
     pub fn world_reach(&self, p: &ParticlesDesc) -> Option<([f64; 3], [f64; 3])> {
+        if let Some(b) = &self.periodic {
+            return Some(super::periodic::corners(b));
+        }
         let reach = Reach::of(&self.positions, self.data.radii.as_deref());
         reach.world_box(p, self.kernel(p), self.total)
     }
@@ -158,6 +170,14 @@ fn sph_columns(p: &ParticlesDesc, source: &load::Source) -> Option<(String, Stri
         .map(|(h, m)| (h.to_string(), m.to_string()))
 }
 
+/// The particle set's periodic box in `frame`'s local coordinates.
+pub(crate) fn local_box(b: Option<&PeriodicBox>, frame: &WorldFrame) -> Option<voxless_core::Aabb> {
+    b.map(|b| {
+        let (lo, hi) = super::periodic::corners(b);
+        frame.box_to_local([lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]])
+    })
+}
+
 /// Every row of frame `frame` of the particles `p` names.
 pub(crate) fn read_frame(
     p: &ParticlesDesc,
@@ -172,6 +192,45 @@ pub(crate) fn read_frame(
 /// array are `.npy` files, by hyperslab from HDF5 columns, else the frame
 /// read whole and cut (its rows are not at known offsets).
 pub(crate) fn read_rows(
+    p: &ParticlesDesc,
+    base: &Path,
+    frame: usize,
+    share: Share,
+) -> Result<FrameData, SceneError> {
+    let mut fd = read_share(p, base, frame, share)?;
+    // The periodic box: the description's or the file's; positions wrapped.
+    fd.periodic = match periodic::resolve_box(p, fd.periodic.map(|b| periodic::corners(&b)))? {
+        Some((b, how)) => {
+            let given = how == "given";
+            let wrapped = periodic::wrap_positions(&mut fd.positions, &b, p, given, &fd.main_file)?;
+            fd.notes
+                .push(periodic::wrap_note(&b, how, wrapped, fd.positions.len()));
+            Some(b)
+        }
+        None => None,
+    };
+    // Radii from neighbours need every row: the ranks of a decomposed set
+    // find them together (`crate::parallel`).
+    if share.is_whole() {
+        let n = periodic::neighbour_count(p, fd.snapshot, fd.data.radii.is_some())?;
+        if let Some(n) = n {
+            let kernel = fd.kernel(p);
+            let r = periodic::neighbour_radii(
+                &fd.positions,
+                n,
+                fd.periodic.as_ref(),
+                kernel,
+                &fd.main_file,
+                &mut fd.notes,
+            )?;
+            fd.data.radii = Some(r);
+        }
+    }
+    Ok(fd)
+}
+
+/// [`read_rows`] before the box and the neighbours.
+fn read_share(
     p: &ParticlesDesc,
     base: &Path,
     frame: usize,
@@ -275,6 +334,8 @@ fn npy_rows(
         notes: Vec::new(),
         offset: rows.start,
         total,
+        periodic: None,
+        snapshot: false,
     }))
 }
 
@@ -294,6 +355,7 @@ fn read_frame_share(
     let mut files: Vec<(&'static str, PathBuf)> = Vec::new();
     let mut notes = Vec::new();
     let mut sph_defaults = None;
+    let (mut file_box, mut snapshot) = (None, false);
     let world_positions: Vec<[f64; 3]>;
     let (data, main_file) = match (&p.file, p.demo.unwrap_or(false)) {
         (Some(f), _) => {
@@ -309,6 +371,15 @@ fn read_frame_share(
             let (positions, source, note) = load::open(&path, in_file, &select)?;
             notes.extend(note);
             rows = source.table.rows;
+            snapshot = source.table.sph.is_some();
+            if source.table.periodic
+                && let Some((lo, hi)) = source.table.domain
+            {
+                file_box = Some(PeriodicBox {
+                    lo,
+                    size: std::array::from_fn(|a| hi[a] - lo[a]),
+                });
+            }
             let n = positions.len();
             world_positions = positions;
             let mut data = ParticleData::default();
@@ -318,7 +389,7 @@ fn read_frame_share(
                 let (kernel, factor, said) = super::sph::convention(&source.table);
                 sph_defaults = Some(kernel);
                 let mut used = Vec::new();
-                if radii.is_none() && p.radius.is_none() {
+                if radii.is_none() && p.radius.is_none() && p.neighbours.is_none() {
                     used.push(if factor == 1.0 {
                         format!("radii = {h}")
                     } else {
@@ -392,6 +463,8 @@ fn read_frame_share(
         notes,
         offset,
         total,
+        periodic: file_box,
+        snapshot,
     };
     Ok((fd, rows.is_some()))
 }
@@ -441,8 +514,9 @@ pub(crate) fn build_frame(
     notes: &mut Vec<String>,
 ) -> Result<ParticleVolume, SceneError> {
     let sph_defaults = fd.sph_defaults;
+    let periodic = local_box(fd.periodic.as_ref(), world);
     let (data, main_file, files) = fd.place(world);
-    build_particles(data, p, sph_defaults, notes, world.scale)
+    build_particles(data, p, sph_defaults, periodic, notes, world.scale)
         .map_err(|e| e.blame(main_file, &files))
 }
 
@@ -479,11 +553,12 @@ pub(crate) fn build_particles(
     mut data: ParticleData,
     p: &ParticlesDesc,
     sph_defaults: Option<Kernel>,
+    periodic: Option<voxless_core::Aabb>,
     notes: &mut Vec<String>,
     scale: f64,
 ) -> Result<ParticleVolume, BuildError> {
     let kernel = prepare_arrays(&mut data, p, sph_defaults, scale)?;
-    let settings = particle_settings(
+    let mut settings = particle_settings(
         p,
         kernel,
         data.radii.is_some(),
@@ -492,6 +567,7 @@ pub(crate) fn build_particles(
         notes,
     )?;
     check_resolvable(&data, settings.radius * kernel.support_factor(), scale)?;
+    settings.periodic = periodic;
     ParticleVolume::new(data, settings).map_err(|e| BuildError::Data(in_world_units(e, scale)))
 }
 
@@ -559,6 +635,7 @@ pub(crate) fn particle_settings(
         cluster_size: p.cluster.unwrap_or(8),
         attribute_range,
         classification,
+        periodic: None,
     })
 }
 

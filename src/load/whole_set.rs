@@ -66,6 +66,10 @@ pub(crate) fn world_reach(
     p: &ParticlesDesc,
     rows: &FrameData,
 ) -> Result<Option<WorldBox>, CommError> {
+    // A periodic box is the same on every rank: the frame fits it.
+    if let Some(b) = &rows.periodic {
+        return Ok(Some(super::periodic::corners(b)));
+    }
     let own = Reach::of(&rows.positions, rows.data.radii.as_deref());
     let mut mine = Vec::with_capacity(7);
     mine.extend(own.lo);
@@ -110,6 +114,7 @@ impl Set {
         notes: &mut Vec<String>,
     ) -> Result<Set, ParallelError> {
         rows.data.positions = rows.positions.iter().map(|&q| world.to_local(q)).collect();
+        let periodic = super::particles::local_box(rows.periodic.as_ref(), world);
         rows.positions = Vec::new();
         let kernel = prepare_arrays(&mut rows.data, p, rows.sph_defaults, world.scale)?;
         let blame_it = |e: ParticleError| blame(rows.main_file.clone(), &rows.files, e);
@@ -143,6 +148,7 @@ impl Set {
                 settings
             }
         };
+        settings.periodic = periodic;
         let positions = union_bounds(comm, spacing::bounds(&rows.data.positions))?;
         if rows.data.attribute.is_none() {
             for (what, present) in [
@@ -224,7 +230,11 @@ impl Set {
         for (q, &r) in rows.data.positions.iter().zip(&radius) {
             own = own.union(support_box(*q, r, kernel));
         }
-        let bounds = union_bounds(comm, own)?;
+        // A periodic volume's bounds are its box (every rank has the same).
+        let bounds = match periodic {
+            Some(b) => b,
+            None => union_bounds(comm, own)?,
+        };
         let median_support = if visible.is_empty() {
             bounds.diagonal().max(1e-6)
         } else {
@@ -350,4 +360,55 @@ fn check_resolvable(
         )
         .0 as usize;
     Err(found.error(far, scale).into())
+}
+
+/// Radii from neighbours for a set read in shares: every rank gathers all
+/// positions (24 bytes per particle) and searches; each keeps its rows'.
+pub(crate) fn neighbour_radii(
+    comm: &dyn Comm,
+    p: &ParticlesDesc,
+    rows: &mut FrameData,
+    notes: &mut Vec<String>,
+) -> Result<(), ParallelError> {
+    let n = super::periodic::neighbour_count(p, rows.snapshot, rows.data.radii.is_some());
+    let Some(n) = agree(comm, n)? else {
+        return Ok(());
+    };
+    let mut w = Writer::with_capacity(16 + 24 * rows.positions.len());
+    w.u64(rows.offset as u64);
+    w.u64(rows.positions.len() as u64);
+    for q in &rows.positions {
+        q.iter().for_each(|&v| w.f64(v));
+    }
+    let mut all = vec![[0.0f64; 3]; rows.total];
+    for msg in comm.all_gather(&w.into_bytes())? {
+        let mut r = Reader::new(&msg);
+        let (offset, len) = (r.u64()? as usize, r.u64()? as usize);
+        for q in all.iter_mut().skip(offset).take(len) {
+            *q = [r.f64()?, r.f64()?, r.f64()?];
+        }
+    }
+    let kernel = rows.kernel(p);
+    let mut said = Vec::new();
+    let found = super::periodic::neighbour_radii(
+        &all,
+        n,
+        rows.periodic.as_ref(),
+        kernel,
+        &rows.main_file,
+        &mut said,
+    );
+    let h = agree(comm, found)?;
+    let mine = rows.offset..rows.offset + rows.positions.len();
+    rows.data.radii = Some(h[mine].to_vec());
+    notes.extend(said);
+    Ok(())
+}
+
+/// Radius parameters of rows `offset..offset + values.len()` of a particle
+/// set, in world units.
+#[derive(Clone, Debug, Default)]
+pub struct RowRadii {
+    pub offset: usize,
+    pub values: Vec<f32>,
 }

@@ -171,5 +171,6 @@ pub(crate) fn open(comm: &dyn Comm, a: &AmrDesc, base: &Path) -> Result<Part, Pa
         fields: Fields::Amr(names),
         counts: PartCounts { read, held },
         notes: Vec::new(),
+        radii: None,
     })
 }

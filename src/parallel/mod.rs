@@ -94,6 +94,9 @@ pub struct Part {
     pub fields: Fields,
     pub counts: PartCounts,
     pub notes: Vec<String>,
+    /// A particle set's radius parameters of this rank's share of the
+    /// rows (world units): what `--save-radii` gathers.
+    pub radii: Option<Box<crate::load::whole_set::RowRadii>>,
 }
 
 /// This rank's part of frame `frame` of the data `desc` names (`earlier`:

@@ -10,7 +10,7 @@ use std::path::Path;
 use voxless_core::{Aabb, Range1, Vec3};
 use voxless_parallel::{Comm, CommExt, Decomposition, Reader};
 use voxless_particles::{
-    FieldStatistics, ParticleData, ParticleSettings, ParticleVolume, support_box,
+    FieldStatistics, ParticleData, ParticleSettings, ParticleVolume, images, support_box,
 };
 use voxless_scene::ParticlesDesc;
 
@@ -19,7 +19,7 @@ use super::{ParallelError, Part, PartCounts};
 use crate::load::Share;
 use crate::load::materials::{build_materials, material_descs};
 use crate::load::particles::{blame, frame_for, read_rows};
-use crate::load::whole_set::{Set, agree, world_reach};
+use crate::load::whole_set::{self, RowRadii, Set, agree, world_reach};
 use crate::{AnyVolume, SceneError, VolumeKind, VolumeSummary, WorldFrame};
 
 /// What a later frame of a time series keeps of the first: its world
@@ -51,7 +51,8 @@ pub(crate) fn open(
     };
     let mut read = Vec::with_capacity(descs.len());
     for d in &descs {
-        let rows = agree(comm, read_rows(d, base, frame, share))?;
+        let mut rows = agree(comm, read_rows(d, base, frame, share))?;
+        whole_set::neighbour_radii(comm, d, &mut rows, &mut notes)?;
         notes.extend(rows.notes.iter().cloned());
         read.push(rows);
     }
@@ -92,9 +93,14 @@ pub(crate) fn open(
         .sum();
     let mut volumes = Vec::with_capacity(sets.len());
     for s in sets {
-        volumes.push(into_part(s, comm, &decomposition)?);
+        volumes.push(into_part(s, comm, &decomposition, world.scale)?);
     }
-    let held = volumes.iter().map(|v| v.len() as u64).sum();
+    let held = volumes.iter().map(|v| v.0.len() as u64).sum();
+    let radii = match volumes.as_slice() {
+        [(_, r)] => Some(r.clone()),
+        _ => None,
+    };
+    let mut volumes: Vec<ParticleVolume> = volumes.into_iter().map(|v| v.0).collect();
     let counts = PartCounts { read, held };
     let (volume, summary) = match &p.materials {
         Some(mats) => {
@@ -133,16 +139,20 @@ pub(crate) fn open(
         decomposition,
         counts,
         notes,
+        radii,
     })
 }
 
-/// Sends every particle to the boxes its support overlaps and builds
-/// this rank's part, with the whole set's density range.
+/// Sends every particle to the boxes its support overlaps (in a periodic
+/// box, every image of it that reaches into the box) and builds this
+/// rank's part, with the whole set's density range; also returns this
+/// rank's rows' radius parameters in world units.
 fn into_part(
     set: Set,
     comm: &dyn Comm,
     d: &Decomposition,
-) -> Result<ParticleVolume, ParallelError> {
+    scale: f64,
+) -> Result<(ParticleVolume, Box<RowRadii>), ParallelError> {
     let Set {
         rows,
         settings,
@@ -155,21 +165,33 @@ fn into_part(
     let kernel = settings.kernel;
     let mut out = outboxes(comm);
     let mut dst = Vec::new();
+    let mut found = Vec::new();
+    let factor = kernel.support_factor();
     for (i, q) in data.positions.iter().enumerate() {
-        // Hidden particles (radius 0 after the map) touch nothing.
-        d.overlapping(&support_box(*q, radius[i], kernel), &mut dst);
-        for &r in &dst {
-            let w = &mut out[r];
-            w.u64((rows.offset + i) as u64);
-            w.vec3(*q);
-            for v in [&data.radii, &data.weights, &data.attribute]
-                .into_iter()
-                .flatten()
-            {
-                w.f32(v[i]);
+        let (b, support) = (settings.periodic.as_ref(), factor * radius[i]);
+        images(b, *q, support, rows.offset + i, &mut found)
+            .map_err(|e| blame(rows.main_file.clone(), &rows.files, e))?;
+        for &(shift, image) in &found {
+            // Hidden particles (radius 0 after the map) touch nothing.
+            d.overlapping(&support_box(image, radius[i], kernel), &mut dst);
+            for &r in &dst {
+                let w = &mut out[r];
+                w.u64((rows.offset + i) as u64);
+                shift.iter().for_each(|&k| w.u8(k as u8));
+                w.vec3(image);
+                for v in [&data.radii, &data.weights, &data.attribute]
+                    .into_iter()
+                    .flatten()
+                {
+                    w.f32(v[i]);
+                }
             }
         }
     }
+    let own_radii = Box::new(RowRadii {
+        offset: rows.offset,
+        values: radius.iter().map(|&r| (r as f64 * scale) as f32).collect(),
+    });
     let has = [
         data.radii.is_some(),
         data.weights.is_some(),
@@ -178,11 +200,15 @@ fn into_part(
     // The rows are in the messages now: free them before the exchange.
     let (main_file, files) = (rows.main_file, rows.files);
     drop((rows.data, radius));
-    let mut items: Vec<(u64, Vec3, [f32; 3])> = Vec::new();
+    // (row, image shift), centre, per-particle values.
+    type Item = ((u64, [i8; 3]), Vec3, [f32; 3]);
+    let mut items: Vec<Item> = Vec::new();
     for msg in exchange(comm, out)? {
         let mut r = Reader::new(&msg);
         while !r.is_done() {
             let row = r.u64()?;
+            let shift = [r.u8()? as i8, r.u8()? as i8, r.u8()? as i8];
+            let row = (row, shift);
             let q = r.vec3()?;
             let mut v = [0.0f32; 3];
             for (k, &h) in has.iter().enumerate() {
@@ -219,5 +245,5 @@ fn into_part(
         .fold(0.0f32, f32::max);
     let max = comm.all_max(&[local as f64])?[0] as f32;
     part.set_value_range(Range1::new(0.0, max));
-    Ok(part)
+    Ok((part, own_radii))
 }

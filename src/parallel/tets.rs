@@ -195,6 +195,7 @@ pub(crate) fn open(
         fields: Fields::Tets { box_size: l, n },
         counts: PartCounts { read, held },
         notes,
+        radii: None,
     })
 }
 

@@ -37,6 +37,8 @@ pub struct DistributedScene {
     /// The whole data's fields.
     pub fields: Fields,
     pub counts: PartCounts,
+    /// This rank's rows' radius parameters (particles of one set).
+    pub radii: Option<Box<crate::load::whole_set::RowRadii>>,
 }
 
 impl DistributedScene {
@@ -106,6 +108,7 @@ impl DistributedScene {
             summary: part.summary,
             fields: part.fields,
             counts: part.counts,
+            radii: part.radii,
         })
     }
 
@@ -173,6 +176,7 @@ impl DistributedScene {
         self.decomposition = part.decomposition;
         self.summary = part.summary;
         self.counts = part.counts;
+        self.radii = part.radii;
         Ok(())
     }
 

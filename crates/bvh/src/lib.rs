@@ -241,6 +241,57 @@ impl Bvh {
         }
     }
 
+    /// Nearest first: visits the leaves whose box lies within the current
+    /// bound of `p` (squared distance ≤ `bound2`), nearer children first;
+    /// `leaf(prim)` returns the new squared bound (it may only shrink the
+    /// search: a k-nearest search returns its k-th best distance so far).
+    /// Box distances are computed in f32; callers needing exact answers pad
+    /// the bound.
+    pub fn nearest(&self, p: Vec3, mut bound2: f32, mut leaf: impl FnMut(u32) -> f32) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let d2 = |n: &Node| {
+            let mut s = 0.0f32;
+            for a in 0..3 {
+                let v = p[a];
+                let d = (n.min[a] - v).max(v - n.max[a]).max(0.0);
+                s += d * d;
+            }
+            s
+        };
+        let mut stack = [(0u32, 0.0f32); STACK];
+        let mut sp = 1;
+        stack[0] = (0, d2(&self.nodes[0]));
+        while sp > 0 {
+            sp -= 1;
+            let (mut i, mut di) = stack[sp];
+            loop {
+                if di > bound2 {
+                    break;
+                }
+                let node = &self.nodes[i as usize];
+                if node.is_leaf() {
+                    bound2 = leaf(node.index);
+                    break;
+                }
+                let (l, r) = (i + 1, i + node.index);
+                let (dl, dr) = (d2(&self.nodes[l as usize]), d2(&self.nodes[r as usize]));
+                // Descend into the nearer child; the farther waits on the stack.
+                let (near, far) = if dl <= dr {
+                    ((l, dl), (r, dr))
+                } else {
+                    ((r, dr), (l, dl))
+                };
+                if far.1 <= bound2 {
+                    stack[sp] = far;
+                    sp += 1;
+                }
+                (i, di) = near;
+            }
+        }
+    }
+
     /// Calls `visit(prim, leaf box)` for every primitive whose box overlaps `b`, depth
     /// first, left child first — the order [`Bvh::point_query`] uses, so for
     /// any point in `b` the primitives containing it come in the same relative

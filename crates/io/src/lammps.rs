@@ -75,6 +75,8 @@ struct SimBox {
     edges: [[f64; 3]; 3],
     lo: [f64; 3],
     hi: [f64; 3],
+    /// Orthogonal and `pp` along every axis.
+    periodic: bool,
 }
 
 impl SimBox {
@@ -380,6 +382,7 @@ fn read_box(
             edges,
             lo,
             hi,
+            periodic: false,
         }
     } else if triclinic {
         let (xy, xz, yz) = (rows[0][2], rows[1][2], rows[2][2]);
@@ -399,6 +402,7 @@ fn read_box(
             ],
             lo: bound_lo,
             hi: bound_hi,
+            periodic: false,
         }
     } else {
         let lo = [rows[0][0], rows[1][0], rows[2][0]];
@@ -412,8 +416,15 @@ fn read_box(
             ],
             lo,
             hi,
+            periodic: false,
         }
     };
+    let mut sim_box = sim_box;
+    let bounds: Vec<&&str> = flags.iter().filter(|f| f.len() == 2).collect();
+    sim_box.periodic = !general
+        && !triclinic
+        && bounds.len() == 3
+        && bounds.iter().all(|f| f.eq_ignore_ascii_case("pp"));
     if sim_box.lo.iter().chain(&sim_box.hi).any(|v| !v.is_finite()) {
         return Err(lines.error(format!("frame {frame}: BOX BOUNDS are not finite")));
     }
@@ -581,6 +592,7 @@ fn read_atoms(
         columns,
         time: header.timestep.map(|t| t as f64),
         domain: header.sim_box.map(|b| (b.lo, b.hi)),
+        periodic: header.sim_box.is_some_and(|b| b.periodic),
         rows: None,
         sph: None,
     };

@@ -223,6 +223,7 @@ pub fn read_particles_timestep_from<R: Read + Seek>(
         columns: vec![("attribute".to_string(), attribute)],
         time: None,
         domain: None,
+        periodic: false,
         rows: None,
         sph: None,
     })

@@ -21,6 +21,10 @@ pub struct ParticleTable {
     pub time: Option<f64>,
     /// The simulation box (lower corner, upper corner), when the file says.
     pub domain: Option<([f64; 3], [f64; 3])>,
+    /// Whether the file says the domain is periodic along every axis
+    /// (LAMMPS `pp pp pp` bounds, extended XYZ `pbc="T T T"`, a SWIFT or
+    /// Gadget `BoxSize`).
+    pub periodic: bool,
     /// When only part of the file's particles was read (one rank's share of
     /// a parallel run): the first row read and the file's particle count.
     pub rows: Option<(usize, usize)>,

@@ -284,6 +284,8 @@ struct Layout {
     lattice: Option<[f64; 9]>,
     origin: [f64; 3],
     time: Option<f64>,
+    /// `pbc="T T T"`: periodic along every lattice vector.
+    pbc: bool,
     /// Names of velocity columns (x, y, z) for `speed`.
     velocity: Option<[String; 3]>,
 }
@@ -329,6 +331,12 @@ impl Layout {
             lattice,
             origin,
             time,
+            pbc: get("pbc").is_some_and(|v| {
+                let f: Vec<&str> = v.split_ascii_whitespace().collect();
+                f.len() == 3
+                    && f.iter()
+                        .all(|t| t.eq_ignore_ascii_case("t") || t.eq_ignore_ascii_case("true"))
+            }),
             velocity: None,
         };
         if let Some(props) = get("Properties") {
@@ -569,6 +577,7 @@ fn read_atoms(
         columns,
         time: layout.time,
         domain: layout.domain(),
+        periodic: layout.pbc && layout.domain().is_some(),
         rows: None,
         sph: None,
     };

@@ -43,6 +43,24 @@ pub enum ParticleError {
         extent: f32,
         count: usize,
     },
+    #[error("periodic box [{lo:?}, {hi:?}] is not a box: every side must be finite and > 0")]
+    BadBox { lo: [f32; 3], hi: [f32; 3] },
+    #[error(
+        "particle {index}'s support radius {support} reaches more than 3 boxes (side {size}) beyond the periodic box; use a smaller radius"
+    )]
+    SupportBeyondBox {
+        index: usize,
+        support: f32,
+        size: f32,
+    },
+    #[error(
+        "neighbours N = {n}: needs 2 ≤ N ≤ the particle count ({count}), the particle itself counted"
+    )]
+    BadNeighbours { n: usize, count: usize },
+    #[error(
+        "particle {index} has {others} other particle(s) at its own position, so its distance to its N-th neighbour is 0; use a larger N or give radii"
+    )]
+    CoincidentNeighbours { index: usize, others: usize },
     #[error("too many particles ({count}); at most {max} per volume")]
     TooMany { count: usize, max: usize },
 }

@@ -54,6 +54,7 @@ mod context;
 mod error;
 pub mod kernel;
 mod materials;
+pub mod neighbours;
 mod volume;
 
 pub use context::{MaterialContext, ParticleContext};
@@ -61,12 +62,14 @@ pub use error::ParticleError;
 pub use kernel::{KERNEL_NAMES, Kernel};
 pub use materials::{Material, MaterialClass, MaterialVolume};
 pub use volume::{
-    Classification, FieldSample, FieldStatistics, ParticleData, ParticleSettings, ParticleVolume,
-    RANGE_PROBES, check_data, median, probe_stride, support_box,
+    Classification, FieldSample, FieldStatistics, MAX_PERIODS, ParticleData, ParticleSettings,
+    ParticleVolume, RANGE_PROBES, check_data, images, median, probe_stride, support_box, wrap,
 };
 
 #[cfg(test)]
 mod packet_tests;
+#[cfg(test)]
+mod periodic_tests;
 #[cfg(test)]
 mod sph_tests;
 #[cfg(test)]

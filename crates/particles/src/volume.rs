@@ -14,7 +14,10 @@ use crate::kernel::{Family, Kernel, with_family};
 mod exact;
 mod packet;
 mod part;
+mod periodic;
 mod splat;
+
+pub use periodic::{MAX_PERIODS, images, wrap};
 
 pub use part::{FieldStatistics, RANGE_PROBES, check_data, median, probe_stride, support_box};
 
@@ -57,6 +60,9 @@ pub struct ParticleSettings {
     /// Normalisation range of the attribute; its min/max when `None`.
     pub attribute_range: Option<Range1>,
     pub classification: Classification,
+    /// A periodic box: the field repeats with it (see the `periodic`
+    /// module); positions outside are wrapped into it.
+    pub periodic: Option<Aabb>,
 }
 
 impl Default for ParticleSettings {
@@ -69,6 +75,7 @@ impl Default for ParticleSettings {
             cluster_size: 8,
             attribute_range: None,
             classification: Classification::Post,
+            periodic: None,
         }
     }
 }
@@ -122,6 +129,12 @@ pub struct ParticleVolume {
     value_range: std::sync::OnceLock<Range1>,
     attribute_range: Option<Range1>,
     nominal_dt: f32,
+    /// Periodic boxes: each entry's image shift in boxes (volume order;
+    /// empty without ghosts), the number of ghosts, and how many particles
+    /// were wrapped into the box.
+    shifts: Vec<[i8; 3]>,
+    ghosts: usize,
+    wrapped: usize,
 }
 
 fn check_settings(s: &ParticleSettings) -> Result<(), ParticleError> {
@@ -132,6 +145,14 @@ fn check_settings(s: &ParticleSettings) -> Result<(), ParticleError> {
     }
     if !(s.radius.is_finite() && s.radius > 0.0) {
         return Err(ParticleError::BadGlobalRadius { value: s.radius });
+    }
+    if let Some(b) = &s.periodic
+        && !(b.min.is_finite() && b.max.is_finite() && (0..3).all(|a| b.max[a] > b.min[a]))
+    {
+        return Err(ParticleError::BadBox {
+            lo: b.min.to_array(),
+            hi: b.max.to_array(),
+        });
     }
     if let Kernel::Gaussian { kappa, sigma } = s.kernel {
         for (name, value) in [("kappa", kappa), ("sigma", sigma)] {
@@ -198,6 +219,14 @@ impl ParticleVolume {
             });
         }
         check_data(&data, 0)?;
+        let attribute_range = data.attribute.as_ref().map(|a| {
+            settings.attribute_range.unwrap_or_else(|| {
+                a.iter().fold(Range1::EMPTY, |mut r, &v| {
+                    r.extend(v);
+                    r
+                })
+            })
+        });
         if data.attribute.is_none() {
             for (what, present) in [
                 ("radius map", settings.radius_map.is_some()),
@@ -208,6 +237,19 @@ impl ParticleVolume {
                 }
             }
         }
+
+        // A periodic box (of a whole set: a part receives its images):
+        // wrap, and add the ghosts.
+        let (data, source, shifts, wrapped) = match (&settings.periodic, &part) {
+            (Some(b), None) => {
+                let range = attribute_range.unwrap_or(Range1::new(0.0, 1.0));
+                let im = periodic::with_images(data, b, &settings, range)?;
+                (im.data, Some(im.source), im.shifts, im.wrapped)
+            }
+            _ => (data, None, Vec::new(), 0),
+        };
+        let ghosts = data.positions.len() - n;
+        let n = data.positions.len();
 
         // Hilbert order so runs of consecutive particles are compact clusters.
         let mut bounds = Aabb::EMPTY;
@@ -221,13 +263,15 @@ impl ParticleVolume {
             .map(|(i, p)| (order::hilbert(order::quantize(*p, &bounds)), i as u32))
             .collect();
         keys.par_sort_unstable();
-        let original_index: Vec<u32> = keys.iter().map(|k| k.1).collect();
-        let gather =
-            |v: &[f32]| -> Vec<f32> { original_index.iter().map(|&i| v[i as usize]).collect() };
-        let positions: Vec<Vec3> = original_index
-            .iter()
-            .map(|&i| data.positions[i as usize])
-            .collect();
+        let order: Vec<u32> = keys.iter().map(|k| k.1).collect();
+        drop(keys);
+        let gather = |v: &[f32]| -> Vec<f32> { order.iter().map(|&i| v[i as usize]).collect() };
+        let positions: Vec<Vec3> = order.iter().map(|&i| data.positions[i as usize]).collect();
+        let shifts: Vec<[i8; 3]> = if shifts.is_empty() {
+            shifts
+        } else {
+            order.iter().map(|&i| shifts[i as usize]).collect()
+        };
         let base_radius = match &data.radii {
             Some(r) => gather(r),
             None => vec![settings.radius; n],
@@ -237,14 +281,10 @@ impl ParticleVolume {
             None => vec![1.0; n],
         };
         let attribute = data.attribute.as_deref().map(gather);
-        let attribute_range = attribute.as_ref().map(|a| {
-            settings.attribute_range.unwrap_or_else(|| {
-                a.iter().fold(Range1::EMPTY, |mut r, &v| {
-                    r.extend(v);
-                    r
-                })
-            })
-        });
+        let original_index = match source {
+            Some(s) => order.iter().map(|&i| s[i as usize]).collect(),
+            None => order,
+        };
 
         let mut vol = ParticleVolume {
             settings,
@@ -262,6 +302,9 @@ impl ParticleVolume {
             value_range: std::sync::OnceLock::new(),
             attribute_range,
             nominal_dt: 1.0,
+            shifts,
+            ghosts,
+            wrapped,
         };
         vol.derive_radii_and_weights();
         if part.is_none() {
@@ -287,6 +330,20 @@ impl ParticleVolume {
         check_settings(&s)?;
         if s.radius_map.is_some() && self.attribute.is_none() {
             return Err(ParticleError::NeedsAttribute { what: "radius map" });
+        }
+        if !self.shifts.is_empty() {
+            // A periodic box's ghosts follow the supports: rebuild.
+            let bvh = std::mem::take(&mut self.bvh);
+            return match Self::build(self.originals(), s, bvh, None) {
+                Ok(next) => {
+                    *self = next;
+                    Ok(())
+                }
+                Err(e) => {
+                    self.bvh = Bvh::build(&self.cluster_bounds());
+                    Err(e)
+                }
+            };
         }
         let old = std::mem::replace(&mut self.settings, s);
         if !self.input_radii {
@@ -400,8 +457,11 @@ impl ParticleVolume {
     /// decomposed set finds the same ones by their row numbers), by index in
     /// volume order.
     fn probes(&self) -> impl Iterator<Item = usize> + '_ {
-        let stride = probe_stride(self.len()) as u32;
-        (0..self.len()).filter(move |&j| self.original_index[j].is_multiple_of(stride))
+        let stride = probe_stride(self.particle_count()) as u32;
+        (0..self.len()).filter(move |&j| {
+            let o = self.original_index[j];
+            o & periodic::GHOST == 0 && o.is_multiple_of(stride)
+        })
     }
 
     /// Macrocells, value range and nominal step, from the current radii —
@@ -515,6 +575,7 @@ impl ParticleVolume {
         } else {
             &[]
         };
+        let p = self.wrap_point(p);
         // Dispatch on the kernel family once; the loop below is monomorphised.
         with_family!(self.settings.kernel, F => if gradient {
             self.eval::<F, true>(colors, p)
@@ -624,6 +685,7 @@ impl ParticleVolume {
     pub fn overlapping(&self, p: Vec3) -> Vec<usize> {
         let n = self.settings.cluster_size;
         let mut out = Vec::new();
+        let p = self.wrap_point(p);
         self.bvh.point_query(p, |c| {
             let start = c as usize * n;
             for i in start..(start + n).min(self.packed.len()) {
@@ -639,18 +701,16 @@ impl ParticleVolume {
     /// Σᵢ ∫φᵢ dV: what a projection over the full bounds must conserve.
     pub fn total_mass(&self) -> f64 {
         let k = self.settings.kernel;
-        self.radius
-            .iter()
-            .zip(&self.weight)
-            .filter(|(r, _)| **r > 0.0)
-            .map(|(&r, &w)| w as f64 * k.integral(r as f64))
+        (0..self.len())
+            .filter(|&i| self.radius[i] > 0.0 && !self.is_ghost(i))
+            .map(|i| self.weight[i] as f64 * k.integral(self.radius[i] as f64))
             .sum()
     }
 }
 
 impl Volume for ParticleVolume {
     fn bounds(&self) -> Aabb {
-        self.bvh.bounds()
+        self.settings.periodic.unwrap_or_else(|| self.bvh.bounds())
     }
 
     fn value_range(&self) -> Range1 {

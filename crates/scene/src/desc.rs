@@ -114,6 +114,41 @@ pub struct ParticlesDesc {
     pub radius_scale: Option<f32>,
     /// Multiplies every particle's weight (mass); default 1.
     pub weight_scale: Option<f32>,
+    /// A periodic box: its side L (the box `[0, L)³`) or
+    /// `[x0, y0, z0, x1, y1, z1]`. Default: the box the file states as
+    /// periodic (SWIFT/Gadget `BoxSize`, LAMMPS `pp` bounds, extended-XYZ
+    /// `Lattice` with `pbc`). The field then sums every periodic image.
+    #[serde(rename = "box")]
+    pub periodic_box: Option<BoxDesc>,
+    /// `false`: ignore the periodic box the file states.
+    pub periodic: Option<bool>,
+    /// Wrap particles into the box even when they span more than one box
+    /// (default: positions outside are wrapped, with a note, but data wider
+    /// than the box is refused as the wrong box).
+    pub wrap: Option<bool>,
+    /// Smoothing lengths from neighbours: each particle's radius makes its
+    /// support reach its N-th nearest neighbour (itself counted; periodic
+    /// distances in a box). Default: on (N = 32) for particle types of
+    /// cosmological snapshots that carry no smoothing length.
+    pub neighbours: Option<usize>,
+}
+
+/// A periodic box: a side L (`[0, L)³`) or `[x0, y0, z0, x1, y1, z1]`.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum BoxDesc {
+    Side(f64),
+    Corners([f64; 6]),
+}
+
+impl BoxDesc {
+    /// The lower and upper corners.
+    pub fn corners(&self) -> ([f64; 3], [f64; 3]) {
+        match *self {
+            BoxDesc::Side(l) => ([0.0; 3], [l; 3]),
+            BoxDesc::Corners(b) => ([b[0], b[1], b[2]], [b[3], b[4], b[5]]),
+        }
+    }
 }
 
 /// One material of a multi-material particle scene: the particles of one

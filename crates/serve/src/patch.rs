@@ -36,6 +36,7 @@ const PATCHABLE: &[(&str, &[&str])] = &[
         &[
             "attribute",
             "radius_scale",
+            "neighbours",
             "weight_scale",
             "attribute_range",
             "classification",

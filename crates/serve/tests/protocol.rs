@@ -305,3 +305,53 @@ fn a_tab_colours_by_a_column_of_the_file_and_by_nothing_else() {
         }
     });
 }
+
+#[test]
+fn a_tab_sets_neighbour_radii_in_a_periodic_box() {
+    let s = Scratch::new("neighbours");
+    let mut csv = String::from("x,y,z\n");
+    let mut rng = voxless::core::SmallRng(4);
+    for _ in 0..600 {
+        csv += &format!("{},{},{}\n", rng.f(), rng.f(), rng.f());
+    }
+    let file = s.0.join("p.csv");
+    std::fs::write(&file, csv).unwrap();
+    let desc = voxless::SceneDesc {
+        particles: Some(voxless::ParticlesDesc {
+            file: Some(file.to_string_lossy().into_owned()),
+            periodic_box: Some(voxless::BoxDesc::Side(1.0)),
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let server = serve(desc, "127.0.0.1");
+    runtime().block_on(async {
+        let mut ws = connect(server.addr, None).await;
+        send(
+            &mut ws,
+            json!({"seq": 1, "type": "hello", "width": 32, "height": 32}),
+        )
+        .await;
+        until_converged(&mut ws, 1).await;
+        send(
+            &mut ws,
+            json!({"seq": 2, "type": "set", "patch": {"particles": {"neighbours": 8}}}),
+        )
+        .await;
+        let msgs = until_converged(&mut ws, 2).await;
+        let state = msgs
+            .iter()
+            .rev()
+            .find_map(|m| match m {
+                Msg::Text(v) if v["type"] == "state" => Some(v.clone()),
+                _ => None,
+            })
+            .expect("a state message");
+        assert_eq!(
+            state["scene"]["particles"]["neighbours"],
+            json!(8),
+            "{state}"
+        );
+        assert_eq!(state["scene"]["particles"]["box"], json!(1.0), "{state}");
+    });
+}

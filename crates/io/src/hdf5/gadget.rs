@@ -144,6 +144,7 @@ pub fn read_gadget_share(
                 }
             };
             table.domain = Some(([0.0; 3], upper));
+            table.periodic = true;
         }
     }
     table.sph = Some(convention(&f, root, header.as_ref())?);

@@ -107,6 +107,7 @@ pub fn read_vtk_points_bytes(bytes: &[u8], name: &Path) -> Result<ParticleTable,
         columns: Vec::new(),
         time,
         domain: None,
+        periodic: false,
         rows: None,
         sph: None,
     };

@@ -43,6 +43,7 @@ impl ParticleVolume {
         } else {
             &[]
         };
+        let p = self.wrap_point(p);
         // Every kernel through its own family, as `field_with` dispatches.
         let mut terms = with_family!(self.settings.kernel, F => if gradient {
             self.terms::<F, true>(colors, p)

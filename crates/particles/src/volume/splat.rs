@@ -16,6 +16,15 @@
 //! path computes the same column from f32 rays clipped to the bounds; the
 //! images agree to f32 rounding of the ray origins (tested against it).
 //!
+//! Periodic boxes (see the `periodic` module): the line of sight crosses
+//! the box once. Along a box axis that is the full chord of every image
+//! shifted across the view (ghosts shifted along the view are left out:
+//! their chords are the parts of the particle's own chord that leave the
+//! box), and pixels whose centre lies outside the box's shadow are 0.
+//! Off axis, particles whose support crosses a face, and ghosts, add the
+//! part of their chord inside the box: each pixel's segment through the
+//! box, clipped in f64; the rest add full chords as above.
+//!
 //! Determinism and parallelism: the image is cut into tiles, particles are
 //! binned in index order to the tiles their support's screen box overlaps,
 //! and tiles are summed in parallel, each pixel over its tile's list in
@@ -60,6 +69,7 @@ impl ParticleVolume {
         if width == 0 || height == 0 || !(half_width > 0.0 && half_height > 0.0) {
             return None;
         }
+        let mode = self.periodic_mode(camera);
         let tiles_x = width.div_ceil(TILE_W);
         let tiles_y = height.div_ceil(TILE_H);
         let lists = self.bin(
@@ -67,6 +77,7 @@ impl ParticleVolume {
             (width, height),
             (half_width, half_height),
             (tiles_x, tiles_y),
+            mode,
         );
         let (hw, hh) = (half_width as f64, half_height as f64);
         let total = (tiles_x * tiles_y) as u64;
@@ -88,6 +99,10 @@ impl ParticleVolume {
                 let v: Vec<f64> = (y0..y1)
                     .map(|y| (1.0 - (2 * y + 1) as f64 / height as f64) * hh)
                     .collect();
+                let segments = match mode {
+                    Periodic::OffAxis(b) => segments(camera, &b, &u, &v),
+                    _ => Vec::new(),
+                };
                 dispatch(
                     Simd::Auto,
                     SplatTile {
@@ -97,9 +112,13 @@ impl ParticleVolume {
                         y: (y0, y1),
                         u: &u,
                         v: &v,
+                        segments: &segments,
                         sum: &mut sum,
                     },
                 );
+                if let Periodic::OnAxis(b, axis) = mode {
+                    outside_shadow_to_zero(camera, &b, axis, &u, &v, &mut sum);
+                }
                 let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                 control.report(d, total);
                 Some(sum)
@@ -133,6 +152,7 @@ impl ParticleVolume {
         (width, height): (u32, u32),
         (half_width, half_height): (f32, f32),
         (tiles_x, tiles_y): (u32, u32),
+        mode: Periodic,
     ) -> TileLists {
         // Pixel coordinates of a point: x = (a / hw + 1)·W/2 with a its
         // offset along `right` from the eye, y = (1 − b / hh)·H/2 along `up`.
@@ -151,15 +171,34 @@ impl ParticleVolume {
                     + d.y as f64 * camera.up.y as f64
                     + d.z as f64 * camera.up.z as f64;
                 let column = kernel.column(self.radius[i] as f64);
+                let depth = d.x as f64 * camera.forward.x as f64
+                    + d.y as f64 * camera.forward.y as f64
+                    + d.z as f64 * camera.forward.z as f64;
+                let (skip, clip) = match mode {
+                    Periodic::No => (false, false),
+                    // Ghosts shifted along the view repeat the particle's own chord.
+                    Periodic::OnAxis(_, axis) => {
+                        (self.shifts.get(i).is_some_and(|s| s[axis] != 0), false)
+                    }
+                    Periodic::OffAxis(b) => {
+                        let s = q.support2.max(0.0).sqrt();
+                        let inside = (0..3)
+                            .all(|k| q.center[k] - s >= b.min[k] && q.center[k] + s <= b.max[k]);
+                        (false, self.is_ghost(i) || !inside)
+                    }
+                };
                 let mut splat = Splat {
                     a,
                     b,
+                    depth,
+                    radius: self.radius[i] as f64,
+                    clip,
                     support2: q.support2 as f64,
                     weight: w as f64,
                     column,
                     span: (0, 0, 0, 0),
                 };
-                if !(q.support2 > 0.0) || w == 0.0 {
+                if !(q.support2 > 0.0) || w == 0.0 || skip {
                     // Hidden or weightless: adds nothing anywhere.
                     return splat;
                 }
@@ -219,6 +258,85 @@ impl ParticleVolume {
             splats,
             start,
             members,
+            kernel,
+        }
+    }
+
+    /// How a projection through `camera` treats the periodic box.
+    fn periodic_mode(&self, camera: &Camera) -> Periodic {
+        let Some(b) = self.settings.periodic else {
+            return Periodic::No;
+        };
+        let f = camera.forward;
+        // A box axis, when the volume knows its ghosts' shifts (a part of a
+        // decomposed set holds images without them: it clips).
+        match (0..3).find(|&a| f[a].abs() >= 1.0 - 1e-6) {
+            Some(axis) if !self.shifts.is_empty() => Periodic::OnAxis(b, axis),
+            _ => Periodic::OffAxis(b),
+        }
+    }
+}
+
+/// A projection's treatment of a periodic box (see the module docs).
+#[derive(Clone, Copy)]
+enum Periodic {
+    No,
+    OnAxis(voxless_core::Aabb, usize),
+    OffAxis(voxless_core::Aabb),
+}
+
+/// Each pixel's segment `[t_in, t_out]` of its line through the box `b`
+/// (empty: `t_in ≥ t_out`), in f64, for the pixel centres `u` × `v` of a
+/// tile (offsets from the eye along the camera's right and up).
+fn segments(camera: &Camera, b: &voxless_core::Aabb, u: &[f64], v: &[f64]) -> Vec<(f64, f64)> {
+    let f64v = |w: voxless_core::Vec3| [w.x as f64, w.y as f64, w.z as f64];
+    let (eye, right, up, fwd) = (
+        f64v(camera.eye),
+        f64v(camera.right),
+        f64v(camera.up),
+        f64v(camera.forward),
+    );
+    let mut out = Vec::with_capacity(u.len() * v.len());
+    for &vv in v {
+        for &uu in u {
+            let mut t = (f64::NEG_INFINITY, f64::INFINITY);
+            for a in 0..3 {
+                let o = eye[a] + right[a] * uu + up[a] * vv;
+                let (lo, hi) = (b.min[a] as f64, b.max[a] as f64);
+                if fwd[a] == 0.0 {
+                    if o < lo || o > hi {
+                        t = (1.0, 0.0);
+                    }
+                    continue;
+                }
+                let (t0, t1) = ((lo - o) / fwd[a], (hi - o) / fwd[a]);
+                t = (t.0.max(t0.min(t1)), t.1.min(t0.max(t1)));
+            }
+            out.push(t);
+        }
+    }
+    out
+}
+
+/// Zeroes the pixels of an on-axis tile whose centre lies outside the
+/// shadow of the box `b` (their line misses the box).
+fn outside_shadow_to_zero(
+    camera: &Camera,
+    b: &voxless_core::Aabb,
+    axis: usize,
+    u: &[f64],
+    v: &[f64],
+    sum: &mut [f64],
+) {
+    let tw = u.len();
+    for (k, s) in sum.iter_mut().enumerate() {
+        let (uu, vv) = (u[k % tw], v[k / tw]);
+        let inside = (0..3).filter(|&a| a != axis).all(|a| {
+            let o = camera.eye[a] as f64 + camera.right[a] as f64 * uu + camera.up[a] as f64 * vv;
+            o >= b.min[a] as f64 && o <= b.max[a] as f64
+        });
+        if !inside {
+            *s = 0.0;
         }
     }
 }
@@ -228,6 +346,11 @@ struct Splat {
     /// Offsets of the centre from the eye along the camera's right and up.
     a: f64,
     b: f64,
+    /// Distance of the centre from the eye along the view.
+    depth: f64,
+    radius: f64,
+    /// Add only the part of the chord inside the periodic box.
+    clip: bool,
     support2: f64,
     weight: f64,
     column: Column,
@@ -241,6 +364,7 @@ struct TileLists {
     /// Tile `t`'s particles are `members[start[t]..start[t + 1]]`.
     start: Vec<u32>,
     members: Vec<u32>,
+    kernel: crate::Kernel,
 }
 
 impl TileLists {
@@ -259,6 +383,9 @@ struct SplatTile<'a> {
     /// Pixel centres of the tile's columns and rows in the image plane.
     u: &'a [f64],
     v: &'a [f64],
+    /// Each pixel's segment through the periodic box (off-axis periodic
+    /// projections only).
+    segments: &'a [(f64, f64)],
     sum: &'a mut [f64],
 }
 
@@ -282,6 +409,25 @@ impl WithLanes for SplatTile<'_> {
                     continue;
                 }
                 let row = (y - y0) as usize * tw;
+                if p.clip {
+                    // The part of the chord inside the box, pixel by pixel.
+                    for x in cx0 as usize..cx1 as usize {
+                        let (t0, t1) = self.segments[row + x];
+                        let du = self.u[x] - p.a;
+                        let b2 = du * du + dv2;
+                        if t0 >= t1 || b2 >= p.support2 {
+                            continue;
+                        }
+                        let c = self.lists.kernel.chord_integral(
+                            b2,
+                            p.radius,
+                            t0 - p.depth,
+                            t1 - p.depth,
+                        );
+                        self.sum[row + x] += p.weight * c;
+                    }
+                    continue;
+                }
                 let (c0, c1) = (row + cx0 as usize, row + cx1 as usize);
                 let u = &self.u[cx0 as usize..cx1 as usize];
                 p.column

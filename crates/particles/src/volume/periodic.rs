@@ -1,0 +1,326 @@
+//! Periodic boxes: a particle volume whose field repeats with the box.
+//!
+//! The periodic field is `Φ(x) = Σᵢ Σₙ φᵢ(x − n·L)` over every lattice
+//! shift `n ∈ ℤ³`. Inside the box only the images whose support reaches the
+//! box contribute, so the volume holds, beside each particle (wrapped into
+//! the box), a *ghost* for each such image: the same radius, weight and
+//! attribute, shifted by `n·L`. Every query then works unchanged —
+//! points are wrapped into the box first — and the box is the volume's
+//! bounds, so renders and per-pixel projections integrate the field over
+//! the part of each ray inside the box: the line of sight crosses the box
+//! once, and every particle's mass is counted once in `∫_box Φ dV`.
+//!
+//! Ghosts carry [`GHOST`] in their original index (so probes, radii in
+//! file order and the total mass see each particle once) and their shift,
+//! which on-axis projections use: along a box axis the column over one
+//! period is the full chord of every image shifted *across* the view only.
+//!
+//! Slabs deeper than the box (`--depth` through the tiled medium) walk each
+//! ray through the lattice cells it crosses, integrating each piece in the
+//! box with the ray shifted back by that cell's offset.
+
+use voxless_core::{Aabb, Range1, Ray, Vec3};
+
+use super::{ParticleData, ParticleSettings, ParticleVolume, part::map_factor};
+use crate::error::ParticleError;
+
+/// Marks a ghost's original index (particle indices are below 2³¹).
+pub(crate) const GHOST: u32 = 1 << 31;
+
+/// Image shifts beyond this many boxes are refused (supports that wide
+/// cover the box many times over).
+const MAX_SHIFT: i32 = 3;
+
+/// A periodic volume reaches at most this many boxes deep in one slab.
+pub const MAX_PERIODS: f64 = 1000.0;
+
+/// `p` moved into `[lo, hi)` of `b` along every axis.
+pub fn wrap(b: &Aabb, p: Vec3) -> Vec3 {
+    let mut q = p;
+    for a in 0..3 {
+        let (lo, l) = (b.min[a], b.max[a] - b.min[a]);
+        if p[a] >= lo && p[a] < b.max[a] {
+            continue;
+        }
+        let mut v = lo + (p[a] - lo).rem_euclid(l);
+        if v >= b.max[a] || v < lo {
+            v = lo;
+        }
+        q[a] = v;
+    }
+    q
+}
+
+/// Particles wrapped into `b` with their ghosts appended: the extended
+/// arrays, each row's original index (with [`GHOST`] for ghosts), each
+/// row's shift in boxes, and how many particles had to be wrapped.
+pub(super) struct Images {
+    pub data: ParticleData,
+    pub source: Vec<u32>,
+    pub shifts: Vec<[i8; 3]>,
+    pub wrapped: usize,
+}
+
+/// The ghosts of `data` in the periodic box `b` (every image whose support
+/// box overlaps `b`); `range` normalises the attribute for the radius map.
+pub(super) fn with_images(
+    mut data: ParticleData,
+    b: &Aabb,
+    settings: &ParticleSettings,
+    range: voxless_core::Range1,
+) -> Result<Images, ParticleError> {
+    let n = data.positions.len();
+    let mut wrapped = 0;
+    for p in &mut data.positions {
+        let q = wrap(b, *p);
+        if q != *p {
+            wrapped += 1;
+            *p = q;
+        }
+    }
+    let factor = settings.kernel.support_factor();
+    let mut source: Vec<u32> = (0..n as u32).collect();
+    let mut shifts = vec![[0i8; 3]; n];
+    let mut extra: Vec<(u32, [i8; 3], Vec3)> = Vec::new();
+    let mut found = Vec::new();
+    for i in 0..n {
+        let base = data.radii.as_ref().map_or(settings.radius, |r| r[i]);
+        let attr = data.attribute.as_ref().map(|a| a[i]);
+        let r = base * map_factor(&settings.radius_map, attr, range);
+        images(Some(b), data.positions[i], factor * r, i, &mut found)?;
+        for &(k, q) in &found {
+            if k != [0; 3] {
+                extra.push((i as u32, k, q));
+            }
+        }
+    }
+    for (i, k, q) in extra {
+        let i = i as usize;
+        data.positions.push(q);
+        for v in [&mut data.radii, &mut data.weights, &mut data.attribute]
+            .into_iter()
+            .flatten()
+        {
+            v.push(v[i]);
+        }
+        source.push(i as u32 | GHOST);
+        shifts.push(k);
+    }
+    Ok(Images {
+        data,
+        source,
+        shifts,
+        wrapped,
+    })
+}
+
+/// The images of particle `index` at `c` (in the periodic box `b`; none:
+/// just the particle) with support radius `support` whose support box
+/// meets `b`, the particle itself (shift 0) included, into `out`
+/// (cleared): each image's shift in boxes and centre. A hidden particle
+/// (support ≤ 0) in a box has none. Refused when the images would reach
+/// beyond [`MAX_SHIFT`] boxes.
+pub fn images(
+    b: Option<&Aabb>,
+    c: Vec3,
+    support: f32,
+    index: usize,
+    out: &mut Vec<([i8; 3], Vec3)>,
+) -> Result<(), ParticleError> {
+    out.clear();
+    let Some(b) = b else {
+        out.push(([0; 3], c));
+        return Ok(());
+    };
+    if !(support > 0.0) {
+        return Ok(());
+    }
+    let (s, size) = (support, b.extent());
+    // Shifts k along each axis with [c + kL − s, c + kL + s] ∩ [lo, hi] ≠ ∅.
+    let mut span = [(0i32, 0i32); 3];
+    for a in 0..3 {
+        let lo = ((b.min[a] - c[a] - s) / size[a]).ceil() as i32;
+        let hi = ((b.max[a] - c[a] + s) / size[a]).floor() as i32;
+        if lo < -MAX_SHIFT || hi > MAX_SHIFT {
+            return Err(ParticleError::SupportBeyondBox {
+                index,
+                support: s,
+                size: size[a],
+            });
+        }
+        span[a] = (lo.min(0), hi.max(0));
+    }
+    for kx in span[0].0..=span[0].1 {
+        for ky in span[1].0..=span[1].1 {
+            for kz in span[2].0..=span[2].1 {
+                let q = Vec3::new(
+                    c.x + kx as f32 * size.x,
+                    c.y + ky as f32 * size.y,
+                    c.z + kz as f32 * size.z,
+                );
+                // Only images whose support box meets the box.
+                if (kx, ky, kz) == (0, 0, 0)
+                    || (0..3).all(|a| q[a] - s <= b.max[a] && q[a] + s >= b.min[a])
+                {
+                    out.push(([kx as i8, ky as i8, kz as i8], q));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+impl ParticleVolume {
+    /// The periodic box, when the volume has one.
+    pub fn periodic(&self) -> Option<Aabb> {
+        self.settings.periodic
+    }
+
+    /// `p` wrapped into the periodic box (unchanged without one).
+    #[inline]
+    pub(super) fn wrap_point(&self, p: Vec3) -> Vec3 {
+        match &self.settings.periodic {
+            Some(b) => wrap(b, p),
+            None => p,
+        }
+    }
+
+    /// Whether entry `i` (volume order) is a ghost.
+    #[inline]
+    pub(super) fn is_ghost(&self, i: usize) -> bool {
+        self.original_index[i] & GHOST != 0
+    }
+
+    /// How many particles lay outside the periodic box and were wrapped
+    /// into it when the volume was built.
+    pub fn wrapped(&self) -> usize {
+        self.wrapped
+    }
+
+    /// Number of particles (ghosts of a periodic box not counted).
+    pub fn particle_count(&self) -> usize {
+        self.len() - self.ghosts
+    }
+
+    /// The particles without their ghosts, in input order, with the input
+    /// radii (if any) and weights before the maps: what to rebuild from.
+    pub(super) fn originals(&self) -> ParticleData {
+        let mut idx: Vec<usize> = (0..self.len()).filter(|&i| !self.is_ghost(i)).collect();
+        idx.sort_unstable_by_key(|&i| self.original_index[i]);
+        let take = |v: &[f32]| idx.iter().map(|&i| v[i]).collect::<Vec<f32>>();
+        ParticleData {
+            positions: idx.iter().map(|&i| self.positions[i]).collect(),
+            radii: self.input_radii.then(|| take(&self.base_radius)),
+            weights: Some(take(&self.base_weight)),
+            attribute: self.attribute.as_deref().map(take),
+        }
+    }
+
+    /// Effective radii in input order (ghosts left out): the smoothing
+    /// lengths the volume renders with.
+    pub fn radii_in_input_order(&self) -> Vec<f32> {
+        let mut out = vec![0.0f32; self.particle_count()];
+        for (i, &o) in self.original_index.iter().enumerate() {
+            if o & GHOST == 0 {
+                out[o as usize] = self.radius[i];
+            }
+        }
+        out
+    }
+
+    /// `∫ Φ dt` along `ray` over `t` through the tiled periodic medium: the
+    /// ray is cut where it crosses a cell of the lattice, and each piece is
+    /// integrated in the box by the ray shifted back by its cell's offset.
+    /// Without a box, the plain line integral.
+    pub fn periodic_line_integral(&self, ray: &Ray, t: Range1) -> f64 {
+        use voxless_core::Volume;
+        let Some(b) = self.settings.periodic else {
+            return self.line_integral(ray, self.bounds().clip_ray(ray, t));
+        };
+        if t.is_empty() || !t.lo.is_finite() || !t.hi.is_finite() {
+            return 0.0;
+        }
+        let size = b.extent();
+        // Every parameter where the ray crosses a lattice plane inside t.
+        let mut cuts = vec![t.lo as f64, t.hi as f64];
+        for a in 0..3 {
+            let d = ray.dir[a] as f64;
+            if d == 0.0 {
+                continue;
+            }
+            let (o, lo, l) = (ray.origin[a] as f64, b.min[a] as f64, size[a] as f64);
+            let x0 = o + d * t.lo as f64;
+            let x1 = o + d * t.hi as f64;
+            let (k0, k1) = (
+                ((x0.min(x1) - lo) / l).ceil() as i64,
+                ((x0.max(x1) - lo) / l).floor() as i64,
+            );
+            for k in k0..=k1 {
+                cuts.push((lo + k as f64 * l - o) / d);
+            }
+        }
+        cuts.sort_unstable_by(f64::total_cmp);
+        let mut sum = 0.0;
+        for w in cuts.windows(2) {
+            let (t0, t1) = (w[0], w[1]);
+            if t1 <= t0 {
+                continue;
+            }
+            let mid = 0.5 * (t0 + t1);
+            // The lattice cell of the piece, and the ray moved back into the box.
+            let shift: Vec3 = Vec3::new(
+                (((ray.origin.x as f64 + ray.dir.x as f64 * mid) - b.min.x as f64) / size.x as f64)
+                    .floor() as f32
+                    * size.x,
+                (((ray.origin.y as f64 + ray.dir.y as f64 * mid) - b.min.y as f64) / size.y as f64)
+                    .floor() as f32
+                    * size.y,
+                (((ray.origin.z as f64 + ray.dir.z as f64 * mid) - b.min.z as f64) / size.z as f64)
+                    .floor() as f32
+                    * size.z,
+            );
+            let moved = Ray::new(ray.origin - shift, ray.dir);
+            sum += self.line_integral(&moved, Range1::new(t0 as f32, t1 as f32));
+        }
+        sum
+    }
+}
+
+impl ParticleVolume {
+    /// Column densities through the pixel centres of an orthographic
+    /// `camera` over the part `t` of every line, through the tiled periodic
+    /// medium ([`ParticleVolume::periodic_line_integral`]); row-major, row
+    /// 0 at the top. Progress in rows, cancellation between rows.
+    pub fn project_periodic_slab(
+        &self,
+        camera: &voxless_core::Camera,
+        width: u32,
+        height: u32,
+        t: Range1,
+        control: &voxless_core::Control,
+    ) -> Result<Vec<f32>, voxless_core::Cancelled> {
+        use rayon::prelude::*;
+        let done = std::sync::atomic::AtomicU64::new(0);
+        let rows: Vec<Option<Vec<f32>>> = (0..height)
+            .into_par_iter()
+            .map(|y| {
+                if control.is_cancelled() {
+                    return None;
+                }
+                let row = (0..width)
+                    .map(|x| {
+                        let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5, width, height);
+                        self.periodic_line_integral(&ray, t) as f32
+                    })
+                    .collect();
+                let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                control.report(d, height as u64);
+                Some(row)
+            })
+            .collect();
+        rows.into_iter()
+            .map(|r| r.ok_or(voxless_core::Cancelled))
+            .collect::<Result<Vec<_>, _>>()
+            .map(|r| r.concat())
+    }
+}

@@ -1,0 +1,209 @@
+//! Periodic boxes and smoothing lengths from neighbours, for particle sets.
+//!
+//! **The box** comes from the description (`particles.box`, `--box`) or,
+//! unless `particles.periodic = false`, from the file where its format
+//! states one as periodic (SWIFT/Gadget `BoxSize`, LAMMPS `pp` bounds,
+//! extended-XYZ `Lattice` with `pbc`). Positions outside it are wrapped in
+//! float64 world coordinates, with a note saying how many; data that spans
+//! more than a box the description gives along an axis is refused as the
+//! wrong box unless `particles.wrap` asks for the wrap anyway (a file's own
+//! box is trusted).
+//!
+//! **Neighbours**: each particle's radius such that its support reaches its
+//! N-th nearest neighbour, the particle itself counted, with minimum-image
+//! distances in a box ([`voxless_particles::neighbours`]). Asked for with
+//! `particles.neighbours`; the default for particle types of cosmological
+//! snapshots that carry no smoothing length (dark matter, AREPO cells).
+//! The radii are world lengths, like radii read from a file.
+
+use std::path::Path;
+
+use voxless_particles::Kernel;
+use voxless_particles::neighbours::{PeriodicBox, smoothing_lengths};
+use voxless_scene::ParticlesDesc;
+
+use crate::SceneError;
+
+/// The neighbour count of the default for snapshots without smoothing
+/// lengths (the cubic spline's usual 32; swiftsimio's and yt's default).
+pub const DEFAULT_NEIGHBOURS: usize = 32;
+
+/// The periodic box `p` gives, else the file's (`domain`, when the file
+/// says it is periodic), else none. Errors name the setting.
+pub(crate) fn resolve_box(
+    p: &ParticlesDesc,
+    file_box: Option<([f64; 3], [f64; 3])>,
+) -> Result<Option<(PeriodicBox, &'static str)>, SceneError> {
+    if let Some(b) = &p.periodic_box {
+        let (lo, hi) = b.corners();
+        if !lo.iter().chain(&hi).all(|v| v.is_finite()) || (0..3).any(|a| !(hi[a] > lo[a])) {
+            return Err(SceneError::setting(
+                "particles.box",
+                format!(
+                    "--box {}: a periodic box needs a side L > 0, or corners x0 y0 z0 x1 y1 z1 with each \
+                     upper corner above the lower one",
+                    match b {
+                        voxless_scene::BoxDesc::Side(l) => format!("{l}"),
+                        voxless_scene::BoxDesc::Corners(c) => c.map(|v| v.to_string()).join(" "),
+                    }
+                ),
+            ));
+        }
+        return Ok(Some((box_of(lo, hi), "given")));
+    }
+    if p.periodic == Some(false) {
+        return Ok(None);
+    }
+    Ok(file_box
+        .filter(|(lo, hi)| (0..3).all(|a| hi[a] > lo[a] && lo[a].is_finite() && hi[a].is_finite()))
+        .map(|(lo, hi)| (box_of(lo, hi), "the file's")))
+}
+
+fn box_of(lo: [f64; 3], hi: [f64; 3]) -> PeriodicBox {
+    PeriodicBox {
+        lo,
+        size: std::array::from_fn(|a| hi[a] - lo[a]),
+    }
+}
+
+/// The box's corners.
+pub(crate) fn corners(b: &PeriodicBox) -> ([f64; 3], [f64; 3]) {
+    (b.lo, std::array::from_fn(|a| b.lo[a] + b.size[a]))
+}
+
+/// Wraps `positions` into `b` (float64, world); refuses data spanning more
+/// than a box the user gave (`given`) along an axis unless `p.wrap` — a
+/// file's own box is trusted (dumps hold atoms that drifted out between
+/// re-wraps). Returns how many were wrapped. Non-finite positions are left
+/// for the volume's check.
+pub(crate) fn wrap_positions(
+    positions: &mut [[f64; 3]],
+    b: &PeriodicBox,
+    p: &ParticlesDesc,
+    given: bool,
+    file: &Path,
+) -> Result<usize, SceneError> {
+    if given && p.wrap != Some(true) {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for q in positions.iter().filter(|q| q.iter().all(|v| v.is_finite())) {
+            for a in 0..3 {
+                lo[a] = lo[a].min(q[a]);
+                hi[a] = hi[a].max(q[a]);
+            }
+        }
+        for a in 0..3 {
+            let span = hi[a] - lo[a];
+            // A box edge's own rounding is allowed.
+            if span > b.size[a] * (1.0 + 1e-6) {
+                return Err(SceneError::data(
+                    file,
+                    format!(
+                        "the particles span {span} along {}, more than the periodic box's side {} \
+                         (particles.box, --box): give the right box, or ask for the wrap with \
+                         --wrap (particles.wrap = true)",
+                        ["x", "y", "z"][a],
+                        b.size[a]
+                    ),
+                ));
+            }
+        }
+    }
+    let mut wrapped = 0;
+    for q in positions.iter_mut() {
+        if q.iter().all(|v| v.is_finite()) && !b.contains(*q) {
+            *q = b.wrap(*q);
+            wrapped += 1;
+        }
+    }
+    Ok(wrapped)
+}
+
+/// The note for `wrapped` particles of `total` wrapped into `b`.
+pub(crate) fn wrap_note(b: &PeriodicBox, how: &str, wrapped: usize, total: usize) -> String {
+    let (lo, hi) = corners(b);
+    let mut s =
+        format!("periodic box ({how}): [{lo:?}, {hi:?}]; the field sums every periodic image");
+    if wrapped > 0 {
+        s.push_str(&format!(
+            "; {wrapped} of {total} particles lay outside it and were wrapped in"
+        ));
+    }
+    s
+}
+
+/// The neighbour count for these particles: the description's, or the
+/// default for a snapshot without smoothing lengths (`snapshot`) when no
+/// radius or radii are given. Refuses a count together with a radius.
+pub(crate) fn neighbour_count(
+    p: &ParticlesDesc,
+    snapshot: bool,
+    has_radii: bool,
+) -> Result<Option<usize>, SceneError> {
+    match p.neighbours {
+        Some(n) => {
+            for (given, what) in [
+                (p.radius.is_some(), "particles.radius (--radius)"),
+                (p.radii.is_some(), "particles.radii (--radii)"),
+            ] {
+                if given {
+                    return Err(SceneError::setting(
+                        "particles.neighbours",
+                        format!(
+                            "give either neighbours (--neighbours) or {what}: both size the kernels"
+                        ),
+                    ));
+                }
+            }
+            if n < 2 {
+                return Err(SceneError::setting(
+                    "particles.neighbours",
+                    format!("--neighbours {n}: needs N ≥ 2 (the particle itself is counted)"),
+                ));
+            }
+            Ok(Some(n))
+        }
+        None if snapshot && !has_radii && p.radius.is_none() && p.radii.is_none() => {
+            Ok(Some(DEFAULT_NEIGHBOURS))
+        }
+        None => Ok(None),
+    }
+}
+
+/// Each particle's radius parameter (world units) so that its support
+/// reaches its `n`-th nearest neighbour, with a note saying so.
+pub(crate) fn neighbour_radii(
+    positions: &[[f64; 3]],
+    n: usize,
+    b: Option<&PeriodicBox>,
+    kernel: Kernel,
+    file: &Path,
+    notes: &mut Vec<String>,
+) -> Result<Vec<f32>, SceneError> {
+    let start = std::time::Instant::now();
+    let h = smoothing_lengths(positions, n, b, kernel).map_err(|e| SceneError::Particles {
+        path: file.to_path_buf(),
+        source: e,
+    })?;
+    let mut sorted = h.to_vec();
+    sorted.sort_unstable_by(f64::total_cmp);
+    let (lo, mid, hi) = (
+        sorted[0],
+        sorted[sorted.len() / 2],
+        sorted[sorted.len() - 1],
+    );
+    notes.push(format!(
+        "radii from the {n} nearest neighbours ({}the particle itself counted; {} kernel, support \
+         {}·h): h from {lo:.4e} to {hi:.4e}, median {mid:.4e}; {:.2} s (change with --neighbours \
+         or --radius)",
+        if b.is_some() {
+            "periodic distances, "
+        } else {
+            ""
+        },
+        kernel.name(),
+        kernel.support_factor(),
+        start.elapsed().as_secs_f64()
+    ));
+    Ok(h.into_iter().map(|v| v as f32).collect())
+}

@@ -1,0 +1,163 @@
+//! Periodic particle boxes and radii from neighbours through the CLI: the
+//! projection of a box conserves its mass, `--save-radii` writes the
+//! brute-force periodic neighbour radii, the file's box is used (and can be
+//! turned off), and bad boxes and counts are refused with the flag named.
+
+mod common;
+
+use common::{Scratch, fails, ok, read, write_positions};
+
+/// The n-th nearest distances by comparing every pair (minimum image in a
+/// unit box).
+fn brute_neighbours(p: &[[f32; 3]], n: usize) -> Vec<f64> {
+    p.iter()
+        .map(|q| {
+            let mut d: Vec<f64> = p
+                .iter()
+                .map(|r| {
+                    (0..3)
+                        .map(|a| {
+                            let x = (q[a] as f64 - r[a] as f64).abs();
+                            x.min(1.0 - x).powi(2)
+                        })
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .collect();
+            d.sort_by(f64::total_cmp);
+            d[n - 1]
+        })
+        .collect()
+}
+
+#[test]
+fn a_periodic_projection_conserves_mass_and_saves_neighbour_radii() {
+    let dir = Scratch::new("periodic-cli");
+    let n = 1500;
+    let p = write_positions(&dir.path("p.npy"), n, 3);
+    let (pos, out, h) = (dir.str("p.npy"), dir.str("c.npy"), dir.str("h.npy"));
+    let err = ok(&[
+        "project",
+        "--particles",
+        &pos,
+        "--box",
+        "1",
+        "--kernel",
+        "cubic-spline",
+        "--neighbours",
+        "12",
+        "--save-radii",
+        &h,
+        "--axis",
+        "x",
+        "--size",
+        "128",
+        "128",
+        "-o",
+        &out,
+    ]);
+    assert!(err.contains("periodic box (given)"), "{err}");
+    assert!(err.contains("12 nearest neighbours"), "{err}");
+    // The default image covers the box: Σ × pixel area = the mass (1 each).
+    let (shape, c) = read(&dir.path("c.npy"));
+    assert_eq!(shape, [128, 128]);
+    let mass = c.iter().sum::<f64>() / (128.0 * 128.0);
+    assert!((mass / n as f64 - 1.0).abs() <= 1e-5, "Σ = {mass}");
+    // Radii: h = the 12th-neighbour distance / 2 (the cubic spline reaches 2h).
+    let (shape, got) = read(&dir.path("h.npy"));
+    assert_eq!(shape, [n]);
+    for (i, want) in brute_neighbours(&p, 12).iter().enumerate() {
+        let want = want / 2.0;
+        assert!(
+            (got[i] - want).abs() <= 1e-6 * want,
+            "{i}: {} vs {want}",
+            got[i]
+        );
+    }
+}
+
+#[test]
+fn bad_boxes_and_counts_are_refused_naming_the_flag() {
+    let dir = Scratch::new("periodic-bad");
+    write_positions(&dir.path("p.npy"), 300, 4);
+    let pos = dir.str("p.npy");
+    let out = dir.str("o.npy");
+    let run = |extra: &[&str]| {
+        let mut a = vec![
+            "project",
+            "--particles",
+            &pos,
+            "--size",
+            "8",
+            "8",
+            "-o",
+            &out,
+        ];
+        a.extend(extra);
+        fails(&a)
+    };
+    for (flags, says) in [
+        (&["--box", "0"][..], "box"),
+        (&["--box", "-5"], "box"),
+        (&["--box", "1", "2"], "box"),
+        (&["--box", "0", "0", "0", "1", "-1", "1"], "box"),
+        (&["--box", "0.5"], "--wrap"),
+        (&["--neighbours", "1"], "neighbours"),
+        (&["--neighbours", "301"], "neighbours"),
+        (&["--neighbours", "8", "--radius", "0.1"], "neighbours"),
+    ] {
+        let err = run(flags);
+        assert!(err.contains(says), "{flags:?}: {err}");
+    }
+    // Asked for, the wrap folds the data into the smaller box.
+    let mut a = vec![
+        "project",
+        "--particles",
+        &pos,
+        "--size",
+        "8",
+        "8",
+        "-o",
+        &out,
+    ];
+    a.extend(["--box", "0.5", "--wrap", "--radius", "0.05"]);
+    let err = ok(&a);
+    assert!(err.contains("were wrapped in"), "{err}");
+}
+
+#[test]
+fn a_lammps_box_with_pp_bounds_is_periodic_unless_turned_off() {
+    let dir = Scratch::new("periodic-lammps");
+    let mut dump = String::from(
+        "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n64\nITEM: BOX BOUNDS pp pp pp\n0 4\n0 4\n0 4\n\
+         ITEM: ATOMS id type x y z\n",
+    );
+    for i in 0..64 {
+        let (x, y, z) = (i % 4, (i / 4) % 4, i / 16);
+        dump.push_str(&format!("{} 1 {} {} {}\n", i + 1, x as f32 + 0.5, y, z));
+    }
+    std::fs::write(dir.path("dump.lattice"), dump).unwrap();
+    let (file, out) = (dir.str("dump.lattice"), dir.str("o.npy"));
+    let base = [
+        "project",
+        "--particles",
+        &file,
+        "--size",
+        "8",
+        "8",
+        "-o",
+        &out,
+    ];
+    let err = ok(&base);
+    assert!(err.contains("periodic box (the file's)"), "{err}");
+    // A lattice of a periodic box projects to a uniform image.
+    let (_, c) = read(&dir.path("o.npy"));
+    let (lo, hi) = c
+        .iter()
+        .fold((f64::MAX, 0.0f64), |m, &v| (m.0.min(v), m.1.max(v)));
+    assert!(lo > 0.0 && hi > 0.0);
+    let mut a = base.to_vec();
+    a.push("--no-box");
+    let err = ok(&a);
+    assert!(!err.contains("periodic box"), "{err}");
+}
