@@ -160,6 +160,12 @@ fn run_job(
             outbox.offer(Slot::State, seq, text(msg));
         }
     };
+    // A periodic box is drawn as an outline over the image.
+    let outline = match &loaded.volume {
+        voxless::AnyVolume::Particles(v) => v.periodic(),
+        _ => None,
+    };
+    let outline = outline.map(|b| (resolved.camera, b));
     let mut budget = memory.budget.clone();
     let result = voxless::render_progressive(
         &loaded.volume,
@@ -172,7 +178,8 @@ fn run_job(
         &mut |stage, film, at| {
             *stage_name.lock().unwrap_or_else(|e| e.into_inner()) = "full";
             let converged = stage.is_converged();
-            if !send_frame(outbox, job, stage, film, at, resolved.background, converged) {
+            let bg = resolved.background;
+            if !send_frame(outbox, job, (stage, film, at), outline, bg, converged) {
                 return false;
             }
             // The controls follow the first image.
@@ -196,16 +203,19 @@ fn run_job(
 fn send_frame(
     outbox: &Outbox,
     job: &Job,
-    stage: Stage,
-    film: &Film,
-    at: &RenderSettings,
+    (stage, film, at): (Stage, &Film, &RenderSettings),
+    outline: Option<(voxless::core::Camera, voxless::core::Aabb)>,
     background: [f32; 3],
     converged: bool,
 ) -> bool {
     if !outbox.is_current(job.seq) {
         return false;
     }
-    let encoded = match encode::encode(&film.resolve(), background, converged) {
+    let mut image = film.resolve();
+    if let Some((camera, b)) = &outline {
+        voxless::core::draw_box_outline(&mut image, camera, b, [0.7, 0.7, 0.7, 0.5]);
+    }
+    let encoded = match encode::encode(&image, background, converged) {
         Ok(e) => e,
         Err(_) => return false,
     };
