@@ -194,7 +194,7 @@ fn particle_volume(
         let mut world: Vec<[f64; 3]> = data.positions.iter().map(|&q| frame.to_world(q)).collect();
         if let Some((b, how)) = &periodic {
             let wrapped = load::periodic::wrap_positions(&mut world, b, desc, true, source)?;
-            notes.push(load::periodic::wrap_note(b, how, wrapped, world.len()));
+            notes.push(load::periodic::wrap_note(b, how, wrapped, &world));
             data.positions = world.iter().map(|&q| frame.to_local(q)).collect();
         }
         if let Some(n) = neighbours {

@@ -123,6 +123,20 @@ fn bad_boxes_and_counts_are_refused_naming_the_flag() {
     a.extend(["--box", "0.5", "--wrap", "--radius", "0.05"]);
     let err = ok(&a);
     assert!(err.contains("were wrapped in"), "{err}");
+    // A box far larger than the data is run, with a question.
+    let mut a = vec![
+        "project",
+        "--particles",
+        &pos,
+        "--size",
+        "8",
+        "8",
+        "-o",
+        &out,
+    ];
+    a.extend(["--box", "1000"]);
+    let err = ok(&a);
+    assert!(err.contains("is the box right"), "{err}");
 }
 
 #[test]

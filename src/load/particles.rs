@@ -204,7 +204,7 @@ pub(crate) fn read_rows(
             let given = how == "given";
             let wrapped = periodic::wrap_positions(&mut fd.positions, &b, p, given, &fd.main_file)?;
             fd.notes
-                .push(periodic::wrap_note(&b, how, wrapped, fd.positions.len()));
+                .push(periodic::wrap_note(&b, how, wrapped, &fd.positions));
             Some(b)
         }
         None => None,

@@ -119,14 +119,36 @@ pub(crate) fn wrap_positions(
     Ok(wrapped)
 }
 
-/// The note for `wrapped` particles of `total` wrapped into `b`.
-pub(crate) fn wrap_note(b: &PeriodicBox, how: &str, wrapped: usize, total: usize) -> String {
+/// The note for the box `b` and the `wrapped` particles of `positions`
+/// (wrapped into it): it also asks whether the box is right when the
+/// particles fill less than a hundredth of its side along every axis.
+pub(crate) fn wrap_note(
+    b: &PeriodicBox,
+    how: &str,
+    wrapped: usize,
+    positions: &[[f64; 3]],
+) -> String {
     let (lo, hi) = corners(b);
     let mut s =
         format!("periodic box ({how}): [{lo:?}, {hi:?}]; the field sums every periodic image");
+    let total = positions.len();
     if wrapped > 0 {
         s.push_str(&format!(
             "; {wrapped} of {total} particles lay outside it and were wrapped in"
+        ));
+    }
+    let fill = (0..3)
+        .map(|a| {
+            let (mut l, mut h) = (f64::INFINITY, f64::NEG_INFINITY);
+            for q in positions.iter().filter(|q| q[a].is_finite()) {
+                (l, h) = (l.min(q[a]), h.max(q[a]));
+            }
+            (h - l) / b.size[a]
+        })
+        .fold(0.0f64, f64::max);
+    if total > 1 && fill < 0.01 {
+        s.push_str(&format!(
+            "; the particles fill only {fill:.1e} of its side: is the box right (--box)?"
         ));
     }
     s
