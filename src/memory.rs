@@ -188,26 +188,30 @@ fn particle_volume(
     let (frame, source) = (arrays.frame, Path::new("positions"));
     let mut data = arrays.into_data();
     // A periodic box and radii from neighbours, as a file's particles get them.
-    let periodic = load::periodic::resolve_box(desc, None)?;
-    let neighbours = load::periodic::neighbour_count(desc, false, data.radii.is_some())?;
-    if periodic.is_some() || neighbours.is_some() {
+    let periodic = if desc.periodic_box.is_some() || desc.neighbours.is_some() {
         let mut world: Vec<[f64; 3]> = data.positions.iter().map(|&q| frame.to_world(q)).collect();
-        if let Some((b, how)) = &periodic {
-            let wrapped = load::periodic::wrap_positions(&mut world, b, desc, true, source)?;
-            notes.push(load::periodic::wrap_note(b, how, wrapped, &world));
+        let kernel = load::particles::kernel_of(
+            desc,
+            desc.kernel.unwrap_or(voxless_scene::KernelName::Gaussian3),
+        );
+        let b = load::periodic::settle(
+            desc,
+            None,
+            &mut world,
+            &mut data.radii,
+            (false, true),
+            kernel,
+            source,
+            notes,
+        )?;
+        if b.is_some() {
             data.positions = world.iter().map(|&q| frame.to_local(q)).collect();
         }
-        if let Some(n) = neighbours {
-            let kernel = load::particles::kernel_of(
-                desc,
-                desc.kernel.unwrap_or(voxless_scene::KernelName::Gaussian3),
-            );
-            let b = periodic.as_ref().map(|p| &p.0);
-            let r = load::periodic::neighbour_radii(&world, n, b, kernel, source, notes)?;
-            data.radii = Some(r);
-        }
-    }
-    let local = load::particles::local_box(periodic.as_ref().map(|p| &p.0), &frame);
+        b
+    } else {
+        None
+    };
+    let local = load::particles::local_box(periodic.as_ref(), &frame);
     load::particles::build_particles(data, desc, None, local, notes, frame.scale)
         .map_err(|e| e.blame(PathBuf::from("positions"), &array_files()))
 }

@@ -157,7 +157,8 @@ impl AnyVolume {
         if let AnyVolume::Particles(v) = self
             && v.periodic().is_some()
         {
-            return v.project_periodic_slab(camera, width, height, t, control);
+            let column = |ray: &voxless_core::Ray| v.periodic_line_integral(ray, t);
+            return voxless_render::project_each(camera, width, height, control, column);
         }
         with_volume!(self, v => voxless_render::project_per_pixel_in(v, camera, width, height, t, control))
     }

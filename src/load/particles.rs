@@ -198,34 +198,17 @@ pub(crate) fn read_rows(
     share: Share,
 ) -> Result<FrameData, SceneError> {
     let mut fd = read_share(p, base, frame, share)?;
-    // The periodic box: the description's or the file's; positions wrapped.
-    fd.periodic = match periodic::resolve_box(p, fd.periodic.map(|b| periodic::corners(&b)))? {
-        Some((b, how)) => {
-            let given = how == "given";
-            let wrapped = periodic::wrap_positions(&mut fd.positions, &b, p, given, &fd.main_file)?;
-            fd.notes
-                .push(periodic::wrap_note(&b, how, wrapped, &fd.positions));
-            Some(b)
-        }
-        None => None,
-    };
-    // Radii from neighbours need every row: the ranks of a decomposed set
-    // find them together (`crate::parallel`).
-    if share.is_whole() {
-        let n = periodic::neighbour_count(p, fd.snapshot, fd.data.radii.is_some())?;
-        if let Some(n) = n {
-            let kernel = fd.kernel(p);
-            let r = periodic::neighbour_radii(
-                &fd.positions,
-                n,
-                fd.periodic.as_ref(),
-                kernel,
-                &fd.main_file,
-                &mut fd.notes,
-            )?;
-            fd.data.radii = Some(r);
-        }
-    }
+    let kernel = fd.kernel(p);
+    fd.periodic = periodic::settle(
+        p,
+        fd.periodic,
+        &mut fd.positions,
+        &mut fd.data.radii,
+        (fd.snapshot, share.is_whole()),
+        kernel,
+        &fd.main_file,
+        &mut fd.notes,
+    )?;
     Ok(fd)
 }
 

@@ -28,12 +28,12 @@ use crate::SceneError;
 /// lengths (the cubic spline's usual 32; swiftsimio's and yt's default).
 pub const DEFAULT_NEIGHBOURS: usize = 32;
 
-/// The periodic box `p` gives, else the file's (`domain`, when the file
-/// says it is periodic), else none. Errors name the setting.
-pub(crate) fn resolve_box(
+/// The periodic box `p` gives (with `true`), else the file's (`false`),
+/// else none. Errors name the setting.
+fn resolve_box(
     p: &ParticlesDesc,
-    file_box: Option<([f64; 3], [f64; 3])>,
-) -> Result<Option<(PeriodicBox, &'static str)>, SceneError> {
+    file_box: Option<PeriodicBox>,
+) -> Result<Option<(PeriodicBox, bool)>, SceneError> {
     if let Some(b) = &p.periodic_box {
         let (lo, hi) = b.corners();
         if !lo.iter().chain(&hi).all(|v| v.is_finite()) || (0..3).any(|a| !(hi[a] > lo[a])) {
@@ -49,14 +49,53 @@ pub(crate) fn resolve_box(
                 ),
             ));
         }
-        return Ok(Some((box_of(lo, hi), "given")));
+        return Ok(Some((box_of(lo, hi), true)));
     }
     if p.periodic == Some(false) {
         return Ok(None);
     }
     Ok(file_box
-        .filter(|(lo, hi)| (0..3).all(|a| hi[a] > lo[a] && lo[a].is_finite() && hi[a].is_finite()))
-        .map(|(lo, hi)| (box_of(lo, hi), "the file's")))
+        .filter(|b| (0..3).all(|a| b.size[a] > 0.0 && b.lo[a].is_finite() && b.size[a].is_finite()))
+        .map(|b| (b, false)))
+}
+
+/// The box and the radii of a set's rows, one process or one share: the
+/// periodic box `p` or the file (`file_box`) gives, with `positions`
+/// (world) wrapped into it, and — for every row at once (`whole`) — radii
+/// from neighbours when asked for or by default (`snapshot` without
+/// `radii`). Notes say what was chosen.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn settle(
+    p: &ParticlesDesc,
+    file_box: Option<PeriodicBox>,
+    positions: &mut [[f64; 3]],
+    radii: &mut Option<Vec<f32>>,
+    (snapshot, whole): (bool, bool),
+    kernel: Kernel,
+    file: &Path,
+    notes: &mut Vec<String>,
+) -> Result<Option<PeriodicBox>, SceneError> {
+    let periodic = match resolve_box(p, file_box)? {
+        Some((b, given)) => {
+            let wrapped = wrap_positions(positions, &b, p, given, file)?;
+            notes.push(wrap_note(&b, given, wrapped, positions));
+            Some(b)
+        }
+        None => None,
+    };
+    // Radii from neighbours need every row: the ranks of a decomposed set
+    // find them together (`whole_set::neighbour_radii`).
+    if whole && let Some(n) = neighbour_count(p, snapshot, radii.is_some())? {
+        *radii = Some(neighbour_radii(
+            positions,
+            n,
+            periodic.as_ref(),
+            kernel,
+            file,
+            notes,
+        )?);
+    }
+    Ok(periodic)
 }
 
 fn box_of(lo: [f64; 3], hi: [f64; 3]) -> PeriodicBox {
@@ -76,7 +115,7 @@ pub(crate) fn corners(b: &PeriodicBox) -> ([f64; 3], [f64; 3]) {
 /// file's own box is trusted (dumps hold atoms that drifted out between
 /// re-wraps). Returns how many were wrapped. Non-finite positions are left
 /// for the volume's check.
-pub(crate) fn wrap_positions(
+fn wrap_positions(
     positions: &mut [[f64; 3]],
     b: &PeriodicBox,
     p: &ParticlesDesc,
@@ -119,18 +158,16 @@ pub(crate) fn wrap_positions(
     Ok(wrapped)
 }
 
-/// The note for the box `b` and the `wrapped` particles of `positions`
+/// The note for the box `b` (`given`, or the file's) and the `wrapped`
+/// particles of `positions`
 /// (wrapped into it): it also asks whether the box is right when the
 /// particles fill less than a hundredth of its side along every axis.
-pub(crate) fn wrap_note(
-    b: &PeriodicBox,
-    how: &str,
-    wrapped: usize,
-    positions: &[[f64; 3]],
-) -> String {
+fn wrap_note(b: &PeriodicBox, given: bool, wrapped: usize, positions: &[[f64; 3]]) -> String {
     let (lo, hi) = corners(b);
-    let mut s =
-        format!("periodic box ({how}): [{lo:?}, {hi:?}]; the field sums every periodic image");
+    let mut s = format!(
+        "periodic box ({}): [{lo:?}, {hi:?}]; the field sums every periodic image",
+        if given { "given" } else { "the file's" }
+    );
     let total = positions.len();
     if wrapped > 0 {
         s.push_str(&format!(

@@ -257,10 +257,9 @@ impl<'a> Search<'a> {
         s.sqrt()
     }
 
-    /// The k-th nearest distance from `q`, searching from the bound
-    /// `start` (a distance the answer cannot exceed; `None`: unbounded).
+    /// The k-th nearest distance from `q`, searching from what `best`
+    /// already holds (points marked in `seen` with `query`).
     fn kth(&self, q: [f64; 3], best: &mut Best, seen: &[u32], query: u32) -> f64 {
-        best.limit = f64::INFINITY;
         let seen = Seen { marks: seen, query };
         let Some(pb) = self.periodic else {
             self.search(q, best, false, &seen);
@@ -348,12 +347,10 @@ struct Seen<'a> {
 }
 
 /// The k best squared distances so far, as a max-heap (the worst on
-/// top), with their points; `limit`: a squared distance the answer is
-/// known not to exceed.
+/// top), with their points.
 struct Best {
     k: usize,
     items: Vec<(f64, u32)>,
-    limit: f64,
 }
 
 impl Best {
@@ -361,34 +358,29 @@ impl Best {
         Best {
             k,
             items: Vec::with_capacity(k),
-            limit: f64::INFINITY,
         }
     }
 
-    /// The squared distance a point must not exceed to enter.
+    /// The squared distance a point must not exceed to enter: the k-th
+    /// best when k are known, else unbounded.
     #[inline]
     fn worst(&self) -> f64 {
         if self.items.len() == self.k {
-            self.items[0].0.min(self.limit)
+            self.items[0].0
         } else {
-            self.limit
+            f64::INFINITY
         }
     }
 
-    /// The current search radius: the k-th best distance when k are known,
-    /// else the starting bound.
+    /// The current search radius.
     fn bound(&self) -> f64 {
-        if self.items.len() == self.k {
-            self.items[0].0.sqrt()
-        } else {
-            self.limit.sqrt()
-        }
+        self.worst().sqrt()
     }
 
     #[inline]
     fn offer(&mut self, d2: f64, i: u32, dedup: bool) {
         let full = self.items.len() == self.k;
-        if d2 > self.limit || (full && d2 >= self.items[0].0) {
+        if full && d2 >= self.items[0].0 {
             return;
         }
         if dedup && let Some(j) = self.items.iter().position(|it| it.1 == i) {

@@ -648,8 +648,31 @@ pub fn project_in<V: Volume>(
     t_range: Range1,
     control: &Control,
 ) -> Result<Vec<f32>, Cancelled> {
-    let done = std::sync::atomic::AtomicU64::new(0);
     let bounds = volume.bounds();
+    project_each(camera, width, height, control, |ray| {
+        let own = own_range(domain, ray);
+        let t = Range1::new(own.lo.max(t_range.lo), own.hi.min(t_range.hi));
+        let t = bounds.clip_ray(ray, t);
+        if t.is_empty() {
+            0.0
+        } else {
+            volume.line_integral(ray, t)
+        }
+    })
+}
+
+/// `column(ray)` through the centre of every pixel of a `width`×`height`
+/// image of `camera`, row-major, row 0 at the top, rows in parallel
+/// (progress in rows, cancellation checked between rows): the per-pixel
+/// loop of every projection.
+pub fn project_each(
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    control: &Control,
+    column: impl Fn(&voxless_core::Ray) -> f64 + Sync,
+) -> Result<Vec<f32>, Cancelled> {
+    let done = std::sync::atomic::AtomicU64::new(0);
     let rows: Vec<Option<Vec<f32>>> = (0..height)
         .into_par_iter()
         .map(|y| {
@@ -657,17 +680,7 @@ pub fn project_in<V: Volume>(
                 return None;
             }
             let row: Vec<f32> = (0..width)
-                .map(|x| {
-                    let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5, width, height);
-                    let own = own_range(domain, &ray);
-                    let t = Range1::new(own.lo.max(t_range.lo), own.hi.min(t_range.hi));
-                    let t = bounds.clip_ray(&ray, t);
-                    if t.is_empty() {
-                        0.0
-                    } else {
-                        volume.line_integral(&ray, t) as f32
-                    }
-                })
+                .map(|x| column(&camera.ray(x as f32 + 0.5, y as f32 + 0.5, width, height)) as f32)
                 .collect();
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             control.report(d, height as u64);
