@@ -23,18 +23,15 @@ pub fn particle_columns(desc: &SceneDesc, base: &Path) -> Result<Vec<String>, Sc
     let Some(path) = frames::expand(spec, base)?.into_iter().next() else {
         return Ok(Vec::new());
     };
-    let format = match formats::ParticleFormat::detect(&path).map_err(SceneError::from)? {
-        // A bare array has no columns: not worth reading.
-        None | Some(formats::ParticleFormat::Npy) => return Ok(Vec::new()),
-        Some(f) => f,
-    };
-    let options = formats::TableOptions {
-        group: p.group.clone(),
-        part_type: p.part_type,
-        share: None,
-    };
-    let table = formats::read_table(&path, format, 0, &options)?;
-    Ok(table
+    // A bare array has no columns: not worth reading.
+    if let None | Some(formats::ParticleFormat::Npy) =
+        formats::ParticleFormat::detect(&path).map_err(SceneError::from)?
+    {
+        return Ok(Vec::new());
+    }
+    let select = crate::load::particles::selection(p, None);
+    let (_, source, _) = crate::load::table::open(&path, 0, &select)?;
+    Ok(source
         .table
         .column_names()
         .into_iter()

@@ -64,12 +64,26 @@ pub struct DataFlags {
         arg(long, value_name = "NAME", help_heading = "Particles")
     )]
     pub group: Option<String>,
-    /// SWIFT/Gadget particle type N: the group PartTypeN (default 0).
+    /// Snapshot particle type: 0–6 or gas, dm, disk, bulge, stars, bh;
+    /// several (gas,stars) become materials, each with its own transfer
+    /// function (default: gas if present, else the first type with particles).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "T", help_heading = "Particles", value_parser = species))]
+    pub part_type: Option<Species>,
+    /// Snapshots: load only the particles that can touch this box
+    /// (periodic-aware; SWIFT reads only the cells that overlap it), with a
+    /// margin for the kernels reaching in: the support of --radius, else a
+    /// tenth of the region. The view defaults to what was loaded.
     #[cfg_attr(
         feature = "clap",
-        arg(long, value_name = "N", help_heading = "Particles")
+        arg(
+            long,
+            num_args = 6,
+            value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"],
+            allow_negative_numbers = true,
+            help_heading = "Particles"
+        )
     )]
-    pub part_type: Option<u32>,
+    pub region: Option<Vec<f64>>,
     /// Keep only particles whose `type` column is T (LAMMPS type number; XYZ
     /// type number or element symbol).
     #[cfg_attr(feature = "clap", arg(long, value_name = "T", help_heading = "Particles", value_parser = species))]
@@ -459,6 +473,7 @@ impl DataFlags {
         "weights",
         "group",
         "part_type",
+        "region",
         "species",
         "kernel",
         "kappa",
@@ -679,7 +694,7 @@ impl SceneFlags {
         [("box", self.data.box_size.is_some())]
     }
 
-    fn particle_flags(&self) -> [(&'static str, bool); 17] {
+    fn particle_flags(&self) -> [(&'static str, bool); 18] {
         let (d, k) = (&self.data, &self.kind);
         [
             ("particles", d.particles.is_some()),
@@ -695,6 +710,7 @@ impl SceneFlags {
             ("attribute_range", k.attribute_range.is_some()),
             ("group", d.group.is_some()),
             ("part_type", d.part_type.is_some()),
+            ("region", d.region.is_some()),
             ("species", d.species.is_some()),
             ("no_box", d.no_box),
             ("wrap", d.wrap),
@@ -817,7 +833,8 @@ impl SceneFlags {
             set(&mut p.weights, column(&self.data.weights));
             set(&mut p.kernel, self.data.kernel);
             set(&mut p.group, self.data.group.clone());
-            set(&mut p.part_type, self.data.part_type);
+            set(&mut p.part_type, self.data.part_type.clone());
+            set(&mut p.region, fixed::<6, f64>("region", &self.data.region)?);
             set(&mut p.species, self.data.species.clone());
             set(&mut p.kappa, self.data.kappa);
             set(&mut p.sigma, self.data.sigma);

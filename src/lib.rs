@@ -71,6 +71,7 @@ pub mod flags;
 mod frame;
 pub mod histogram;
 pub mod load;
+pub mod map_fits;
 mod memory;
 pub mod output;
 pub mod parallel;

@@ -41,7 +41,8 @@ impl ImageFormat {
 pub enum OutputKind {
     /// A rendered image: `.png`, `.jpg`/`.jpeg` or `.exr`.
     Image,
-    /// A float32 map (a projection): `.npy` or `.exr`.
+    /// A float32 map (a projection): `.npy`, `.exr` or `.fits` (with a
+    /// world coordinate system and the data's unit).
     Map,
     /// Float32 columns (sampled fields): `.npy`.
     Columns,
@@ -51,7 +52,7 @@ impl OutputKind {
     fn extensions(self) -> &'static [&'static str] {
         match self {
             OutputKind::Image => &["png", "jpg", "jpeg", "exr"],
-            OutputKind::Map => &["npy", "exr"],
+            OutputKind::Map => &["npy", "exr", "fits"],
             OutputKind::Columns => &["npy"],
         }
     }

@@ -25,9 +25,20 @@ pub struct InfoArgs {
     /// PySPH particle array to show (default: fluid if present, else the first).
     #[arg(long, value_name = "NAME")]
     pub group: Option<String>,
-    /// SWIFT/Gadget particle type N to show (default 0).
-    #[arg(long, value_name = "N")]
+    /// Snapshot particle type to show: 0–6 or gas, dm, disk, bulge, stars,
+    /// bh (default: gas if present, else the first type with particles).
+    #[arg(long, value_name = "T", value_parser = part_type)]
     pub part_type: Option<u32>,
+}
+
+/// A particle type by number or name.
+fn part_type(s: &str) -> Result<u32, String> {
+    voxless::io::part_type_named(s).ok_or_else(|| {
+        format!(
+            "unknown particle type '{s}': give 0–6 or one of {}",
+            voxless::io::snapshot::PART_TYPE_NAMES.join(", ")
+        )
+    })
 }
 
 pub fn run(args: &InfoArgs) -> Result<()> {
@@ -50,7 +61,7 @@ fn describe(args: &InfoArgs) -> Result<String> {
         let options = TableOptions {
             group: args.group.clone(),
             part_type: args.part_type,
-            share: None,
+            ..Default::default()
         };
         for (i, (n, f)) in files.iter().enumerate() {
             if i < LISTED_FRAMES / 2 || i + LISTED_FRAMES / 2 >= files.len() {
@@ -95,7 +106,8 @@ fn describe(args: &InfoArgs) -> Result<String> {
 
 fn describe_file(args: &InfoArgs) -> Result<String> {
     let path = args.file.as_path();
-    if !path.exists() {
+    // A snapshot's stem (snap_033 of snap_033.0, snap_033.1, …) is no file.
+    if !path.exists() && voxless::io::snapshot::snapshot_files(path).is_none() {
         bail!("{}: no such file", path.display());
     }
     let name = path
@@ -133,7 +145,7 @@ fn particles(path: &Path, format: ParticleFormat, args: &InfoArgs) -> Result<Str
     let options = TableOptions {
         group: args.group.clone(),
         part_type: args.part_type,
-        share: None,
+        ..Default::default()
     };
     let frames = formats::frames_in(path, format)?;
     let mut out = String::new();
@@ -144,6 +156,9 @@ fn particles(path: &Path, format: ParticleFormat, args: &InfoArgs) -> Result<Str
         format.name(),
         plural(frames)
     )?;
+    if let Some(h) = voxless::io::snapshot_header(path, format)? {
+        snapshot(&mut out, &h)?;
+    }
     if args.frame >= frames {
         bail!(
             "{}: --frame {}: the file has {frames} frame(s), 0..{}",
@@ -179,6 +194,78 @@ fn particles(path: &Path, format: ParticleFormat, args: &InfoArgs) -> Result<Str
     let which = (frames > 1).then_some(args.frame);
     table_summary(&mut out, &table.table, format, which)?;
     Ok(out)
+}
+
+/// What a snapshot's headers say: code, files, particles and fields per
+/// type, box, epoch, units, and which fields would be the radii and masses.
+fn snapshot(out: &mut String, h: &voxless::io::SnapshotHeader) -> std::fmt::Result {
+    use voxless::io::part_type_label;
+    writeln!(out, "snapshot: {}", h.code)?;
+    if h.files.len() > 1 {
+        let name = |p: &Path| {
+            p.file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        };
+        writeln!(
+            out,
+            "  files ({}): {} … {}",
+            h.files.len(),
+            name(&h.files[0]),
+            name(&h.files[h.files.len() - 1])
+        )?;
+    }
+    let total: u64 = h.counts.iter().sum();
+    writeln!(out, "  {total} particles in all")?;
+    for (t, &n) in h.counts.iter().enumerate() {
+        if n == 0 {
+            continue;
+        }
+        writeln!(out, "  type {}: {n} particles", part_type_label(t as u32))?;
+        if let Some((_, fields)) = h.fields.iter().find(|f| f.0 == t as u32) {
+            writeln!(out, "    fields: {}", fields.join(", "))?;
+            let has = |names: &[&str]| {
+                names
+                    .iter()
+                    .find(|n| fields.iter().any(|f| f.eq_ignore_ascii_case(n)))
+                    .map(|n| n.to_string())
+            };
+            let table_mass = h.mass_table.get(t).copied().filter(|m| *m != 0.0);
+            let mass = has(&["Masses", "MASS", "mass"])
+                .or(table_mass.map(|m| format!("MassTable = {}", num(m))));
+            let radius = match has(&["SmoothingLengths", "SmoothingLength", "HSML", "hsmooth"]) {
+                Some(hs) => format!("{hs} (the code's convention)"),
+                None if h.code == "AREPO" && t == 0 => "cell volume Masses/Density".into(),
+                None => "the 32 nearest neighbours (--neighbours)".into(),
+            };
+            writeln!(
+                out,
+                "    used: mass {}, radius {radius}; colour by a field with --attribute",
+                mass.unwrap_or_else(|| "1 (none in the file)".into())
+            )?;
+        }
+    }
+    if let Some(b) = h.box_size {
+        writeln!(out, "  box: {} (periodic)", triple(b))?;
+    }
+    let mut epoch = Vec::new();
+    if let Some(t) = h.time {
+        epoch.push(format!("time {}", num(t)));
+    }
+    if let Some(z) = h.redshift {
+        epoch.push(format!("redshift {}", num(z)));
+    }
+    if !epoch.is_empty() {
+        writeln!(out, "  {}", epoch.join(", "))?;
+    }
+    match &h.units {
+        Some(u) => writeln!(out, "  units: {}", u.describe())?,
+        None => writeln!(
+            out,
+            "  units: none stated (positions, masses and column densities in the code's units)"
+        )?,
+    }
+    Ok(())
 }
 
 /// Whether files of `format` may record their time.
@@ -463,7 +550,12 @@ fn hdf5(path: &Path, args: &InfoArgs) -> Result<String> {
                 groups.join(", ")
             )?;
         }
-        Hdf5Kind::Gadget => writeln!(out, "{}: HDF5, SWIFT/Gadget snapshot", path.display())?,
+        Hdf5Kind::Gadget => {
+            writeln!(out, "{}: HDF5 snapshot", path.display())?;
+            if let Some(h) = voxless::io::snapshot_header(path, ParticleFormat::Hdf5)? {
+                snapshot(&mut out, &h)?;
+            }
+        }
         Hdf5Kind::Jaxpm => {
             let snaps: Vec<String> = voxless::io::jaxpm_snapshots(path)?
                 .iter()
@@ -482,7 +574,7 @@ fn hdf5(path: &Path, args: &InfoArgs) -> Result<String> {
         let options = TableOptions {
             group: args.group.clone(),
             part_type: args.part_type,
-            share: None,
+            ..Default::default()
         };
         let table = formats::read_table(path, ParticleFormat::Hdf5, 0, &options)?;
         if let Some(note) = table.note {
@@ -490,8 +582,13 @@ fn hdf5(path: &Path, args: &InfoArgs) -> Result<String> {
         }
         table_summary(&mut out, &table.table, ParticleFormat::Hdf5, None)?;
     }
-    writeln!(out, "\ncontents:")?;
-    out.push_str(&voxless::io::describe_hdf5(path)?);
+    // A snapshot of several files: the first file's contents.
+    let first = match voxless::io::snapshot::snapshot_files(path) {
+        Some(files) if !path.is_file() => files[0].clone(),
+        _ => path.to_path_buf(),
+    };
+    writeln!(out, "\ncontents of {}:", first.display())?;
+    out.push_str(&voxless::io::describe_hdf5(&first)?);
     Ok(out)
 }
 

@@ -446,7 +446,21 @@ fn project(
     let (view, column) = data.project(projection, w, h, &Control::new().with_progress(&report))?;
     progress.finish();
     let written = column.map_or(Ok(()), |column| {
-        out::write_gray(output, w, h, &column)?;
+        if out::is_fits(output) {
+            // The map's world coordinates, unit and epoch go with it.
+            let meta = voxless::map_fits::map_meta(desc, base, frame)?;
+            let line: Vec<String> = std::env::args().collect();
+            voxless::map_fits::write_projection_fits(
+                output,
+                &view,
+                (w, h),
+                &column,
+                &meta,
+                &[format!("voxless: {}", line.join(" "))],
+            )?;
+        } else {
+            out::write_gray(output, w, h, &column)?;
+        }
         let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * view.pixel_area(w, h);
         let mass = data
             .total_mass()

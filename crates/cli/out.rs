@@ -76,6 +76,12 @@ pub fn write_image(output: &Path, image: &voxless::Image, background: [f32; 3]) 
     Ok(())
 }
 
+/// Whether a map output is FITS (written with its world coordinates).
+pub fn is_fits(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("fits"))
+}
+
 /// Writes a float32 map: `.exr` (one channel) or `.npy` (H×W).
 pub fn write_gray(path: &Path, w: u32, h: u32, values: &[f32]) -> Result<()> {
     if ImageFormat::of(path) == Some(ImageFormat::Exr) {

@@ -33,7 +33,12 @@ pub fn is_sequence(spec: &str, base: &Path) -> bool {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    name.contains('%') || name.contains('*') || name.contains('?') || base.join(spec).is_dir()
+    let full = base.join(spec);
+    // A directory holding one snapshot's files (snapdir_033/) is one frame.
+    name.contains('%')
+        || name.contains('*')
+        || name.contains('?')
+        || (full.is_dir() && voxless_io::snapshot::snapshot_files(&full).is_none())
 }
 
 /// The files of `spec` in frame order (one file when it is not a sequence).

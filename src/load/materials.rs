@@ -2,13 +2,14 @@
 //! species of the particle file with its own radius and transfer function
 //! (see `voxless_particles::MaterialVolume` for the blending).
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use voxless_core::{Range1, Vec3, Volume, srgb_to_linear};
 use voxless_particles::{Material, MaterialClass, MaterialVolume, ParticleVolume};
 use voxless_transfer::{Colormap, OpacityMap, TransferFunction};
 
-use voxless_scene::{MaterialDesc, ParticlesDesc};
+use voxless_scene::{MaterialDesc, ParticlesDesc, Species};
 
 use super::particles::{FrameData, build_frame, frame_for, read_frame};
 use crate::checks::range;
@@ -52,6 +53,43 @@ pub(crate) fn load_materials(
         build_frame(fd, desc, &world, notes)
     })?;
     Ok((v, world))
+}
+
+/// Colormaps of the materials several snapshot types become, in order.
+const TYPE_COLORMAPS: [&str; 4] = ["inferno", "viridis", "magma", "cividis"];
+
+/// `p` with several snapshot types (`part_type = "gas,stars"`) turned into
+/// one material per type (species = the type, a colormap each); `p` as it
+/// is otherwise. Types and materials together are refused.
+pub(crate) fn with_types(p: &ParticlesDesc) -> Result<Cow<'_, ParticlesDesc>, SceneError> {
+    let Some(types) = p.part_type.as_ref().filter(|t| t.0.contains(',')) else {
+        return Ok(Cow::Borrowed(p));
+    };
+    if p.materials.is_some() || p.species.is_some() {
+        return Err(SceneError::setting(
+            "particles.part_type",
+            "several types become materials of their own: give them either as part_type = \
+             \"gas,stars\" or as [[particles.materials]] species, not both",
+        ));
+    }
+    let mats = types
+        .0
+        .split(',')
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+        .enumerate()
+        .map(|(k, t)| MaterialDesc {
+            species: Species(t.to_string()),
+            name: Some(t.to_string()),
+            colormap: Some(TYPE_COLORMAPS[k % TYPE_COLORMAPS.len()].to_string()),
+            ..Default::default()
+        })
+        .collect();
+    Ok(Cow::Owned(ParticlesDesc {
+        part_type: None,
+        materials: Some(mats),
+        ..p.clone()
+    }))
 }
 
 /// Every material's particle description (see [`material_desc`]); the

@@ -25,6 +25,7 @@ pub(crate) mod particles;
 pub(crate) mod periodic;
 pub(crate) mod reach;
 pub(crate) mod scale;
+pub(crate) mod snapshot;
 pub(crate) mod spacing;
 mod sph;
 pub(crate) mod table;
@@ -101,8 +102,10 @@ pub enum Purpose {
 
 /// The one data source a description names.
 pub(crate) enum Source<'a> {
-    /// Particles (with `materials`, several species of one file).
-    Particles(&'a ParticlesDesc),
+    /// Particles (with `materials`, several species of one file; several
+    /// snapshot types become materials, see
+    /// [`materials::with_types`]).
+    Particles(Box<Cow<'a, ParticlesDesc>>),
     Amr(&'a AmrDesc),
     /// A phase-space tessellation: a `[tets]` table, or a JaxPM run given
     /// as particles.
@@ -127,7 +130,7 @@ pub(crate) fn source<'a>(desc: &'a SceneDesc, base: &Path) -> Result<Source<'a>,
         // `--particles run.h5` of a JaxPM run: its tessellation.
         return Ok(match jaxpm::as_tessellation(p, base)? {
             Some(t) => Source::Tets(Cow::Owned(t)),
-            None => Source::Particles(p),
+            None => Source::Particles(Box::new(materials::with_types(p)?)),
         });
     }
     match (&desc.amr, &desc.tets) {
@@ -161,11 +164,11 @@ pub fn load_in(
     let (volume, world) = match source(desc, base)? {
         Source::Particles(p) => match &p.materials {
             Some(mats) => {
-                let (v, f) = materials::load_materials(p, mats, base, &mut notes, frame, world)?;
+                let (v, f) = materials::load_materials(&p, mats, base, &mut notes, frame, world)?;
                 (AnyVolume::Materials(Box::new(v)), f)
             }
             None => {
-                let (v, f) = particles::load_particles(p, base, &mut notes, frame, world)?;
+                let (v, f) = particles::load_particles(&p, base, &mut notes, frame, world)?;
                 (AnyVolume::Particles(Box::new(v)), f)
             }
         },

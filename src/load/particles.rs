@@ -21,9 +21,10 @@ use voxless_transfer::ControlPoints;
 
 use voxless_particles::neighbours::PeriodicBox;
 
-use super::formats::{self, ParticleFormat, TableOptions};
+use super::formats::{self, ParticleFormat};
 use super::periodic;
 use super::reach::{Reach, Unresolvable};
+pub(crate) use super::snapshot::selection;
 use super::spacing;
 use super::{Share, frames, table as load};
 use crate::checks::{positive, range};
@@ -154,20 +155,6 @@ pub(crate) fn locate(
         }
     }
     Ok((path, frame))
-}
-
-/// The columns SPH output carries for smoothing lengths and masses, when
-/// `p` gives no kernel: PySPH's `h`, `m` or SWIFT/Gadget's
-/// `SmoothingLengths`, `Masses`. `None` unless both are present.
-fn sph_columns(p: &ParticlesDesc, source: &load::Source) -> Option<(String, String)> {
-    if p.kernel.is_some() || source.format != ParticleFormat::Hdf5 {
-        return None;
-    }
-    let t = &source.table;
-    [("h", "m"), ("SmoothingLengths", "Masses")]
-        .into_iter()
-        .find(|(h, m)| t.column(h).is_some() && t.column(m).is_some())
-        .map(|(h, m)| (h.to_string(), m.to_string()))
 }
 
 /// The particle set's periodic box in `frame`'s local coordinates.
@@ -343,16 +330,11 @@ fn read_frame_share(
     let (data, main_file) = match (&p.file, p.demo.unwrap_or(false)) {
         (Some(f), _) => {
             let (path, in_file) = locate(f, base, frame)?;
-            let select = load::Selection {
-                options: TableOptions {
-                    group: p.group.clone(),
-                    part_type: p.part_type,
-                    share,
-                },
-                species: p.species.as_ref().map(|s| s.0.as_str()),
-            };
+            super::snapshot::check_region(p)?;
+            let select = selection(p, share);
             let (positions, source, note) = load::open(&path, in_file, &select)?;
             notes.extend(note);
+            notes.extend(super::snapshot::describe(&source.table, source.format));
             rows = source.table.rows;
             snapshot = source.table.sph.is_some();
             if source.table.periodic
@@ -368,7 +350,7 @@ fn read_frame_share(
             let mut data = ParticleData::default();
             let (mut radii, mut weights) = (p.radii.clone(), p.weights.clone());
             let mut h_scale = None;
-            if let Some((h, m)) = sph_columns(p, &source) {
+            if let Some((h, m)) = super::snapshot::sph_columns(p, &source) {
                 let (kernel, factor, said) = super::sph::convention(&source.table);
                 sph_defaults = Some(kernel);
                 let mut used = Vec::new();
@@ -410,6 +392,14 @@ fn read_frame_share(
             };
             data.attribute = per(&p.attribute, "attribute")?;
             data.radii = per(&radii, "radii")?;
+            if let Some((r, said)) = super::snapshot::cell_radii(p, &source.table) {
+                notes.push(said);
+                data.radii = Some(r);
+                sph_defaults.get_or_insert(Kernel::CubicSpline);
+                if weights.is_none() {
+                    weights = Some("Masses".into());
+                }
+            }
             // The file's smoothing lengths in voxless's h (same support).
             if let (Some(f), Some(r)) = (h_scale, data.radii.as_mut())
                 && f != 1.0

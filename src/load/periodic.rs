@@ -76,6 +76,9 @@ pub(crate) fn settle(
     notes: &mut Vec<String>,
 ) -> Result<Option<PeriodicBox>, SceneError> {
     let periodic = match resolve_box(p, file_box)? {
+        // A region cut out of the box: its particles, unwrapped around it,
+        // are no longer periodic.
+        Some((b, _)) if cut_out(p, &b, positions, notes) => None,
         Some((b, given)) => {
             let wrapped = wrap_positions(positions, &b, p, given, file)?;
             notes.push(wrap_note(&b, given, wrapped, positions));
@@ -96,6 +99,41 @@ pub(crate) fn settle(
         )?);
     }
     Ok(periodic)
+}
+
+/// With `particles.region` narrower than the box `b` (with its margin),
+/// moves every particle to its image nearest the region's centre and says
+/// so; returns whether it did (the cutout is then not periodic).
+fn cut_out(
+    p: &ParticlesDesc,
+    b: &PeriodicBox,
+    positions: &mut [[f64; 3]],
+    notes: &mut Vec<String>,
+) -> bool {
+    let Some(r) = super::snapshot::region(p) else {
+        return false;
+    };
+    let centre: [f64; 3] = std::array::from_fn(|a| 0.5 * (r.lo[a] + r.hi[a]));
+    // The margin the reader kept must fit too.
+    let fits = (0..3).all(|a| r.hi[a] - r.lo[a] + 2.0 * r.pad < b.size[a]);
+    if !fits {
+        notes.push(
+            "--region spans (nearly) the whole periodic box: the box stays periodic".to_string(),
+        );
+        return false;
+    }
+    for q in positions.iter_mut() {
+        for a in 0..3 {
+            let l = b.size[a];
+            q[a] = centre[a] + (q[a] - centre[a] + 0.5 * l).rem_euclid(l) - 0.5 * l;
+        }
+    }
+    notes.push(format!(
+        "--region cut out of the periodic box (side {:?}): particles moved to their image \
+         nearest the region; the cutout is not periodic",
+        b.size
+    ));
+    true
 }
 
 fn box_of(lo: [f64; 3], hi: [f64; 3]) -> PeriodicBox {

@@ -60,7 +60,14 @@ pub(crate) fn convention(table: &ParticleTable) -> (Kernel, f32, String) {
         SphCode::Gadget => (
             Kernel::CubicSpline,
             0.5,
-            "cubic-spline kernel (Gadget writes the support radius H = 2h)".into(),
+            "cubic-spline kernel (Gadget and GIZMO write the support radius H = 2h)".into(),
+        ),
+        // No smoothing lengths: the radii come from the cell volumes.
+        SphCode::Arepo => (Kernel::CubicSpline, 1.0, "cubic-spline kernel".into()),
+        SphCode::Tipsy => (
+            Kernel::CubicSpline,
+            1.0,
+            "cubic-spline kernel (Tipsy's hsmooth is h, support 2h)".into(),
         ),
         SphCode::Swift => {
             let (kernel, said) = match sph.kernel.as_deref() {

@@ -26,8 +26,12 @@ impl Source {
 #[derive(Default)]
 pub struct Selection<'a> {
     pub options: TableOptions,
-    /// Keep only this `type` (`particles.species`).
+    /// Keep only this `type` (`particles.species`); in a snapshot, the
+    /// particle type (a material's species).
     pub species: Option<&'a str>,
+    /// The snapshot particle type asked for (`particles.part_type`), as
+    /// given: a number or a name.
+    pub part_type: Option<&'a str>,
 }
 
 fn is_npy(path: &Path) -> bool {
@@ -50,12 +54,37 @@ pub type Opened = (Vec<[f64; 3]>, Source, Option<String>);
 /// the table, and a note on what part of the file was read, if worth one.
 pub fn open(path: &Path, frame: usize, select: &Selection) -> Result<Opened, SceneError> {
     let format = ParticleFormat::detect(path)?.unwrap_or(ParticleFormat::Csv);
-    let formats::Table { mut table, note } =
-        formats::read_table(path, format, frame, &select.options)?;
-    if let Some(species) = select.species {
+    let mut options = select.options.clone();
+    let mut species = select.species;
+    // A snapshot's types are its species.
+    if format.is_snapshot() && select.part_type.is_none() {
+        options.part_type = species.take().map(|s| part_type_of(s, path)).transpose()?;
+    } else if let Some(t) = select.part_type {
+        options.part_type = Some(if format.is_snapshot() {
+            part_type_of(t, path)?
+        } else {
+            0 // the reader says part_type does not apply
+        });
+    }
+    let formats::Table { mut table, note } = formats::read_table(path, format, frame, &options)?;
+    if let Some(species) = species {
         formats::keep_species(&mut table, species, path, format, frame)?;
     }
     if table.is_empty() {
+        if let Some(r) = &options.region {
+            let box_text = match table.domain {
+                Some((lo, hi)) => format!(" (the snapshot's box is {lo:?} to {hi:?})"),
+                None => String::new(),
+            };
+            return Err(SceneError::data(
+                path,
+                format!(
+                    "particles.region (--region) {:?} to {:?}: no particle of the snapshot \
+                     can reach it{box_text}",
+                    r.lo, r.hi
+                ),
+            ));
+        }
         let what = match format {
             ParticleFormat::Npy => "the array has 0 rows",
             ParticleFormat::Csv => "the table has no rows",
@@ -70,6 +99,30 @@ pub fn open(path: &Path, frame: usize, select: &Selection) -> Result<Opened, Sce
         table,
     };
     Ok((positions, source, note))
+}
+
+/// The particle type `s` names (`0`–`6`, `gas`, `dm`, …), or an error
+/// naming the file.
+fn part_type_of(s: &str, path: &Path) -> Result<u32, SceneError> {
+    if s.contains(',') {
+        return Err(SceneError::data(
+            path,
+            format!(
+                "particles.part_type '{s}': several types are read as materials \
+                 ([[particles.materials]] species = \"gas\", …), one type at a time here"
+            ),
+        ));
+    }
+    voxless_io::part_type_named(s).ok_or_else(|| {
+        SceneError::data(
+            path,
+            format!(
+                "unknown particle type '{s}' (particles.part_type, --part-type): give 0–6 or \
+                 one of {}",
+                voxless_io::snapshot::PART_TYPE_NAMES.join(", ")
+            ),
+        )
+    })
 }
 
 /// Reads a per-particle array: a column of the particle table when `spec`

@@ -119,7 +119,7 @@ pub(crate) fn open_part(
     let projecting = purpose == Purpose::Project;
     crate::checks::check_ranks(desc, tets, comm.size(), projecting)?;
     match source {
-        Source::Particles(p) => particles::open(comm, p, base, frame, earlier),
+        Source::Particles(p) => particles::open(comm, &p, base, frame, earlier),
         Source::Amr(a) => amr::open(comm, a, base),
         Source::Tets(t) => tets::open(comm, &t, base, purpose),
     }

@@ -189,9 +189,10 @@ impl Scene {
     ) -> Result<(), SceneError> {
         if let (AnyVolume::Materials(_), Some(p)) = (&self.volume, &desc.particles) {
             // Each material is rebuilt from the new frame (no buffer reuse).
+            let p = load::materials::with_types(p)?;
             let mats = p.materials.as_deref().unwrap_or_default();
             let (v, _) = load::materials::load_materials(
-                p,
+                &p,
                 mats,
                 base,
                 &mut Vec::new(),

@@ -62,8 +62,7 @@ pub fn read_dam_break(path: &Path) -> Result<ParticleData> {
     };
     let opts = TableOptions {
         group: (format == ParticleFormat::Hdf5).then(|| "fluid".to_string()),
-        part_type: None,
-        share: None,
+        ..Default::default()
     };
     let t = read_table(path, format, 0, &opts)?.table;
     let column = |name: &str| -> Result<Vec<f32>> {

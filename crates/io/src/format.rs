@@ -10,12 +10,17 @@
 //! | XYZ | `.xyz`, `.extxyz`, or a first line holding only a count | frames back to back; `type` numbers the species |
 //! | LAMMPS dump | `dump.*`, `.lammpstrj`, `.dump`, or a first line `ITEM: TIMESTEP` | frames; `type`, `id`, … |
 //! | `.particles` | `.particles` | an index of timesteps; column `attribute` |
-//! | HDF5 | `.h5`, `.hdf5`, or the HDF5 signature | PySPH or SWIFT/Gadget (feature `hdf5`) |
+//! | HDF5 | `.h5`, `.hdf5`, or the HDF5 signature | PySPH, SWIFT, Gadget-4, AREPO, GIZMO, one file or several (feature `hdf5`) |
+//! | Gadget binary | its first record (format 1 or 2, either byte order) | `snap_033`, or `snap_033.0` … of a multi-file set |
+//! | Tipsy | `.tipsy`, `.std`, or a header whose counts match the file's size | ChaNGa/Gasoline, big- or little-endian |
 //!
 //! Detection works on a path ([`ParticleFormat::detect`]) or on a name and
 //! the first bytes of the content ([`ParticleFormat::detect_bytes`]), so
 //! data that never was a file (an upload, a network stream) is recognised
-//! the same way: `detect(path)` is `detect_bytes(path, first 512 bytes)`.
+//! the same way: `detect(path)` is `detect_bytes(path, first 512 bytes)`
+//! (and the file's length, which a Tipsy header must match). A snapshot
+//! split over several files is detected by its first file, whichever of
+//! them, its stem or its directory names it.
 //!
 //! [`read_table`] and [`frames_in`] dispatch to the readers of this crate by
 //! format; [`read_table_from`] and [`frames_in_from`] do the same on a
@@ -34,8 +39,9 @@ pub const SNIFF_LEN: usize = 512;
 
 /// What `voxless info` and error messages list as readable.
 pub const SUPPORTED: &str = "particles: .npy (N×3), .csv/.txt (x, y, z columns), .vtp/.vtu, \
-    .xyz/.extxyz, LAMMPS dumps (dump.*, .lammpstrj, .dump), .particles, .h5/.hdf5 (PySPH, \
-    SWIFT/Gadget; JaxPM as a tessellation; needs --features hdf5); AMR: ExaBricks .cells, \
+    .xyz/.extxyz, LAMMPS dumps (dump.*, .lammpstrj, .dump), .particles, Gadget binary \
+    snapshots (format 1/2, multi-file), Tipsy, .h5/.hdf5 (PySPH, SWIFT, Gadget-4, AREPO, GIZMO, \
+    multi-file; JaxPM as a tessellation; needs --features hdf5); AMR: ExaBricks .cells, \
     AMRClaw fort.qNNNN; meshes: .vtu";
 
 /// A particle file format voxless reads.
@@ -48,6 +54,8 @@ pub enum ParticleFormat {
     Lammps,
     Particles,
     Hdf5,
+    GadgetBinary,
+    Tipsy,
 }
 
 impl ParticleFormat {
@@ -61,7 +69,18 @@ impl ParticleFormat {
             ParticleFormat::Lammps => "LAMMPS dump",
             ParticleFormat::Particles => ".particles series",
             ParticleFormat::Hdf5 => "HDF5",
+            ParticleFormat::GadgetBinary => "Gadget binary snapshot",
+            ParticleFormat::Tipsy => "Tipsy file",
         }
+    }
+
+    /// Whether this is a cosmological snapshot format (particle types,
+    /// regions, units).
+    pub fn is_snapshot(self) -> bool {
+        matches!(
+            self,
+            ParticleFormat::Hdf5 | ParticleFormat::GadgetBinary | ParticleFormat::Tipsy
+        )
     }
 
     /// Whether one file of this format can hold several frames.
@@ -85,6 +104,7 @@ impl ParticleFormat {
             "lammpstrj" | "dump" => Some(ParticleFormat::Lammps),
             "particles" => Some(ParticleFormat::Particles),
             "h5" | "hdf5" => Some(ParticleFormat::Hdf5),
+            "tipsy" | "std" => Some(ParticleFormat::Tipsy),
             _ if file_name.starts_with("dump.") => Some(ParticleFormat::Lammps),
             _ => None,
         }
@@ -99,6 +119,12 @@ impl ParticleFormat {
     /// [`from_name`]: ParticleFormat::from_name
     /// [`detect_bytes`]: ParticleFormat::detect_bytes
     pub fn detect(path: &Path) -> Result<Option<ParticleFormat>, IoError> {
+        // A snapshot of several files: its first file says.
+        if !path.is_file()
+            && let Some(files) = crate::snapshot::snapshot_files(path)
+        {
+            return ParticleFormat::detect(&files[0]);
+        }
         // The name decides without opening the file (which may not exist
         // yet, or be a directory of frames the caller expands).
         if let Some(format) = ParticleFormat::from_name(path) {
@@ -106,10 +132,11 @@ impl ParticleFormat {
         }
         let mut head = Vec::with_capacity(SNIFF_LEN);
         let file = File::open(path).map_err(|e| IoError::io(path, e))?;
+        let len = file.metadata().map_err(|e| IoError::io(path, e))?.len();
         file.take(SNIFF_LEN as u64)
             .read_to_end(&mut head)
             .map_err(|e| IoError::io(path, e))?;
-        Ok(ParticleFormat::detect_bytes(path, &head))
+        Ok(ParticleFormat::detect_content(path, &head, len))
     }
 
     /// The format of content named `name` (a file name, or whatever the
@@ -124,10 +151,22 @@ impl ParticleFormat {
     /// followed by more lines. A `.csv`, `.tsv` or `.txt` name makes it a
     /// text table unless the content is a LAMMPS dump.
     pub fn detect_bytes(name: &Path, head: &[u8]) -> Option<ParticleFormat> {
+        ParticleFormat::detect_content(name, head, head.len() as u64)
+    }
+
+    /// [`detect_bytes`](ParticleFormat::detect_bytes) of content `len`
+    /// bytes long (which a Tipsy header's counts must match).
+    pub fn detect_content(name: &Path, head: &[u8], len: u64) -> Option<ParticleFormat> {
         if let Some(format) = ParticleFormat::from_name(name) {
             return Some(format);
         }
         let head = &head[..head.len().min(SNIFF_LEN)];
+        if crate::gadget_bin::sniff_gadget_binary(head) {
+            return Some(ParticleFormat::GadgetBinary);
+        }
+        if crate::tipsy::sniff_tipsy(head, len) {
+            return Some(ParticleFormat::Tipsy);
+        }
         let table_ext = matches!(lowercase(name.extension()).as_str(), "csv" | "tsv" | "txt");
         match sniff(head) {
             // A text table's extension wins unless the content is a dump.
@@ -182,6 +221,13 @@ pub struct TableOptions {
     /// only those rows (hyperslabs) and say so in [`ParticleTable::rows`];
     /// other formats read every row.
     pub share: Option<(usize, usize)>,
+    /// Keep only the particles that can touch this region (cosmological
+    /// snapshots: SWIFT through its cell metadata, Gadget binary and Tipsy
+    /// by streaming); other formats ignore it and the caller cuts.
+    pub region: Option<crate::Region>,
+    /// The file's periodic box is to be ignored (`--no-box`): a region
+    /// without a `period` then measures plainly.
+    pub no_file_box: bool,
 }
 
 /// A frame of a particle file: the table, and for HDF5 a line saying which
@@ -240,8 +286,50 @@ pub fn read_table(
         ParticleFormat::Lammps => crate::read_lammps(path, frame)?,
         ParticleFormat::Particles => crate::read_particles_file(path, frame)?,
         ParticleFormat::Hdf5 => return read_hdf5(path, opts),
+        ParticleFormat::GadgetBinary => {
+            let mut region = opts.region;
+            if let Some(r) = region.as_mut()
+                && r.period.is_none()
+                && !opts.no_file_box
+            {
+                let b = crate::gadget_bin::open_gadget_binary(path)?.header.box_size;
+                r.period = (b > 0.0).then_some(([0.0; 3], [b; 3]));
+            }
+            let t = crate::gadget_bin::read_gadget_binary(
+                path,
+                opts.part_type,
+                opts.share,
+                region.as_ref(),
+            )?;
+            return Ok(snapshot_table(t, opts, "Gadget binary", path));
+        }
+        ParticleFormat::Tipsy => {
+            let t =
+                crate::tipsy::read_tipsy(path, opts.part_type, opts.share, opts.region.as_ref())?;
+            return Ok(snapshot_table(t, opts, "Tipsy", path));
+        }
     };
     Ok(Table { table, note: None })
+}
+
+/// A snapshot's table with a note saying which type was read when none was
+/// asked for, and how many particles a region kept.
+fn snapshot_table(table: ParticleTable, opts: &TableOptions, what: &str, path: &Path) -> Table {
+    let mut said = Vec::new();
+    if opts.part_type.is_none() {
+        said.push(format!(
+            "{what}: the particles of the default type (pick one with --part-type; `voxless \
+             info {}` lists them)",
+            path.display()
+        ));
+    }
+    if opts.region.is_some() {
+        said.push(format!("--region: {} particles kept", table.len()));
+    }
+    Table {
+        table,
+        note: (!said.is_empty()).then(|| said.join("; ")),
+    }
 }
 
 /// [`read_table`] of the content from `reader`'s position to its end;
@@ -282,11 +370,16 @@ pub fn read_table_from<R: Read + Seek>(
             ));
         }
         ParticleFormat::Hdf5 => return Err(hdf5_from_memory(name)),
+        ParticleFormat::GadgetBinary => {
+            crate::gadget_bin::read_gadget_binary_from(reader, name, opts.part_type)?
+        }
+        ParticleFormat::Tipsy => crate::tipsy::read_tipsy_from(reader, name, opts.part_type)?,
     };
     Ok(Table { table, note: None })
 }
 
-/// `group` and `part_type` only apply to HDF5 layouts.
+/// `group` only applies to PySPH HDF5 output, `part_type` and `region` to
+/// snapshots.
 fn check_options(path: &Path, format: ParticleFormat, opts: &TableOptions) -> Result<(), IoError> {
     if format == ParticleFormat::Hdf5 {
         return Ok(());
@@ -294,11 +387,22 @@ fn check_options(path: &Path, format: ParticleFormat, opts: &TableOptions) -> Re
     if opts.group.is_some() {
         return Err(not_applicable(path, "group", "PySPH HDF5 output", format));
     }
+    if format.is_snapshot() {
+        return Ok(());
+    }
     if opts.part_type.is_some() {
         return Err(not_applicable(
             path,
             "part_type",
-            "SWIFT/Gadget HDF5 snapshots",
+            "snapshots (SWIFT/Gadget/AREPO/GIZMO HDF5, Gadget binary, Tipsy)",
+            format,
+        ));
+    }
+    if opts.region.is_some() {
+        return Err(not_applicable(
+            path,
+            "region",
+            "snapshots (SWIFT/Gadget/AREPO/GIZMO HDF5, Gadget binary, Tipsy)",
             format,
         ));
     }
@@ -391,7 +495,7 @@ fn hdf5_from_memory(name: &Path) -> IoError {
 /// is on.
 #[cfg(feature = "hdf5")]
 fn read_hdf5(path: &Path, opts: &TableOptions) -> Result<Table, IoError> {
-    use crate::hdf5::{read_gadget_share, read_pysph_share};
+    use crate::hdf5::read_pysph_share;
     use crate::{Hdf5Kind, hdf5_kind, pysph_groups};
 
     let kind = hdf5_kind(path)?;
@@ -408,14 +512,16 @@ fn read_hdf5(path: &Path, opts: &TableOptions) -> Result<Table, IoError> {
             format!("particles.group (--group) applies to PySPH output, but this is {what}"),
         ));
     }
-    if opts.part_type.is_some() && kind != Hdf5Kind::Gadget {
-        return Err(IoError::format(
-            path,
-            format!(
-                "particles.part_type (--part-type) applies to SWIFT/Gadget snapshots, but \
-                 this is {what}"
-            ),
-        ));
+    for (given, key) in [
+        (opts.part_type.is_some(), "part_type (--part-type)"),
+        (opts.region.is_some(), "region (--region)"),
+    ] {
+        if given && kind != Hdf5Kind::Gadget {
+            return Err(IoError::format(
+                path,
+                format!("particles.{key} applies to snapshots, but this is {what}"),
+            ));
+        }
     }
     match kind {
         Hdf5Kind::PySph => {
@@ -440,11 +546,20 @@ fn read_hdf5(path: &Path, opts: &TableOptions) -> Result<Table, IoError> {
             Ok(Table { table, note })
         }
         Hdf5Kind::Gadget => {
-            let part_type = opts.part_type.unwrap_or(0);
-            let table = read_gadget_share(path, part_type, opts.share)?;
-            let note = opts.part_type.is_none().then(|| {
-                format!("SWIFT/Gadget PartType{part_type} (pick another with --part-type N)")
-            });
+            let mut region = opts.region;
+            if let Some(r) = region.as_mut()
+                && r.period.is_none()
+                && !opts.no_file_box
+                && let Some(b) = crate::hdf5::open_gadget_hdf5(path)?.box_size
+            {
+                r.period = Some(([0.0; 3], b));
+            }
+            let (table, note) = crate::hdf5::read_gadget_snapshot(
+                path,
+                opts.part_type,
+                opts.share,
+                region.as_ref(),
+            )?;
             Ok(Table { table, note })
         }
         Hdf5Kind::Jaxpm => Err(IoError::format(

@@ -595,6 +595,7 @@ fn read_atoms(
         periodic: header.sim_box.is_some_and(|b| b.periodic),
         rows: None,
         sph: None,
+        ..Default::default()
     };
     table.derive_speed("vx", "vy", "vz");
     Ok(table)

@@ -13,14 +13,24 @@
 //!   ASCII `fort.q`/`fort.t` output ([`read_amrclaw`]), whose coarse cells
 //!   under finer grids are dropped.
 //! - `hdf5` (cargo feature `hdf5`, needs the system HDF5 library): PySPH
-//!   output, SWIFT/Gadget-4 snapshots and JaxPM runs (`read_pysph`,
-//!   `read_gadget`, `read_jaxpm`), layout sniffing and a tree listing of any
+//!   output, SWIFT, Gadget-4, AREPO and GIZMO snapshots in one file or
+//!   several, with SWIFT's cell metadata for regions, and JaxPM runs
+//!   (`read_pysph`, `read_gadget_snapshot`, `read_jaxpm`), layout sniffing and a tree listing of any
 //!   HDF5 file (`describe_hdf5`).
 //! - [`lammps`]: LAMMPS text dumps ([`read_lammps`], [`lammps_frames`]) with
 //!   any column set, scaled or unscaled coordinates, orthogonal or triclinic
 //!   boxes; rows sorted by atom id.
 //! - [`xyz`]: plain and extended XYZ files ([`read_xyz`], [`xyz_frames`]),
 //!   several frames back to back.
+//! - [`gadget_bin`]: Gadget binary snapshots, format 1 and 2, either byte
+//!   order, one file or several ([`read_gadget_binary`]); [`tipsy`]: Tipsy
+//!   files of ChaNGa and Gasoline ([`read_tipsy`]); [`snapshot`]: what the
+//!   snapshot readers share (particle types by name, regions read without
+//!   reading everything, the unit system a file states, multi-file sets,
+//!   [`snapshot_header`] for `voxless info`).
+//! - [`fits`]: FITS images with a linear world coordinate system
+//!   ([`write_fits_image`]) for projected maps, and a reader of what it
+//!   writes.
 //! - [`particles_fmt`]: the `.particles` time series of the attribute-aware
 //!   RBF renderer ([`read_particles_file`], [`particles_frames`]).
 //! - [`vtk`]: VTK XML `.vtp`/`.vtu` files in every encoding VTK writes:
@@ -89,15 +99,19 @@ use std::path::{Path, PathBuf};
 pub mod amr;
 mod atomic;
 pub mod csv;
+pub mod fits;
 pub mod format;
+pub mod gadget_bin;
 #[cfg(feature = "hdf5")]
 pub mod hdf5;
 pub mod image;
 pub mod lammps;
 pub mod npy;
 pub mod particles_fmt;
+pub mod snapshot;
 pub mod surface;
 pub mod table;
+pub mod tipsy;
 pub mod vtk;
 pub mod xyz;
 
@@ -107,11 +121,16 @@ pub use amr::{
 };
 pub use atomic::write_atomically;
 pub use csv::{CsvTable, read_csv, read_csv_from};
+pub use fits::{CardValue, FitsImage, LinearWcs, read_fits_image, write_fits_image};
 pub use format::{ParticleFormat, TableOptions};
+pub use gadget_bin::{
+    GadgetBinary, GadgetHeader, gadget_binary_files, open_gadget_binary, read_gadget_binary,
+    read_gadget_binary_from, sniff_gadget_binary,
+};
 #[cfg(feature = "hdf5")]
 pub use hdf5::{
     Hdf5Kind, JaxpmSnapshot, describe_hdf5, hdf5_kind, jaxpm_snapshots, pysph_groups, read_gadget,
-    read_gadget_share, read_jaxpm, read_pysph, read_pysph_share,
+    read_gadget_share, read_gadget_snapshot, read_jaxpm, read_pysph, read_pysph_share,
 };
 pub use image::{
     read_exr_gray, read_exr_gray_from, read_png_rgb8, read_png_rgb8_from, write_exr_gray,
@@ -126,8 +145,12 @@ pub use particles_fmt::{
     particles_frames, particles_frames_from, read_particles_file, read_particles_from,
     read_particles_timestep_from,
 };
+pub use snapshot::{
+    Region, SnapshotHeader, Units, part_type_label, part_type_named, snapshot_header,
+};
 pub use surface::{SurfaceFormat, SurfaceMesh, read_surface, read_surface_bytes};
 pub use table::{ParticleTable, SphCode, SphConvention};
+pub use tipsy::{TipsyHeader, read_tipsy, read_tipsy_from, sniff_tipsy, tipsy_header};
 pub use vtk::{
     VtkMesh, read_vtk_points, read_vtk_points_bytes, read_vtu_mesh, read_vtu_mesh_bytes,
 };

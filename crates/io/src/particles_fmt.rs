@@ -226,5 +226,6 @@ pub fn read_particles_timestep_from<R: Read + Seek>(
         periodic: false,
         rows: None,
         sph: None,
+        ..Default::default()
     })
 }

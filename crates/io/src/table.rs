@@ -17,8 +17,14 @@ pub struct ParticleTable {
     /// Vector quantities appear as their components (`vx`, `vy`, `vz`) and, for
     /// velocities, as `speed`.
     pub columns: Vec<(String, Vec<f32>)>,
-    /// Simulation time of the frame, when the file says.
+    /// Simulation time of the frame, when the file says (the scale factor
+    /// in cosmological snapshots).
     pub time: Option<f64>,
+    /// Redshift, when a cosmological snapshot states it.
+    pub redshift: Option<f64>,
+    /// The file's unit system, when it states one (SWIFT, Gadget/AREPO
+    /// HDF5); positions and columns stay in these units.
+    pub units: Option<crate::Units>,
     /// The simulation box (lower corner, upper corner), when the file says.
     pub domain: Option<([f64; 3], [f64; 3])>,
     /// Whether the file says the domain is periodic along every axis
@@ -39,8 +45,15 @@ pub struct ParticleTable {
 pub enum SphCode {
     /// `SmoothingLengths` = h_S with support `γ h_S` (γ per kernel).
     Swift,
-    /// `SmoothingLengths` = the support radius H.
+    /// `SmoothingLength(s)` = the support radius H (Gadget-2/3/4, GIZMO:
+    /// cubic spline by default).
     Gadget,
+    /// AREPO's moving-mesh cells: no smoothing length; a cell's size comes
+    /// from its volume `Masses / Density`.
+    Arepo,
+    /// Tipsy (ChaNGa, Gasoline): `hsmooth` = h with support 2h (cubic
+    /// spline); dark and star particles carry a softening `eps`.
+    Tipsy,
 }
 
 /// What a snapshot says about its kernel.

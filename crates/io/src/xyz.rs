@@ -580,6 +580,7 @@ fn read_atoms(
         periodic: layout.pbc && layout.domain().is_some(),
         rows: None,
         sph: None,
+        ..Default::default()
     };
     if let Some([x, y, z]) = &layout.velocity {
         table.derive_speed(x, y, z);

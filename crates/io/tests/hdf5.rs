@@ -218,7 +218,7 @@ fn swift_tiny_snapshot() {
 
     let text = message_naming(read_gadget(&path, 4).unwrap_err(), &path);
     assert!(
-        text.contains("PartType4") && text.contains("PartType0, PartType1"),
+        text.contains("type 4 (stars)") && text.contains("0 (gas) × 8, 1 (dm) × 6"),
         "{text}"
     );
 }
@@ -234,7 +234,7 @@ fn gadget4_tiny_snapshot_with_scalar_header() {
     // No HydroScheme and no SWIFT code: Gadget's support-radius convention.
     assert_eq!(table.sph.map(|s| s.code), Some(voxless_io::SphCode::Gadget));
     let text = message_naming(read_gadget(&path, 0).unwrap_err(), &path);
-    assert!(text.contains("present: PartType1"), "{text}");
+    assert!(text.contains("present: 1 (dm) × 5"), "{text}");
 }
 
 #[test]

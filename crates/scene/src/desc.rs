@@ -76,8 +76,17 @@ pub struct ParticlesDesc {
     /// PySPH particle array to read (default: `fluid` if present, else the
     /// first).
     pub group: Option<String>,
-    /// SWIFT/Gadget particle type N, the group `PartType<N>` (default 0).
-    pub part_type: Option<u32>,
+    /// Snapshot particle type: a number 0–6 or a name (`gas`, `dm`, `disk`,
+    /// `bulge`, `stars`, `bh`); several, comma-separated (`"gas,stars"`),
+    /// become materials with their own transfer functions. Default: gas
+    /// when the snapshot has any, else the first type with particles.
+    pub part_type: Option<Species>,
+    /// Snapshots: load only the particles that can touch the box
+    /// `[x0, y0, z0, x1, y1, z1]` (periodic-aware), with a margin for the
+    /// kernels reaching in (the support of `radius`, else a tenth of the
+    /// region's longest side). A cutout of a periodic box is unwrapped
+    /// around the region and is not periodic itself.
+    pub region: Option<[f64; 6]>,
     /// Keep only particles whose `type` column equals this (LAMMPS type
     /// number; XYZ type number or element symbol).
     pub species: Option<Species>,

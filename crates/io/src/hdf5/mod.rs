@@ -49,7 +49,9 @@ mod jaxpm;
 mod pysph;
 
 pub use describe::describe_hdf5;
-pub use gadget::{read_gadget, read_gadget_share};
+pub use gadget::{
+    GadgetHdf5, open_gadget_hdf5, read_gadget, read_gadget_share, read_gadget_snapshot,
+};
 pub use jaxpm::{JaxpmSnapshot, jaxpm_snapshots, read_jaxpm};
 pub use pysph::{pysph_groups, read_pysph, read_pysph_share};
 
@@ -78,7 +80,12 @@ pub enum Hdf5Kind {
 /// `PartType<N>` group means SWIFT/Gadget, a `q_index` dataset next to
 /// `snap_<K>` groups means JaxPM.
 pub fn hdf5_kind(path: &Path) -> Result<Hdf5Kind, IoError> {
-    let f = Hdf5File::open(path)?;
+    // A snapshot of several files: its first file says.
+    let first = match crate::snapshot::snapshot_files(path) {
+        Some(files) if !path.is_file() => files[0].clone(),
+        _ => path.to_path_buf(),
+    };
+    let f = Hdf5File::open(&first)?;
     let root = f.root();
     let names = f.member_names(root, "/")?;
     if let Some(particles) = f.child_group(root, "particles") {
@@ -90,9 +97,14 @@ pub fn hdf5_kind(path: &Path) -> Result<Hdf5Kind, IoError> {
             }
         }
     }
-    if names
-        .iter()
-        .any(|n| numbered(n, "PartType").is_some() && f.child_group(root, n).is_some())
+    let counted = f.child_group(root, "Header").is_some_and(|h| {
+        h.attr_names()
+            .is_ok_and(|n| n.iter().any(|a| a == "NumPart_Total"))
+    });
+    if counted
+        || names
+            .iter()
+            .any(|n| numbered(n, "PartType").is_some() && f.child_group(root, n).is_some())
     {
         return Ok(Hdf5Kind::Gadget);
     }

@@ -110,6 +110,7 @@ pub fn read_vtk_points_bytes(bytes: &[u8], name: &Path) -> Result<ParticleTable,
         periodic: false,
         rows: None,
         sph: None,
+        ..Default::default()
     };
     arrays.to_columns(&mut table.columns, None);
     if let Some([x, y, z]) = arrays.velocity_names() {

@@ -162,6 +162,7 @@ fn table_options_and_unsupported_sources() {
         group: Some("fluid".into()),
         part_type: None,
         share: None,
+        ..Default::default()
     };
     let err = read_table_from(Cursor::new(csv), name, F::Csv, 0, &group)
         .err()
@@ -213,6 +214,7 @@ fn hdf5_table_dispatch() {
         group: None,
         part_type: Some(1),
         share: None,
+        ..Default::default()
     };
     let gadget = read("gadget4_snapshot.hdf5", &type1).unwrap();
     assert!(!gadget.table.is_empty() && gadget.note.is_none());
@@ -221,6 +223,7 @@ fn hdf5_table_dispatch() {
         group: Some("fluid".into()),
         part_type: None,
         share: None,
+        ..Default::default()
     };
     let err = read("gadget4_snapshot.hdf5", &group)
         .unwrap_err()
