@@ -399,3 +399,46 @@ fn periodic_particles_with_neighbour_radii_under_mpirun_equal_one_process() {
     mpi_ok(3, &a3);
     same_bits(Path::new(&one_h), Path::new(&k_h));
 }
+
+#[test]
+fn snapshots_and_their_regions_under_mpirun_equal_one_process() {
+    if !have_mpirun() {
+        return;
+    }
+    let dir = Scratch::new("mpi-snapshots");
+    let snap = |name: &str| {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/snapshots")
+            .join(name)
+            .to_string_lossy()
+            .into_owned()
+    };
+    let points = write_points(&dir, 0.0, 100.0);
+    // A 3-file Gadget binary set: dark matter with neighbour radii and the
+    // header's masses, every periodic image.
+    let multi = snap("gadget_multi/snap_005");
+    let data = ["--particles", &multi, "--part-type", "dm"];
+    check_kind(&dir, "gadget", &data, &["--opacity-scale", "0.2"], &points);
+    // A region: every rank reads the region, then keeps its share.
+    let gas = snap("gadget2_gas_snap");
+    let region = [
+        "--particles",
+        &gas,
+        "--part-type",
+        "dm",
+        "--region",
+        "10",
+        "10",
+        "10",
+        "60",
+        "60",
+        "60",
+    ];
+    check_kind(
+        &dir,
+        "region",
+        &region,
+        &["--opacity-scale", "0.2"],
+        &points,
+    );
+}

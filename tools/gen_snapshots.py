@@ -70,10 +70,11 @@ Files and the layouts they follow (units are each format's usual ones):
   (PartType1) and gas (PartType0 with SmoothingLengths = SWIFT's h, the
   cubic-spline support over γ = 1.825742). The Writer writes only Header,
   Units and the particles; what SWIFT itself adds and readers use is added
-  with h5py after the SWIFT documentation ("Snapshots", "Quick access to
-  particles via hash-tables"): Header Code = "SWIFT", Time, Redshift,
-  Scale-factor; Cosmology, Policy, Parameters, HydroScheme, SubgridScheme
-  groups; and the top-level cell grid ``Cells/``: ``Meta-data`` attributes
+  with h5py after the SWIFT documentation (swift.strw.leidenuniv.nl/docs,
+  "Snapshots" and its "Quick access to particles via hash-tables"): Header
+  Code = "SWIFT", Time, Redshift, Scale-factor, Dimension (1-element arrays,
+  as SWIFT writes them); InternalCodeUnits, Cosmology, Policy, Parameters,
+  HydroScheme, SubgridScheme groups; and the top-level cell grid ``Cells/``: ``Meta-data`` attributes
   ``dimension`` (cells per axis, 3), ``size`` (cell size ×3), ``nr_cells``;
   ``Centres`` (nr_cells×3, C order: z fastest), ``Counts/PartTypeN`` and
   ``OffsetsInFile/PartTypeN`` (int64), ``Files/PartTypeN`` (int32, zeros),
@@ -97,12 +98,14 @@ Files and the layouts they follow (units are each format's usual ones):
   as AREPO writes it.
 - ``gizmo_snap.hdf5``: GIZMO / FIRE style single file: Header with
   GIZMO_version (2022), BoxSize (scalar), Time, Redshift, HubbleParam,
-  Omega_Matter/Omega0, OmegaLambda, MassTable of zeros and no unit attributes
-  (FIRE snapshots are in ckpc/h, 1e10 Msun/h, km/s √a by convention);
-  PartType0 with SmoothingLength (GIZMO's kernel support radius H, cubic
-  spline, from 32 neighbours: 4π/3 H³ Σ W = 32, as GIZMO's DesNumNgb),
-  Density = Σ m W(r, H) (the same kernel sum), Masses, InternalEnergy,
-  Velocities, ParticleIDs; PartType1 with Masses.
+  Omega_Matter, Omega_Lambda, Omega_Baryon, Omega_Radiation (and the Gadget
+  names Omega0, OmegaLambda), MassTable of zeros and no unit attributes
+  (FIRE snapshots are in ckpc/h, 1e10 Msun/h, km/s √a by convention: see
+  the GIZMO user guide, "Snapshot & initial condition files"); PartType0
+  with SmoothingLength (GIZMO's kernel support radius H of the cubic
+  spline: here the distance to the 32nd nearest neighbour, itself counted,
+  for DesNumNgb = 32), Density = Σ m W(r, H) (the same kernel), Masses,
+  InternalEnergy, Velocities, ParticleIDs; PartType1 with Masses.
 - ``expected.json``: per file set, the paths (file order), box, time,
   redshift, units, particle counts per type and, per type in the order a
   reader returns the particles (type, then file, then row), a few whole
@@ -111,13 +114,16 @@ Files and the layouts they follow (units are each format's usual ones):
   arrays as written (float32 values widened exactly to float64).
 
 ``--check`` loads the first file of every set with yt (``yt.load``; the
-binary Gadget files with ``unit_base`` and ``bounding_box``) and with
-``pynbody.load`` where it reads the format, and prints the particle counts
-each finds next to those written.
+binary Gadget files with ``unit_base`` and ``bounding_box``, Tipsy with
+``bounding_box``; SWIFT through ``yt_load``, which works around yt 4.4
+calling ``int()`` on SWIFT's 1-element attributes, an error under NumPy ≥
+2.3) and with ``pynbody.load`` (multi-file sets by their stem, as pynbody
+wants them), in a copy of the output (both write index files beside the
+data), and prints the particle counts each finds next to those written.
 
 The test module python/tests/test_snapshots.py imports this file and calls
-``make_inputs`` and the ``write_*`` functions to write larger sets into a
-temporary directory.
+``make_inputs`` (or ``synthetic_inputs``) and ``write_all`` to write larger
+sets (4,096 dark-matter particles) into a temporary directory.
 """
 
 import argparse

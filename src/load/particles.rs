@@ -218,7 +218,10 @@ fn read_share(
         .into_iter()
         .flatten()
         .all(|spec| !is_npy(&base.join(spec)));
-    let part = (p.species.is_none() && columns_only).then_some((share.rank, share.ranks));
+    // A region's rows are known only once read: every rank reads the
+    // region (bounded by it) and keeps its share.
+    let part = (p.species.is_none() && p.region.is_none() && columns_only)
+        .then_some((share.rank, share.ranks));
     let (mut fd, shared) = read_frame_share(p, base, frame, part)?;
     if shared {
         return Ok(fd);
@@ -350,28 +353,12 @@ fn read_frame_share(
             let mut data = ParticleData::default();
             let (mut radii, mut weights) = (p.radii.clone(), p.weights.clone());
             let mut h_scale = None;
-            if let Some((h, m)) = super::snapshot::sph_columns(p, &source) {
-                let (kernel, factor, said) = super::sph::convention(&source.table);
+            if let Some((kernel, scale, said)) =
+                super::snapshot::defaults(p, &source, &mut radii, &mut weights)
+            {
                 sph_defaults = Some(kernel);
-                let mut used = Vec::new();
-                if radii.is_none() && p.radius.is_none() && p.neighbours.is_none() {
-                    used.push(if factor == 1.0 {
-                        format!("radii = {h}")
-                    } else {
-                        format!("radii = {factor:.6} × {h}")
-                    });
-                    radii = Some(h);
-                    h_scale = Some(factor);
-                }
-                if weights.is_none() {
-                    used.push(format!("weights = {m}"));
-                    weights = Some(m);
-                }
-                used.insert(0, said);
-                notes.push(format!(
-                    "SPH data and no kernel given: {} (override with --kernel, --radii, --weights)",
-                    used.join(", ")
-                ));
+                h_scale = scale;
+                notes.extend(said);
             }
             let mut per = |spec: &Option<String>,
                            what: &'static str|

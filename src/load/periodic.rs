@@ -88,7 +88,7 @@ pub(crate) fn settle(
     };
     // Radii from neighbours need every row: the ranks of a decomposed set
     // find them together (`whole_set::neighbour_radii`).
-    if whole && let Some(n) = neighbour_count(p, snapshot, radii.is_some())? {
+    if whole && let Some(n) = neighbour_count(p, snapshot, radii.is_some(), positions.len())? {
         *radii = Some(neighbour_radii(
             positions,
             n,
@@ -236,6 +236,7 @@ pub(crate) fn neighbour_count(
     p: &ParticlesDesc,
     snapshot: bool,
     has_radii: bool,
+    total: usize,
 ) -> Result<Option<usize>, SceneError> {
     match p.neighbours {
         Some(n) => {
@@ -260,8 +261,10 @@ pub(crate) fn neighbour_count(
             }
             Ok(Some(n))
         }
+        // The default fits types with fewer particles (a few stars); one
+        // particle alone has no neighbour and keeps the default radius.
         None if snapshot && !has_radii && p.radius.is_none() && p.radii.is_none() => {
-            Ok(Some(DEFAULT_NEIGHBOURS))
+            Ok((total >= 2).then_some(DEFAULT_NEIGHBOURS.min(total)))
         }
         None => Ok(None),
     }

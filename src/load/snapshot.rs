@@ -82,22 +82,102 @@ pub(crate) fn check_region(p: &ParticlesDesc) -> Result<(), SceneError> {
 /// The columns holding the smoothing lengths and masses when `p` gives no
 /// kernel: PySPH's `h`, `m`; SWIFT's `SmoothingLengths`; Gadget-4, GIZMO
 /// and Gadget binary gas `SmoothingLength`; Tipsy gas `hsmooth`, `mass`.
-/// `None` unless both are present.
-pub(crate) fn sph_columns(p: &ParticlesDesc, source: &Source) -> Option<(String, String)> {
+/// Snapshot types without smoothing lengths (dark matter, stars) give
+/// their masses alone (their radii come from neighbours), and so does a
+/// snapshot when `p` gives a kernel. `None` without masses.
+pub(crate) fn sph_columns(p: &ParticlesDesc, source: &Source) -> Option<(Option<String>, String)> {
     let hdf5 = source.format == ParticleFormat::Hdf5;
-    if p.kernel.is_some() || !(hdf5 || source.table.sph.is_some()) {
+    let t = &source.table;
+    if !(hdf5 || t.sph.is_some()) {
         return None;
     }
-    let t = &source.table;
-    [
+    // A kernel given: the smoothing lengths are the user's to choose, but
+    // a snapshot's particles still weigh their masses.
+    if p.kernel.is_some() {
+        t.sph.as_ref()?;
+        return ["Masses", "mass"]
+            .into_iter()
+            .find(|m| t.column(m).is_some())
+            .map(|m| (None, m.to_string()));
+    }
+    let pair = [
         ("h", "m"),
         ("SmoothingLengths", "Masses"),
         ("SmoothingLength", "Masses"),
         ("hsmooth", "mass"),
     ]
     .into_iter()
-    .find(|(h, m)| t.column(h).is_some() && t.column(m).is_some())
-    .map(|(h, m)| (h.to_string(), m.to_string()))
+    .find(|(h, m)| t.column(h).is_some() && t.column(m).is_some());
+    if let Some((h, m)) = pair {
+        return Some((Some(h.to_string()), m.to_string()));
+    }
+    // A snapshot's other types: masses, and the code's kernel.
+    t.sph.as_ref()?;
+    ["Masses", "mass"]
+        .into_iter()
+        .find(|m| t.column(m).is_some())
+        .map(|m| (None, m.to_string()))
+}
+
+/// The defaults an SPH file or snapshot gives when `p` leaves them open:
+/// the kernel, the smoothing lengths as radii (and the factor from the
+/// code's convention to voxless's h), the masses as weights; sets `radii`
+/// and `weights` to those columns and returns the kernel, the factor and a
+/// note saying what was used. `None` when the file gives nothing.
+pub(crate) fn defaults(
+    p: &ParticlesDesc,
+    source: &Source,
+    radii: &mut Option<String>,
+    weights: &mut Option<String>,
+) -> Option<(voxless_particles::Kernel, Option<f32>, Option<String>)> {
+    let (h, m) = sph_columns(p, source)?;
+    let (kernel, factor, said) = super::sph::convention(&source.table);
+    let mut used = Vec::new();
+    let mut scale = None;
+    if let Some(h) = h
+        && radii.is_none()
+        && p.radius.is_none()
+        && p.neighbours.is_none()
+    {
+        used.push(if factor == 1.0 {
+            format!("radii = {h}")
+        } else {
+            format!("radii = {factor:.6} × {h}")
+        });
+        *radii = Some(h);
+        scale = Some(factor);
+    }
+    if weights.is_none() {
+        used.push(format!("weights = {m}"));
+        *weights = Some(m);
+    }
+    let note = if p.kernel.is_some() {
+        if used.is_empty() {
+            return Some((kernel, scale, None));
+        }
+        format!("snapshot: {} (override with --weights)", used.join(", "))
+    } else {
+        // The code's smoothing-length convention only matters with
+        // smoothing lengths.
+        used.insert(
+            0,
+            if scale.is_some() {
+                said
+            } else {
+                format!("{} kernel", kernel.name())
+            },
+        );
+        format!(
+            "{} and no kernel given: {} (override with --kernel, --radii, --weights)",
+            if scale.is_some() {
+                "SPH data"
+            } else {
+                "snapshot particles"
+            },
+            used.join(", ")
+        )
+    };
+    Some((kernel, scale, Some(note)))
 }
 
 /// AREPO's gas cells carry no smoothing length: each cell's kernel gets the

@@ -370,7 +370,8 @@ pub(crate) fn neighbour_radii(
     rows: &mut FrameData,
     notes: &mut Vec<String>,
 ) -> Result<(), ParallelError> {
-    let n = super::periodic::neighbour_count(p, rows.snapshot, rows.data.radii.is_some());
+    let n =
+        super::periodic::neighbour_count(p, rows.snapshot, rows.data.radii.is_some(), rows.total);
     let Some(n) = agree(comm, n)? else {
         return Ok(());
     };
