@@ -224,11 +224,12 @@ fn snapshot(out: &mut String, h: &voxless::io::SnapshotHeader) -> std::fmt::Resu
         writeln!(out, "  type {}: {n} particles", part_type_label(t as u32))?;
         if let Some((_, fields)) = h.fields.iter().find(|f| f.0 == t as u32) {
             writeln!(out, "    fields: {}", fields.join(", "))?;
+            // The file's own name of the first field named like one of these.
             let has = |names: &[&str]| {
                 names
                     .iter()
-                    .find(|n| fields.iter().any(|f| f.eq_ignore_ascii_case(n)))
-                    .map(|n| n.to_string())
+                    .find_map(|n| fields.iter().find(|f| f.eq_ignore_ascii_case(n)))
+                    .cloned()
             };
             let table_mass = h.mass_table.get(t).copied().filter(|m| *m != 0.0);
             let mass = has(&["Masses", "MASS", "mass"])
@@ -236,7 +237,7 @@ fn snapshot(out: &mut String, h: &voxless::io::SnapshotHeader) -> std::fmt::Resu
             let radius = match has(&["SmoothingLengths", "SmoothingLength", "HSML", "hsmooth"]) {
                 Some(hs) => format!("{hs} (the code's convention)"),
                 None if h.code == "AREPO" && t == 0 => "cell volume Masses/Density".into(),
-                None => "the 32 nearest neighbours (--neighbours)".into(),
+                None => format!("the {} nearest neighbours (--neighbours)", n.min(32)),
             };
             writeln!(
                 out,
