@@ -9,29 +9,37 @@ script writes, into a scratch directory, with the community's writers
 - a Tipsy standard binary (pynbody's TipsySnap writer; code units, the box
   [-0.5, 0.5)³);
 - a SWIFT HDF5 snapshot (swiftsimio's Writer plus SWIFT's ``Cells/`` group:
-  --cells³ top-level cells, the particles sorted by cell as SWIFT writes them).
+  --cells³ top-level cells, the particles sorted by cell as SWIFT writes
+  them; the Cosmology attributes swiftsimio needs are added).
 
 Velocities are zero, IDs 1..N, masses equal. Then, interleaved (voxless,
-then its peer, --reps rounds, after one untimed warm-up of each; the files
-are in the page cache for both):
+then its peers, --reps rounds, after one untimed warm-up of each; the files
+are in the page cache for all):
 
 1. Gadget and Tipsy: ``voxless info FILE`` (the whole process; it reads the
-   default type's table: positions, velocities, IDs, masses) against
-   ``pynbody.load(f); f['pos']; f['mass']`` (in this process, imports done),
-   and pynbody with ``f['vel']`` and ``f['iord']`` loaded too (what info
-   reads).
-2. SWIFT, a region (--region, default the cube [30, 55)³ of a box of 100:
+   default type's table: positions, velocities, IDs, masses, and prints
+   each column's range) against ``pynbody.load(f); f['pos']; f['mass']``,
+   and pynbody loading what info reads too (Gadget: vel, iord; Tipsy: vel,
+   eps, phi).
+2. SWIFT, a region (--region, default the cube [30, 55]³ of a box of 100:
    1/64 of the volume): ``voxless project --particles F --part-type dm
    --region … --kernel cubic-spline --radius R --size 64 64`` and the same at
-   8², against swiftsimio's ``mask(f).constrain_spatial(…)``, ``load(f,
+   8², against swiftsimio's ``mask(f)``, ``constrain_spatial(…)``, ``load(f,
    mask=…)``, coordinates and masses. voxless reads the cells that overlap
    the region padded by the kernel support 2R; swiftsimio is given that
    padded box (so both read the same cells). The whole file too: voxless
    project without --region, ``voxless info --part-type dm``, and
    swiftsimio without a mask. voxless's own ``loaded particles in`` and
    ``projected … in`` lines are recorded beside the process time.
-3. Peak RSS (``/usr/bin/time -f %M``, twice each): voxless project with and without --region, and
-   swiftsimio's read in a child Python process (minus one that only imports).
+3. Peak RSS (``/usr/bin/time -f %M``, the larger of two runs): voxless
+   project with and without --region, and swiftsimio's read (beside a
+   Python process that only imports).
+
+The peers are timed inside a fresh Python process each time (this script
+with --child), from after the imports to the last array read: like a
+voxless process, each starts with no memory mapped yet. Once per round the
+same read also runs in this process ("warm session": the allocator has
+recycled the previous rounds' arrays), which can be several times faster.
 
 Agreement: the particle counts each reader returns, the bounds ``info``
 prints against pynbody's, and for the region: swiftsimio's particle count
@@ -49,6 +57,7 @@ Needs numpy, pynbody (2.x), swiftsimio, h5py, unyt.
 
 import argparse
 import importlib.util
+import json
 import os
 import re
 import subprocess
@@ -64,6 +73,7 @@ os.environ["RAYON_NUM_THREADS"] = THREADS
 import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
+BLOCKS = {"gadget": ["vel", "iord"], "tipsy": ["vel", "eps", "phi"]}
 
 
 def load_gen():
@@ -71,6 +81,72 @@ def load_gen():
     gen = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(gen)
     return gen
+
+
+# ---------------------------------------------------------------------------
+# The peers' reads (in this process, or in a child: --child)
+
+
+def peer_read(kind, f, extra):
+    """One timed read; returns a dict: wall, cores, n, and what the checks need.
+    kind "pynbody": extra = the blocks after pos and mass. kind "swift":
+    extra = the padded region (X0 Y0 Z0 X1 Y1 Z1), or empty for the whole file."""
+    warnings.simplefilter("ignore")
+    if kind == "pynbody":
+        import pynbody
+
+        c, t = time.process_time(), time.perf_counter()
+        s = pynbody.load(f)
+        for k in ["pos", "mass"] + list(extra):
+            s[k]  # loads the array
+        wall = time.perf_counter() - t
+        pos = np.asarray(s["pos"])
+        return dict(wall=wall, cores=(time.process_time() - c) / wall, n=len(s), lo=pos.min(0).tolist(),
+                    hi=pos.max(0).tolist())  # fmt: skip
+    import swiftsimio
+    from swiftsimio import cosmo_array
+
+    c, t = time.process_time(), time.perf_counter()
+    mask_s = None
+    if extra:
+        m = swiftsimio.mask(f)
+        restrict = cosmo_array(np.array(extra, dtype=float).reshape(2, 3).T, m.metadata.boxsize.units,
+                               comoving=True, scale_factor=m.metadata.a, scale_exponent=1)  # fmt: skip
+        m.constrain_spatial(restrict)
+        mask_s = time.perf_counter() - t
+        d = swiftsimio.load(f, mask=m)
+    else:
+        d = swiftsimio.load(f)
+    x, _ = d.dark_matter.coordinates, d.dark_matter.masses  # swiftsimio reads on access
+    wall = time.perf_counter() - t
+    out = dict(wall=wall, cores=(time.process_time() - c) / wall, n=len(x), mask=mask_s)
+    if extra:
+        x = np.asarray(x.to_value(x.units))
+        lo, hi = np.array(extra[:3]), np.array(extra[3:])
+        out["inside"] = int(np.all((x >= lo) & (x <= hi), axis=1).sum())
+    return out
+
+
+def child(args):
+    """The peer's read in a fresh process (this script with --child)."""
+    kind, f = args[0], args[1]
+    if kind == "pynbody":
+        import pynbody  # noqa: F401 (imported before the clock starts)
+    else:
+        import swiftsimio  # noqa: F401
+    if args[2:3] == ["imports"]:
+        return
+    extra = [float(v) for v in args[2:]] if kind == "swift" else args[2:]
+    print("RESULT " + json.dumps(peer_read(kind, f, extra)))
+
+
+def child_cmd(kind, f, extra):
+    return [sys.executable, str(Path(__file__).resolve()), "--child", kind, str(f), *map(str, extra)]
+
+
+def run_child(kind, f, extra):
+    out = child_usage(child_cmd(kind, f, extra))[0]
+    return json.loads(out.split("RESULT ", 1)[1])
 
 
 # ---------------------------------------------------------------------------
@@ -100,14 +176,6 @@ def seconds(text, pattern):
     if not m:
         sys.exit(f"no /{pattern}/ in the CLI's output:\n{text}")
     return float(m.group(1)) * {"µs": 1e-6, "us": 1e-6, "ms": 1e-3, "s": 1.0}[m.group(2)]
-
-
-def in_process(fn):
-    """Time fn() here: (its result, wall s, cores used)."""
-    c, t = time.process_time(), time.perf_counter()
-    r = fn()
-    wall = time.perf_counter() - t
-    return r, wall, (time.process_time() - c) / wall
 
 
 def med(xs):
@@ -198,48 +266,44 @@ def info_stats(out):
 
 
 def binary_reads(a, files, n):
-    import pynbody
-
     rows, agree = [], {}
-    for key, label, more in (("gadget", "Gadget-2 format 2", ["vel", "iord"]),
-                             ("tipsy", "Tipsy", ["vel", "eps", "phi"])):  # fmt: skip
-        f = str(files[key])
+    for key, label in (("gadget", "Gadget-2 format 2"), ("tipsy", "Tipsy")):
+        f, more = str(files[key]), BLOCKS[key]
         cmd = [a.bin, "info", f]
-
-        def pyn(all_blocks):
-            s = pynbody.load(f)
-            for k in ["pos", "mass"] + (more if all_blocks else []):
-                s[k]  # loads the array
-            return s
-
         run_cli(cmd)  # warm-up
-        pyn(True)
-        t = {"ours": [], "pos": [], "all": [], "c_ours": [], "c_pos": [], "c_all": []}
+        run_child("pynbody", f, more)
+        peer_read("pynbody", f, more)
+        t = {k: [] for k in ("ours", "pos", "all", "warm", "c_ours", "c_pos", "c_all")}
         for rep in range(a.reps):
             out, w, c = run_cli(cmd)
             t["ours"].append(w)
             t["c_ours"].append(c)
-            s, w, c = in_process(lambda: pyn(False))
-            t["pos"].append(w)
-            t["c_pos"].append(c)
-            n_pyn, plo, phi = len(s), np.asarray(s["pos"]).min(axis=0), np.asarray(s["pos"]).max(axis=0)
-            del s
-            s, w, c = in_process(lambda: pyn(True))
-            del s
-            t["all"].append(w)
-            t["c_all"].append(c)
+            r = run_child("pynbody", f, [])
+            t["pos"].append(r["wall"])
+            t["c_pos"].append(r["cores"])
+            r_all = run_child("pynbody", f, more)
+            t["all"].append(r_all["wall"])
+            t["c_all"].append(r_all["cores"])
+            t["warm"].append(peer_read("pynbody", f, [])["wall"])
             print(f"  {label} round {rep + 1}: voxless info {t['ours'][-1]:.3f} s ({t['c_ours'][-1]:.2f} cores), "
                   f"pynbody pos+mass {t['pos'][-1]:.3f} s ({t['c_pos'][-1]:.2f}), + {', '.join(more)} "
-                  f"{t['all'][-1]:.3f} s ({t['c_all'][-1]:.2f}), load {os.getloadavg()[0]:.2f}", flush=True)
+                  f"{t['all'][-1]:.3f} s ({t['c_all'][-1]:.2f}), warm session {t['warm'][-1]:.3f} s, "
+                  f"load {os.getloadavg()[0]:.2f}", flush=True)  # fmt: skip
         n_ours, lo, hi = info_stats(out)
+        plo, phi = np.array(r["lo"]), np.array(r["hi"])
         tol = 1e-5 * (np.abs(plo) + np.abs(phi)).max()
-        agree[label] = (n_ours, n_pyn, float(max(np.abs(lo - plo).max(), np.abs(hi - phi).max())), tol)
+        agree[label] = (n_ours, r["n"], float(max(np.abs(lo - plo).max(), np.abs(hi - phi).max())), tol)
         mp = lambda xs: f"{n / med(xs) / 1e6:.1f} M/s"  # noqa: E731
         rows += [
-            (f"{label}, {n:,} dm", "voxless `info` (whole process)", fmt(t["ours"]), mp(t["ours"]), ""),
-            ("", "pynbody load + pos + mass", fmt(t["pos"]), mp(t["pos"]), ratio(t["pos"], t["ours"])),
-            ("", f"pynbody … + {' + '.join(more)}", fmt(t["all"]), mp(t["all"]), ratio(t["all"], t["ours"])),
-        ]
+            (f"{label}, {n:,} dm", "voxless `info` (whole process)", fmt(t["ours"]),
+             f"{mp(t['ours'])}; {cores(t['c_ours'])} cores", ""),
+            ("", "pynbody load, pos, mass", fmt(t["pos"]), f"{mp(t['pos'])}; {cores(t['c_pos'])} cores",
+             ratio(t["pos"], t["ours"])),
+            ("", f"pynbody … + {', '.join(more)}", fmt(t["all"]), f"{mp(t['all'])}; {cores(t['c_all'])} cores",
+             ratio(t["all"], t["ours"])),
+            ("", "pynbody load, pos, mass (warm session)", fmt(t["warm"]), mp(t["warm"]),
+             ratio(t["warm"], t["ours"])),
+        ]  # fmt: skip
     return rows, agree
 
 
@@ -248,13 +312,10 @@ def binary_reads(a, files, n):
 
 
 def swift_reads(a, files, n):
-    import swiftsimio
-    from swiftsimio import cosmo_array
-
     f = str(files["swift"])
     pad = 2.0 * a.radius  # the cubic spline reaches 2h
     lo, hi = np.array(a.region[:3]), np.array(a.region[3:])
-    plo, phi = lo - pad, hi + pad
+    padded = (lo - pad).tolist() + (hi + pad).tolist()
     reg = [str(v) for v in a.region]
     base = [a.bin, "project", "--particles", f, "--part-type", "dm", "--kernel", "cubic-spline",
             "--radius", str(a.radius)]  # fmt: skip
@@ -266,39 +327,28 @@ def swift_reads(a, files, n):
         "full8": base + ["--size", "8", "8", "-o", out_npy],
         "info": [a.bin, "info", f, "--part-type", "dm"],
     }
-    mask_s = []
-
-    def sw(region):
-        t0 = time.perf_counter()
-        if region:
-            m = swiftsimio.mask(f)
-            restrict = cosmo_array(np.stack([plo, phi], axis=1), m.metadata.boxsize.units, comoving=True,
-                                   scale_factor=m.metadata.a, scale_exponent=1)  # fmt: skip
-            m.constrain_spatial(restrict)
-            mask_s.append(time.perf_counter() - t0)
-            d = swiftsimio.load(f, mask=m)
-        else:
-            d = swiftsimio.load(f)
-        return d.dark_matter.coordinates, d.dark_matter.masses
-
     for c in cmds.values():  # warm-up
         run_cli(c)
-    sw(True)
-    sw(False)
-    mask_s.clear()
-    order = ("region64", "sw_region", "region8", "full64", "sw_full", "full8", "info")
+    for extra in (padded, []):
+        run_child("swift", f, extra)
+        peer_read("swift", f, extra)
+    order = ("region64", "sw_region", "region8", "sw_region_warm", "full64", "sw_full", "full8", "info",
+             "sw_full_warm")  # fmt: skip
     t = {k: [] for k in order}
     load = {k: [] for k in cmds}
     proj = {k: [] for k in cmds}
+    mask_s = []
     for rep in range(a.reps):
         for k in order:
             if k.startswith("sw_"):
-                r, w, _ = in_process(lambda: sw(k == "sw_region"))
+                extra = padded if k.startswith("sw_region") else []
+                r = peer_read("swift", f, extra) if k.endswith("_warm") else run_child("swift", f, extra)
+                w = r["wall"]
                 if k == "sw_region":
-                    x_reg = np.asarray(r[0].to_value(r[0].units))
-                else:
-                    n_full = len(r[0])
-                del r
+                    sw_reg = r
+                    mask_s.append(r["mask"])
+                elif k == "sw_full":
+                    n_full = r["n"]
             else:
                 out, w, _ = run_cli(cmds[k])
                 if k != "info":
@@ -313,51 +363,36 @@ def swift_reads(a, files, n):
                     n_info = info_stats(out)[0]
             t[k].append(w)
         print(f"  SWIFT round {rep + 1}: region voxless {t['region64'][-1]:.3f} s (8²: {t['region8'][-1]:.3f}), "
-              f"swiftsimio {t['sw_region'][-1]:.3f} s (mask {mask_s[-1]:.3f}); whole voxless "
-              f"{t['full64'][-1]:.3f} s (8²: {t['full8'][-1]:.3f}, info {t['info'][-1]:.3f}), swiftsimio "
-              f"{t['sw_full'][-1]:.3f} s, load {os.getloadavg()[0]:.2f}", flush=True)  # fmt: skip
-    inside = int(np.all((x_reg >= plo) & (x_reg <= phi), axis=1).sum())
-    agree = dict(kept=kept, read=read, total=total, sw_read=len(x_reg), sw_inside=inside, n_full=n_full,
-                 n_info=n_info)  # fmt: skip
+              f"swiftsimio {t['sw_region'][-1]:.3f} s (mask {mask_s[-1]:.3f}; warm session "
+              f"{t['sw_region_warm'][-1]:.3f}); whole voxless {t['full64'][-1]:.3f} s (8²: {t['full8'][-1]:.3f}, "
+              f"info {t['info'][-1]:.3f}), swiftsimio {t['sw_full'][-1]:.3f} s (warm session "
+              f"{t['sw_full_warm'][-1]:.3f}), load {os.getloadavg()[0]:.2f}", flush=True)  # fmt: skip
+    agree = dict(kept=kept, read=read, total=total, sw_read=sw_reg["n"], sw_inside=sw_reg["inside"],
+                 n_full=n_full, n_info=n_info)  # fmt: skip
     cli = lambda k: f"CLI: loaded {med(load[k]):.3f} s, projected {med(proj[k]):.3f} s"  # noqa: E731
     frac = round(a.box**3 / np.prod(hi - lo))
     rows = [
         (f"SWIFT, region 1/{frac} of the box ({read:,} read, {kept:,} kept)", "voxless project 64²",
          fmt(t["region64"]), cli("region64"), ""),
         ("", "voxless project 8²", fmt(t["region8"]), cli("region8"), ""),
-        ("", "swiftsimio mask + load + coordinates + masses", fmt(t["sw_region"]),
-         f"{len(x_reg):,} particles; mask {fmt(mask_s)}",
+        ("", "swiftsimio mask, load, coordinates, masses", fmt(t["sw_region"]),
+         f"{sw_reg['n']:,} particles; mask {fmt(mask_s)}",
          f"{ratio(t['sw_region'], t['region64'])} (64²); {ratio(t['sw_region'], t['region8'])} (8²)"),
+        ("", "swiftsimio, warm session", fmt(t["sw_region_warm"]), "",
+         f"{ratio(t['sw_region_warm'], t['region8'])} (8²)"),
         (f"SWIFT, whole file, {n:,} dm", "voxless project 64²", fmt(t["full64"]), cli("full64"), ""),
         ("", "voxless project 8²", fmt(t["full8"]), cli("full8"), ""),
         ("", "voxless `info --part-type dm`", fmt(t["info"]), f"{n / med(t['info']) / 1e6:.1f} M/s", ""),
-        ("", "swiftsimio load + coordinates + masses", fmt(t["sw_full"]), f"{n / med(t['sw_full']) / 1e6:.1f} M/s",
+        ("", "swiftsimio load, coordinates, masses", fmt(t["sw_full"]), f"{n / med(t['sw_full']) / 1e6:.1f} M/s",
          f"{ratio(t['sw_full'], t['info'])} (info); {ratio(t['sw_full'], t['full8'])} (8²)"),
+        ("", "swiftsimio, warm session", fmt(t["sw_full_warm"]), f"{n / med(t['sw_full_warm']) / 1e6:.1f} M/s",
+         f"{ratio(t['sw_full_warm'], t['info'])} (info)"),
     ]  # fmt: skip
-    return rows, agree, cmds
+    return rows, agree, cmds, padded
 
 
 # ---------------------------------------------------------------------------
 # 3. Peak memory
-
-
-SW_CHILD = """
-import sys, numpy as np, swiftsimio, unyt
-from swiftsimio import cosmo_array
-f, mode = sys.argv[1], sys.argv[2]
-if mode == "imports":
-    sys.exit(0)
-if mode == "region":
-    lo = [float(v) for v in sys.argv[3:6]]; hi = [float(v) for v in sys.argv[6:9]]
-    m = swiftsimio.mask(f)
-    m.constrain_spatial(cosmo_array(np.stack([lo, hi], axis=1), m.metadata.boxsize.units, comoving=True,
-                                    scale_factor=m.metadata.a, scale_exponent=1))
-    d = swiftsimio.load(f, mask=m)
-else:
-    d = swiftsimio.load(f)
-x = d.dark_matter.coordinates; m = d.dark_matter.masses
-print(len(x))
-"""
 
 
 def peak_rss(cmd):
@@ -367,20 +402,16 @@ def peak_rss(cmd):
     return int(re.findall(r"maxrss_kib=(\d+)", out)[-1]) / 1024.0
 
 
-def memory(a, files, cmds):
-    f = str(files["swift"])
-    pad = 2.0 * a.radius
-    padded = [str(v - pad) for v in a.region[:3]] + [str(v + pad) for v in a.region[3:]]
+def memory(files, cmds, padded):
+    f = files["swift"]
     rows = []
     for label, cmd in (("voxless project 64², --region", cmds["region64"]),
                        ("voxless project 64², whole file", cmds["full64"]),
                        ("voxless info --part-type dm, whole file", cmds["info"])):  # fmt: skip
-        rss = [peak_rss(cmd) for _ in range(2)]
-        rows.append((label, f"{max(rss):.0f}"))
-    py = [sys.executable, "-c", SW_CHILD, f]
-    base = max(peak_rss(py + ["imports"]) for _ in range(2))
-    for label, extra in (("swiftsimio, padded region", ["region", *padded]), ("swiftsimio, whole file", ["all"])):
-        rss = max(peak_rss(py + extra) for _ in range(2))
+        rows.append((label, f"{max(peak_rss(cmd) for _ in range(2)):.0f}"))
+    base = max(peak_rss(child_cmd("swift", f, ["imports"])) for _ in range(2))
+    for label, extra in (("swiftsimio, padded region", padded), ("swiftsimio, whole file", [])):
+        rss = max(peak_rss(child_cmd("swift", f, extra)) for _ in range(2))
         rows.append((label, f"{rss:.0f} ({rss - base:.0f} over the {base:.0f} of Python + imports)"))
     return rows
 
@@ -389,6 +420,8 @@ def memory(a, files, cmds):
 
 
 def main():
+    if sys.argv[1:2] == ["--child"]:
+        return child(sys.argv[2:])
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("data", help="positions .npy (N×3, in [0, box)³)")
     ap.add_argument("--box", type=float, default=100.0)
@@ -417,12 +450,12 @@ def main():
 
     print(f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f} at the start; pynbody "
           f"{pynbody.__version__}, swiftsimio {swiftsimio.__version__}, numpy {np.__version__}, "
-          f"Python {sys.version.split()[0]}", flush=True)  # fmt: skip
+          f"Python {sys.version.split()[0]}; {a.bin}", flush=True)  # fmt: skip
     files = write_files(gen, pos, a.box, a.cells, work)
     del pos
     rows1, ag1 = binary_reads(a, files, n)
-    rows2, ag2, cmds = swift_reads(a, files, n)
-    mem = [] if a.no_memory or not os.path.exists("/usr/bin/time") else memory(a, files, cmds)
+    rows2, ag2, cmds, padded = swift_reads(a, files, n)
+    mem = [] if a.no_memory or not os.path.exists("/usr/bin/time") else memory(files, cmds, padded)
 
     print("\n| read | program | time, median (min–max) | rate; detail | peer/voxless, median (min–max) |")
     print("|---|---|---:|---|---|")
