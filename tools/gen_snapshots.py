@@ -517,6 +517,12 @@ def write_swift(path, snap, cdim=4):
                        "Omega_nu_0": 0.0, "Omega_r": 0.0, "Redshift": snap["redshift"],
                        "Scale-factor": snap["time"]}.items():  # fmt: skip
             cosmo.attrs[key] = np.array([v])
+        # What swiftsimio builds its astropy cosmology from: H0 in internal
+        # units (1/time), and the dark-energy equation of state.
+        u_t = float(f["Units"].attrs["Unit time in cgs (U_t)"][0])
+        h0 = 100.0 * snap["h"] * 1e5 / 3.08567758149e24  # 1/s
+        for key, v in (("H0 [internal units]", h0 * u_t), ("w_0", -1.0), ("w_a", 0.0)):
+            cosmo.attrs[key] = np.array([v])
         f.copy(f["Units"], "InternalCodeUnits")
         f.create_group("Policy").attrs["cosmological integration"] = np.array([1], dtype=np.int32)
         params = f.create_group("Parameters")

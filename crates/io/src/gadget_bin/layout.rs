@@ -43,10 +43,6 @@ impl Endian {
         }
     }
 
-    pub(super) fn f32(self, b: [u8; 4]) -> f32 {
-        f32::from_bits(self.u32(b))
-    }
-
     pub(super) fn f64(self, b: [u8; 8]) -> f64 {
         f64::from_bits(self.u64(b))
     }

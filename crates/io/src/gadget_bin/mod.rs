@@ -602,8 +602,12 @@ fn stream<S: Read + Seek>(
         }
         let kept = keep.iter().filter(|&&k| k).count();
         if kept > 0 {
-            out.positions
-                .extend(points.zip(&keep).filter(|(_, k)| **k).map(|(p, _)| p));
+            if kept == rows {
+                out.positions.extend(points);
+            } else {
+                out.positions
+                    .extend(points.zip(&keep).filter(|(_, k)| **k).map(|(p, _)| p));
+            }
             let mut slot = 0;
             for source in sources {
                 match source {
@@ -612,12 +616,19 @@ fn stream<S: Read + Seek>(
                         let ints = field.kind == Kind::Ids;
                         decode_f32(&bytes, field.width, ints, layout.endian, &mut floats);
                         let comps = field.comps as usize;
-                        for c in 0..comps {
-                            if let Some(column) = out.values.get_mut(slot + c) {
-                                let values = floats.iter().skip(c).step_by(comps);
-                                column.extend(
-                                    values.zip(&keep).filter(|(_, k)| **k).map(|(v, _)| *v),
-                                );
+                        if kept == rows {
+                            // Every row kept (no region): whole slices.
+                            if let Some(columns) = out.values.get_mut(slot..) {
+                                split_columns(&floats, comps, columns);
+                            }
+                        } else {
+                            for c in 0..comps {
+                                if let Some(column) = out.values.get_mut(slot + c) {
+                                    let values = floats.iter().skip(c).step_by(comps);
+                                    column.extend(
+                                        values.zip(&keep).filter(|(_, k)| **k).map(|(v, _)| *v),
+                                    );
+                                }
                             }
                         }
                         slot += comps;
@@ -664,21 +675,61 @@ fn read_rows<S: Read + Seek>(
     src.read_at(offset, bytes, &format!("block {}", field.label))
 }
 
+/// `comps` interleaved components of `values` appended to the first
+/// `comps` of `columns`.
+fn split_columns(values: &[f32], comps: usize, columns: &mut [Vec<f32>]) {
+    match (comps, columns) {
+        (1, [column, ..]) => column.extend_from_slice(values),
+        (3, [x, y, z, ..]) => {
+            for v in values.chunks_exact(3) {
+                x.push(v[0]);
+                y.push(v[1]);
+                z.push(v[2]);
+            }
+        }
+        (_, columns) => {
+            for (c, column) in columns.iter_mut().take(comps).enumerate() {
+                column.extend(values.iter().skip(c).step_by(comps));
+            }
+        }
+    }
+}
+
+/// 4- or 8-byte words decoded in the file's byte order by `f`, the byte
+/// order chosen once per block rather than per value.
+fn decode<T, const W: usize>(
+    bytes: &[u8],
+    endian: layout::Endian,
+    out: &mut Vec<T>,
+    f: impl Fn([u8; W], bool) -> T,
+) {
+    let little = endian == layout::Endian::Little;
+    out.extend(bytes.chunks_exact(W).map(|b| {
+        let mut w = [0u8; W];
+        w.copy_from_slice(b);
+        f(w, little)
+    }));
+}
+
 /// 4- or 8-byte floats as f64.
 fn decode_f64(bytes: &[u8], width: u64, endian: layout::Endian, out: &mut Vec<f64>) {
     out.clear();
     if width == 8 {
-        out.extend(
-            bytes
-                .chunks_exact(8)
-                .map(|b| endian.f64([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]])),
-        );
+        decode(bytes, endian, out, |w: [u8; 8], le| {
+            if le {
+                f64::from_le_bytes(w)
+            } else {
+                f64::from_be_bytes(w)
+            }
+        });
     } else {
-        out.extend(
-            bytes
-                .chunks_exact(4)
-                .map(|b| f64::from(endian.f32([b[0], b[1], b[2], b[3]]))),
-        );
+        decode(bytes, endian, out, |w: [u8; 4], le| {
+            f64::from(if le {
+                f32::from_le_bytes(w)
+            } else {
+                f32::from_be_bytes(w)
+            })
+        });
     }
 }
 
@@ -686,24 +737,35 @@ fn decode_f64(bytes: &[u8], width: u64, endian: layout::Endian, out: &mut Vec<f6
 /// rounded once).
 fn decode_f32(bytes: &[u8], width: u64, ints: bool, endian: layout::Endian, out: &mut Vec<f32>) {
     out.clear();
-    if width == 8 {
-        out.extend(bytes.chunks_exact(8).map(|b| {
-            let w = [b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]];
-            if ints {
-                endian.u64(w) as f32
+    match (width, ints) {
+        (8, true) => decode(bytes, endian, out, |w: [u8; 8], le| {
+            (if le {
+                u64::from_le_bytes(w)
             } else {
-                endian.f64(w) as f32
-            }
-        }));
-    } else {
-        out.extend(bytes.chunks_exact(4).map(|b| {
-            let w = [b[0], b[1], b[2], b[3]];
-            if ints {
-                endian.u32(w) as f32
+                u64::from_be_bytes(w)
+            }) as f32
+        }),
+        (8, false) => decode(bytes, endian, out, |w: [u8; 8], le| {
+            (if le {
+                f64::from_le_bytes(w)
             } else {
-                endian.f32(w)
+                f64::from_be_bytes(w)
+            }) as f32
+        }),
+        (_, true) => decode(bytes, endian, out, |w: [u8; 4], le| {
+            (if le {
+                u32::from_le_bytes(w)
+            } else {
+                u32::from_be_bytes(w)
+            }) as f32
+        }),
+        (_, false) => decode(bytes, endian, out, |w: [u8; 4], le| {
+            if le {
+                f32::from_le_bytes(w)
+            } else {
+                f32::from_be_bytes(w)
             }
-        }));
+        }),
     }
 }
 

@@ -209,12 +209,15 @@ pub fn open_gadget_hdf5(path: &Path) -> Result<GadgetHdf5, IoError> {
         });
     }
     let scalar = |name: &str| attr(name).map(|v| v.and_then(|v| v.first().copied()));
-    let time = match scalar("Time")? {
-        Some(t) => Some(t),
-        None => scalar("Scale-factor")?,
+    let units = units_of(&first, header.as_ref(), code)?;
+    // A snapshot's time is the scale factor in cosmological runs: Gadget's
+    // `Time` is, SWIFT's `Time` is the cosmic time (its `Scale-factor` is).
+    let cosmological_swift = code == SphCode::Swift && units.as_ref().is_some_and(|u| u.comoving);
+    let time = match (cosmological_swift, scalar("Scale-factor")?, scalar("Time")?) {
+        (true, Some(a), _) => Some(a),
+        (_, a, t) => t.or(a),
     };
     let mut redshift = scalar("Redshift")?;
-    let units = units_of(&first, header.as_ref(), code)?;
     if redshift.is_none()
         && units.as_ref().is_some_and(|u| u.comoving)
         && let Some(a) = time.filter(|a| *a > 0.0)
