@@ -67,6 +67,36 @@ pub fn check_image_memory(width: u32, height: u32) -> Result<(), SceneError> {
     }
 }
 
+/// An error when the k-buffer's per-tile buffers (`k` events and
+/// `layers` depth bins per pixel, one tile per thread) would not fit in the
+/// memory available: `--layers 1000000000` is refused before any work.
+pub fn check_kbuffer_memory(k: usize, layers: usize) -> Result<(), SceneError> {
+    let tile = (voxless_tets::raster::TILE as u64).pow(2);
+    let threads = rayon::current_num_threads().max(1) as u64;
+    // Per pixel: k (depth, value) pairs, a depth bin (f64) and an edge
+    // (f32) per layer.
+    let per_pixel = (k as u64)
+        .saturating_mul(8)
+        .saturating_add((layers as u64).saturating_mul(12));
+    let needed = per_pixel.saturating_mul(tile).saturating_mul(threads);
+    match available_memory() {
+        Some(avail) if needed > avail => Err(SceneError::setting(
+            if layers as u64 * 12 >= k as u64 * 8 {
+                "tets.layers (--layers)"
+            } else {
+                "tets.k (--k)"
+            },
+            format!(
+                "k = {k} events and {layers} depth layers per pixel need about {} for the \
+                 k-buffer's tiles ({threads} at a time), but {} is available",
+                gib(needed),
+                gib(avail)
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

@@ -386,7 +386,7 @@ pub struct ViewFlags {
         arg(long, value_name = "FILE", help_heading = "Surfaces")
     )]
     pub mesh: Vec<PathBuf>,
-    /// Ambient occlusion on mesh and iso-surface hits: N rays per hit.
+    /// Ambient occlusion on mesh and iso-surface hits: N rays per hit (1–4096).
     #[cfg_attr(
         feature = "clap",
         arg(long, value_name = "N", help_heading = "Surfaces")

@@ -235,6 +235,48 @@ impl ProjectionView {
             }
             (None, Some(n)) => Self::along_normal(desc, n, (lo, hi), volume_bounds, frame),
         }
+        .and_then(|view| view.meets(volume_bounds, frame))
+    }
+
+    /// The view, or an error when its image misses the data altogether (an
+    /// all-zero map would look like empty space, not a wrong view).
+    fn meets(self, volume_bounds: &Aabb, frame: &WorldFrame) -> Result<Self, SceneError> {
+        let (lo, hi) = (
+            frame.to_world(volume_bounds.min),
+            frame.to_world(volume_bounds.max),
+        );
+        let corners = (0..8).map(|i| {
+            [
+                if i & 1 == 0 { lo[0] } else { hi[0] },
+                if i & 2 == 0 { lo[1] } else { hi[1] },
+                if i & 4 == 0 { lo[2] } else { hi[2] },
+            ]
+        });
+        // The data's extent and the image's along each image axis.
+        let span = |axis: V3| {
+            corners
+                .clone()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| {
+                    let d = dot(c, axis);
+                    (a.min(d), b.max(d))
+                })
+        };
+        for (k, axis) in [self.right, self.up].into_iter().enumerate() {
+            let (a, b) = span(axis);
+            let c = dot(self.center, axis);
+            let half = 0.5 * self.width[k];
+            if c + half < a || c - half > b {
+                return Err(SceneError::setting(
+                    "bounds",
+                    format!(
+                        "the image ({}) misses the data, whose bounds are {lo:?} to {hi:?}: \
+                         the map would be all zero",
+                        if k == 0 { "across" } else { "up" }
+                    ),
+                ));
+            }
+        }
+        Ok(self)
     }
 
     /// An axis projection covering the box, with `center` and `width`

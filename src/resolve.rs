@@ -337,10 +337,12 @@ fn iso_settings(
         && let Some(t) = &desc.tets
     {
         if t.mode == Some(TetModeName::Kbuffer) {
-            settings.event_budget = Some(EventBudget {
+            let budget = EventBudget {
                 k: at_least_one("tets.k (--k)", t.k.unwrap_or(16))?,
                 layers: at_least_one("tets.layers (--layers)", t.layers.unwrap_or(64))?,
-            });
+            };
+            crate::budget::check_kbuffer_memory(budget.k, budget.layers)?;
+            settings.event_budget = Some(budget);
         } else if t.k.is_some() || t.layers.is_some() {
             return Err(SceneError::setting(
                 if t.k.is_some() {

@@ -99,6 +99,19 @@ pub(crate) fn resolve(
                 "give at least 1 ray per hit (or leave ambient occlusion out)",
             ));
         }
+        // Each ray is a march through the volume from every hit of every
+        // sample: beyond this a pixel takes seconds and the picture does not
+        // change (the noise of n rays falls as 1/√n; more samples per pixel
+        // average it too).
+        if rays > MAX_AO_RAYS {
+            return Err(SceneError::setting(
+                "render.ao (--ao)",
+                format!(
+                    "{rays} rays per hit: at most {MAX_AO_RAYS} (for less noise, add samples \
+                     per pixel with --spp)"
+                ),
+            ));
+        }
         if settings.surfaces.is_none() && settings.iso.is_empty() {
             return Err(SceneError::setting(
                 "render.ao (--ao)",
@@ -120,6 +133,9 @@ pub(crate) fn resolve(
     }
     Ok(())
 }
+
+/// Ambient-occlusion rays per hit at most (`render.ao`).
+pub const MAX_AO_RAYS: u32 = 4096;
 
 /// What the last built surfaces were made from: the mesh entries, where
 /// their paths start, the frame, and each file's modification time.

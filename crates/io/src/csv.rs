@@ -155,12 +155,14 @@ fn parse_header(text: &str, sep: Separator) -> Result<Vec<String>, String> {
              (a header commented out with '#' is not read)"
         ));
     }
+    // Duplicates by a map of the names seen (linear in the columns: a
+    // header of 10⁵ names is checked at once).
+    let mut seen = std::collections::HashMap::with_capacity(names.len());
     for (i, name) in names.iter().enumerate() {
         if name.is_empty() {
             return Err(format!("column {} of the header has an empty name", i + 1));
         }
-        let lower = name.to_lowercase();
-        if let Some(j) = names[..i].iter().position(|n| n.to_lowercase() == lower) {
+        if let Some(j) = seen.insert(name.to_lowercase(), i) {
             return Err(format!(
                 "duplicate column name '{name}' (columns {} and {})",
                 j + 1,

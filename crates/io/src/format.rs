@@ -125,6 +125,17 @@ impl ParticleFormat {
         {
             return ParticleFormat::detect(&files[0]);
         }
+        // A device, FIFO or socket (/dev/zero, a pipe named x.npy) would
+        // block or never end: particle data comes from regular files.
+        if let Ok(meta) = std::fs::metadata(path)
+            && !meta.is_file()
+            && !meta.is_dir()
+        {
+            return Err(IoError::format(
+                path,
+                "not a regular file (a device, FIFO or socket): particle data is read from files",
+            ));
+        }
         // The name decides without opening the file (which may not exist
         // yet, or be a directory of frames the caller expands).
         if let Some(format) = ParticleFormat::from_name(path) {
@@ -454,13 +465,13 @@ fn csv_table(t: CsvTable, path: &Path) -> Result<ParticleTable, IoError> {
     };
     let (x, y, z) = (col("x")?, col("y")?, col("z")?);
     let positions = (0..t.rows()).map(|i| [x[i], y[i], z[i]]).collect();
+    // Every column in order, by index (not looked up by name per column,
+    // which is quadratic in the columns).
     let columns = t
         .columns
         .iter()
-        .map(|name| {
-            let v = t.column(name).unwrap_or(&[]);
-            (name.clone(), v.iter().map(|&v| v as f32).collect())
-        })
+        .zip(&t.data)
+        .map(|(name, v)| (name.clone(), v.iter().map(|&v| v as f32).collect()))
         .collect();
     Ok(ParticleTable {
         positions,

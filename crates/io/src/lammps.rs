@@ -198,7 +198,26 @@ fn read_frame<R: BufRead>(
     }
     let header =
         read_header(&mut lines, frame)?.ok_or_else(|| past_end(lines.path(), frame, frame))?;
-    read_atoms(&mut lines, frame, header)
+    let table = read_atoms(&mut lines, frame, header)?;
+    // More atom rows than NUMBER OF ATOMS says: the count lies, as `info`
+    // (which reads every frame) says too. The next frame, even one still
+    // being written, starts with an ITEM line.
+    while let Some(line) = lines.next_line()? {
+        if line.is_empty() {
+            continue;
+        }
+        if !line.starts_with("ITEM:") {
+            let shown: String = line.chars().take(60).collect();
+            return Err(lines.error(format!(
+                "frame {}: expected an 'ITEM:' line but found '{shown}' (frame {frame} holds \
+                 more atom rows than its NUMBER OF ATOMS, {})",
+                frame + 1,
+                table.len()
+            )));
+        }
+        break;
+    }
+    Ok(table)
 }
 
 fn past_end(path: &Path, frame: usize, frames: usize) -> IoError {

@@ -330,7 +330,7 @@ pub struct RenderDesc {
     /// Particles: march rays in packets that share one BVH traversal per
     /// pass (default true); false samples point by point. Same image.
     pub packets: Option<bool>,
-    /// Ambient occlusion: this many rays per mesh or iso-surface hit.
+    /// Ambient occlusion: this many rays per mesh or iso-surface hit (1 to 4096).
     pub ao: Option<u32>,
     /// How far ambient-occlusion rays look (default a tenth of the data's
     /// diagonal).

@@ -10,8 +10,9 @@
 //! When the server is bound beyond loopback every request must carry the
 //! access token (`?token=…`, or the `x-voxless-token` header): missing is
 //! 401, wrong is 403. On loopback, requests must name a loopback host (so a
-//! web page cannot reach the server by DNS rebinding), and a websocket
-//! opened by a page must come from the server's own origin.
+//! web page cannot reach the server by DNS rebinding), and a request a page
+//! makes (it carries an `Origin`) must come from the server's own origin:
+//! scheme, host and port; `Origin: null` is refused.
 
 use std::sync::Arc;
 
@@ -75,6 +76,18 @@ fn host_name(s: &str) -> &str {
     s.rsplit_once(':').map_or(s, |(h, _)| h)
 }
 
+/// Whether `origin` (`http://host:port`) is this server as `host` (the
+/// Host header, `host:port`) names it.
+fn same_origin(origin: &str, host: &str) -> bool {
+    let Some(authority) = origin
+        .strip_prefix("http://")
+        .or_else(|| origin.strip_prefix("https://"))
+    else {
+        return false;
+    };
+    !host.is_empty() && authority.trim_end_matches('/').eq_ignore_ascii_case(host)
+}
+
 fn is_loopback_name(h: &str) -> bool {
     h.eq_ignore_ascii_case("localhost")
         || h.parse::<std::net::IpAddr>()
@@ -95,9 +108,12 @@ async fn access(State(app): State<Arc<App>>, req: Request, next: Next) -> Respon
         )
             .into_response();
     }
-    if let Some(origin) = headers.get(header::ORIGIN).and_then(|o| o.to_str().ok())
-        && origin != "null"
-        && !host_name(origin).eq_ignore_ascii_case(host_name(host))
+    // A browser names the page behind a request in `Origin`: only the
+    // viewer's own page (scheme, host and port of this server) may drive
+    // it. `null` (sandboxed frames, files) and other ports of the same host
+    // are other pages. Requests without an Origin are not from a page.
+    if let Some(origin) = headers.get(header::ORIGIN)
+        && !same_origin(origin.to_str().unwrap_or("null"), host)
     {
         return (StatusCode::FORBIDDEN, "cross-origin requests are refused\n").into_response();
     }

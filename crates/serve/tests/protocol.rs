@@ -165,6 +165,18 @@ fn traversal_in_any_spelling_is_404() {
     let mut buf = Vec::new();
     let _ = s.read_to_end(&mut buf);
     assert!(String::from_utf8_lossy(&buf).starts_with("HTTP/1.1 403"));
+    // Only the viewer's own page may drive it: `Origin: null` (sandboxed
+    // frames) and other ports or hosts are other pages.
+    let origin = |o: &str| status(server.addr, "/", &format!("Origin: {o}\r\n"));
+    assert_eq!(origin("http://127.0.0.1"), 200);
+    for other in [
+        "null",
+        "http://127.0.0.1:1",
+        "http://evil.example",
+        "file://",
+    ] {
+        assert_eq!(origin(other), 403, "{other}");
+    }
 }
 
 #[test]

@@ -96,10 +96,32 @@ pub fn read_colormap_file(
     path: &Path,
     name: Option<&str>,
 ) -> Result<ImportedColormap, ImportError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ImportError::Read {
+    let read = |source| ImportError::Read {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    // A device or FIFO (/dev/zero) would never end; a colormap is a small
+    // file, read up to a bound.
+    let meta = std::fs::metadata(path).map_err(read)?;
+    if !meta.is_file() {
+        return Err(ImportError::Invalid {
+            path: path.to_path_buf(),
+            what: "colormap file".into(),
+            message: "not a regular file (a directory, device or FIFO)".into(),
+        });
+    }
+    const MAX_LEN: u64 = 64 << 20;
+    if meta.len() > MAX_LEN {
+        return Err(ImportError::Invalid {
+            path: path.to_path_buf(),
+            what: "colormap file".into(),
+            message: format!(
+                "{} bytes; a colormap file holds at most {MAX_LEN}",
+                meta.len()
+            ),
+        });
+    }
+    let text = std::fs::read_to_string(path).map_err(read)?;
     parse_colormap_json(&text, name, path)
 }
 

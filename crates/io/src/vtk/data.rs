@@ -64,6 +64,9 @@ impl<'a> Source<'a> {
             })?),
             None => None,
         };
+        // The bytes the array's values take, when their count is known.
+        let bytes_of =
+            |n: Option<usize>| n.map(|n| (n as u64).saturating_mul(scalar.size() as u64));
         let values = match spec.format {
             Format::Ascii => ascii_values(&spec.text, expected)?,
             Format::Binary => {
@@ -74,7 +77,7 @@ impl<'a> Source<'a> {
                     .filter(|b| !b.is_ascii_whitespace())
                     .collect();
                 let blob = decode_base64(&text)?;
-                let data = self.payload(&blob)?;
+                let data = self.payload(&blob, bytes_of(expected))?;
                 convert(&data, scalar, self.doc.byte_order, expected)?
             }
             Format::Appended(offset) => {
@@ -91,7 +94,7 @@ impl<'a> Source<'a> {
                 }
                 match appended.encoding {
                     Encoding::Raw => {
-                        let data = self.payload(&region[offset..])?;
+                        let data = self.payload(&region[offset..], bytes_of(expected))?;
                         convert(&data, scalar, self.doc.byte_order, expected)?
                     }
                     Encoding::Base64 => {
@@ -107,7 +110,7 @@ impl<'a> Source<'a> {
                             .filter(|b| !b.is_ascii_whitespace())
                             .collect();
                         let blob = decode_base64(&text)?;
-                        let data = self.payload(&blob)?;
+                        let data = self.payload(&blob, bytes_of(expected))?;
                         convert(&data, scalar, self.doc.byte_order, expected)?
                     }
                 }
@@ -123,8 +126,10 @@ impl<'a> Source<'a> {
         Ok(values)
     }
 
-    /// The data bytes of a binary block `blob` (header, then data).
-    fn payload<'b>(&self, blob: &'b [u8]) -> Result<Cow<'b, [u8]>, String> {
+    /// The data bytes of a binary block `blob` (header, then data); `limit`
+    /// is what the array needs, when its size is known (compressed data
+    /// declaring more is refused before it is inflated).
+    fn payload<'b>(&self, blob: &'b [u8], limit: Option<u64>) -> Result<Cow<'b, [u8]>, String> {
         let header = self.doc.header;
         let order = self.doc.byte_order;
         let hsize = header.size();
@@ -145,7 +150,7 @@ impl<'a> Source<'a> {
                 }
                 Ok(Cow::Borrowed(&blob[hsize..hsize + n as usize]))
             }
-            Some("vtkZLibDataCompressor") => decompress(blob, hsize, &word).map(Cow::Owned),
+            Some("vtkZLibDataCompressor") => decompress(blob, hsize, &word, limit).map(Cow::Owned),
             Some(other) => Err(format!(
                 "compressor \"{other}\" is not supported (only vtkZLibDataCompressor)"
             )),
@@ -158,6 +163,7 @@ fn decompress(
     blob: &[u8],
     hsize: usize,
     word: &dyn Fn(usize) -> Result<u64, String>,
+    limit: Option<u64>,
 ) -> Result<Vec<u8>, String> {
     let blocks = word(0)?;
     let block_size = word(1)?;
@@ -190,7 +196,31 @@ fn decompress(
             "last block size {last_size} is larger than the block size {block_size}"
         ));
     }
+    // What the blocks inflate to, checked against what the array needs and
+    // reserved up front: a bomb is refused, not inflated, and memory that
+    // cannot be had is an error rather than an abort.
+    let total: u64 = (0..blocks as u64)
+        .map(|i| {
+            if i + 1 == blocks as u64 && last_size != 0 {
+                last_size
+            } else {
+                block_size
+            }
+        })
+        .fold(0u64, u64::saturating_add);
+    if let Some(limit) = limit
+        && total > limit
+    {
+        return Err(format!(
+            "compression header declares {total} bytes once inflated, but the array holds \
+             {limit}"
+        ));
+    }
     let mut out = Vec::new();
+    usize::try_from(total)
+        .ok()
+        .and_then(|t| out.try_reserve_exact(t).ok())
+        .ok_or_else(|| format!("the inflated data, {total} bytes, does not fit in memory"))?;
     let mut pos = header_len;
     for (i, &c) in compressed.iter().enumerate() {
         let expected = if i + 1 == blocks && last_size != 0 {

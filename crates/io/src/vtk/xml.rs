@@ -174,8 +174,18 @@ fn rfind(haystack: &[u8], needle: &[u8]) -> Option<usize> {
 /// The attributes of a start tag as (name, value) strings.
 fn attributes(reader: &Reader<&[u8]>, e: &BytesStart) -> Result<Vec<(String, String)>, String> {
     let mut out = Vec::new();
-    for attr in e.attributes() {
+    // quick-xml's own duplicate check compares every attribute with every
+    // earlier one (quadratic: 2·10⁵ attributes take minutes); a set does it
+    // in one pass.
+    let mut seen = std::collections::HashSet::new();
+    for attr in e.attributes().with_checks(false) {
         let attr = attr.map_err(|err| format!("bad XML attribute: {err}"))?;
+        if !seen.insert(attr.key.as_ref().to_vec()) {
+            return Err(format!(
+                "bad XML attribute: '{}' appears twice in one tag",
+                String::from_utf8_lossy(attr.key.as_ref())
+            ));
+        }
         let key = String::from_utf8_lossy(attr.key.local_name().as_ref()).into_owned();
         let value = attr
             .decode_and_unescape_value(reader.decoder())

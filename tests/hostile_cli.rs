@@ -1,0 +1,185 @@
+//! Hostile input through the CLI: sizes that cannot fit are refused before
+//! any work, special files are refused instead of read forever, a dump
+//! whose atom count lies fails as `info` does, a projection that misses the
+//! data is an error, and an output named by a symbolic link stays a link.
+//! (Times are never asserted; a quadratic reader shows as a test that does
+//! not finish.)
+
+mod common;
+use common::*;
+
+#[test]
+fn sizes_that_cannot_fit_are_refused_before_any_work() {
+    let s = Scratch::new("hostile-sizes");
+    let n = 6;
+    let mut flat = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..n {
+                flat.extend([
+                    i as f32 / n as f32,
+                    j as f32 / n as f32,
+                    k as f32 / n as f32,
+                ]);
+            }
+        }
+    }
+    voxless_io::write_npy_f32(&s.path("grid.npy"), &[n * n * n, 3], &flat).unwrap();
+    let out = s.str("x.png");
+    let e = fails(&[
+        "render",
+        "--particles",
+        &s.str("grid.npy"),
+        "--lagrangian",
+        "6",
+        "--box",
+        "1",
+        "--tet-mode",
+        "kbuffer",
+        "--layers",
+        "1000000000",
+        "--size",
+        "16",
+        "12",
+        "-o",
+        &out,
+    ]);
+    assert!(
+        e.contains("tets.layers (--layers)") && e.contains("available"),
+        "{e}"
+    );
+    let p = s.path("p.npy");
+    write_positions(&p, 200, 3);
+    let e = fails(&[
+        "render",
+        "--particles",
+        &s.str("p.npy"),
+        "--radius",
+        "0.05",
+        "--iso",
+        "0.3",
+        "--ao",
+        "1000000000",
+        "--size",
+        "16",
+        "12",
+        "-o",
+        &out,
+    ]);
+    assert!(
+        e.contains("render.ao (--ao)") && e.contains("at most 4096"),
+        "{e}"
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn special_files_are_refused_and_links_stay_links() {
+    let s = Scratch::new("hostile-files");
+    let out = s.str("x.png");
+    let e = fails(&[
+        "render",
+        "--particles",
+        "/dev/zero",
+        "--size",
+        "16",
+        "12",
+        "-o",
+        &out,
+    ]);
+    assert!(e.contains("not a regular file"), "{e}");
+    write_positions(&s.path("p.npy"), 200, 4);
+    std::fs::write(s.path("target.png"), b"keep").unwrap();
+    std::os::unix::fs::symlink("target.png", s.path("link.png")).unwrap();
+    ok(&[
+        "render",
+        "--particles",
+        &s.str("p.npy"),
+        "--radius",
+        "0.05",
+        "--size",
+        "16",
+        "12",
+        "-o",
+        &s.str("link.png"),
+    ]);
+    let link = std::fs::symlink_metadata(s.path("link.png")).unwrap();
+    assert!(
+        link.file_type().is_symlink(),
+        "the link was replaced by a file"
+    );
+    let png = std::fs::read(s.path("target.png")).unwrap();
+    assert!(
+        png.starts_with(b"\x89PNG"),
+        "the link's target holds the image"
+    );
+}
+
+#[test]
+fn lying_counts_and_empty_projections_are_errors() {
+    let s = Scratch::new("hostile-counts");
+    let mut dump = String::from(
+        "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n30\nITEM: BOX BOUNDS pp pp pp\n0 1\n0 1\n0 1\n\
+         ITEM: ATOMS id type xs ys zs\n",
+    );
+    for i in 0..40 {
+        let f = i as f32 / 40.0;
+        dump.push_str(&format!("{} 1 {f} {} {}\n", i + 1, 1.0 - f, 0.5));
+    }
+    std::fs::write(s.path("dump.liar"), dump).unwrap();
+    let e = fails(&[
+        "render",
+        "--particles",
+        &s.str("dump.liar"),
+        "--size",
+        "16",
+        "12",
+        "-o",
+        &s.str("x.png"),
+    ]);
+    assert!(e.contains("more atom rows than its NUMBER OF ATOMS"), "{e}");
+    let (success, _, _) = voxless(&["info", &s.str("dump.liar")]);
+    assert!(!success, "info and render must agree");
+    write_positions(&s.path("p.npy"), 200, 5);
+    let e = fails(&[
+        "project",
+        "--particles",
+        &s.str("p.npy"),
+        "--radius",
+        "0.05",
+        "--bounds",
+        "10",
+        "10",
+        "10",
+        "11",
+        "11",
+        "11",
+        "--size",
+        "16",
+        "16",
+        "-o",
+        &s.str("e.npy"),
+    ]);
+    assert!(e.contains("misses the data"), "{e}");
+    assert!(!s.path("e.npy").exists());
+}
+
+#[test]
+fn wide_headers_are_read_in_linear_time() {
+    let s = Scratch::new("hostile-wide");
+    let n = 50_000;
+    let mut header = String::from("x,y,z");
+    let mut row = String::from("0.5,0.5,0.5");
+    for i in 0..n {
+        header.push_str(&format!(",c{i}"));
+        row.push_str(",1");
+    }
+    std::fs::write(s.path("wide.csv"), format!("{header}\n{row}\n")).unwrap();
+    let (success, stderr, out) = voxless(&["info", &s.str("wide.csv")]);
+    assert!(success, "{stderr}");
+    assert!(String::from_utf8_lossy(&out.stdout).contains(&format!("columns ({})", n + 3)));
+    // A duplicate among them is still found.
+    std::fs::write(s.path("dup.csv"), format!("{header},c7\n{row},1\n")).unwrap();
+    let e = fails(&["info", &s.str("dup.csv")]);
+    assert!(e.contains("duplicate column name 'c7'"), "{e}");
+}
