@@ -92,6 +92,19 @@ fn run_job(
 ) {
     let seq = job.seq;
     let fail = |message: String| {
+        // Back to the view that rendered last (unless the page moved on):
+        // the next interaction starts from it, not from the failed setting.
+        let mut t = tab.lock().unwrap_or_else(|e| e.into_inner());
+        let mut message = message;
+        if t.desc == job.desc
+            && t.frame == job.frame
+            && let Some((desc, frame)) = t.last_good.clone()
+        {
+            app.set_current(&desc, frame);
+            (t.desc, t.frame) = (desc, frame);
+            message.push_str(" (the view is back to the last one that rendered)");
+        }
+        drop(t);
         outbox.offer(
             Slot::Error,
             seq,
@@ -120,6 +133,7 @@ fn run_job(
     };
     {
         let mut t = tab.lock().unwrap_or_else(|e| e.into_inner());
+        t.last_good = Some((job.desc.clone(), job.frame));
         // What the default camera framed (the part of the data the
         // transfer function shows), so camera moves start from that view.
         t.bounds = resolved.framed;

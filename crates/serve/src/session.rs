@@ -50,6 +50,10 @@ pub struct Tab {
     pub value_range: Option<[f32; 2]>,
     pub attribute_range: Option<[f32; 2]>,
     pub imported: Vec<ImportedPreset>,
+    /// The view that resolved last: a setting that fails to load or
+    /// resolve goes back to it, so one bad patch does not stick to every
+    /// later interaction.
+    pub last_good: Option<(SceneDesc, usize)>,
 }
 
 /// The pending job and the cancel token of the running one.
@@ -117,6 +121,7 @@ pub async fn run(socket: WebSocket, app: Arc<App>) {
         value_range: None,
         attribute_range: None,
         imported: Vec::new(),
+        last_good: None,
     }));
     let worker = Arc::new(Worker::default());
 

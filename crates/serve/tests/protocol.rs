@@ -315,6 +315,33 @@ fn a_tab_colours_by_a_column_of_the_file_and_by_nothing_else() {
                 break;
             }
         }
+        // A rejected setting does not stick: the next move renders from the
+        // view that rendered last, and so after one the renderer refuses.
+        send(
+            &mut ws,
+            json!({"seq": 4, "type": "orbit", "yaw": 10.0, "pitch": 0.0}),
+        )
+        .await;
+        until_converged(&mut ws, 4).await;
+        send(
+            &mut ws,
+            json!({"seq": 5, "type": "set", "patch": {"image": {"spp": 0}}}),
+        )
+        .await;
+        loop {
+            if let Some(Msg::Text(v)) = next(&mut ws).await
+                && v["type"] == "error"
+                && v["seq"] == 5
+            {
+                break;
+            }
+        }
+        send(
+            &mut ws,
+            json!({"seq": 6, "type": "orbit", "yaw": 10.0, "pitch": 0.0}),
+        )
+        .await;
+        until_converged(&mut ws, 6).await;
     });
 }
 
