@@ -851,7 +851,20 @@ impl SceneFlags {
                  scene has neither",
             ));
         }
-        if given(&self.amr_flags()).is_some() {
+        if let Some(flag) = given(&self.amr_flags()) {
+            // Settings of AMR cells on a scene of particles or tets would be
+            // ignored (or read as a second data source): say which flag.
+            let amr_source = self.data.cells.is_some()
+                || self.data.amrclaw.is_some()
+                || !self.data.scalars.is_empty()
+                || d.amr.is_some();
+            if !amr_source && (d.particles.is_some() || d.tets.is_some()) {
+                return Err(SceneError::setting(
+                    flag,
+                    "applies to AMR cells (--cells with --scalars, or --amrclaw), and the \
+                     scene's data are particles or a tessellation",
+                ));
+            }
             let a = d.amr.get_or_insert_with(AmrDesc::default);
             if let Some(c) = &self.data.cells {
                 a.cells = Some(path(c));

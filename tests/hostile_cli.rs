@@ -183,3 +183,46 @@ fn wide_headers_are_read_in_linear_time() {
     let e = fails(&["info", &s.str("dup.csv")]);
     assert!(e.contains("duplicate column name 'c7'"), "{e}");
 }
+
+#[test]
+fn settings_that_would_be_ignored_or_misread_name_their_flag() {
+    let s = Scratch::new("hostile-flags");
+    write_positions(&s.path("p.npy"), 200, 6);
+    let p = s.str("p.npy");
+    let out = s.str("x.png");
+    let base = [
+        "render",
+        "--particles",
+        &p,
+        "--size",
+        "16",
+        "12",
+        "-o",
+        &out,
+    ];
+    let with = |extra: &[&str]| -> Vec<String> {
+        base.iter().chain(extra).map(|a| a.to_string()).collect()
+    };
+    let fails_with = |extra: &[&str], needle: &str| {
+        let args = with(extra);
+        let e = fails(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(e.contains(needle), "{extra:?}: {e}");
+    };
+    // AMR settings on particles: the flag, not "more than one data source".
+    fails_with(&["--field", "density"], "field");
+    fails_with(&["--cell-size", "0.1"], "applies to AMR cells");
+    // The Gaussian's σ = 0 is named as such.
+    fails_with(
+        &["--kernel", "gaussian", "--sigma", "0"],
+        "particles.sigma (--sigma)",
+    );
+    // Settings of an attribute without one.
+    fails_with(
+        &["--attribute-range", "0", "1"],
+        "acts on a per-particle attribute",
+    );
+    fails_with(
+        &["--classification", "pre"],
+        "acts on a per-particle attribute",
+    );
+}

@@ -541,11 +541,52 @@ pub(crate) fn prepare_arrays(
     sph_defaults: Option<Kernel>,
     scale: f64,
 ) -> Result<Kernel, SceneError> {
+    check_kernel_and_attribute(p, data.attribute.is_some())?;
     super::scale::scale_arrays(data, p)?;
     let kernel =
         sph_defaults.unwrap_or_else(|| kernel_of(p, p.kernel.unwrap_or(KernelName::Gaussian3)));
     localise(data, kernel, scale);
     Ok(kernel)
+}
+
+/// The Gaussian's κ and σ must be finite and positive, and the settings
+/// that act on an attribute need one (they would be ignored without a
+/// word).
+fn check_kernel_and_attribute(p: &ParticlesDesc, has_attribute: bool) -> Result<(), SceneError> {
+    for (name, v) in [
+        ("particles.kappa (--kappa)", p.kappa),
+        ("particles.sigma (--sigma)", p.sigma),
+    ] {
+        if let Some(v) = v
+            && !(v.is_finite() && v > 0.0)
+        {
+            return Err(SceneError::setting(
+                name,
+                format!("{v}: the Gaussian's parameters must be finite numbers > 0"),
+            ));
+        }
+    }
+    if !has_attribute {
+        for (name, given) in [
+            (
+                "particles.attribute_range (--attribute-range)",
+                p.attribute_range.is_some(),
+            ),
+            (
+                "particles.classification (--classification pre)",
+                p.classification == Some(ClassificationName::Pre),
+            ),
+        ] {
+            if given {
+                return Err(SceneError::setting(
+                    name,
+                    "acts on a per-particle attribute, and none is given: add --attribute \
+                     (a column or a .npy)",
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The particle settings `p` describes for `kernel`, in a frame of scale
