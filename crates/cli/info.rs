@@ -584,10 +584,7 @@ fn hdf5(path: &Path, args: &InfoArgs) -> Result<String> {
         table_summary(&mut out, &table.table, ParticleFormat::Hdf5, None)?;
     }
     // A snapshot of several files: the first file's contents.
-    let first = match voxless::io::snapshot::snapshot_files(path) {
-        Some(files) if !path.is_file() => files[0].clone(),
-        _ => path.to_path_buf(),
-    };
+    let first = voxless::io::snapshot::first_file(path);
     writeln!(out, "\ncontents of {}:", first.display())?;
     out.push_str(&voxless::io::describe_hdf5(&first)?);
     Ok(out)

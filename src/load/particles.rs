@@ -356,7 +356,7 @@ fn read_frame_share(
             if let Some((kernel, scale, said)) =
                 super::snapshot::defaults(p, &source, &mut radii, &mut weights)
             {
-                sph_defaults = Some(kernel);
+                sph_defaults = kernel;
                 h_scale = scale;
                 notes.extend(said);
             }
@@ -379,13 +379,10 @@ fn read_frame_share(
             };
             data.attribute = per(&p.attribute, "attribute")?;
             data.radii = per(&radii, "radii")?;
+            // (Its masses are the weights already: `defaults` above.)
             if let Some((r, said)) = super::snapshot::cell_radii(p, &source.table) {
                 notes.push(said);
                 data.radii = Some(r);
-                sph_defaults.get_or_insert(Kernel::CubicSpline);
-                if weights.is_none() {
-                    weights = Some("Masses".into());
-                }
             }
             // The file's smoothing lengths in voxless's h (same support).
             if let (Some(f), Some(r)) = (h_scale, data.radii.as_mut())

@@ -122,14 +122,19 @@ pub(crate) fn sph_columns(p: &ParticlesDesc, source: &Source) -> Option<(Option<
 /// The defaults an SPH file or snapshot gives when `p` leaves them open:
 /// the kernel, the smoothing lengths as radii (and the factor from the
 /// code's convention to voxless's h), the masses as weights; sets `radii`
-/// and `weights` to those columns and returns the kernel, the factor and a
-/// note saying what was used. `None` when the file gives nothing.
+/// and `weights` to those columns and returns the kernel (`None` when `p`
+/// gives one), the factor and a note saying what was used. `None` when the
+/// file gives nothing.
 pub(crate) fn defaults(
     p: &ParticlesDesc,
     source: &Source,
     radii: &mut Option<String>,
     weights: &mut Option<String>,
-) -> Option<(voxless_particles::Kernel, Option<f32>, Option<String>)> {
+) -> Option<(
+    Option<voxless_particles::Kernel>,
+    Option<f32>,
+    Option<String>,
+)> {
     let (h, m) = sph_columns(p, source)?;
     let (kernel, factor, said) = super::sph::convention(&source.table);
     let mut used = Vec::new();
@@ -151,12 +156,13 @@ pub(crate) fn defaults(
         used.push(format!("weights = {m}"));
         *weights = Some(m);
     }
-    let note = if p.kernel.is_some() {
-        if used.is_empty() {
-            return Some((kernel, scale, None));
-        }
-        format!("snapshot: {} (override with --weights)", used.join(", "))
-    } else {
+    // A kernel the user gave stays theirs: only the weights are defaults.
+    if p.kernel.is_some() {
+        let note = (!used.is_empty())
+            .then(|| format!("snapshot: {} (override with --weights)", used.join(", ")));
+        return Some((None, scale, note));
+    }
+    let note = {
         // The code's smoothing-length convention only matters with
         // smoothing lengths.
         used.insert(
@@ -177,7 +183,7 @@ pub(crate) fn defaults(
             used.join(", ")
         )
     };
-    Some((kernel, scale, Some(note)))
+    Some((Some(kernel), scale, Some(note)))
 }
 
 /// AREPO's gas cells carry no smoothing length: each cell's kernel gets the

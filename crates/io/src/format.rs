@@ -120,10 +120,9 @@ impl ParticleFormat {
     /// [`detect_bytes`]: ParticleFormat::detect_bytes
     pub fn detect(path: &Path) -> Result<Option<ParticleFormat>, IoError> {
         // A snapshot of several files: its first file says.
-        if !path.is_file()
-            && let Some(files) = crate::snapshot::snapshot_files(path)
-        {
-            return ParticleFormat::detect(&files[0]);
+        let first = crate::snapshot::first_file(path);
+        if first != path {
+            return ParticleFormat::detect(&first);
         }
         // A device, FIFO or socket (/dev/zero, a pipe named x.npy) would
         // block or never end: particle data comes from regular files.
@@ -557,19 +556,12 @@ fn read_hdf5(path: &Path, opts: &TableOptions) -> Result<Table, IoError> {
             Ok(Table { table, note })
         }
         Hdf5Kind::Gadget => {
-            let mut region = opts.region;
-            if let Some(r) = region.as_mut()
-                && r.period.is_none()
-                && !opts.no_file_box
-                && let Some(b) = crate::hdf5::open_gadget_hdf5(path)?.box_size
-            {
-                r.period = Some(([0.0; 3], b));
-            }
             let (table, note) = crate::hdf5::read_gadget_snapshot(
                 path,
                 opts.part_type,
                 opts.share,
-                region.as_ref(),
+                opts.region.as_ref(),
+                !opts.no_file_box,
             )?;
             Ok(Table { table, note })
         }

@@ -269,6 +269,16 @@ pub fn snapshot_files(path: &Path) -> Option<Vec<PathBuf>> {
         .then(|| found.into_iter().map(|(_, p)| p).collect())
 }
 
+/// The file that stands for `path` when reading a header or sniffing a
+/// format: the first file of the multi-file snapshot `path` names (its
+/// stem or directory), else `path` itself.
+pub fn first_file(path: &Path) -> PathBuf {
+    match snapshot_files(path) {
+        Some(files) if !path.is_file() => files[0].clone(),
+        _ => path.to_path_buf(),
+    }
+}
+
 /// `stem.K.ext` → (stem, K, ".ext"), `stem.K` → (stem, K, "") for the
 /// extensions of snapshot files.
 fn split_numbered(name: &str) -> Option<(&str, u64, &str)> {

@@ -90,7 +90,7 @@ pub fn read_gadget_share(
     part_type: u32,
     share: Option<(usize, usize)>,
 ) -> Result<ParticleTable, IoError> {
-    read_gadget_snapshot(path, Some(part_type), share, None).map(|(t, _)| t)
+    read_gadget_snapshot(path, Some(part_type), share, None, true).map(|(t, _)| t)
 }
 
 /// The files of the snapshot `path` names, and what their headers say.
@@ -256,7 +256,9 @@ pub fn open_gadget_hdf5(path: &Path) -> Result<GadgetHdf5, IoError> {
 /// = |v| comes last. `BoxSize` makes the table periodic over [0, BoxSize].
 ///
 /// `share = Some((r, k))` reads rows `n·r/k .. n·(r+1)/k` of the type's `n`
-/// (over all files); `region` keeps only the particles that can touch it.
+/// (over all files); `region` keeps only the particles that can touch it,
+/// measured periodically over the file's box when it gives no period of
+/// its own and `file_box` is true.
 /// The second value is a note saying what was read when it is worth one (a
 /// default type, a region's count).
 pub fn read_gadget_snapshot(
@@ -264,8 +266,19 @@ pub fn read_gadget_snapshot(
     part_type: Option<u32>,
     share: Option<(usize, usize)>,
     region: Option<&Region>,
+    file_box: bool,
 ) -> Result<(ParticleTable, Option<String>), IoError> {
     let snap = open_gadget_hdf5(path)?;
+    // The region over the file's periodic box (read once, with the rest of
+    // the headers).
+    let region = region.map(|r| match (r.period, snap.box_size) {
+        (None, Some(b)) if file_box => Region {
+            period: Some(([0.0; 3], b)),
+            ..*r
+        },
+        _ => *r,
+    });
+    let region = region.as_ref();
     let t = match part_type {
         Some(t) => t,
         None => default_part_type(&snap.total),

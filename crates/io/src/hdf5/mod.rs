@@ -81,10 +81,7 @@ pub enum Hdf5Kind {
 /// `snap_<K>` groups means JaxPM.
 pub fn hdf5_kind(path: &Path) -> Result<Hdf5Kind, IoError> {
     // A snapshot of several files: its first file says.
-    let first = match crate::snapshot::snapshot_files(path) {
-        Some(files) if !path.is_file() => files[0].clone(),
-        _ => path.to_path_buf(),
-    };
+    let first = crate::snapshot::first_file(path);
     let f = Hdf5File::open(&first)?;
     let root = f.root();
     let names = f.member_names(root, "/")?;
