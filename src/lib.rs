@@ -83,6 +83,7 @@ mod resolve;
 pub mod save;
 mod scene;
 pub mod series;
+pub mod stream;
 mod surfaces;
 mod view;
 mod volume;

@@ -436,6 +436,33 @@ fn project(
     radii: Option<&Path>,
 ) -> Result<()> {
     let t = Instant::now();
+    // One process, nothing else asked of the particles: stream them.
+    if matches!(placement, Placement::Process) && radii.is_none() {
+        let progress = Progress::new("projecting (streamed)", 1, true);
+        let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
+        let control = Control::new().with_progress(&report);
+        if let Some(s) = voxless::stream::project(desc, base, frame, projection, (w, h), &control)?
+        {
+            progress.finish();
+            for n in &s.notes {
+                eprintln!("note: {n}");
+            }
+            write_map(output, desc, base, frame, &s.view, (w, h), &s.column)?;
+            let integral: f64 =
+                s.column.iter().map(|&c| c as f64).sum::<f64>() * s.view.pixel_area(w, h);
+            eprintln!(
+                "projected {w}×{h} from {} particles streamed in {} chunk{} in {:.3}s → {} \
+                 (Σ column × pixel area = {integral:.6e}, exact ∫ field dV = {:.6e})",
+                s.particles,
+                s.chunks,
+                if s.chunks == 1 { "" } else { "s" },
+                t.elapsed().as_secs_f64(),
+                output.display(),
+                s.mass
+            );
+            return Ok(());
+        }
+    }
     let data = placement.load(desc, base, frame, Purpose::Project)?;
     let kind = data.kind().name();
     render::report_loaded(placement, data.notes(), kind, data.world_bounds(), t);
@@ -446,21 +473,7 @@ fn project(
     let (view, column) = data.project(projection, w, h, &Control::new().with_progress(&report))?;
     progress.finish();
     let written = column.map_or(Ok(()), |column| {
-        if out::is_fits(output) {
-            // The map's world coordinates, unit and epoch go with it.
-            let meta = voxless::map_fits::map_meta(desc, base, frame)?;
-            let line: Vec<String> = std::env::args().collect();
-            voxless::map_fits::write_projection_fits(
-                output,
-                &view,
-                (w, h),
-                &column,
-                &meta,
-                &[format!("voxless: {}", line.join(" "))],
-            )?;
-        } else {
-            out::write_gray(output, w, h, &column)?;
-        }
+        write_map(output, desc, base, frame, &view, (w, h), &column)?;
         let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * view.pixel_area(w, h);
         let mass = data
             .total_mass()
@@ -476,6 +489,34 @@ fn project(
     });
     render::agree(placement, written)?;
     render::say(placement.memory_report(data.counts())?);
+    Ok(())
+}
+
+/// Writes a projection's column densities: a FITS map with its world
+/// coordinates, unit and epoch, or a raw array or image.
+fn write_map(
+    output: &Path,
+    desc: &voxless::SceneDesc,
+    base: &Path,
+    frame: usize,
+    view: &voxless::ProjectionView,
+    (w, h): (u32, u32),
+    column: &[f32],
+) -> Result<()> {
+    if out::is_fits(output) {
+        let meta = voxless::map_fits::map_meta(desc, base, frame)?;
+        let line: Vec<String> = std::env::args().collect();
+        voxless::map_fits::write_projection_fits(
+            output,
+            view,
+            (w, h),
+            column,
+            &meta,
+            &[format!("voxless: {}", line.join(" "))],
+        )?;
+    } else {
+        out::write_gray(output, w, h, column)?;
+    }
     Ok(())
 }
 

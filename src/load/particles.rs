@@ -236,7 +236,7 @@ fn read_share(
     Ok(fd)
 }
 
-fn is_npy(path: &Path) -> bool {
+pub(crate) fn is_npy(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("npy"))
 }
@@ -244,7 +244,7 @@ fn is_npy(path: &Path) -> bool {
 /// Share `share` of the rows read by offset, when the positions and every
 /// per-particle array are `.npy` files of the right shapes; `None` sends
 /// the read down the general path (which also words any error).
-fn npy_rows(
+pub(crate) fn npy_rows(
     p: &ParticlesDesc,
     base: &Path,
     frame: usize,

@@ -30,7 +30,7 @@ pub const DEFAULT_NEIGHBOURS: usize = 32;
 
 /// The periodic box `p` gives (with `true`), else the file's (`false`),
 /// else none. Errors name the setting.
-fn resolve_box(
+pub(crate) fn resolve_box(
     p: &ParticlesDesc,
     file_box: Option<PeriodicBox>,
 ) -> Result<Option<(PeriodicBox, bool)>, SceneError> {
@@ -201,25 +201,45 @@ fn wrap_positions(
 /// (wrapped into it): it also asks whether the box is right when the
 /// particles fill less than a hundredth of its side along every axis.
 fn wrap_note(b: &PeriodicBox, given: bool, wrapped: usize, positions: &[[f64; 3]]) -> String {
+    let mut span = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for q in positions {
+        extend_span(&mut span, q);
+    }
+    box_note(b, given, wrapped, positions.len(), span)
+}
+
+/// Grows the per-axis span `(lo, hi)` by the finite coordinates of `q`.
+pub(crate) fn extend_span(span: &mut ([f64; 3], [f64; 3]), q: &[f64; 3]) {
+    for (a, &v) in q.iter().enumerate() {
+        if v.is_finite() {
+            span.0[a] = span.0[a].min(v);
+            span.1[a] = span.1[a].max(v);
+        }
+    }
+}
+
+/// What a periodic box note says: the box, how many of `total` particles
+/// were wrapped into it, and a question when the particles' `span` fills
+/// under a hundredth of its side.
+pub(crate) fn box_note(
+    b: &PeriodicBox,
+    given: bool,
+    wrapped: usize,
+    total: usize,
+    (l, h): ([f64; 3], [f64; 3]),
+) -> String {
     let (lo, hi) = corners(b);
     let mut s = format!(
         "periodic box ({}): [{lo:?}, {hi:?}]; the field sums every periodic image",
         if given { "given" } else { "the file's" }
     );
-    let total = positions.len();
     if wrapped > 0 {
         s.push_str(&format!(
             "; {wrapped} of {total} particles lay outside it and were wrapped in"
         ));
     }
     let fill = (0..3)
-        .map(|a| {
-            let (mut l, mut h) = (f64::INFINITY, f64::NEG_INFINITY);
-            for q in positions.iter().filter(|q| q[a].is_finite()) {
-                (l, h) = (l.min(q[a]), h.max(q[a]));
-            }
-            (h - l) / b.size[a]
-        })
+        .map(|a| (h[a] - l[a]) / b.size[a])
         .fold(0.0f64, f64::max);
     if total > 1 && fill < 0.01 {
         s.push_str(&format!(

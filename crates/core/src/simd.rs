@@ -151,6 +151,9 @@ pub trait Lanes:
     /// Truncated toward zero; NaN and lanes outside the i32 range give
     /// `i32::MIN` on x86 (`cvttps`). Callers clamp first.
     fn trunc_i32(self) -> [i32; LANES];
+    /// Rounded towards zero, in every lane.
+    fn trunc(self) -> Self;
+
     /// Each lane's bit pattern shifted left by 23 bits (into the exponent
     /// field), zeros shifted in.
     fn shl23(self) -> Self;
@@ -159,6 +162,10 @@ pub trait Lanes:
     /// (NaN included) reads `v[0]`. Zero in every lane when `v` is empty.
     /// (AVX2: one hardware gather; portable: eight loads.)
     fn gather(v: &[f32], at: Self) -> Self;
+    /// `(v[i][0], v[i][1])` in every lane, `i` as for [`Lanes::gather`]:
+    /// a table and its next entry in one read of eight bytes per lane
+    /// (AVX2: two 64-bit gathers; portable: eight loads).
+    fn gather_pair(v: &[[f32; 2]], at: Self) -> (Self, Self);
     /// `acc[k] += a[k] as f64 * b[k] as f64` in every lane: the product is
     /// exact (an f32 × f32 product fits an f64), the sum rounded once — for
     /// sums that must stay exact where the terms' weights add up to one.
@@ -381,6 +388,10 @@ impl Lanes for wide::f32x8 {
         self.fast_trunc_int().to_array()
     }
     #[inline(always)]
+    fn trunc(self) -> Self {
+        wide::f32x8::trunc(self)
+    }
+    #[inline(always)]
     fn shl23(self) -> Self {
         let bits: wide::u32x8 = wide::bytemuck::cast(self);
         wide::bytemuck::cast(bits << 23u32)
@@ -399,6 +410,25 @@ impl Lanes for wide::f32x8 {
             };
             v[i.min(last) as usize]
         }))
+    }
+    #[inline(always)]
+    fn gather_pair(v: &[[f32; 2]], at: Self) -> (Self, Self) {
+        let Some(last) = v.len().checked_sub(1) else {
+            return (Self::splat(0.0), Self::splat(0.0));
+        };
+        let last = last.min(i32::MAX as usize) as i32;
+        let p = wide::f32x8::to_array(at).map(|x| {
+            let i = if (0.0..2_147_483_648.0).contains(&x) {
+                x as i32
+            } else {
+                0
+            };
+            v[i.min(last) as usize]
+        });
+        (
+            wide::f32x8::new(p.map(|q| q[0])),
+            wide::f32x8::new(p.map(|q| q[1])),
+        )
     }
     #[inline(always)]
     fn add_product_f64(acc: &mut [f64; LANES], a: Self, b: Self) {
@@ -539,6 +569,12 @@ mod avx2 {
             a
         }
         #[inline(always)]
+        fn trunc(self) -> Self {
+            unsafe {
+                Avx2Lanes(_mm256_round_ps::<{ _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC }>(self.0))
+            }
+        }
+        #[inline(always)]
         fn gather(v: &[f32], at: Self) -> Self {
             let Some(last) = v.len().checked_sub(1) else {
                 return Self::splat(0.0);
@@ -551,6 +587,34 @@ mod avx2 {
                 let i = _mm256_max_epi32(i, _mm256_setzero_si256());
                 let i = _mm256_min_epi32(i, _mm256_set1_epi32(last));
                 Avx2Lanes(_mm256_i32gather_ps::<4>(v.as_ptr(), i))
+            }
+        }
+        #[inline(always)]
+        fn gather_pair(v: &[[f32; 2]], at: Self) -> (Self, Self) {
+            let Some(last) = v.len().checked_sub(1) else {
+                return (Self::splat(0.0), Self::splat(0.0));
+            };
+            let last = last.min(i32::MAX as usize) as i32;
+            // As `gather`: every index read is in 0..v.len(); each entry's
+            // eight bytes are read as one f64 lane.
+            unsafe {
+                let i = _mm256_cvttps_epi32(at.0);
+                let i = _mm256_max_epi32(i, _mm256_setzero_si256());
+                let i = _mm256_min_epi32(i, _mm256_set1_epi32(last));
+                let base = v.as_ptr().cast::<f64>();
+                let a = _mm256_castpd_ps(_mm256_i32gather_pd::<8>(base, _mm256_castsi256_si128(i)));
+                let b = _mm256_castpd_ps(_mm256_i32gather_pd::<8>(
+                    base,
+                    _mm256_extracti128_si256::<1>(i),
+                ));
+                // a = x0 y0 x1 y1 | x2 y2 x3 y3, b = x4 y4 x5 y5 | x6 y6 x7 y7.
+                let x = _mm256_shuffle_ps::<0b10_00_10_00>(a, b); // x0 x1 x4 x5 | x2 x3 x6 x7
+                let y = _mm256_shuffle_ps::<0b11_01_11_01>(a, b);
+                let order = _mm256_setr_epi32(0, 1, 4, 5, 2, 3, 6, 7);
+                (
+                    Avx2Lanes(_mm256_permutevar8x32_ps(x, order)),
+                    Avx2Lanes(_mm256_permutevar8x32_ps(y, order)),
+                )
             }
         }
         #[inline(always)]

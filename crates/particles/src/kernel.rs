@@ -400,9 +400,36 @@ fn projected_m4_q2_table() -> &'static [f32; PROJ_Q2_TABLE] {
 }
 
 /// The table of the kernels that read none.
-static NO_TABLE: [f32; PROJ_Q2_TABLE] = [0.0; PROJ_Q2_TABLE];
+pub(crate) static NO_TABLE: [f32; PROJ_Q2_TABLE] = [0.0; PROJ_Q2_TABLE];
 
 impl Kernel {
+    /// The projected-kernel table an SPH kernel's [`Column`] reads (over
+    /// `q² ∈ [0, Q²]`, `Q` the support factor); `None` for the Gaussians.
+    pub fn sph_table(&self) -> Option<&'static [f32]> {
+        match self.sph() {
+            _ if *self == Kernel::CubicSpline => Some(projected_m4_q2_table()),
+            Some(s) => Some(s.column_table()),
+            None => None,
+        }
+    }
+
+    /// [`Kernel::sph_table`] as pairs `(value, next value)`, so that one
+    /// eight-byte read gives both ends of an interpolation.
+    pub fn sph_pairs(&self) -> Option<&'static [[f32; 2]]> {
+        use std::sync::OnceLock;
+        static PAIRS: [OnceLock<Vec<[f32; 2]>>; 6] = [const { OnceLock::new() }; 6];
+        let table = self.sph_table()?;
+        let slot = match self.sph() {
+            None => 0,
+            Some(s) => 1 + s as usize,
+        };
+        Some(PAIRS[slot].get_or_init(|| {
+            (0..table.len())
+                .map(|i| [table[i], table.get(i + 1).copied().unwrap_or(0.0)])
+                .collect()
+        }))
+    }
+
     /// The full column of a particle of radius `r` (see [`Column`]).
     pub fn column(&self, r: f64) -> Column {
         let factor = self.support_factor() as f64;
@@ -428,6 +455,38 @@ impl Kernel {
 }
 
 impl Column {
+    /// Whether the column is read from the SPH table ([`Kernel::sph_table`]).
+    #[inline]
+    pub fn is_sph(&self) -> bool {
+        self.kernel.is_sph()
+    }
+
+    /// The table position per unit `b²` (SPH kernels).
+    #[inline]
+    pub fn to_index(&self) -> f64 {
+        self.to_index
+    }
+
+    /// The factor of the table's values (SPH kernels): the column is
+    /// `scale ×` the interpolated table value.
+    #[inline]
+    pub fn scale(&self) -> f64 {
+        self.scale
+    }
+
+    /// The squared support radius.
+    #[inline]
+    pub fn support2(&self) -> f64 {
+        self.support2
+    }
+
+    /// The integral along the line at squared distance `b2` from the centre
+    /// over the line parameter `u0..u1` (0 at the closest point).
+    #[inline]
+    pub fn chord(&self, b2: f64, u0: f64, u1: f64) -> f64 {
+        self.kernel.chord_integral(b2, self.r, u0, u1)
+    }
+
     /// An SPH kernel's column at `b2` inside the support, from the table.
     #[inline(always)]
     fn tabled(&self, b2: f64) -> f64 {
@@ -575,6 +634,19 @@ fn gaussian_chord(b2: f64, s: f64, amp: f64, a: f64, b: f64) -> f64 {
         * (libm::erf(b / k) - libm::erf(a / k))
 }
 
+/// `F(q_b)` for M4 by Simpson's rule, split at the `q = 1` kink.
+pub(crate) fn projected_m4_quadrature(qb: f64) -> f64 {
+    let f = |v: f64| m4((qb * qb + v * v).sqrt());
+    let vmax = (4.0 - qb * qb).max(0.0).sqrt();
+    let vkink = (1.0 - qb * qb).max(0.0).sqrt();
+    let inner = if vkink > 0.0 {
+        voxless_core::simpson(f, 0.0, vkink, 400)
+    } else {
+        0.0
+    };
+    2.0 * (inner + voxless_core::simpson(f, vkink, vmax, 400))
+}
+
 /// Entries of the projected-M4 table over `q_b ∈ [0, 2]`.
 const PROJ_TABLE: usize = 2049;
 
@@ -586,18 +658,7 @@ fn projected_m4(qb: f32) -> f32 {
     static TABLE: OnceLock<Vec<f32>> = OnceLock::new();
     let table = TABLE.get_or_init(|| {
         (0..PROJ_TABLE)
-            .map(|i| {
-                let qb = 2.0 * i as f64 / (PROJ_TABLE - 1) as f64;
-                let f = |v: f64| m4((qb * qb + v * v).sqrt());
-                let vmax = (4.0 - qb * qb).max(0.0).sqrt();
-                let vkink = (1.0 - qb * qb).max(0.0).sqrt();
-                let inner = if vkink > 0.0 {
-                    voxless_core::simpson(f, 0.0, vkink, 400)
-                } else {
-                    0.0
-                };
-                (2.0 * (inner + voxless_core::simpson(f, vkink, vmax, 400))) as f32
-            })
+            .map(|i| projected_m4_quadrature(2.0 * i as f64 / (PROJ_TABLE - 1) as f64) as f32)
             .collect()
     });
     let x = (qb / 2.0).clamp(0.0, 1.0) * (PROJ_TABLE - 1) as f32;

@@ -55,6 +55,7 @@ mod error;
 pub mod kernel;
 mod materials;
 pub mod neighbours;
+pub mod splat;
 mod volume;
 
 pub use context::{MaterialContext, ParticleContext};

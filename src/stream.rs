@@ -1,0 +1,265 @@
+//! Projections streamed from files: column densities of a particle file
+//! summed chunk by chunk, never holding the particles, their order or a
+//! BVH — peak memory is the image and one chunk, whatever the file's size.
+//!
+//! Which scenes stream: particles from `.npy` files (positions, and radii
+//! and weights when given as `.npy`), with a global radius or per-particle
+//! radii, no radius or weight map, and a projection over the whole line
+//! (no `depth`). Everything else — radii from neighbours or the spacing,
+//! which need every particle at once; snapshots, tables and regions;
+//! slabs — takes the in-memory path ([`crate::PlacedData::project`]).
+//!
+//! The result is the in-memory projection's: the same frame (chosen from
+//! the whole set's reach in a first pass), the same local positions,
+//! radii and weights (the loader's own conversions, chunk by chunk), the
+//! same view, and the same splatter ([`voxless_particles::splat`]); only
+//! the order in which particles are summed differs (file order here, the
+//! volume's Hilbert order there), so the images agree to f32 rounding of
+//! the sums (tested to 1e-6 of the peak).
+//!
+//! Passes over the file: one for the reach (and the periodic box's wrap
+//! count), one for the local bounds when the view needs them (no periodic
+//! box), and the splatting pass.
+
+use std::path::Path;
+
+use voxless_core::{Aabb, Control};
+use voxless_particles::splat::{CHUNK, SplatParticle, Splatter};
+use voxless_particles::{Kernel, check_data};
+use voxless_scene::{ParticlesDesc, SceneDesc};
+
+use crate::SceneError;
+use crate::load::particles::{self as load, FrameData};
+use crate::load::{Share, periodic};
+use crate::projection::{ProjectionDesc, ProjectionView};
+
+/// A projection streamed from its files.
+pub struct Streamed {
+    pub view: ProjectionView,
+    /// Column densities in world units, row-major, row 0 at the top.
+    pub column: Vec<f32>,
+    /// `∫ field dV` of the particles, in world units.
+    pub mass: f64,
+    pub particles: usize,
+    pub chunks: usize,
+    /// What the loader would say (the periodic box, the wrap).
+    pub notes: Vec<String>,
+}
+
+/// Projects frame `frame` of the data `desc` names through `projection` at
+/// `w` × `h`, streaming the particles from their files, when the scene can
+/// be streamed (module docs); `Ok(None)` when it cannot (nothing was
+/// written; the in-memory path gives the same image and any error).
+pub fn project(
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+    projection: &ProjectionDesc,
+    (w, h): (u32, u32),
+    control: &Control,
+) -> Result<Option<Streamed>, SceneError> {
+    let Some(p) = streamable(desc, projection) else {
+        return Ok(None);
+    };
+    // No rows: the header's shape (and the other files' checked).
+    let Some(first) = load::npy_rows(
+        p,
+        base,
+        frame,
+        Share {
+            rank: 0,
+            ranks: usize::MAX,
+        },
+    )?
+    else {
+        return Ok(None);
+    };
+    let total = first.total;
+    let chunks = total.div_ceil(CHUNK).max(1);
+    drop(first);
+    let read = |k: usize| -> Result<FrameData, SceneError> {
+        load::npy_rows(
+            p,
+            base,
+            frame,
+            Share {
+                rank: k,
+                ranks: chunks,
+            },
+        )?
+        .ok_or_else(|| SceneError::setting("particles.file", "the files changed while being read"))
+    };
+    let kernel = load::kernel_of(p, p.kernel.unwrap_or(voxless_scene::KernelName::Gaussian3));
+    let boxed = periodic::resolve_box(p, None)?;
+
+    // Pass 1: the world reach (the frame), the span and the wrap count.
+    let mut span = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    let mut reach: Option<([f64; 3], [f64; 3])> = None;
+    let mut wrapped = 0;
+    for k in 0..chunks {
+        let fd = read(k)?;
+        for q in &fd.positions {
+            periodic::extend_span(&mut span, q);
+        }
+        if let Some((b, _)) = &boxed {
+            wrapped += fd
+                .positions
+                .iter()
+                .filter(|q| q.iter().all(|v| v.is_finite()) && !b.contains(**q))
+                .count();
+        } else if let Some((lo, hi)) = fd.world_reach(p) {
+            reach = Some(match reach {
+                None => (lo, hi),
+                Some((a, b)) => (
+                    std::array::from_fn(|i| a[i].min(lo[i])),
+                    std::array::from_fn(|i| b[i].max(hi[i])),
+                ),
+            });
+        }
+    }
+    let mut notes = Vec::new();
+    if let Some((b, given)) = &boxed {
+        // Particles spanning more than the box are refused (or wrapped
+        // with --wrap) by the loader, which words it.
+        let too_wide = (0..3).any(|a| span.1[a] - span.0[a] > b.size[a] * (1.0 + 1e-6));
+        if *given && p.wrap != Some(true) && too_wide {
+            return Ok(None);
+        }
+        notes.push(periodic::box_note(b, *given, wrapped, total, span));
+        reach = Some(periodic::corners(b));
+    }
+    let world = load::frame_for(reach);
+    let local_box = load::local_box(boxed.as_ref().map(|b| &b.0), &world);
+    let mut scratch = Vec::new();
+    // Each chunk as the loader prepares it: wrapped (world), placed in the
+    // frame, scaled, local radii and weights.
+    let prepare = |k: usize, scratch: &mut Vec<String>| -> Result<Prepared, SceneError> {
+        let mut fd = read(k)?;
+        periodic::settle(
+            p,
+            None,
+            &mut fd.positions,
+            &mut fd.data.radii,
+            (false, false),
+            kernel,
+            &fd.main_file,
+            scratch,
+        )?;
+        let offset = fd.offset;
+        let (mut data, main_file, files) = fd.place(&world);
+        let kernel = load::prepare_arrays(&mut data, p, None, world.scale)?;
+        let settings = load::particle_settings(
+            p,
+            kernel,
+            data.radii.is_some(),
+            &mut |_| (1.0, String::new()),
+            world.scale,
+            scratch,
+        )?;
+        check_data(&data, offset).map_err(|e| load::blame(main_file, &files, e))?;
+        let radius = settings.radius;
+        let particles = (0..data.positions.len())
+            .map(|i| {
+                let c = data.positions[i];
+                SplatParticle {
+                    // The volume wraps its local positions once more.
+                    center: local_box.map_or(c, |b| voxless_particles::wrap(&b, c)),
+                    radius: data.radii.as_ref().map_or(radius, |r| r[i]),
+                    weight: data.weights.as_ref().map_or(1.0, |w| w[i]),
+                }
+            })
+            .collect();
+        Ok(Prepared {
+            particles,
+            offset,
+            kernel,
+        })
+    };
+
+    // Pass 2 (no box): the volume's bounds, the union of the supports.
+    let bounds = match local_box {
+        Some(b) => b,
+        None => {
+            let mut b = Aabb::EMPTY;
+            for k in 0..chunks {
+                let c = prepare(k, &mut scratch)?;
+                let factor = c.kernel.support_factor();
+                for q in c.particles.iter().filter(|q| q.radius > 0.0) {
+                    let s = factor * q.radius;
+                    b = b.union(Aabb::around(q.center, (s * s).sqrt()));
+                }
+            }
+            b
+        }
+    };
+    let view = ProjectionView::new(projection, &bounds, &world)?;
+    let Some(mut splatter) = Splatter::new(&view.camera, w, h, kernel, local_box) else {
+        return Ok(None);
+    };
+
+    // Pass 3: splat chunk by chunk.
+    let mut mass = 0.0;
+    for k in 0..chunks {
+        let c = prepare(k, &mut scratch)?;
+        mass += c
+            .particles
+            .iter()
+            .filter(|q| q.radius > 0.0)
+            .map(|q| q.weight as f64 * c.kernel.integral(q.radius as f64))
+            .sum::<f64>();
+        splatter
+            .add(&c.particles, c.offset, control)
+            .map_err(|e| SceneError::setting("particles.radius", e.to_string()))?;
+        if control.is_cancelled() {
+            return Err(SceneError::setting("project", "cancelled"));
+        }
+        control.report(k as u64 + 1, chunks as u64);
+    }
+    let local = splatter.finish();
+    let column = if view.scale == 1.0 {
+        local
+    } else {
+        local
+            .iter()
+            .map(|&c| (c as f64 * view.scale) as f32)
+            .collect()
+    };
+    Ok(Some(Streamed {
+        view,
+        column,
+        mass: mass * world.scale.powi(3),
+        particles: total,
+        chunks,
+        notes,
+    }))
+}
+
+/// One chunk's particles, local and ready to splat.
+struct Prepared {
+    particles: Vec<SplatParticle>,
+    offset: usize,
+    kernel: Kernel,
+}
+
+/// The particle description of a scene that can stream (module docs).
+fn streamable<'a>(desc: &'a SceneDesc, projection: &ProjectionDesc) -> Option<&'a ParticlesDesc> {
+    let p = desc.particles.as_ref()?;
+    let plain = desc.amr.is_none()
+        && desc.tets.is_none()
+        && projection.depth.is_none()
+        && p.demo != Some(true)
+        && p.materials.is_none()
+        && p.part_type.is_none()
+        && p.species.is_none()
+        && p.region.is_none()
+        && p.neighbours.is_none()
+        && p.radius_map.is_none()
+        && p.weight_map.is_none()
+        && (p.radius.is_some() || p.radii.is_some());
+    let npy = |s: &Option<String>| s.as_ref().is_none_or(|f| load::is_npy(Path::new(f)));
+    (plain
+        && p.file.as_ref().is_some_and(|f| load::is_npy(Path::new(f)))
+        && npy(&p.radii)
+        && npy(&p.weights))
+    .then_some(p)
+}

@@ -1,0 +1,194 @@
+//! Projections streamed from `.npy` files (`voxless::stream`) against the
+//! in-memory path they replace: the same image to f64 summation order (the
+//! streamed particles come in file order, the volume's in Hilbert order),
+//! for periodic and open sets, on and off axis, several chunks; the scenes
+//! that cannot stream say so; and `voxless project` takes the stream.
+
+mod common;
+
+use common::{Lcg, Scratch, bin};
+use voxless::{
+    BoxDesc, Control, KernelName, ParticlesDesc, ProjectionDesc, ProjectionView, SceneDesc,
+};
+
+/// `n` particles in a box of side `l` at `offset`, some outside it (to be
+/// wrapped), with radii and weights; returns the scene reading them.
+fn files(s: &Scratch, n: usize, l: f32, offset: f32, periodic: bool) -> SceneDesc {
+    let mut rng = Lcg(11);
+    let mut pos = Vec::with_capacity(3 * n);
+    for i in 0..n {
+        for _ in 0..3 {
+            // A clump and a background; a few just outside the box.
+            let u = if i % 3 == 0 {
+                0.5 + 0.1 * (rng.f() - 0.5)
+            } else {
+                rng.f() * 1.02 - 0.01
+            };
+            pos.push(offset + l * u);
+        }
+    }
+    let radii: Vec<f32> = (0..n)
+        .map(|i| l * (0.004 + 0.02 * ((i * 7) % 13) as f32 / 13.0))
+        .collect();
+    let weights: Vec<f32> = (0..n).map(|i| 1.0 + (i % 5) as f32 * 0.25).collect();
+    voxless_io::write_npy_f32(&s.path("p.npy"), &[n, 3], &pos).unwrap();
+    voxless_io::write_npy_f32(&s.path("h.npy"), &[n], &radii).unwrap();
+    voxless_io::write_npy_f32(&s.path("m.npy"), &[n], &weights).unwrap();
+    SceneDesc {
+        particles: Some(ParticlesDesc {
+            file: Some(s.str("p.npy")),
+            radii: Some(s.str("h.npy")),
+            weights: Some(s.str("m.npy")),
+            kernel: Some(KernelName::WendlandC2),
+            periodic_box: periodic.then_some(BoxDesc::Corners([
+                offset as f64,
+                offset as f64,
+                offset as f64,
+                (offset + l) as f64,
+                (offset + l) as f64,
+                (offset + l) as f64,
+            ])),
+            wrap: periodic.then_some(true),
+            ..Default::default()
+        }),
+        ..Default::default()
+    }
+}
+
+/// The in-memory projection of `desc`.
+fn in_memory(desc: &SceneDesc, projection: &ProjectionDesc, (w, h): (u32, u32)) -> Vec<f32> {
+    let l = voxless::load(desc, std::path::Path::new("."), 0).unwrap();
+    let view = ProjectionView::new(projection, &l.volume.bounds(), &l.frame).unwrap();
+    view.project(&l.volume, w, h, &Control::new()).unwrap()
+}
+
+#[test]
+fn streamed_projections_equal_the_in_memory_path() {
+    let s = Scratch::new("stream-equal");
+    // 150k particles: three chunks.
+    let n = 150_000;
+    for (periodic, offset) in [(true, -3.0f32), (false, 1000.0)] {
+        let desc = files(&s, n, 8.0, offset, periodic);
+        for projection in [
+            ProjectionDesc {
+                axis: Some(2),
+                ..Default::default()
+            },
+            ProjectionDesc {
+                normal: Some([1.0, 0.4, 0.3]),
+                ..Default::default()
+            },
+        ] {
+            let size = (96, 80);
+            let c = Control::new();
+            let streamed = voxless::stream::project(&desc, ".".as_ref(), 0, &projection, size, &c)
+                .unwrap()
+                .expect("npy particles with radii stream");
+            assert_eq!(streamed.particles, n);
+            assert!(streamed.chunks >= 3);
+            let memory = in_memory(&desc, &projection, size);
+            let peak = memory.iter().fold(0.0f32, |m, &v| m.max(v));
+            assert!(peak > 0.0);
+            let worst = streamed
+                .column
+                .iter()
+                .zip(&memory)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0f32, f32::max);
+            // f64 sums in another order, rounded once to f32.
+            assert!(
+                worst <= 1e-6 * peak,
+                "periodic {periodic}, {projection:?}: {worst} of {peak}"
+            );
+        }
+    }
+}
+
+#[test]
+fn scenes_that_need_every_particle_do_not_stream() {
+    let s = Scratch::new("stream-none");
+    let mut desc = files(&s, 2000, 1.0, 0.0, false);
+    let p = desc.particles.as_mut().unwrap();
+    p.radii = None;
+    // No radius: the default comes from the spacing of all particles.
+    let c = Control::new();
+    let axis = ProjectionDesc::default();
+    let none = voxless::stream::project(&desc, ".".as_ref(), 0, &axis, (8, 8), &c).unwrap();
+    assert!(none.is_none());
+    // Neighbour radii, and slabs.
+    desc.particles.as_mut().unwrap().neighbours = Some(8);
+    assert!(
+        voxless::stream::project(&desc, ".".as_ref(), 0, &axis, (8, 8), &c)
+            .unwrap()
+            .is_none()
+    );
+    let mut desc = files(&s, 2000, 1.0, 0.0, false);
+    let slab = ProjectionDesc {
+        depth: Some(0.2),
+        ..Default::default()
+    };
+    assert!(
+        voxless::stream::project(&desc, ".".as_ref(), 0, &slab, (8, 8), &c)
+            .unwrap()
+            .is_none()
+    );
+    // Bad rows are named as the loader names them.
+    let mut pos = vec![0.5f32; 30];
+    pos[13] = f32::NAN;
+    voxless_io::write_npy_f32(&s.path("nan.npy"), &[10, 3], &pos).unwrap();
+    let p = desc.particles.as_mut().unwrap();
+    p.file = Some(s.str("nan.npy"));
+    p.radii = None;
+    p.weights = None;
+    p.radius = Some(0.1);
+    let err = voxless::stream::project(&desc, ".".as_ref(), 0, &axis, (8, 8), &c)
+        .err()
+        .expect("a NaN position is an error")
+        .to_string();
+    assert!(
+        err.contains("nan.npy") && err.contains("particle 4"),
+        "{err}"
+    );
+}
+
+#[test]
+fn the_cli_streams_npy_projections() {
+    let s = Scratch::new("stream-cli");
+    files(&s, 20_000, 4.0, 0.0, true);
+    let run = |extra: &[&str], out: &str| {
+        let o = std::process::Command::new(bin())
+            .args([
+                "project",
+                "--particles",
+                &s.str("p.npy"),
+                "--radii",
+                &s.str("h.npy"),
+            ])
+            .args([
+                "--weights",
+                &s.str("m.npy"),
+                "--kernel",
+                "wendland-c2",
+                "--box",
+                "4",
+                "--wrap",
+            ])
+            .args(["--size", "64", "64", "-o", &s.str(out)])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let log = run(&[], "a.npy");
+    assert!(log.contains("streamed"), "{log}");
+    // Saving the radii loads the volume: the in-memory path.
+    let log = run(&["--save-radii", &s.str("r.npy")], "b.npy");
+    assert!(!log.contains("streamed"), "{log}");
+    let a = voxless_io::read_npy(&s.path("a.npy")).unwrap().data;
+    let b = voxless_io::read_npy(&s.path("b.npy")).unwrap().data;
+    let peak = b.iter().fold(0.0f64, |m, &v| m.max(v));
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() <= 1e-6 * peak, "{x} vs {y}");
+    }
+}
