@@ -94,6 +94,17 @@ pub(super) fn with_images(
             }
         }
     }
+    // Exactly the room the ghosts need (pushing one by one would double
+    // the arrays' capacity: 12 bytes a particle of positions alone).
+    data.positions.reserve_exact(extra.len());
+    for v in [&mut data.radii, &mut data.weights, &mut data.attribute]
+        .into_iter()
+        .flatten()
+    {
+        v.reserve_exact(extra.len());
+    }
+    source.reserve_exact(extra.len());
+    shifts.reserve_exact(extra.len());
     for (i, k, q) in extra {
         let i = i as usize;
         data.positions.push(q);
@@ -207,12 +218,13 @@ impl ParticleVolume {
     pub(super) fn originals(&self) -> ParticleData {
         let mut idx: Vec<usize> = (0..self.len()).filter(|&i| !self.is_ghost(i)).collect();
         idx.sort_unstable_by_key(|&i| self.original_index[i]);
-        let take = |v: &[f32]| idx.iter().map(|&i| v[i]).collect::<Vec<f32>>();
+        let take =
+            |v: &[f32]| (!v.is_empty()).then(|| idx.iter().map(|&i| v[i]).collect::<Vec<f32>>());
         ParticleData {
-            positions: idx.iter().map(|&i| self.positions[i]).collect(),
-            radii: self.input_radii.then(|| take(&self.base_radius)),
-            weights: Some(take(&self.base_weight)),
-            attribute: self.attribute.as_deref().map(take),
+            positions: idx.iter().map(|&i| self.packed[i].center).collect(),
+            radii: take(&self.base_radius),
+            weights: take(&self.base_weight),
+            attribute: self.attribute.as_deref().and_then(take),
         }
     }
 
