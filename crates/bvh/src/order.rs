@@ -46,10 +46,117 @@ pub fn morton(c: [u32; 3]) -> u64 {
 /// Hilbert key of a lattice point (Skilling's transpose algorithm, "Programming
 /// the Hilbert curve", AIP Conf. Proc. 707, 2004), 21 bits per axis.
 pub fn hilbert(c: [u32; 3]) -> u64 {
+    // Skilling's transform, run level by level from the top, is a state
+    // machine: what the levels above did to the lower bits is a signed
+    // permutation of the axes (plus the parity that the Gray code's last
+    // step carries down), so each level's key digit and the next state
+    // depend only on the state and that level's three bits. The table
+    // (built once from the transform itself, see `HilbertTable`) replaces
+    // ~60 dependent bit operations per level with one lookup.
+    let table = hilbert_table();
+    let mut state = 0usize;
+    let mut key = 0u64;
+    for level in (0..KEY_BITS).rev() {
+        let o = (((c[0] >> level) & 1) << 2) | (((c[1] >> level) & 1) << 1) | ((c[2] >> level) & 1);
+        let e = table.entry[state * 8 + o as usize];
+        key = (key << 3) | (e & 7) as u64;
+        state = (e >> 3) as usize;
+    }
+    key
+}
+
+/// The state machine of [`hilbert`]: entry `state·8 + octant` holds the
+/// key digit (low three bits) and the next state (the rest).
+struct HilbertTable {
+    entry: Vec<u16>,
+}
+
+/// A state of Skilling's transform below the current level: bit `i` of the
+/// transformed `x[i]` is bit `perm[i]` of the input, inverted where
+/// `flip[i]`; `parity` is the Gray code's running XOR of the transformed
+/// `x[2]` bits above.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+struct TransformState {
+    perm: [u8; 3],
+    flip: [bool; 3],
+    parity: bool,
+}
+
+impl TransformState {
+    /// This level's digit and the state below it, for the input bits `o`
+    /// (x in bit 2).
+    fn step(self, o: u32) -> (u32, TransformState) {
+        let bit = |a: u8| (o >> (2 - a)) & 1 == 1;
+        // The transformed bits at this level (the levels above touched only
+        // the bits below them, which include this one).
+        let mut c = [false; 3];
+        for i in 0..3 {
+            c[i] = bit(self.perm[i]) ^ self.flip[i];
+        }
+        // This level's operations on the bits below: invert x[0], or
+        // exchange x[0] and x[i], in order i = 0, 1, 2.
+        let (mut perm, mut flip) = (self.perm, self.flip);
+        for i in 0..3 {
+            if c[i] {
+                flip[0] = !flip[0];
+            } else {
+                perm.swap(0, i);
+                flip.swap(0, i);
+            }
+        }
+        // Gray encode this level: x1 ^= x0, x2 ^= x1, then XOR with the
+        // parity of the encoded x2 bits above.
+        let g0 = c[0];
+        let g1 = c[1] ^ g0;
+        let g2 = c[2] ^ g1;
+        let t = self.parity;
+        let digit = (((g0 ^ t) as u32) << 2) | (((g1 ^ t) as u32) << 1) | ((g2 ^ t) as u32);
+        (
+            digit,
+            TransformState {
+                perm,
+                flip,
+                parity: self.parity ^ g2,
+            },
+        )
+    }
+}
+
+fn hilbert_table() -> &'static HilbertTable {
+    static TABLE: std::sync::OnceLock<HilbertTable> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        let start = TransformState {
+            perm: [0, 1, 2],
+            flip: [false; 3],
+            parity: false,
+        };
+        let mut states = vec![start];
+        let mut entry = Vec::new();
+        let mut k = 0;
+        while k < states.len() {
+            for o in 0..8 {
+                let (digit, next) = states[k].step(o);
+                let j = match states.iter().position(|s| *s == next) {
+                    Some(j) => j,
+                    None => {
+                        states.push(next);
+                        states.len() - 1
+                    }
+                };
+                entry.push((j << 3) as u16 | digit as u16);
+            }
+            k += 1;
+        }
+        HilbertTable { entry }
+    })
+}
+
+/// Skilling's algorithm as published (with branches): the reference the
+/// branch-free [`hilbert`] is tested against.
+#[cfg(test)]
+fn hilbert_reference(c: [u32; 3]) -> u64 {
     let mut x = c;
     let m = 1u32 << (KEY_BITS - 1);
-    // Undo excess work: walk bits from the top, inverting or exchanging the
-    // low bits so each sub-cube is visited in curve orientation.
     let mut q = m;
     while q > 1 {
         let p = q - 1;
@@ -64,7 +171,6 @@ pub fn hilbert(c: [u32; 3]) -> u64 {
         }
         q >>= 1;
     }
-    // Gray encode.
     x[1] ^= x[0];
     x[2] ^= x[1];
     let mut t = 0;
@@ -78,14 +184,31 @@ pub fn hilbert(c: [u32; 3]) -> u64 {
     for v in x.iter_mut() {
         *v ^= t;
     }
-    // The transposed form holds the key's bits spread over the three axes,
-    // most significant first: interleave them.
     morton(x)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn branch_free_hilbert_equals_skillings() {
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        let max = (1u32 << KEY_BITS) - 1;
+        for k in 0..200_000u32 {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            let c = [
+                s as u32 & max,
+                (s >> 21) as u32 & max,
+                (s >> 42) as u32 & max,
+            ];
+            assert_eq!(hilbert(c), hilbert_reference(c), "{c:?}");
+            let e = [k & max, max - (k & max), 0];
+            assert_eq!(hilbert(e), hilbert_reference(e), "{e:?}");
+        }
+    }
 
     /// Keys of an 8³ sub-lattice: the Hilbert curve must visit every cell once
     /// and step only between face neighbours.
