@@ -89,15 +89,12 @@ impl TransformState {
         let bit = |a: u8| (o >> (2 - a)) & 1 == 1;
         // The transformed bits at this level (the levels above touched only
         // the bits below them, which include this one).
-        let mut c = [false; 3];
-        for i in 0..3 {
-            c[i] = bit(self.perm[i]) ^ self.flip[i];
-        }
+        let c: [bool; 3] = std::array::from_fn(|i| bit(self.perm[i]) ^ self.flip[i]);
         // This level's operations on the bits below: invert x[0], or
         // exchange x[0] and x[i], in order i = 0, 1, 2.
         let (mut perm, mut flip) = (self.perm, self.flip);
-        for i in 0..3 {
-            if c[i] {
+        for (i, &set) in c.iter().enumerate() {
+            if set {
                 flip[0] = !flip[0];
             } else {
                 perm.swap(0, i);
