@@ -143,7 +143,15 @@ pub fn render_progressive(
     if let Some(max) = coarse_pixels.filter(|&m| m < full) {
         let coarse = coarse_settings(settings, max);
         let t = Instant::now();
-        let film = volume.render_passes(camera, tf, &coarse, control, &mut |_| true)?;
+        // A large particle set's coarse image comes from its merged
+        // preview (levels of detail): the full set would take seconds.
+        let film = match volume {
+            AnyVolume::Particles(v) if v.preview().is_some() => {
+                let p = v.preview().expect("preview");
+                voxless_render::render_film(p, camera, tf, &coarse, control, &mut |_| true)?
+            }
+            _ => volume.render_passes(camera, tf, &coarse, control, &mut |_| true)?,
+        };
         if let Some(b) = budget {
             b.record(
                 coarse.width as u64 * coarse.height as u64,

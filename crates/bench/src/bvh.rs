@@ -105,7 +105,7 @@ fn bench_bvh(
         |d| ParticleVolume::new(d, settings(1)),
     );
     let vol = vol?;
-    let positions = vol.positions();
+    let positions = &vol.positions()[..];
     let factor = kernel.support_factor();
     let support: Vec<f32> = vol.radii().iter().map(|r| r * factor).collect();
     let grown: Vec<f32> = support.iter().map(|s| s * 1.5).collect();

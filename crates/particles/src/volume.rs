@@ -12,6 +12,7 @@ use crate::error::ParticleError;
 use crate::kernel::{Family, Kernel, with_family};
 
 mod exact;
+mod lod;
 mod packet;
 mod part;
 mod periodic;
@@ -134,6 +135,9 @@ pub struct ParticleVolume {
     shifts: Vec<[i8; 3]>,
     ghosts: usize,
     wrapped: usize,
+    /// The merged particles of a large set's previews, built on first use
+    /// (see the `lod` module).
+    preview: std::sync::OnceLock<Option<Box<ParticleVolume>>>,
 }
 
 fn check_settings(s: &ParticleSettings) -> Result<(), ParticleError> {
@@ -308,6 +312,7 @@ impl ParticleVolume {
             shifts,
             ghosts,
             wrapped,
+            preview: std::sync::OnceLock::new(),
         };
         vol.derive_radii_and_weights();
         if part.is_none() {
@@ -380,6 +385,8 @@ impl ParticleVolume {
     }
 
     fn derive_radii_and_weights(&mut self) {
+        // A preview merged from the old radii and weights is stale.
+        self.preview = std::sync::OnceLock::new();
         let s = &self.settings;
         let range = self.attribute_range.unwrap_or(Range1::new(0.0, 1.0));
         let attr = |i: usize| self.attribute.as_ref().map(|a| a[i]);

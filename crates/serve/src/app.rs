@@ -130,7 +130,14 @@ impl Volumes {
                 t.lod_levels.get_or_insert(COARSE_LOD_LEVELS);
             }
             voxless::load(&desc, base, number)
-                .map(|l| Arc::new(Loaded::new(l)))
+                .map(|l| {
+                    // A large particle set's preview (its coarse images) is
+                    // merged now, not on the first camera move.
+                    if let voxless::AnyVolume::Particles(v) = &l.volume {
+                        let _ = v.preview();
+                    }
+                    Arc::new(Loaded::new(l))
+                })
                 .map_err(|e| e.to_string())
         })
         .clone()
