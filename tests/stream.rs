@@ -192,3 +192,91 @@ fn the_cli_streams_npy_projections() {
         assert!((x - y).abs() <= 1e-6 * peak, "{x} vs {y}");
     }
 }
+
+#[test]
+fn the_level_of_detail_keeps_the_projected_mass() {
+    let s = Scratch::new("stream-lod");
+    let desc = files(&s, 40_000, 1.0, 0.0, true);
+    let run = |extra: &[&str], out: &str| {
+        let o = std::process::Command::new(bin())
+            .args([
+                "project",
+                "--particles",
+                &s.str("p.npy"),
+                "--radii",
+                &s.str("h.npy"),
+            ])
+            .args([
+                "--weights",
+                &s.str("m.npy"),
+                "--kernel",
+                "wendland-c2",
+                "--box",
+                "1",
+                "--wrap",
+            ])
+            .args(["--size", "200", "200", "-o", &s.str(out)])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        voxless_io::read_npy(&s.path(out)).unwrap().data
+    };
+    let exact = run(&[], "exact.npy");
+    let lod = run(&["--lod", "8"], "lod.npy");
+    let sum = |v: &[f64]| v.iter().sum::<f64>();
+    // On axis through the box both conserve the mass; the merged kernels
+    // move it by less than their support.
+    assert!(
+        (sum(&lod) / sum(&exact) - 1.0).abs() < 1e-3,
+        "{} vs {}",
+        sum(&lod),
+        sum(&exact)
+    );
+    assert!(exact != lod, "--lod merged nothing");
+    // The library's view of it: the same total.
+    let mut d = desc.clone();
+    d.particles.as_mut().unwrap().lod_pixels = Some(2.0);
+    assert!(
+        voxless::stream::project(
+            &d,
+            ".".as_ref(),
+            0,
+            &ProjectionDesc::default(),
+            (8, 8),
+            &Control::new()
+        )
+        .unwrap()
+        .is_none()
+    );
+    // --lod on a render too; and refused where there are no particles.
+    let o = std::process::Command::new(bin())
+        .args([
+            "render",
+            "--particles",
+            &s.str("p.npy"),
+            "--radius",
+            "0.02",
+            "--lod",
+            "3",
+        ])
+        .args(["--size", "32", "24", "-o", &s.str("r.png")])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = std::process::Command::new(bin())
+        .args([
+            "render",
+            "--particles",
+            &s.str("p.npy"),
+            "--radius",
+            "0.02",
+            "--lod",
+            "0",
+        ])
+        .args(["--size", "32", "24", "-o", &s.str("r2.png")])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--lod"), "{err}");
+}

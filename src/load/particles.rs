@@ -625,6 +625,9 @@ pub(crate) fn particle_settings(
         .attribute_range
         .map(|[a, b]| range("particles.attribute_range", a, b))
         .transpose()?;
+    if let Some(l) = p.lod_pixels {
+        positive("particles.lod_pixels (--lod)", l)?;
+    }
     Ok(ParticleSettings {
         kernel,
         radius,
@@ -634,6 +637,7 @@ pub(crate) fn particle_settings(
         attribute_range,
         classification,
         periodic: None,
+        lod_pixels: p.lod_pixels,
     })
 }
 

@@ -46,6 +46,16 @@
 //! render) and its SIMD backend, so one volume serves renders with
 //! different transfer functions at once.
 //!
+//! **Projections** splat ([`splat`]): each particle adds its exact column
+//! to the pixels its support covers, summed in f64 band by band; the same
+//! [`splat::Splatter`] takes a volume's particles or a file's, streamed in
+//! chunks that are never all held.
+//!
+//! **Levels of detail**: [`ParticleVolume::merged`] merges runs of `8^k`
+//! Hilbert-ordered particles into one kernel each (mass, centroid and
+//! second moment kept); [`ParticleVolume::preview`] is the merged volume a
+//! large set's coarse images come from.
+//!
 //! Invariants: positions, radii, weights and attributes are finite (checked
 //! on construction, with the offending particle named); hidden particles have
 //! radius 0 and are skipped by every query.
