@@ -351,16 +351,6 @@ pub(crate) fn check_ranks(
             ),
         ));
     }
-    if desc
-        .particles
-        .as_ref()
-        .is_some_and(|p| p.lod_pixels.is_some())
-    {
-        return Err(SceneError::setting(
-            "particles.lod_pixels (--lod)",
-            format!("the level of detail is not used on more than one rank: {why}"),
-        ));
-    }
     let Some(t) = tets else {
         return Ok(());
     };

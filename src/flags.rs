@@ -207,10 +207,12 @@ pub struct KindFlags {
     /// Log-spaced depth layers behind the k-buffer (default 64).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "Phase-space tessellation"))]
     pub layers: Option<usize>,
-    /// Level of detail (off by default): particles merged into fewer
-    /// kernels, and tessellation blocks drawn from a 2^r-subsampled grid,
-    /// where they span fewer than this many pixels on screen.
-    #[cfg_attr(feature = "clap", arg(long, value_name = "PIXELS"))]
+    /// Level of detail: blocks smaller than this many pixels on screen use a
+    /// 2^r-subsampled Lagrangian grid (off by default).
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "PIXELS", help_heading = "Phase-space tessellation")
+    )]
     pub lod: Option<f32>,
     /// Field driving colour (multi-field rendering; default: --field).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
@@ -688,11 +690,8 @@ impl SceneFlags {
 
     /// Data flags of more than one kind: a periodic box holds particles or
     /// a tessellation.
-    fn shared_flags(&self) -> [(&'static str, bool); 2] {
-        [
-            ("box", self.data.box_size.is_some()),
-            ("lod", self.kind.lod.is_some()),
-        ]
+    fn shared_flags(&self) -> [(&'static str, bool); 1] {
+        [("box", self.data.box_size.is_some())]
     }
 
     fn particle_flags(&self) -> [(&'static str, bool); 18] {
@@ -719,7 +718,7 @@ impl SceneFlags {
         ]
     }
 
-    fn tet_flags(&self) -> [(&'static str, bool); 6] {
+    fn tet_flags(&self) -> [(&'static str, bool); 7] {
         let (d, k) = (&self.data, &self.kind);
         [
             ("lagrangian", d.lagrangian.is_some()),
@@ -728,6 +727,7 @@ impl SceneFlags {
             ("tet_mode", k.tet_mode.is_some()),
             ("k", k.k.is_some()),
             ("layers", k.layers.is_some()),
+            ("lod", k.lod.is_some()),
         ]
     }
 
@@ -805,7 +805,7 @@ impl SceneFlags {
             set(&mut t.layers, self.kind.layers);
             set(&mut t.lod_pixels, self.kind.lod);
         } else if given(&particle_flags).is_some()
-            || ((periodic_box.is_some() || self.kind.lod.is_some()) && d.particles.is_some())
+            || (periodic_box.is_some() && d.particles.is_some())
         {
             let p = d.particles.get_or_insert_with(ParticlesDesc::default);
             set(&mut p.periodic_box, periodic_box);
@@ -822,7 +822,6 @@ impl SceneFlags {
                 p.wrap = Some(true);
             }
             set(&mut p.neighbours, self.data.neighbours);
-            set(&mut p.lod_pixels, self.kind.lod);
             if let Some(f) = &self.data.particles {
                 p.file = Some(path(f));
                 p.demo = None;
@@ -845,11 +844,6 @@ impl SceneFlags {
                 &mut p.attribute_range,
                 fixed("attribute_range", &self.kind.attribute_range)?,
             );
-        } else if self.kind.lod.is_some() {
-            return Err(SceneError::setting(
-                "lod",
-                "applies to particles or a phase-space tessellation, and the scene has neither",
-            ));
         } else if periodic_box.is_some() {
             return Err(SceneError::setting(
                 "box",

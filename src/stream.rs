@@ -4,8 +4,8 @@
 //!
 //! Which scenes stream: particles from `.npy` files (positions, and radii
 //! and weights when given as `.npy`), with a global radius or per-particle
-//! radii, no radius or weight map or level of detail, and a projection
-//! over the whole line (no `depth`). Everything else — radii from neighbours or the spacing,
+//! radii, no radius or weight map, and a projection over the whole line
+//! (no `depth`). Everything else — radii from neighbours or the spacing,
 //! which need every particle at once; snapshots, tables and regions;
 //! slabs — takes the in-memory path ([`crate::PlacedData::project`]).
 //!
@@ -255,7 +255,6 @@ fn streamable<'a>(desc: &'a SceneDesc, projection: &ProjectionDesc) -> Option<&'
         && p.neighbours.is_none()
         && p.radius_map.is_none()
         && p.weight_map.is_none()
-        && p.lod_pixels.is_none()
         && (p.radius.is_some() || p.radii.is_some());
     let npy = |s: &Option<String>| s.as_ref().is_none_or(|f| load::is_npy(Path::new(f)));
     (plain

@@ -103,23 +103,7 @@ impl AnyVolume {
         settings: &RenderSettings,
         control: &Control,
     ) -> Result<Image, Cancelled> {
-        if let Some(cut) = self.lod_view(camera, settings.height) {
-            return voxless_render::render(&cut, camera, tf, settings, control);
-        }
         with_volume!(self, v => voxless_render::render(v, camera, tf, settings, control))
-    }
-
-    /// A particle volume's level of detail for this view, when its settings
-    /// ask for one (`lod_pixels`) and it merges anything (see
-    /// [`ParticleVolume::lod_cut`]). A cut that cannot be built (it is made
-    /// of the volume's own valid kernels, so this does not happen in
-    /// practice) leaves the full volume to draw the view.
-    fn lod_view(&self, camera: &Camera, height: u32) -> Option<ParticleVolume> {
-        let AnyVolume::Particles(v) = self else {
-            return None;
-        };
-        let pixels = v.settings().lod_pixels?;
-        v.lod_cut(camera, height, pixels).ok().flatten()
     }
 
     /// Renders pass by pass into a film: after each pass `on_pass(&film)`
@@ -133,9 +117,6 @@ impl AnyVolume {
         control: &Control,
         on_pass: &mut dyn FnMut(&Film) -> bool,
     ) -> Result<Film, Cancelled> {
-        if let Some(cut) = self.lod_view(camera, settings.height) {
-            return voxless_render::render_film(&cut, camera, tf, settings, control, on_pass);
-        }
         with_volume!(self, v => voxless_render::render_film(v, camera, tf, settings, control, on_pass))
     }
 
@@ -158,9 +139,6 @@ impl AnyVolume {
         height: u32,
         control: &Control,
     ) -> Result<Vec<f32>, Cancelled> {
-        if let Some(cut) = self.lod_view(camera, height) {
-            return voxless_render::project(&cut, camera, width, height, control);
-        }
         with_volume!(self, v => voxless_render::project(v, camera, width, height, control))
     }
 

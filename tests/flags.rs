@@ -148,9 +148,7 @@ fn bad_flags_are_errors_naming_the_flag() {
     // The data flags, as opposed to the view's.
     assert_eq!(
         flags("kernel = 'm4'\ncolormap = 'magma'\nlod = 2.0\nfield = 'rho'").data_flags(),
-        // Particle, tessellation and AMR flags, then those of more than one
-        // kind (--lod: particles or a tessellation).
-        ["kernel", "field", "lod"]
+        ["kernel", "lod", "field"]
     );
 }
 

@@ -142,12 +142,6 @@ enum Command {
         /// Frame N of a time series (default 0).
         #[arg(long, value_name = "N")]
         frame: Option<usize>,
-        /// Particles: level of detail — runs of neighbouring particles
-        /// whose merged kernel spans fewer than PIXELS pixels are projected
-        /// as that kernel (the mass is kept; off by default). Scene:
-        /// particles.lod_pixels.
-        #[arg(long, value_name = "PIXELS")]
-        lod: Option<f32>,
         #[command(flatten)]
         data: DataArgs,
     },
@@ -320,7 +314,6 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             size,
             pixels,
             frame,
-            lod,
             data,
         } => {
             let radii = data.save_radii.clone();
@@ -330,18 +323,9 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
                     size,
                     ..Default::default()
                 },
-                kind: voxless::flags::KindFlags {
-                    lod,
-                    ..Default::default()
-                },
+                ..Default::default()
             };
             let (mut desc, base) = args.scene()?;
-            if lod.is_some() && desc.particles.is_none() {
-                anyhow::bail!(
-                    "--lod: a projection's level of detail is for particles; tessellation and \
-                     AMR projections are exact"
-                );
-            }
             let projection = projection_desc(axis, bounds, normal, north, center, width, depth);
             voxless::set_projection_pixels(&mut desc, pixels, &projection)?;
             out::check(

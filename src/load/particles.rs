@@ -625,9 +625,6 @@ pub(crate) fn particle_settings(
         .attribute_range
         .map(|[a, b]| range("particles.attribute_range", a, b))
         .transpose()?;
-    if let Some(l) = p.lod_pixels {
-        positive("particles.lod_pixels (--lod)", l)?;
-    }
     Ok(ParticleSettings {
         kernel,
         radius,
@@ -637,7 +634,6 @@ pub(crate) fn particle_settings(
         attribute_range,
         classification,
         periodic: None,
-        lod_pixels: p.lod_pixels,
     })
 }
 

@@ -64,10 +64,6 @@ pub struct ParticleSettings {
     /// A periodic box: the field repeats with it (see the `periodic`
     /// module); positions outside are wrapped into it.
     pub periodic: Option<Aabb>,
-    /// Level of detail for renders and projections: merged kernels spanning
-    /// fewer pixels than this stand for their particles (see
-    /// [`ParticleVolume::lod_cut`]); `None`: every particle.
-    pub lod_pixels: Option<f32>,
 }
 
 impl Default for ParticleSettings {
@@ -81,7 +77,6 @@ impl Default for ParticleSettings {
             attribute_range: None,
             classification: Classification::Post,
             periodic: None,
-            lod_pixels: None,
         }
     }
 }
@@ -143,8 +138,6 @@ pub struct ParticleVolume {
     /// The merged particles of a large set's previews, built on first use
     /// (see the `lod` module).
     preview: std::sync::OnceLock<Option<Box<ParticleVolume>>>,
-    /// The merged levels of detail, built on first use.
-    lod: std::sync::OnceLock<lod::LodTree>,
 }
 
 fn check_settings(s: &ParticleSettings) -> Result<(), ParticleError> {
@@ -320,7 +313,6 @@ impl ParticleVolume {
             ghosts,
             wrapped,
             preview: std::sync::OnceLock::new(),
-            lod: std::sync::OnceLock::new(),
         };
         vol.derive_radii_and_weights();
         if part.is_none() {
@@ -393,9 +385,8 @@ impl ParticleVolume {
     }
 
     fn derive_radii_and_weights(&mut self) {
-        // A preview or levels merged from the old radii and weights are stale.
+        // A preview merged from the old radii and weights is stale.
         self.preview = std::sync::OnceLock::new();
-        self.lod = std::sync::OnceLock::new();
         let s = &self.settings;
         let range = self.attribute_range.unwrap_or(Range1::new(0.0, 1.0));
         let attr = |i: usize| self.attribute.as_ref().map(|a| a[i]);

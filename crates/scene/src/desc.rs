@@ -113,11 +113,6 @@ pub struct ParticlesDesc {
     pub cluster: Option<usize>,
     /// post (default) or pre.
     pub classification: Option<ClassificationName>,
-    /// Level of detail: runs of neighbouring particles whose merged kernel
-    /// spans fewer than this many pixels on screen are drawn as that one
-    /// kernel (mass, centroid and second moment kept). Off by default: the
-    /// image then uses every particle.
-    pub lod_pixels: Option<f32>,
     /// `[[attribute, fraction], ...]` over the normalised attribute.
     pub radius_map: Option<Vec<[f32; 2]>>,
     /// `[[attribute, weight], ...]` over the normalised attribute.

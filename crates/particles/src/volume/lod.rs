@@ -26,8 +26,7 @@
 
 use std::sync::OnceLock;
 
-use rayon::prelude::*;
-use voxless_core::{Camera, Projection, Vec3};
+use voxless_core::Vec3;
 
 use super::{ParticleData, ParticleVolume};
 use crate::error::ParticleError;
@@ -40,152 +39,70 @@ pub const PREVIEW_MIN: usize = 1 << 20;
 /// the smallest whose runs bring the count below it).
 pub const PREVIEW_TARGET: usize = 1 << 18;
 
-/// One merged kernel: a run's mass (`Σ wᵢ·∫φ`, f64 so that levels compose
-/// without drift), centroid, radius and mass-weighted attribute.
-#[derive(Clone, Copy, Debug)]
-struct Node {
-    mass: f64,
-    center: [f64; 3],
-    radius: f32,
-    attribute: f32,
-}
-
-/// The merged levels: `levels[k - 1]` holds level `k`, node `j` the merge
-/// of nodes `8j..8j + 8` of level `k − 1` (level 0: the particles, ghosts
-/// and hidden ones left out, in volume order) — so node `j` of level `k` is
-/// the run of particles `8ᵏj..8ᵏ(j + 1)`. Merging children keeps the same
-/// moments as merging their particles directly (masses add, centroids and
-/// second moments about the new centroid compose exactly).
-pub(crate) struct LodTree {
-    /// The particles level 1 merges (volume indices).
-    own: Vec<u32>,
-    levels: Vec<Vec<Node>>,
-}
-
-/// Levels stop when one has at most this many nodes.
-const TOP_NODES: usize = 512;
-
 impl ParticleVolume {
-    /// The merged levels, built on first use.
-    pub(crate) fn lod_tree(&self) -> &LodTree {
-        self.lod.get_or_init(|| {
-            let kernel = self.settings.kernel;
-            let s = variance_factor(kernel);
-            let own: Vec<u32> = (0..self.len())
-                .filter(|&i| !self.is_ghost(i) && self.radius[i] > 0.0 && self.weight[i] > 0.0)
-                .map(|i| i as u32)
-                .collect();
-            let particle = |i: u32| {
-                let i = i as usize;
-                let c = self.packed[i].center;
-                Node {
-                    mass: self.weight[i] as f64 * kernel.integral(self.radius[i] as f64),
-                    center: [c.x as f64, c.y as f64, c.z as f64],
-                    radius: self.radius[i],
-                    attribute: self.attribute.as_ref().map_or(0.0, |a| a[i]),
-                }
-            };
-            let mut levels: Vec<Vec<Node>> = Vec::new();
-            let mut below: Vec<Node> = own.par_iter().map(|&i| particle(i)).collect();
-            while below.len() > TOP_NODES || levels.is_empty() {
-                let next: Vec<Node> = below.par_chunks(8).map(|c| merge(c, s)).collect();
-                levels.push(next);
-                below = levels.last().expect("a level").clone();
-                if below.len() <= 1 {
-                    break;
-                }
-            }
-            LodTree { own, levels }
-        })
-    }
-
     /// The volume with every run of `8^level` consecutive particles (volume
     /// order, ghosts left out) merged into one (see the module docs); the
     /// same settings, without the radius and weight maps (the merged radii
-    /// and weights are the effective ones). Level 0 and levels beyond the
-    /// tree's are clamped to its first and last.
+    /// and weights are the effective ones).
     pub fn merged(&self, level: u32) -> Result<ParticleVolume, ParticleError> {
-        let tree = self.lod_tree();
-        let k = (level.max(1) as usize).min(tree.levels.len());
-        let nodes = &tree.levels[k - 1];
-        let mut cut = Cut::new(self, nodes.len());
-        for n in nodes {
-            cut.node(self, n);
-        }
-        cut.build(self)
-    }
-
-    /// The view-dependent level of detail of `camera` at `height` pixels:
-    /// from the coarsest level down, a merged kernel whose support spans
-    /// fewer than `pixels` pixels where it lies stands for its particles;
-    /// the rest are the particles themselves. `None` when every particle
-    /// stays (nothing to merge: render the volume itself).
-    pub fn lod_cut(
-        &self,
-        camera: &Camera,
-        height: u32,
-        pixels: f32,
-    ) -> Result<Option<ParticleVolume>, ParticleError> {
-        let tree = self.lod_tree();
-        let factor = self.settings.kernel.support_factor() as f64;
-        let eye = [
-            camera.eye.x as f64,
-            camera.eye.y as f64,
-            camera.eye.z as f64,
-        ];
-        let fwd = [
-            camera.forward.x as f64,
-            camera.forward.y as f64,
-            camera.forward.z as f64,
-        ];
-        let budget = pixels.max(0.0) as f64;
-        // World size of a pixel at depth d along the view.
-        let pixel = |d: f64| match camera.projection {
-            Projection::Orthographic { half_height, .. } => {
-                2.0 * half_height as f64 / height as f64
-            }
-            Projection::Perspective { fov_y_deg } => {
-                2.0 * d * (0.5 * fov_y_deg as f64).to_radians().tan() / height as f64
-            }
-        };
-        let small = |n: &Node| {
-            let support = factor * n.radius as f64;
-            let d: f64 = (0..3).map(|a| (n.center[a] - eye[a]) * fwd[a]).sum();
-            // A node reaching the eye's plane is never merged.
-            d > support && 2.0 * support < budget * pixel(d)
-        };
-        let top = tree.levels.len();
-        let mut stack: Vec<(usize, usize)> = (0..tree.levels[top - 1].len())
-            .rev()
-            .map(|j| (top, j))
+        let run = 8usize.saturating_pow(level).max(1);
+        let kernel = self.settings.kernel;
+        let s = variance_factor(kernel);
+        let own: Vec<usize> = (0..self.len())
+            .filter(|&i| !self.is_ghost(i) && self.radius[i] > 0.0)
             .collect();
-        let mut cut = Cut::new(self, 0);
-        let mut merged = 0usize;
-        while let Some((k, j)) = stack.pop() {
-            if k == 0 {
-                cut.particle(self, tree.own[j] as usize);
+        let groups = own.len().div_ceil(run);
+        let mut data = ParticleData {
+            positions: Vec::with_capacity(groups),
+            radii: Some(Vec::with_capacity(groups)),
+            attribute: self.attribute.as_ref().map(|_| Vec::with_capacity(groups)),
+            weights: Some(Vec::with_capacity(groups)),
+        };
+        for members in own.chunks(run) {
+            let mut mass = 0.0f64;
+            let mut c = [0.0f64; 3];
+            let mut attr = 0.0f64;
+            for &i in members {
+                let m = self.weight[i] as f64 * kernel.integral(self.radius[i] as f64);
+                let p = self.packed[i].center;
+                mass += m;
+                for (a, ca) in c.iter_mut().enumerate() {
+                    *ca += m * p[a] as f64;
+                }
+                if let Some(at) = &self.attribute {
+                    attr += m * at[i] as f64;
+                }
+            }
+            if !(mass > 0.0) {
                 continue;
             }
-            let n = &tree.levels[k - 1][j];
-            if small(n) {
-                cut.node(self, n);
-                merged += 1;
-                continue;
+            let c = c.map(|v| v / mass);
+            let mut second = 0.0f64;
+            for &i in members {
+                let m = self.weight[i] as f64 * kernel.integral(self.radius[i] as f64);
+                let p = self.packed[i].center;
+                let d2: f64 = (0..3).map(|a| (p[a] as f64 - c[a]).powi(2)).sum();
+                let r = self.radius[i] as f64;
+                second += m * (s * r * r + d2 / 3.0);
             }
-            let len = if k == 1 {
-                tree.own.len()
-            } else {
-                tree.levels[k - 2].len()
-            };
-            // Children in reverse so that the cut keeps the volume's order.
-            for c in (8 * j..(8 * j + 8).min(len)).rev() {
-                stack.push((k - 1, c));
+            let radius = (second / mass / s).sqrt();
+            // The weight that gives the merged kernel the run's mass.
+            let weight = mass / kernel.integral(radius);
+            data.positions
+                .push(Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32));
+            data.radii.as_mut().expect("radii").push(radius as f32);
+            data.weights.as_mut().expect("weights").push(weight as f32);
+            if let Some(a) = data.attribute.as_mut() {
+                a.push((attr / mass) as f32);
             }
         }
-        if merged == 0 {
-            return Ok(None);
+        let mut settings = self.settings.clone();
+        settings.radius_map = None;
+        settings.weight_map = None;
+        if settings.attribute_range.is_none() {
+            settings.attribute_range = self.attribute_range;
         }
-        cut.build(self).map(Some)
+        ParticleVolume::new(data, settings)
     }
 
     /// The preview of a large set (at least [`PREVIEW_MIN`] particles): its
@@ -206,87 +123,6 @@ impl ParticleVolume {
                 self.merged(level).ok().map(Box::new)
             })
             .as_deref()
-    }
-}
-
-/// The merge of `nodes` (module docs), `s` the kernel's variance factor.
-fn merge(nodes: &[Node], s: f64) -> Node {
-    let mass: f64 = nodes.iter().map(|n| n.mass).sum();
-    let mut c = [0.0f64; 3];
-    let mut attribute = 0.0f64;
-    for n in nodes {
-        for (a, ca) in c.iter_mut().enumerate() {
-            *ca += n.mass * n.center[a];
-        }
-        attribute += n.mass * n.attribute as f64;
-    }
-    let c = c.map(|v| v / mass);
-    let second: f64 = nodes
-        .iter()
-        .map(|n| {
-            let d2: f64 = (0..3).map(|a| (n.center[a] - c[a]).powi(2)).sum();
-            let r = n.radius as f64;
-            n.mass * (s * r * r + d2 / 3.0)
-        })
-        .sum();
-    Node {
-        mass,
-        center: c,
-        radius: (second / mass / s).sqrt() as f32,
-        attribute: (attribute / mass) as f32,
-    }
-}
-
-/// A level-of-detail set being gathered: merged nodes and particles.
-struct Cut {
-    data: ParticleData,
-}
-
-impl Cut {
-    fn new(v: &ParticleVolume, capacity: usize) -> Cut {
-        Cut {
-            data: ParticleData {
-                positions: Vec::with_capacity(capacity),
-                radii: Some(Vec::with_capacity(capacity)),
-                attribute: v.attribute.as_ref().map(|_| Vec::with_capacity(capacity)),
-                weights: Some(Vec::with_capacity(capacity)),
-            },
-        }
-    }
-
-    fn push(&mut self, center: Vec3, radius: f32, weight: f32, attribute: f32) {
-        let d = &mut self.data;
-        d.positions.push(center);
-        d.radii.as_mut().expect("radii").push(radius);
-        d.weights.as_mut().expect("weights").push(weight);
-        if let Some(a) = d.attribute.as_mut() {
-            a.push(attribute);
-        }
-    }
-
-    fn node(&mut self, v: &ParticleVolume, n: &Node) {
-        // The weight that gives the merged kernel the run's mass.
-        let weight = n.mass / v.settings.kernel.integral(n.radius as f64);
-        let c = Vec3::new(n.center[0] as f32, n.center[1] as f32, n.center[2] as f32);
-        self.push(c, n.radius, weight as f32, n.attribute);
-    }
-
-    fn particle(&mut self, v: &ParticleVolume, i: usize) {
-        let a = v.attribute.as_ref().map_or(0.0, |a| a[i]);
-        self.push(v.packed[i].center, v.radius[i], v.weight[i], a);
-    }
-
-    /// The cut as a volume with `v`'s settings (no maps: the radii and
-    /// weights are the effective ones).
-    fn build(self, v: &ParticleVolume) -> Result<ParticleVolume, ParticleError> {
-        let mut settings = v.settings.clone();
-        settings.radius_map = None;
-        settings.weight_map = None;
-        settings.lod_pixels = None;
-        if settings.attribute_range.is_none() {
-            settings.attribute_range = v.attribute_range;
-        }
-        ParticleVolume::new(self.data, settings)
     }
 }
 
@@ -402,54 +238,6 @@ mod tests {
         // the ~8% of ⟨r²⟩ the 3% of its mass beyond 3σ carried.
         let g = variance_factor(Kernel::Gaussian3);
         assert!(g < 1.0 / 9.0 && g > 0.9 / 9.0, "{g}");
-    }
-
-    #[test]
-    fn a_view_dependent_cut_keeps_the_mass_and_the_image() {
-        let v = volume(40_000, Kernel::CubicSpline, true);
-        let cam =
-            Camera::axis_projection(&Aabb::new(Vec3::splat(0.0), Vec3::splat(1.0)), 2).unwrap();
-        // Nothing spans under a thousandth of a pixel: no cut.
-        assert!(v.lod_cut(&cam, 16, 1e-3).unwrap().is_none());
-        // The cut is chosen for a 16² image; the images are compared at
-        // 128² (where every kernel spans pixels, so sampling at pixel
-        // centres is accurate), averaged over the 16² image's pixels.
-        let c = Control::new();
-        let blocks = |img: &[f32]| {
-            let mut b = vec![0.0f64; 256];
-            for (k, &x) in img.iter().enumerate() {
-                b[(k / 128 / 8) * 16 + (k % 128) / 8] += x as f64 / 64.0;
-            }
-            b
-        };
-        let exact = blocks(&v.project_image(&cam, 128, 128, &c).unwrap().unwrap());
-        let peak = exact.iter().fold(0.0f64, |m, &x| m.max(x));
-        let sum = |x: &[f64]| x.iter().sum::<f64>();
-        // (pixel budget, the worst pixel's error over the peak allowed:
-        // measured 4.2e-3, 5.4e-2 and 5.2e-2, with a margin)
-        for (budget, bound) in [(1.0f32, 0.01), (2.0, 0.08), (4.0, 0.08)] {
-            let cut = v.lod_cut(&cam, 16, budget).unwrap().expect("merged nodes");
-            assert!(cut.particle_count() < v.particle_count());
-            let (a, b) = (v.total_mass(), cut.total_mass());
-            assert!((a / b - 1.0).abs() <= 1e-6, "{budget}: {a} vs {b}");
-            let lod = blocks(&cut.project_image(&cam, 128, 128, &c).unwrap().unwrap());
-            let worst = exact
-                .iter()
-                .zip(&lod)
-                .map(|(x, y)| (x - y).abs())
-                .fold(0.0, f64::max);
-            eprintln!(
-                "lod {budget} px: {} of {} kernels, worst pixel {:.2e} of the peak, Σ {:.1e}",
-                cut.particle_count(),
-                v.particle_count(),
-                worst / peak,
-                sum(&lod) / sum(&exact) - 1.0
-            );
-            // Merged kernels span under `budget` pixels: each pixel's mean
-            // moves by a fraction of the peak that grows with the budget.
-            assert!(worst <= bound * peak, "{budget}: {worst} of {peak}");
-            assert!((sum(&lod) / sum(&exact) - 1.0).abs() <= 1e-5);
-        }
     }
 
     #[test]
