@@ -35,6 +35,23 @@ impl Fields {
     /// attribute), then ∂Φ/∂x, ∂Φ/∂y, ∂Φ/∂z (with `gradient`); materials one
     /// density each; tessellations density and streams; AMR every field,
     /// then every field's gradient.
+    /// Refuses a gradient of fields that have none to give (it would be
+    /// dropped without a word): a tessellation's density is constant inside
+    /// each tet, and several materials are sampled as densities only.
+    pub fn check_gradient(&self, gradient: bool) -> Result<(), crate::SceneError> {
+        let why = match self {
+            Fields::Tets { .. } if gradient => {
+                "a phase-space tessellation's density is constant inside every tet (its gradient \
+                 is zero there and undefined on the faces)"
+            }
+            Fields::Materials(_) if gradient => {
+                "materials are sampled as one density per species, without gradients"
+            }
+            _ => return Ok(()),
+        };
+        Err(crate::SceneError::setting("gradient (--gradient)", why))
+    }
+
     pub fn columns(&self, gradient: bool) -> Vec<String> {
         let grad = |name: &str| ["x", "y", "z"].map(|a| format!("d{name}/d{a}"));
         match self {

@@ -258,7 +258,15 @@ fn data_defaults(
     let units = if settings.log_scale { "log10 " } else { "" };
     match desc.transfer.value_range {
         Some([lo, hi]) => {
-            settings.value_range = range("transfer.value_range (--value-range)", lo, hi)?;
+            const NAME: &str = "transfer.value_range (--value-range)";
+            settings.value_range = range(NAME, lo, hi)?;
+            if lo == hi {
+                return Err(SceneError::setting(
+                    NAME,
+                    format!("[{lo}, {hi}] has zero width: the transfer function needs lo < hi"),
+                ));
+            }
+            above_the_data(volume.value_range, lo, settings.log_scale)?;
         }
         None => {
             let floor_zero = kind == VolumeKind::Particles;
@@ -573,4 +581,34 @@ pub fn transfer_function_at(
         (None, None, None) => OpacityMap::preset("linear")?,
     };
     Ok(TransferFunction::new(colormap, opacity))
+}
+
+/// Refuses a value range that starts far above the field's largest value
+/// `data.hi` (in the transfer function's units: log10 when `log`): every
+/// sample would be transparent and the image empty, which the render would
+/// blame on the camera. "Far": beyond the data's own span above its maximum
+/// (twice the maximum for a field ≥ 0), since the maximum is probed.
+fn above_the_data(data: Range1, lo: f32, log: bool) -> Result<(), SceneError> {
+    let top = if log {
+        if !(data.hi > 0.0) {
+            return Ok(());
+        }
+        data.hi.log10() + std::f32::consts::LOG10_2
+    } else {
+        data.hi + (data.hi - data.lo).max(data.hi.abs())
+    };
+    if top.is_finite() && lo > top {
+        return Err(SceneError::setting(
+            "transfer.value_range (--value-range)",
+            format!(
+                "starts at {lo:.4e}, above the field's largest value {}{:.4e}: every sample would \
+                 be transparent; give a range that overlaps the data's [{:.4e}, {:.4e}]",
+                if log { "(log10) " } else { "" },
+                if log { data.hi.log10() } else { data.hi },
+                data.lo,
+                data.hi
+            ),
+        ));
+    }
+    Ok(())
 }

@@ -211,6 +211,15 @@ fn mirrors(
             ));
         }
         let plane = match i.at {
+            Some(at) if !at.is_finite() => {
+                return Err(SceneError::setting(
+                    "instances.at (--mirror AXIS=VALUE)",
+                    format!(
+                        "the {} mirror's plane is at {at}; it must be a finite coordinate",
+                        i.mirror.name()
+                    ),
+                ));
+            }
             Some(at) => {
                 let mut p = frame.to_world(bounds.center());
                 p[axis] = at;

@@ -225,4 +225,58 @@ fn settings_that_would_be_ignored_or_misread_name_their_flag() {
         &["--classification", "pre"],
         "acts on a per-particle attribute",
     );
+    // Value ranges that make every sample transparent name the range, not
+    // the camera.
+    fails_with(&["--value-range", "0.5", "0.5"], "zero width");
+    fails_with(
+        &["--value-range", "1e30", "2e30"],
+        "above the field's largest value",
+    );
+    // A frame the data does not have.
+    let n = 6;
+    let grid: Vec<f32> = (0..n * n * n)
+        .flat_map(|c| [c / (n * n), (c / n) % n, c % n].map(|v| v as f32 / n as f32))
+        .collect();
+    voxless_io::write_npy_f32(&s.path("grid.npy"), &[n * n * n, 3], &grid).unwrap();
+    let tets = [
+        "--particles",
+        &s.str("grid.npy"),
+        "--lagrangian",
+        "6",
+        "--box",
+        "1",
+    ];
+    let mut args = vec!["render", "--frame", "2", "--size", "16", "12", "-o", &out];
+    args.extend(tets);
+    let e = fails(&args);
+    assert!(e.contains("frame 2") && e.contains("one frame"), "{e}");
+    let proj = s.str("x.npy");
+    let mut args = vec!["project", "--frame", "1", "--size", "8", "8", "-o", &proj];
+    args.extend(tets);
+    assert!(fails(&args).contains("one frame"));
+    // A gradient the tessellation does not have.
+    voxless_io::write_npy_f32(&s.path("q.npy"), &[1, 3], &[0.5, 0.5, 0.5]).unwrap();
+    let pts = s.str("q.npy");
+    let samples = s.str("s.npy");
+    let mut args = vec!["sample", "--points", &pts, "--gradient", "-o", &samples];
+    args.extend(tets);
+    let e = fails(&args);
+    assert!(e.contains("gradient (--gradient)"), "{e}");
+    // A scene mirror at NaN (the flag form is refused by its parser).
+    let scene = s.path("mirror.toml");
+    std::fs::write(
+        &scene,
+        format!("[particles]\nfile = '{p}'\n[[instances]]\nmirror = 'x'\nat = nan\n"),
+    )
+    .unwrap();
+    let e = fails(&[
+        "render",
+        &s.str("mirror.toml"),
+        "--size",
+        "16",
+        "12",
+        "-o",
+        &out,
+    ]);
+    assert!(e.contains("instances.at"), "{e}");
 }

@@ -283,6 +283,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
                 Ok(Vec::new())
             };
             let pts = render::agree(placement, read)?;
+            s.fields().check_gradient(gradient)?;
             let cols = s.fields().columns(gradient);
             let t = Instant::now();
             let values = s.sample(&pts, gradient)?;

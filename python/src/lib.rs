@@ -475,6 +475,11 @@ impl Volume {
                 format!("points: point {i} has a non-finite coordinate"),
             ));
         }
+        self.held
+            .volume()
+            .fields()
+            .check_gradient(gradient)
+            .map_err(|e| errors::value(py, e.to_string()))?;
         let held = self.held.clone();
         let n = pts.len();
         // World points into the volume's frame (as Scene::sample does).

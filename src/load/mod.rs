@@ -145,6 +145,32 @@ pub(crate) fn source<'a>(desc: &'a SceneDesc, base: &Path) -> Result<Source<'a>,
     }
 }
 
+/// [`source`], refusing a frame other than 0 of data that has one frame
+/// (AMR cells, a tessellation: their files are not read as time series, so
+/// the frame would be ignored without a word).
+pub(crate) fn source_at<'a>(
+    desc: &'a SceneDesc,
+    base: &Path,
+    frame: usize,
+) -> Result<Source<'a>, SceneError> {
+    let s = source(desc, base)?;
+    let what = match &s {
+        Source::Amr(_) => "AMR cells have",
+        Source::Tets(_) => "a phase-space tessellation has",
+        Source::Particles(_) => return Ok(s),
+    };
+    if frame > 0 {
+        return Err(SceneError::setting(
+            "frame (--frame, --frames)",
+            format!(
+                "frame {frame} was asked for, but {what} one frame, 0 (AMR and tessellation \
+                 files are not read as time series)"
+            ),
+        ));
+    }
+    Ok(s)
+}
+
 /// Loads the data `desc` names (paths relative to `base`) at frame `frame`
 /// of a time series (0 for single frames), in the frame the placement
 /// policy picks for it (see [`WorldFrame::fit`]).
@@ -161,7 +187,7 @@ pub fn load_in(
     world: Option<&WorldFrame>,
 ) -> Result<Loaded, SceneError> {
     let mut notes = Vec::new();
-    let (volume, world) = match source(desc, base)? {
+    let (volume, world) = match source_at(desc, base, frame)? {
         Source::Particles(p) => match &p.materials {
             Some(mats) => {
                 let (v, f) = materials::load_materials(&p, mats, base, &mut notes, frame, world)?;

@@ -111,7 +111,7 @@ pub(crate) fn open_part(
     purpose: Purpose,
     earlier: Option<Earlier>,
 ) -> Result<Part, ParallelError> {
-    let source = agree(comm, load::source(desc, base))?;
+    let source = agree(comm, load::source_at(desc, base, frame))?;
     let tets = match &source {
         Source::Tets(t) => Some(&**t),
         _ => None,
