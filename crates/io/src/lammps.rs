@@ -447,6 +447,15 @@ fn read_box(
     if sim_box.lo.iter().chain(&sim_box.hi).any(|v| !v.is_finite()) {
         return Err(lines.error(format!("frame {frame}: BOX BOUNDS are not finite")));
     }
+    if let Some(a) = (0..3).find(|&a| !(sim_box.lo[a] < sim_box.hi[a])) {
+        return Err(lines.error(format!(
+            "frame {frame}: BOX BOUNDS along {} run from {} to {}; the lower bound must be \
+             below the upper",
+            ["x", "y", "z"][a],
+            sim_box.lo[a],
+            sim_box.hi[a]
+        )));
+    }
     Ok(sim_box)
 }
 
@@ -599,6 +608,18 @@ fn read_atoms(
     if id_col.is_some() {
         let mut order: Vec<usize> = (0..ids.len()).collect();
         order.sort_by(|&a, &b| ids[a].total_cmp(&ids[b]));
+        // Rows are matched across frames by id: two atoms with one id would
+        // be taken for one.
+        if let Some(w) = order.windows(2).find(|w| ids[w[0]] == ids[w[1]]) {
+            let (a, b) = (w[0].min(w[1]), w[0].max(w[1]));
+            return Err(lines.error(format!(
+                "frame {frame}: atom id {} appears twice (atom lines {} and {} of the frame); \
+                 ids must be unique",
+                ids[a],
+                a + 1,
+                b + 1
+            )));
+        }
         if order.iter().enumerate().any(|(i, &o)| i != o) {
             positions = order.iter().map(|&i| positions[i]).collect();
             for (_, col) in &mut columns {

@@ -260,6 +260,20 @@ fn lammps_malformed_inputs() {
             "expected 4 values",
         ),
         ("long-row", frame("1", "id x y z", "1 0 0 0 9\n"), "found 5"),
+        // Two atoms with one id would be matched as one across frames.
+        (
+            "duplicate-id",
+            frame("2", "id x y z", "4 0 0 0\n4 0.5 0 0\n"),
+            "atom id 4 appears twice",
+        ),
+        // A box whose lower bound is above its upper.
+        (
+            "inverted-box",
+            "ITEM: TIMESTEP\n7\nITEM: NUMBER OF ATOMS\n1\nITEM: BOX BOUNDS pp pp pp\n\
+             0 1\n2 1\n0 1\nITEM: ATOMS id x y z\n1 0 0 0\n"
+                .to_string(),
+            "BOX BOUNDS along y run from 2 to 1",
+        ),
         (
             "no-positions",
             frame("1", "id type vx vy vz", "1 1 0 0 0\n"),
@@ -305,7 +319,12 @@ fn lammps_malformed_inputs() {
         // Counting frames skips atom lines, so only structural errors show.
         let structural = !matches!(
             name,
-            "bad-number" | "short-row" | "long-row" | "no-positions" | "partial-positions"
+            "bad-number"
+                | "short-row"
+                | "long-row"
+                | "no-positions"
+                | "partial-positions"
+                | "duplicate-id"
         );
         if structural {
             assert!(lammps_frames(&path).is_err(), "{name}");
