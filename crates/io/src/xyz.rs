@@ -120,7 +120,12 @@ fn read_frame<R: BufRead>(
     scan_species(&mut lines, frame, 0..frame, &mut species)?;
     let n = read_count(&mut lines, frame)?.ok_or_else(|| past_end(lines.path(), frame, frame))?;
     let comment = read_comment(&mut lines, frame, n)?;
-    read_atoms(&mut lines, frame, n, &comment, &mut species)
+    let table = read_atoms(&mut lines, frame, n, &comment, &mut species)?;
+    // What follows must be the next frame's count (or the end): more atom
+    // lines than the count said fail here as they do when frames are
+    // counted, instead of being dropped without a word.
+    read_count(&mut lines, frame + 1)?;
+    Ok(table)
 }
 
 /// Reads frames `frames` past, numbering the species they use in order of

@@ -515,6 +515,12 @@ fn xyz_malformed_inputs() {
         let msg = error_message(result, &path);
         assert!(msg.contains(expected), "{name}: {msg}");
     }
+    // More atom lines than the count: reading frame 0 fails too (as
+    // counting the frames does), rather than dropping the extra lines.
+    let path = dir.write("extra-lines-0.xyz", "1\n\nH 0 0 0\nH 1 1 1\n");
+    let msg = error_message(read_xyz(&path, 0), &path);
+    assert!(msg.contains("more atom lines than its count"), "{msg}");
+    assert!(xyz_frames(&path).is_err());
     let path = dir.write("binary.xyz", [1u8, 0xff, 0xfe, b'\n']);
     let msg = error_message(xyz_frames(&path), &path);
     assert!(msg.contains("UTF-8"), "{msg}");
