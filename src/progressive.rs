@@ -145,12 +145,13 @@ pub fn render_progressive(
         let t = Instant::now();
         // A large particle set's coarse image comes from its merged
         // preview (levels of detail): the full set would take seconds.
-        let film = match volume {
-            AnyVolume::Particles(v) if v.preview().is_some() => {
-                let p = v.preview().expect("preview");
-                voxless_render::render_film(p, camera, tf, &coarse, control, &mut |_| true)?
-            }
-            _ => volume.render_passes(camera, tf, &coarse, control, &mut |_| true)?,
+        let preview = match volume {
+            AnyVolume::Particles(v) => v.preview(),
+            _ => None,
+        };
+        let film = match preview {
+            Some(p) => voxless_render::render_film(p, camera, tf, &coarse, control, &mut |_| true)?,
+            None => volume.render_passes(camera, tf, &coarse, control, &mut |_| true)?,
         };
         if let Some(b) = budget {
             b.record(

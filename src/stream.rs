@@ -24,8 +24,8 @@
 use std::path::Path;
 
 use voxless_core::{Aabb, Control};
+use voxless_particles::check_data;
 use voxless_particles::splat::{CHUNK, SplatParticle, Splatter};
-use voxless_particles::{Kernel, check_data};
 use voxless_scene::{ParticlesDesc, SceneDesc};
 
 use crate::SceneError;
@@ -130,10 +130,21 @@ pub fn project(
     }
     let world = load::frame_for(reach);
     let local_box = load::local_box(boxed.as_ref().map(|b| &b.0), &world);
-    let mut scratch = Vec::new();
+    // The global radius in the frame (validated as the loader does; the
+    // default from the spacing never applies: a radius or radii are given).
+    let radius = load::particle_settings(
+        p,
+        kernel,
+        p.radii.is_some(),
+        &mut |_| (1.0, String::new()),
+        world.scale,
+        &mut Vec::new(),
+    )?
+    .radius;
     // Each chunk as the loader prepares it: wrapped (world), placed in the
-    // frame, scaled, local radii and weights.
-    let prepare = |k: usize, scratch: &mut Vec<String>| -> Result<Prepared, SceneError> {
+    // frame, scaled, local radii and weights. (The loader's notes were said
+    // once above, for the whole set.)
+    let prepare = |k: usize| -> Result<Prepared, SceneError> {
         let mut fd = read(k)?;
         periodic::settle(
             p,
@@ -143,21 +154,12 @@ pub fn project(
             (false, false),
             kernel,
             &fd.main_file,
-            scratch,
+            &mut Vec::new(),
         )?;
         let offset = fd.offset;
         let (mut data, main_file, files) = fd.place(&world);
-        let kernel = load::prepare_arrays(&mut data, p, None, world.scale)?;
-        let settings = load::particle_settings(
-            p,
-            kernel,
-            data.radii.is_some(),
-            &mut |_| (1.0, String::new()),
-            world.scale,
-            scratch,
-        )?;
+        load::prepare_arrays(&mut data, p, None, world.scale)?;
         check_data(&data, offset).map_err(|e| load::blame(main_file, &files, e))?;
-        let radius = settings.radius;
         let particles = (0..data.positions.len())
             .map(|i| {
                 let c = data.positions[i];
@@ -169,11 +171,7 @@ pub fn project(
                 }
             })
             .collect();
-        Ok(Prepared {
-            particles,
-            offset,
-            kernel,
-        })
+        Ok(Prepared { particles, offset })
     };
 
     // Pass 2 (no box): the volume's bounds, the union of the supports.
@@ -181,9 +179,9 @@ pub fn project(
         Some(b) => b,
         None => {
             let mut b = Aabb::EMPTY;
+            let factor = kernel.support_factor();
             for k in 0..chunks {
-                let c = prepare(k, &mut scratch)?;
-                let factor = c.kernel.support_factor();
+                let c = prepare(k)?;
                 for q in c.particles.iter().filter(|q| q.radius > 0.0) {
                     let s = factor * q.radius;
                     b = b.union(Aabb::around(q.center, (s * s).sqrt()));
@@ -200,12 +198,12 @@ pub fn project(
     // Pass 3: splat chunk by chunk.
     let mut mass = 0.0;
     for k in 0..chunks {
-        let c = prepare(k, &mut scratch)?;
+        let c = prepare(k)?;
         mass += c
             .particles
             .iter()
             .filter(|q| q.radius > 0.0)
-            .map(|q| q.weight as f64 * c.kernel.integral(q.radius as f64))
+            .map(|q| q.weight as f64 * kernel.integral(q.radius as f64))
             .sum::<f64>();
         splatter
             .add(&c.particles, c.offset, control)
@@ -215,18 +213,9 @@ pub fn project(
         }
         control.report(k as u64 + 1, chunks as u64);
     }
-    let local = splatter.finish();
-    let column = if view.scale == 1.0 {
-        local
-    } else {
-        local
-            .iter()
-            .map(|&c| (c as f64 * view.scale) as f32)
-            .collect()
-    };
     Ok(Some(Streamed {
         view,
-        column,
+        column: world.columns_to_world(splatter.finish()),
         mass: mass * world.scale.powi(3),
         particles: total,
         chunks,
@@ -238,7 +227,6 @@ pub fn project(
 struct Prepared {
     particles: Vec<SplatParticle>,
     offset: usize,
-    kernel: Kernel,
 }
 
 /// The particle description of a scene that can stream (module docs).

@@ -8,23 +8,18 @@
 mod common;
 use common::*;
 
+/// An n³ Lagrangian grid in the unit box, in Lagrangian order.
+fn write_grid(path: &std::path::Path, n: usize) {
+    let grid: Vec<f32> = (0..n * n * n)
+        .flat_map(|c| [c / (n * n), (c / n) % n, c % n].map(|v| v as f32 / n as f32))
+        .collect();
+    voxless_io::write_npy_f32(path, &[n * n * n, 3], &grid).unwrap();
+}
+
 #[test]
 fn sizes_that_cannot_fit_are_refused_before_any_work() {
     let s = Scratch::new("hostile-sizes");
-    let n = 6;
-    let mut flat = Vec::new();
-    for i in 0..n {
-        for j in 0..n {
-            for k in 0..n {
-                flat.extend([
-                    i as f32 / n as f32,
-                    j as f32 / n as f32,
-                    k as f32 / n as f32,
-                ]);
-            }
-        }
-    }
-    voxless_io::write_npy_f32(&s.path("grid.npy"), &[n * n * n, 3], &flat).unwrap();
+    write_grid(&s.path("grid.npy"), 6);
     let out = s.str("x.png");
     let e = fails(&[
         "render",
@@ -233,11 +228,7 @@ fn settings_that_would_be_ignored_or_misread_name_their_flag() {
         "above the field's largest value",
     );
     // A frame the data does not have.
-    let n = 6;
-    let grid: Vec<f32> = (0..n * n * n)
-        .flat_map(|c| [c / (n * n), (c / n) % n, c % n].map(|v| v as f32 / n as f32))
-        .collect();
-    voxless_io::write_npy_f32(&s.path("grid.npy"), &[n * n * n, 3], &grid).unwrap();
+    write_grid(&s.path("grid.npy"), 6);
     let tets = [
         "--particles",
         &s.str("grid.npy"),

@@ -35,6 +35,11 @@ impl std::fmt::Display for CameraError {
 impl std::error::Error for CameraError {}
 
 impl Camera {
+    /// The eye and the right, up and forward directions in f64, for work
+    /// that measures offsets in the image plane in double precision.
+    pub fn basis_f64(&self) -> [[f64; 3]; 4] {
+        [self.eye, self.right, self.up, self.forward].map(|v| [v.x as f64, v.y as f64, v.z as f64])
+    }
     /// A camera at `eye` looking at `look_at`, with `up` as the approximate up
     /// direction. Errors when the vectors are not finite, `eye == look_at`, or
     /// `up` is parallel to the view direction.

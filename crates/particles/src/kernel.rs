@@ -30,7 +30,7 @@
 //! drops the `1/s²` factor; we keep the exact form).
 
 use voxless_core::Vec3;
-use voxless_core::simd::{LANES, Lanes};
+use voxless_core::simd::Lanes;
 
 pub mod sph;
 
@@ -400,7 +400,7 @@ fn projected_m4_q2_table() -> &'static [f32; PROJ_Q2_TABLE] {
 }
 
 /// The table of the kernels that read none.
-pub(crate) static NO_TABLE: [f32; PROJ_Q2_TABLE] = [0.0; PROJ_Q2_TABLE];
+static NO_TABLE: [f32; PROJ_Q2_TABLE] = [0.0; PROJ_Q2_TABLE];
 
 impl Kernel {
     /// The projected-kernel table an SPH kernel's [`Column`] reads (over
@@ -512,116 +512,6 @@ impl Column {
         } else {
             self.kernel
                 .chord_integral(b2, self.r, f64::NEG_INFINITY, f64::INFINITY)
-        }
-    }
-
-    /// Adds `weight ×` the column to a row of pixels: `out[k] += weight ·
-    /// at((u[k] − a)² + dv2)` for increasing `u`, with the bits of that loop
-    /// but only over the pixels inside the support (elsewhere it adds 0) and
-    /// with the kernel chosen once.
-    #[inline]
-    pub fn add_row(&self, out: &mut [f64], u: &[f64], a: f64, dv2: f64, weight: f64) {
-        let rest = self.support2 - dv2;
-        if !(rest > 0.0) {
-            return;
-        }
-        // The pixels on the support's chord, padded by one against rounding.
-        let half = rest.sqrt();
-        let first = u.partition_point(|&x| x < a - half).saturating_sub(1);
-        let last = (u.partition_point(|&x| x <= a + half) + 1).min(u.len());
-        if first >= last {
-            return;
-        }
-        let (out, u) = (&mut out[first..last], &u[first..last]);
-        if self.kernel.is_sph() {
-            for (s, &x) in out.iter_mut().zip(u) {
-                let du = x - a;
-                let b2 = du * du + dv2;
-                if b2 < self.support2 {
-                    *s += weight * self.tabled(b2);
-                }
-            }
-        } else {
-            for (s, &x) in out.iter_mut().zip(u) {
-                let du = x - a;
-                *s += weight * self.at(du * du + dv2);
-            }
-        }
-    }
-
-    /// [`Column::add_row`] eight pixels at a time for the SPH kernels (the
-    /// others take the scalar row): the table position is computed in f32
-    /// lanes from the offsets of evenly spaced pixel centres `u` and only
-    /// the table reads are per pixel. Agrees with the f64 row to f32
-    /// rounding of the table position (~1e-7 of the peak column, tested).
-    #[inline(always)]
-    pub fn add_row_lanes<L: Lanes>(
-        &self,
-        out: &mut [f64],
-        u: &[f64],
-        a: f64,
-        dv2: f64,
-        weight: f64,
-    ) {
-        if !self.kernel.is_sph() {
-            return self.add_row(out, u, a, dv2, weight);
-        }
-        let rest = self.support2 - dv2;
-        if !(rest > 0.0) {
-            return;
-        }
-        // The support's chord, from the even spacing of the pixel centres
-        // instead of a search, padded by a pixel each side (pixels outside
-        // the support add 0).
-        let half = rest.sqrt();
-        let (first, last) = if u.len() > 1 {
-            let (u0, du) = (u[0], u[1] - u[0]);
-            let k = |x: f64| ((x - u0) / du).clamp(-1.0, u.len() as f64);
-            let (k0, k1) = (k(a - half).floor() - 1.0, k(a + half).ceil() + 2.0);
-            (k0.max(0.0) as usize, (k1.max(0.0) as usize).min(u.len()))
-        } else {
-            (0, u.len())
-        };
-        if first >= last {
-            return;
-        }
-        let (out, u) = (&mut out[first..last], &u[first..last]);
-        let n = out.len();
-        // Pixel centres are evenly spaced: u[k] − a = du0 + k·step.
-        let du0 = (u[0] - a) as f32;
-        let step = if n > 1 { (u[1] - u[0]) as f32 } else { 0.0 };
-        let s = L::splat;
-        let (dv2, to_index) = (s(dv2 as f32), s(self.to_index as f32));
-        let (inside, top) = (s(self.support2 as f32), s((PROJ_Q2_TABLE - 1) as f32));
-        let ws = weight * self.scale;
-        let mut k = 0;
-        while k < n {
-            let du = s(du0) + (L::iota() + s(k as f32)) * s(step);
-            let b2 = du * du + dv2;
-            let x = (b2 * to_index).min(top);
-            let xi = x.trunc_i32();
-            let (mut lo, mut hi, mut at) = ([0f32; LANES], [0f32; LANES], [0f32; LANES]);
-            for j in 0..LANES {
-                let i = (xi[j].max(0) as usize).min(PROJ_Q2_TABLE - 2);
-                lo[j] = self.table[i];
-                hi[j] = self.table[i + 1];
-                at[j] = i as f32;
-            }
-            let f = x - L::from_array(at);
-            let col = L::from_array(lo) * (s(1.0) - f) + L::from_array(hi) * f;
-            let col = b2.lt(inside).select(col, s(0.0)).to_array();
-            if let Some(o) = out.get_mut(k..k + LANES) {
-                // A whole group: fixed-length, so the f64 adds vectorise.
-                let o: &mut [f64; LANES] = o.try_into().expect("LANES pixels");
-                for (o, &c) in o.iter_mut().zip(&col) {
-                    *o += ws * c as f64;
-                }
-            } else {
-                for (o, &c) in out[k..].iter_mut().zip(&col) {
-                    *o += ws * c as f64;
-                }
-            }
-            k += LANES;
         }
     }
 }

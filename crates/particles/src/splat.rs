@@ -77,6 +77,9 @@ pub struct Splatter {
     /// Reused between chunks.
     splats: Vec<Splat>,
     found: Vec<([i8; 3], Vec3)>,
+    /// The SIMD lanes the bands run on (every backend gives the same
+    /// image to f32 rounding of the table position; tests pick each).
+    simd: Simd,
 }
 
 impl Splatter {
@@ -118,6 +121,7 @@ impl Splatter {
             sum: vec![0.0; width as usize * height as usize],
             splats: Vec::new(),
             found: Vec::new(),
+            simd: Simd::Auto,
         })
     }
 
@@ -138,6 +142,9 @@ impl Splatter {
         let (camera, mode, kernel, half) = (&self.camera, self.mode, self.kernel, self.half);
         let (width, height) = (self.width, self.height);
         let splats = &self.splats;
+        // The Gaussians read no table (their columns are closed forms).
+        let pairs = kernel.sph_pairs().unwrap_or(&[[0.0; 2]; 2]);
+        let simd = self.simd;
         self.sum
             .par_chunks_mut(w * BAND as usize)
             .enumerate()
@@ -149,13 +156,13 @@ impl Splatter {
                 let y0 = band as u32 * BAND;
                 let rows = (out.len() / w) as u32;
                 dispatch(
-                    Simd::Auto,
+                    simd,
                     SplatBand {
                         splats,
                         members,
                         y: (y0, y0 + rows),
                         width: w,
-                        pairs: kernel.sph_pairs().unwrap_or(&[[0.0; 2]; 2]),
+                        pairs,
                         out: &mut *out,
                     },
                 );
@@ -176,6 +183,14 @@ impl Splatter {
         image
     }
 
+    /// The same splatter on the SIMD lanes `simd` (for tests of each
+    /// backend).
+    #[cfg(test)]
+    pub(crate) fn on(mut self, simd: Simd) -> Self {
+        self.simd = simd;
+        self
+    }
+
     /// Each particle's periodic images as splats, in order, into
     /// `self.splats`.
     fn place(&mut self, particles: &[SplatParticle], offset: usize) -> Result<(), ParticleError> {
@@ -186,14 +201,7 @@ impl Splatter {
         // Pixel coordinates of a point: x = (a / hw + 1)·W/2 with a its
         // offset along `right` from the eye, y = (1 − b / hh)·H/2 along `up`.
         let (pw, ph) = (2.0 * hw / w, 2.0 * hh / h);
-        let cam = &self.camera;
-        let f64v = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
-        let (eye, right, up, fwd) = (
-            f64v(cam.eye),
-            f64v(cam.right),
-            f64v(cam.up),
-            f64v(cam.forward),
-        );
+        let [eye, right, up, fwd] = self.camera.basis_f64();
         let dot = |d: [f64; 3], e: [f64; 3]| d[0] * e[0] + d[1] * e[1] + d[2] * e[2];
         for (i, p) in particles.iter().enumerate() {
             if !(p.radius > 0.0) || p.weight == 0.0 {
@@ -364,8 +372,8 @@ impl Bands {
     }
 }
 
-/// One band's f32 sums over its splats in order (run on the best SIMD
-/// lanes the CPU has). Clipped splats are left to [`clipped`].
+/// One band's f64 sums over its splats in order (on the SIMD lanes the
+/// splatter was given). Clipped splats are left to [`clipped`].
 struct SplatBand<'a> {
     splats: &'a [Splat],
     members: &'a [u32],
@@ -468,13 +476,7 @@ fn clipped(
     y0: u32,
     out: &mut [f64],
 ) {
-    let f64v = |w: Vec3| [w.x as f64, w.y as f64, w.z as f64];
-    let (eye, right, up, fwd) = (
-        f64v(camera.eye),
-        f64v(camera.right),
-        f64v(camera.up),
-        f64v(camera.forward),
-    );
+    let [eye, right, up, fwd] = camera.basis_f64();
     let y1 = (y0 + BAND).min(height);
     for &i in members {
         let p = &splats[i as usize];

@@ -3,7 +3,6 @@
 //! brute-force sum over all particles written from the kernel definitions.
 
 use super::*;
-use crate::kernel::Column;
 use voxless_core::SmallRng as Lcg;
 use voxless_core::simd::Simd;
 use voxless_core::{Aabb, Range1, Ray, Vec3, Volume};
@@ -719,75 +718,57 @@ fn materials_render_the_same_with_packets_and_a_hidden_material_drops_out() {
     );
 }
 
-/// A row of a splatted projection adds what the pixel-by-pixel loop adds,
-/// bit for bit, for every kernel, row and particle position (the row skips
-/// only pixels outside the support, where the column is 0); and the column
-/// is the full chord integral.
+/// The column is the full chord integral, and the splatter adds it at
+/// every pixel centre, on every SIMD backend: one particle at a time at
+/// random sub-pixel positions against `w · column.at(b²)` per pixel in f64
+/// (the lanes compute the table position in f32: ~1e-7 of the peak).
 #[test]
-fn column_rows_equal_the_pixel_loop() {
+fn splatted_columns_equal_the_pixel_loop_on_every_backend() {
     let mut rng = Lcg(17);
-    let u: Vec<f64> = (0..200).map(|k| -1.0 + k as f64 * 0.01).collect();
+    let (n, side) = (64u32, 2.0f64);
+    let bounds = Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0));
+    let cam = voxless_core::Camera::axis_projection(&bounds, 2).unwrap();
+    let pixel = side / n as f64;
     for kernel in KERNELS {
-        for _ in 0..50 {
+        for _ in 0..20 {
             let r = 0.01 + 0.2 * rng.f() as f64;
             let column = kernel.column(r);
-            let (a, dv, w) = (
-                2.4 * rng.f() as f64 - 1.2,
-                0.3 * rng.f() as f64,
+            let (cx, cy, w) = (
+                1.6 * rng.f() as f64 - 0.8,
+                1.6 * rng.f() as f64 - 0.8,
                 0.5 + rng.f() as f64,
             );
-            let mut fast = vec![0.25; u.len()];
-            let mut slow = fast.clone();
-            column.add_row(&mut fast, &u, a, dv * dv, w);
-            for (s, &x) in slow.iter_mut().zip(&u) {
-                *s += w * column.at((x - a) * (x - a) + dv * dv);
-            }
-            assert_eq!(fast, slow, "{kernel:?} r {r} a {a} dv {dv}");
-            let b2 = dv * dv;
+            let b2 = 0.3 * rng.f() as f64 * r;
             let exact = kernel.chord_integral(b2, r, f64::NEG_INFINITY, f64::INFINITY);
             let peak = kernel.chord_integral(0.0, r, f64::NEG_INFINITY, f64::INFINITY);
             assert!((column.at(b2) - exact).abs() <= 1e-6 * peak, "{kernel:?}");
-            // The lanes row (the splatting path) on every backend: the
-            // table position in f32 moves the column by ~1e-7 of its peak.
+            let p = crate::splat::SplatParticle {
+                center: Vec3::new(cx as f32, cy as f32, 0.3),
+                radius: r as f32,
+                weight: w as f32,
+            };
+            let slow: Vec<f64> = (0..n * n)
+                .map(|k| {
+                    let x = -1.0 + ((k % n) as f64 + 0.5) * pixel - p.center.x as f64;
+                    let y = 1.0 - ((k / n) as f64 + 0.5) * pixel - p.center.y as f64;
+                    w * column.at(x * x + y * y)
+                })
+                .collect();
             for simd in Simd::ALL.into_iter().filter(|s| s.available()) {
-                let mut lanes = vec![0.25; u.len()];
-                voxless_core::simd::dispatch(
-                    simd,
-                    LanesRow {
-                        column: &column,
-                        out: &mut lanes,
-                        u: &u,
-                        a,
-                        dv2: b2,
-                        weight: w,
-                    },
-                );
-                for (k, (x, y)) in lanes.iter().zip(&slow).enumerate() {
+                let mut splatter = crate::splat::Splatter::new(&cam, n, n, kernel, None)
+                    .unwrap()
+                    .on(simd);
+                splatter
+                    .add(&[p], 0, &voxless_core::Control::new())
+                    .unwrap();
+                let fast = splatter.finish();
+                for (k, (x, y)) in fast.iter().zip(&slow).enumerate() {
                     assert!(
-                        (x - y).abs() <= 1e-6 * w * peak,
+                        (*x as f64 - y).abs() <= 1e-6 * w * peak,
                         "{kernel:?} {simd:?} pixel {k}: {x} vs {y} (peak {peak})"
                     );
                 }
             }
         }
-    }
-}
-
-/// [`Column::add_row_lanes`] on the lanes a dispatch picks.
-struct LanesRow<'a> {
-    column: &'a Column,
-    out: &'a mut [f64],
-    u: &'a [f64],
-    a: f64,
-    dv2: f64,
-    weight: f64,
-}
-
-impl voxless_core::simd::WithLanes for LanesRow<'_> {
-    type Output = ();
-    #[inline(always)]
-    fn run<L: voxless_core::simd::Lanes>(self) {
-        self.column
-            .add_row_lanes::<L>(self.out, self.u, self.a, self.dv2, self.weight);
     }
 }

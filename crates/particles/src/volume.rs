@@ -129,10 +129,11 @@ pub struct ParticleVolume {
     value_range: std::sync::OnceLock<Range1>,
     attribute_range: Option<Range1>,
     nominal_dt: f32,
-    /// Periodic boxes: each entry's image shift in boxes (volume order;
-    /// empty without ghosts), the number of ghosts, and how many particles
-    /// were wrapped into the box.
-    shifts: Vec<[i8; 3]>,
+    /// Periodic boxes: whether the volume made its ghosts itself (a whole
+    /// set; a part of a decomposed set receives its images from the other
+    /// parts), the number of ghosts, and how many particles were wrapped
+    /// into the box.
+    own_images: bool,
     ghosts: usize,
     wrapped: usize,
     /// The merged particles of a large set's previews, built on first use
@@ -243,14 +244,15 @@ impl ParticleVolume {
 
         // A periodic box (of a whole set: a part receives its images):
         // wrap, and add the ghosts.
-        let (data, source, shifts, wrapped) = match (&settings.periodic, &part) {
+        let (data, source, wrapped) = match (&settings.periodic, &part) {
             (Some(b), None) => {
                 let range = attribute_range.unwrap_or(Range1::new(0.0, 1.0));
                 let im = periodic::with_images(data, b, &settings, range)?;
-                (im.data, Some(im.source), im.shifts, im.wrapped)
+                (im.data, Some(im.source), im.wrapped)
             }
-            _ => (data, None, Vec::new(), 0),
+            _ => (data, None, 0),
         };
+        let own_images = source.is_some();
         let ghosts = data.positions.len() - n;
 
         // Hilbert order so runs of consecutive particles are compact clusters.
@@ -282,11 +284,6 @@ impl ParticleVolume {
             .collect();
         let mut data = data;
         drop(std::mem::take(&mut data.positions));
-        let shifts: Vec<[i8; 3]> = if shifts.is_empty() {
-            shifts
-        } else {
-            order.iter().map(|&i| shifts[i as usize]).collect()
-        };
         let base_radius = data.radii.take().map(|r| gather(&r)).unwrap_or_default();
         let base_weight = data.weights.take().map(|w| gather(&w)).unwrap_or_default();
         let attribute = data.attribute.take().as_deref().map(gather);
@@ -309,7 +306,7 @@ impl ParticleVolume {
             value_range: std::sync::OnceLock::new(),
             attribute_range,
             nominal_dt: 1.0,
-            shifts,
+            own_images,
             ghosts,
             wrapped,
             preview: std::sync::OnceLock::new(),
@@ -339,7 +336,7 @@ impl ParticleVolume {
         if s.radius_map.is_some() && self.attribute.is_none() {
             return Err(ParticleError::NeedsAttribute { what: "radius map" });
         }
-        if !self.shifts.is_empty() {
+        if self.own_images {
             // A periodic box's ghosts follow the supports: rebuild.
             let bvh = std::mem::take(&mut self.bvh);
             return match Self::build(self.originals(), s, bvh, None) {

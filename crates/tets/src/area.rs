@@ -65,13 +65,7 @@ pub(crate) struct BoxClip {
 impl BoxClip {
     pub fn new(camera: &Camera, l: f32) -> BoxClip {
         let l = l as f64;
-        let d = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
-        let (eye, right, up, fwd) = (
-            d(camera.eye),
-            d(camera.right),
-            d(camera.up),
-            d(camera.forward),
-        );
+        let [eye, right, up, fwd] = camera.basis_f64();
         let (hw, hh) = match camera.projection {
             Projection::Orthographic {
                 half_width,

@@ -11,9 +11,9 @@
 //! once, and every particle's mass is counted once in `∫_box Φ dV`.
 //!
 //! Ghosts carry [`GHOST`] in their original index (so probes, radii in
-//! file order and the total mass see each particle once) and their shift,
-//! which on-axis projections use: along a box axis the column over one
-//! period is the full chord of every image shifted *across* the view only.
+//! file order and the total mass see each particle once). Projections by
+//! splatting leave them out and make the images themselves
+//! ([`crate::splat`]).
 //!
 //! Slabs deeper than the box (`--depth` through the tiled medium) walk each
 //! ray through the lattice cells it crosses, integrating each piece in the
@@ -52,12 +52,11 @@ pub fn wrap(b: &Aabb, p: Vec3) -> Vec3 {
 }
 
 /// Particles wrapped into `b` with their ghosts appended: the extended
-/// arrays, each row's original index (with [`GHOST`] for ghosts), each
-/// row's shift in boxes, and how many particles had to be wrapped.
+/// arrays, each row's original index (with [`GHOST`] for ghosts), and how
+/// many particles had to be wrapped.
 pub(super) struct Images {
     pub data: ParticleData,
     pub source: Vec<u32>,
-    pub shifts: Vec<[i8; 3]>,
     pub wrapped: usize,
 }
 
@@ -80,8 +79,7 @@ pub(super) fn with_images(
     }
     let factor = settings.kernel.support_factor();
     let mut source: Vec<u32> = (0..n as u32).collect();
-    let mut shifts = vec![[0i8; 3]; n];
-    let mut extra: Vec<(u32, [i8; 3], Vec3)> = Vec::new();
+    let mut extra: Vec<(u32, Vec3)> = Vec::new();
     let mut found = Vec::new();
     for i in 0..n {
         let base = data.radii.as_ref().map_or(settings.radius, |r| r[i]);
@@ -90,7 +88,7 @@ pub(super) fn with_images(
         images(Some(b), data.positions[i], factor * r, i, &mut found)?;
         for &(k, q) in &found {
             if k != [0; 3] {
-                extra.push((i as u32, k, q));
+                extra.push((i as u32, q));
             }
         }
     }
@@ -104,8 +102,7 @@ pub(super) fn with_images(
         v.reserve_exact(extra.len());
     }
     source.reserve_exact(extra.len());
-    shifts.reserve_exact(extra.len());
-    for (i, k, q) in extra {
+    for (i, q) in extra {
         let i = i as usize;
         data.positions.push(q);
         for v in [&mut data.radii, &mut data.weights, &mut data.attribute]
@@ -115,12 +112,10 @@ pub(super) fn with_images(
             v.push(v[i]);
         }
         source.push(i as u32 | GHOST);
-        shifts.push(k);
     }
     Ok(Images {
         data,
         source,
-        shifts,
         wrapped,
     })
 }

@@ -13,8 +13,8 @@ use super::ParticleVolume;
 impl ParticleVolume {
     /// The column density through every pixel centre of an orthographic
     /// `camera` (row-major, row 0 at the top); `None` for other cameras,
-    /// and for a part of a decomposed periodic set (its images from other
-    /// parts carry no shifts; the per-pixel path clips them).
+    /// and for a part of a decomposed periodic set (it holds images from
+    /// other parts; the per-pixel path clips them).
     pub(super) fn splat_projection(
         &self,
         camera: &Camera,
@@ -22,7 +22,7 @@ impl ParticleVolume {
         height: u32,
         control: &Control,
     ) -> Option<Result<Vec<f32>, Cancelled>> {
-        if self.settings.periodic.is_some() && self.shifts.is_empty() && self.ghosts > 0 {
+        if self.settings.periodic.is_some() && !self.own_images {
             return None;
         }
         let mut splatter = Splatter::new(
@@ -32,27 +32,31 @@ impl ParticleVolume {
             self.settings.kernel,
             self.settings.periodic,
         )?;
-        let own: Vec<usize> = (0..self.packed.len())
+        // The particles without their ghosts, CHUNK at a time.
+        let mut own = (0..self.packed.len())
             .filter(|&i| !self.is_ghost(i))
-            .collect();
-        let chunks = own.len().div_ceil(CHUNK).max(1) as u64;
-        let mut chunk = Vec::with_capacity(CHUNK.min(own.len()));
-        for (k, part) in own.chunks(CHUNK).enumerate() {
+            .map(|i| {
+                let q = &self.packed[i];
+                SplatParticle {
+                    center: q.center,
+                    radius: if q.support2 > 0.0 {
+                        self.radius[i]
+                    } else {
+                        0.0
+                    },
+                    weight: self.weight[i],
+                }
+            });
+        let chunks = self.particle_count().div_ceil(CHUNK).max(1) as u64;
+        let mut chunk = Vec::with_capacity(CHUNK.min(self.particle_count()));
+        for k in 0..chunks {
             chunk.clear();
-            chunk.extend(part.iter().map(|&i| SplatParticle {
-                center: self.packed[i].center,
-                radius: if self.packed[i].support2 > 0.0 {
-                    self.radius[i]
-                } else {
-                    0.0
-                },
-                weight: self.weight[i],
-            }));
+            chunk.extend(own.by_ref().take(CHUNK));
             // The volume's particles passed its own checks: images fit the box.
             if splatter.add(&chunk, 0, control).is_err() || control.is_cancelled() {
                 return Some(Err(Cancelled));
             }
-            control.report(k as u64 + 1, chunks);
+            control.report(k + 1, chunks);
         }
         Some(Ok(splatter.finish()))
     }
