@@ -168,6 +168,11 @@ pub struct DataFlags {
     /// AMRClaw ASCII output fort.qNNNN (fields q0, q1, …).
     #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
     pub amrclaw: Option<PathBuf>,
+    /// Any AMR output, format detected: an AMReX/BoxLib plotfile directory,
+    /// FLASH HDF5, an Enzo parameter file, Athena++ .athdf (the HDF5 ones
+    /// with the `hdf5` feature), AMRClaw fort.qNNNN or ExaBricks .cells.
+    #[cfg_attr(feature = "clap", arg(long, help_heading = "AMR"))]
+    pub amr: Option<PathBuf>,
     /// World position of cell coordinate 0 (default: .meta.json beside the cells, else 0).
     #[cfg_attr(feature = "clap", arg(long, num_args = 3, value_names = ["X", "Y", "Z"], help_heading = "AMR", allow_negative_numbers = true))]
     pub origin: Option<Vec<f64>>,
@@ -489,6 +494,7 @@ impl DataFlags {
         "cells",
         "scalars",
         "amrclaw",
+        "amr",
         "origin",
         "cell_size",
         "field",
@@ -731,12 +737,13 @@ impl SceneFlags {
         ]
     }
 
-    fn amr_flags(&self) -> [(&'static str, bool); 8] {
+    fn amr_flags(&self) -> [(&'static str, bool); 9] {
         let (d, k) = (&self.data, &self.kind);
         [
             ("cells", d.cells.is_some()),
             ("scalars", !d.scalars.is_empty()),
             ("amrclaw", d.amrclaw.is_some()),
+            ("amr", d.amr.is_some()),
             ("origin", d.origin.is_some()),
             ("cell_size", d.cell_size.is_some()),
             ("field", d.field.is_some()),
@@ -856,26 +863,31 @@ impl SceneFlags {
             // ignored (or read as a second data source): say which flag.
             let amr_source = self.data.cells.is_some()
                 || self.data.amrclaw.is_some()
+                || self.data.amr.is_some()
                 || !self.data.scalars.is_empty()
                 || d.amr.is_some();
             if !amr_source && (d.particles.is_some() || d.tets.is_some()) {
                 return Err(SceneError::setting(
                     flag,
-                    "applies to AMR cells (--cells with --scalars, or --amrclaw), and the \
+                    "applies to AMR cells (--amr, --cells with --scalars, or --amrclaw), and the \
                      scene's data are particles or a tessellation",
                 ));
             }
             let a = d.amr.get_or_insert_with(AmrDesc::default);
             if let Some(c) = &self.data.cells {
                 a.cells = Some(path(c));
-                a.amrclaw = None;
+                (a.amrclaw, a.file) = (None, None);
             }
             if !self.data.scalars.is_empty() {
                 a.scalars = Some(self.data.scalars.iter().map(path).collect());
             }
             if let Some(q) = &self.data.amrclaw {
                 a.amrclaw = Some(path(q));
-                a.cells = None;
+                (a.cells, a.file) = (None, None);
+            }
+            if let Some(f) = &self.data.amr {
+                a.file = Some(path(f));
+                (a.cells, a.amrclaw) = (None, None);
             }
             set(&mut a.origin, fixed("origin", &self.data.origin)?);
             set(&mut a.cell_size, self.data.cell_size);

@@ -94,7 +94,10 @@ pub use fields::Fields;
 pub use flags::SceneFlags;
 pub use frame::WorldFrame;
 pub use load::AmrArrays;
-pub use load::{Loaded, Purpose, Share, frame_count, frame_numbers, load, read_points, read_scene};
+pub use load::{
+    Loaded, Purpose, Share, data_flag_for, frame_count, frame_numbers, load, read_points,
+    read_scene,
+};
 pub use memory::ParticleArrays;
 pub use placement::{Placed, PlacedData, Placement, Rendered};
 pub use projection::{ProjectionDesc, ProjectionView};

@@ -79,6 +79,7 @@ pub fn input_files(desc: &SceneDesc, base: &Path) -> Vec<PathBuf> {
     if let Some(a) = &desc.amr {
         specs.extend(a.cells.as_deref());
         specs.extend(a.amrclaw.as_deref());
+        specs.extend(a.file.as_deref());
         specs.extend(a.scalars.iter().flatten().map(String::as_str));
     }
     if let Some(t) = &desc.tets {

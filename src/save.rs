@@ -41,6 +41,7 @@ pub fn with_absolute_paths(desc: &SceneDesc, base: &Path) -> SceneDesc {
     if let Some(a) = &mut d.amr {
         a.cells.iter_mut().for_each(abs);
         a.amrclaw.iter_mut().for_each(abs);
+        a.file.iter_mut().for_each(abs);
         a.scalars.iter_mut().flatten().for_each(abs);
     }
     if let Some(t) = &mut d.tets {

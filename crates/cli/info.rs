@@ -124,6 +124,16 @@ fn describe_file(args: &InfoArgs) -> Result<String> {
     if name.starts_with("fort.q") {
         return amr(path, "AMRClaw output", voxless::io::read_amrclaw(path));
     }
+    // AMR outputs told apart by their names and neighbours; HDF5 ones by
+    // their layout (below).
+    if path.is_dir() || ext == "athdf" || ext == "hierarchy" || enzo(path) {
+        let format = voxless::io::amr_format(path)?;
+        return amr(
+            path,
+            format.name(),
+            voxless::io::read_amr(path).map(|r| r.0),
+        );
+    }
     if ext == "vtu" {
         return mesh(path);
     }
@@ -424,6 +434,13 @@ fn cube_root(n: usize) -> Option<usize> {
 
 /// The `.scalars` files beside an ExaBricks `.cells` file:
 /// `<stem>.<field>.scalars`.
+/// Whether `path` is an Enzo parameter file (its `.hierarchy` beside it).
+fn enzo(path: &Path) -> bool {
+    let mut h = path.as_os_str().to_owned();
+    h.push(".hierarchy");
+    Path::new(&h).is_file()
+}
+
 fn exabricks(cells: &Path) -> Result<voxless::io::AmrCellData, voxless::io::IoError> {
     let stem = cells
         .file_stem()
@@ -568,6 +585,12 @@ fn hdf5(path: &Path, args: &InfoArgs) -> Result<String> {
                 path.display(),
                 snaps.join(", ")
             )?;
+        }
+        Hdf5Kind::Flash => {
+            return amr(path, "FLASH", voxless::io::read_amr(path).map(|r| r.0));
+        }
+        Hdf5Kind::Athena => {
+            return amr(path, "Athena++", voxless::io::read_amr(path).map(|r| r.0));
         }
         Hdf5Kind::Other => writeln!(out, "{}: HDF5 (no known layout)", path.display())?,
     }

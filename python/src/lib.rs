@@ -350,6 +350,13 @@ fn load(
     })
 }
 
+/// The data flag a bare path is read with (`particles`, `amr`, `cells` or
+/// `amrclaw`): the library decides, as for every front-end.
+#[pyfunction]
+fn data_flag_for(path: PathBuf) -> &'static str {
+    voxless::data_flag_for(&path)
+}
+
 /// A TOML scene file as a dictionary.
 #[pyfunction]
 fn read_scene<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyAny>> {
@@ -708,6 +715,7 @@ fn _voxless(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tessellation, m)?)?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(read_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(data_flag_for, m)?)?;
     m.add_function(wrap_pyfunction!(srgb8, m)?)?;
     m.add_function(wrap_pyfunction!(png, m)?)?;
     m.add_function(wrap_pyfunction!(colormaps, m)?)?;

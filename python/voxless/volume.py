@@ -355,11 +355,13 @@ def load(source=None, *, frame=0, **kwargs) -> Volume:
     """Loads data the CLI reads: a file, a TOML scene file, or a scene dict.
 
     ``source`` is a particle file (``.npy``, CSV, VTK, XYZ, LAMMPS dump,
-    ``.particles``; HDF5 when built with the ``hdf5`` feature), a ``.cells``
-    file (with ``scalars=[…]``), an AMRClaw ``fort.qNNNN``, N-body positions
+    ``.particles``; HDF5 when built with the ``hdf5`` feature), AMR output
+    (an AMReX plotfile directory, an AMRClaw ``fort.qNNNN``, a ``.cells``
+    file with ``scalars=[…]``; with ``hdf5``: FLASH, an Enzo parameter file,
+    Athena++ ``.athdf``), N-body positions
     with ``lagrangian=N`` and ``box=L`` (a tessellation), a ``.toml`` scene,
     or a scene dict. Keywords are the CLI's flags (``attribute="speed"``,
-    ``radii="h.npy"``, ``kernel=…``, ``cells=``, ``scalars=``, ``amrclaw=``,
+    ``radii="h.npy"``, ``kernel=…``, ``amr=``, ``cells=``, ``scalars=``, ``amrclaw=``,
     …) applied over the scene as on the command line; view flags become the
     volume's default view. For particles, ``box`` (a side ``L`` or the
     corners) makes the box periodic (default: the box the file states as
@@ -381,8 +383,7 @@ def load(source=None, *, frame=0, **kwargs) -> Volume:
         source = None
     sugar, flags = opt.split("load", kwargs, opt.DATA_FLAGS)
     if source is not None:
-        name = os.path.basename(opt.path("source", source))
-        key = "cells" if name.endswith(".cells") else "amrclaw" if name.startswith("fort.q") else "particles"
+        key = _voxless.data_flag_for(os.fspath(opt.path("source", source)))
         if key in flags:
             raise TypeError(f"load() got the data twice: source and {key}=")
         flags[key] = os.fspath(source)

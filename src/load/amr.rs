@@ -48,6 +48,17 @@ pub(crate) struct CellRun {
 /// with every check of the whole-file reader, for one process); AMRClaw
 /// output is read whole and cut.
 pub(crate) fn read_cells(a: &AmrDesc, base: &Path, share: Share) -> Result<CellRun, SceneError> {
+    if let Some(file) = &a.file {
+        if a.cells.is_some() || a.amrclaw.is_some() {
+            return Err(SceneError::setting(
+                "amr.file",
+                "give one AMR source: file, cells (ExaBricks) or amrclaw",
+            ));
+        }
+        let path = base.join(file);
+        let (data, _) = voxless_io::read_amr(&path)?;
+        return Ok(cut_run(data, share, path));
+    }
     match (&a.cells, &a.amrclaw) {
         (Some(cells), None) => {
             let scalars: Vec<PathBuf> = a.scalars.iter().flatten().map(|s| base.join(s)).collect();
@@ -85,21 +96,8 @@ pub(crate) fn read_cells(a: &AmrDesc, base: &Path, share: Share) -> Result<CellR
         }
         (None, Some(q)) => {
             let path = base.join(q);
-            let mut data = voxless_io::read_amrclaw(&path)?;
-            let total = data.cells.len();
-            let rows = share.rows(total);
-            if !share.is_whole() {
-                data.cells = data.cells[rows.clone()].to_vec();
-                for f in &mut data.fields {
-                    f.1 = f.1[rows.clone()].to_vec();
-                }
-            }
-            Ok(CellRun {
-                data,
-                offset: rows.start,
-                total,
-                source: path,
-            })
+            let data = voxless_io::read_amrclaw(&path)?;
+            Ok(cut_run(data, share, path))
         }
         (Some(_), Some(_)) => Err(SceneError::setting(
             "amr",
@@ -107,8 +105,27 @@ pub(crate) fn read_cells(a: &AmrDesc, base: &Path, share: Share) -> Result<CellR
         )),
         (None, None) => Err(SceneError::setting(
             "amr",
-            "no cells: give cells + scalars (ExaBricks) or amrclaw (fort.qNNNN)",
+            "no cells: give file (any AMR output), cells + scalars (ExaBricks) or amrclaw \
+             (fort.qNNNN)",
         )),
+    }
+}
+
+/// Share `share` of cells read whole (formats without row access).
+fn cut_run(mut data: voxless_io::AmrCellData, share: Share, source: PathBuf) -> CellRun {
+    let total = data.cells.len();
+    let rows = share.rows(total);
+    if !share.is_whole() {
+        data.cells = data.cells[rows.clone()].to_vec();
+        for f in &mut data.fields {
+            f.1 = f.1[rows.clone()].to_vec();
+        }
+    }
+    CellRun {
+        data,
+        offset: rows.start,
+        total,
+        source,
     }
 }
 
@@ -166,7 +183,7 @@ pub(crate) fn amr_settings(
     source: &Path,
 ) -> Result<(AmrSettings, WorldFrame, f32), SceneError> {
     let index = |what: &str, name: &str| {
-        names.iter().position(|n| *n == name).ok_or_else(|| {
+        voxless_io::amr_field(names, name).ok_or_else(|| {
             SceneError::data(
                 source,
                 format!(

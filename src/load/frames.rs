@@ -34,11 +34,14 @@ pub fn is_sequence(spec: &str, base: &Path) -> bool {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     let full = base.join(spec);
-    // A directory holding one snapshot's files (snapdir_033/) is one frame.
+    // A directory holding one snapshot's files (snapdir_033/) is one frame,
+    // as is an AMReX plotfile (a directory with a `Header`).
     name.contains('%')
         || name.contains('*')
         || name.contains('?')
-        || (full.is_dir() && voxless_io::snapshot::snapshot_files(&full).is_none())
+        || (full.is_dir()
+            && voxless_io::snapshot::snapshot_files(&full).is_none()
+            && !full.join("Header").is_file())
 }
 
 /// The files of `spec` in frame order (one file when it is not a sequence).

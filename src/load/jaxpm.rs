@@ -25,6 +25,7 @@ pub(crate) fn grid(
         let what = match kind {
             Hdf5Kind::PySph => "PySPH output",
             Hdf5Kind::Gadget => "a SWIFT/Gadget snapshot",
+            Hdf5Kind::Flash | Hdf5Kind::Athena => "AMR output (read it with --amr)",
             _ => "an HDF5 file of unknown layout",
         };
         return Err(SceneError::data(

@@ -140,7 +140,8 @@ pub(crate) fn source<'a>(desc: &'a SceneDesc, base: &Path) -> Result<Source<'a>,
             "scene",
             "no data source: add a [particles], [amr] or [tets] table to the scene, or pass \
              --particles FILE (with --lagrangian N --box L for a phase-space tessellation), \
-             --cells FILE --scalars FILE, or --amrclaw FILE (or use `voxless demo`)",
+             --amr PATH (AMReX, FLASH, Enzo, Athena++, AMRClaw), --cells FILE --scalars FILE, or \
+             --amrclaw FILE (or use `voxless demo`)",
         )),
     }
 }
@@ -217,6 +218,24 @@ pub fn load_in(
 /// Query points for `sample`, in world coordinates (float64): an N×3
 /// `.npy` (float32/float64) or a CSV with x, y, z columns; non-finite
 /// coordinates are an error naming the point.
+/// The data flag a file given on its own is read with, for front-ends
+/// that take a bare path: `cells` for ExaBricks `.cells`, `amrclaw` for
+/// `fort.qNNNN`, `amr` for the other AMR outputs ([`voxless_io::amr_format`]:
+/// an AMReX plotfile directory, an Enzo parameter file, Athena++ `.athdf`,
+/// FLASH HDF5 when HDF5 support is built in), else `particles`.
+pub fn data_flag_for(path: &Path) -> &'static str {
+    use voxless_io::AmrFormat;
+    match voxless_io::amr_format(path) {
+        Ok(AmrFormat::ExaBricks) => "cells",
+        Ok(AmrFormat::AmrClaw) => "amrclaw",
+        // Without HDF5 support any HDF5 file looks like FLASH: it is read
+        // as particles, whose reader says what is missing.
+        Ok(AmrFormat::Flash) if !cfg!(feature = "hdf5") => "particles",
+        Ok(_) => "amr",
+        Err(_) => "particles",
+    }
+}
+
 pub fn read_points(path: &Path) -> Result<Vec<[f64; 3]>, SceneError> {
     let (points, _) = table::read_positions(path)?;
     if let Some(i) = points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {

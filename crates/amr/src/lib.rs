@@ -87,6 +87,8 @@ pub enum AmrError {
 }
 
 #[cfg(test)]
+mod iso_tests;
+#[cfg(test)]
 mod tests;
 #[cfg(test)]
 mod walk_tests;

@@ -5,6 +5,7 @@
 //! baseline ([`locator`]) live beside it.
 
 mod batch;
+mod columns;
 mod lanes;
 mod locator;
 mod nearest;
@@ -687,7 +688,7 @@ impl Volume for AmrVolume {
     ) -> Option<Result<Vec<f32>, Cancelled>> {
         match self.settings.reconstruction {
             Reconstruction::Basis => self.project_axis_view(camera, width, height, control),
-            Reconstruction::Nearest => None,
+            Reconstruction::Nearest => self.project_axis_nearest(camera, width, height, control),
         }
     }
 

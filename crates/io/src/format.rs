@@ -513,6 +513,8 @@ fn read_hdf5(path: &Path, opts: &TableOptions) -> Result<Table, IoError> {
         Hdf5Kind::PySph => "PySPH output",
         Hdf5Kind::Gadget => "a SWIFT/Gadget snapshot",
         Hdf5Kind::Jaxpm => "a JaxPM run",
+        Hdf5Kind::Flash => "FLASH AMR output (read it with --amr)",
+        Hdf5Kind::Athena => "Athena++ AMR output (read it with --amr)",
         Hdf5Kind::Other => "an HDF5 file of unknown layout",
     };
     // The options must fit the layout found, as for the other formats.
@@ -571,6 +573,9 @@ fn read_hdf5(path: &Path, opts: &TableOptions) -> Result<Table, IoError> {
              or --lagrangian N (N and the box come from the file), or in a scene with \
              [tets] file = ...",
         )),
+        Hdf5Kind::Flash | Hdf5Kind::Athena => {
+            Err(IoError::format(path, format!("is {what}, not particles")))
+        }
         Hdf5Kind::Other => Err(IoError::format(
             path,
             "an HDF5 file that is neither PySPH output nor a SWIFT/Gadget snapshot \

@@ -116,8 +116,8 @@ pub mod vtk;
 pub mod xyz;
 
 pub use amr::{
-    AmrCellData, read_amrclaw, read_amrclaw_from, read_exabricks, read_exabricks_bytes,
-    read_exabricks_rows,
+    AmrCellData, AmrFormat, amr_field, amr_format, read_amr, read_amrclaw, read_amrclaw_from,
+    read_amrex, read_exabricks, read_exabricks_bytes, read_exabricks_rows,
 };
 pub use atomic::write_atomically;
 pub use csv::{CsvTable, read_csv, read_csv_from};
@@ -132,6 +132,8 @@ pub use hdf5::{
     Hdf5Kind, JaxpmSnapshot, describe_hdf5, hdf5_kind, jaxpm_snapshots, pysph_groups, read_gadget,
     read_gadget_share, read_gadget_snapshot, read_jaxpm, read_pysph, read_pysph_share,
 };
+#[cfg(feature = "hdf5")]
+pub use hdf5::{read_athena, read_enzo, read_flash};
 pub use image::{
     read_exr_gray, read_exr_gray_from, read_png_rgb8, read_png_rgb8_from, write_exr_gray,
     write_exr_gray_to, write_exr_rgba, write_exr_rgba_to, write_jpeg_rgb8, write_jpeg_rgb8_to,

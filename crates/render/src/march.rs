@@ -19,7 +19,7 @@ use voxless_core::{
 use voxless_transfer::TransferFunction;
 
 use crate::ctx::Ctx;
-use crate::cursor::{RayIntervals, Segment};
+use crate::cursor::{RayIntervals, Segment, min_step_at};
 use crate::sampling::PixelRng;
 use crate::spans::{RaySpans, region};
 use crate::surface::iso_visibility;
@@ -161,6 +161,12 @@ pub(crate) struct RayState {
     pub stats: RayStats,
     /// The previous sample (t, value), for iso-surface crossings.
     prev: Option<(f32, f32)>,
+    /// The sample before `prev`, for dips across an iso-value within a step.
+    prev2: Option<(f32, f32)>,
+    /// The pieces of a gap that hold an iso-value (scratch).
+    gap_pieces: Vec<Interval>,
+    /// Whether a sampled interval has been sampled yet.
+    sampled: bool,
     /// The last interval when it was constant: (end, value). A gap after it
     /// is a crossing to zero.
     last_constant: Option<(f32, f32)>,
@@ -177,6 +183,12 @@ pub(crate) struct RayState {
 /// rounding, not structure, for iso-surfaces.
 const ROUNDING: f32 = 4.0;
 
+/// Lattice points per step in a gap's pieces that may hold a crossing.
+const GAP_DIVS: usize = 4;
+
+/// Samples over the two steps around a dip that may cross an iso-value.
+const DIP_SAMPLES: usize = 8;
+
 impl RayState {
     /// The state at the start of a ray whose samples are cut to `span`,
     /// with opacity `alpha0` already in front of it (and no colour).
@@ -189,6 +201,9 @@ impl RayState {
             },
             stats: RayStats::default(),
             prev: None,
+            prev2: None,
+            gap_pieces: Vec::new(),
+            sampled: false,
             last_constant: None,
             span,
             last_end: span.lo,
@@ -230,6 +245,7 @@ impl RayState {
                 _ => false,
             };
         }
+        let tm = seg.t;
         if seg.reset {
             // A gap: leaving a constant interval into it is a step to zero.
             if let Some((t_end, v0)) = self.last_constant.take()
@@ -237,55 +253,45 @@ impl RayState {
             {
                 return true;
             }
-            self.prev = None;
+            // Between the previous sample and this one the cursor skipped
+            // space: invisible pieces hold no crossing, but a visible piece
+            // shorter than a step may have got no sample (a pinhole).
+            // Before the ray's first sample, the gap starts where the ray
+            // enters the volume.
+            let prev = match self.prev.take() {
+                None if !self.sampled => Some((self.span.lo, f32::NAN)),
+                prev => prev,
+            };
+            if let Some(prev) = prev
+                && self.gap_crossings(volume, ray, prev, (tm, seg.len), sample, ctx)
+            {
+                return true;
+            }
         }
         self.last_constant = None;
         self.last_end = iv.t.hi;
+        self.sampled = true;
         let Some(s) = sample else {
             self.prev = None;
             return false;
         };
-        let tm = seg.t;
         if !settings.iso.is_empty() {
             self.stats.values.extend(s.value);
         }
         // Implicit iso-surfaces: a sign change of value − iso between the
         // previous sample and this one is a hit, placed by linear interpolation.
-        if let Some((t0, v0)) = self.prev {
-            for &iso in &settings.iso {
-                if (v0 - iso) * (s.value - iso) < 0.0 || (s.value == iso && v0 != iso) {
-                    let th = t0 + (iso - v0) / (s.value - v0) * (tm - t0);
-                    let ph = ray.at(th);
-                    // The hit may lie in the previous interval: only use
-                    // this interval's hint when it contains the hit.
-                    let hit = if iv.t.contains(th) {
-                        volume.sample_with_gradient_in(ph, iv)
-                    } else {
-                        volume.sample_with_gradient(ph)
-                    };
-                    let (hs, g) = hit.unwrap_or((s, gradient));
-                    self.stats.iso_hits += 1;
-                    let seen = iso_visibility(
-                        volume,
-                        ph,
-                        g,
-                        ray,
-                        ctx,
-                        &self.rng,
-                        self.stats.iso_hits as u32,
-                    );
-                    let c = ctx.colour_of(&hs, settings.normalize(iso))
-                        * (iso_shade(ray, g, ctx) * seen);
-                    if self
-                        .acc
-                        .add(c, settings.iso_opacity, settings.early_termination)
-                    {
-                        return true;
-                    }
-                }
+        if let Some(prev) = self.prev {
+            let here = Some((iv, (s, gradient)));
+            if self.crossings(volume, ray, here, prev, (tm, s.value), None, ctx) {
+                return true;
+            }
+            if let Some(prev2) = self.prev2
+                && self.dip_crossings(volume, ray, [prev2, prev, (tm, s.value)], ctx)
+            {
+                return true;
             }
         }
-        self.prev = Some((tm, s.value));
+        (self.prev2, self.prev) = (self.prev, Some((tm, s.value)));
         if !settings.volume {
             return false;
         }
@@ -323,7 +329,7 @@ impl RayState {
             }
             Some(0.0)
         };
-        self.prev = Some((iv.t.hi, v));
+        (self.prev2, self.prev) = (None, Some((iv.t.hi, v)));
         self.last_constant = Some((iv.t.hi, v));
         match before {
             Some(v0) => self.step_crossings(volume, ray, iv.t.lo, v0, v, ctx),
@@ -376,6 +382,197 @@ impl RayState {
     #[inline(always)]
     pub fn feed_classified(&mut self, c: Vec3, a: f32, gradient: Vec3, ctx: &Ctx) -> bool {
         a >= 0.0 && self.add_shaded(c, a, gradient, ctx)
+    }
+
+    /// Iso-surfaces crossed in a gap the cursor skipped between the sample
+    /// `(t0, v0)` (`v0` NaN: none, the ray's entry) and the next one at
+    /// `t1` (`next`, its segment `step` long). The field is continuous and
+    /// never equals an iso-value outside the volume's pieces whose range
+    /// holds one, so every crossing lies in such a piece; a visible piece
+    /// in a gap is shorter than a step, or it would hold a sample. Each
+    /// piece is sampled on a lattice [`GAP_DIVS`] times finer than the
+    /// step, anchored at `t1`: the points depend on the ray and the step
+    /// alone, not on how a volume cuts or merges its pieces, so every path
+    /// finds the same crossings at the same places.
+    #[allow(clippy::too_many_arguments)]
+    fn gap_crossings<V: Volume>(
+        &mut self,
+        volume: &V,
+        ray: &Ray,
+        (t0, v0): (f32, f32),
+        (t1, step): (f32, f32),
+        next: Option<Sample>,
+        ctx: &Ctx,
+    ) -> bool {
+        let isos = &ctx.settings.iso;
+        let holds_iso = |r: Range1| isos.iter().any(|&v| r.contains(v));
+        let query = IntervalQuery {
+            is_visible: &holds_iso,
+        };
+        let mut pieces = std::mem::take(&mut self.gap_pieces);
+        pieces.clear();
+        volume.intervals(ray, Range1::new(t0, t1), &query, &mut pieces);
+        let d = step / GAP_DIVS as f32;
+        if !(d > 0.0 && t1 > t0) {
+            self.gap_pieces = pieces;
+            return false;
+        }
+        let last = ((t1 - t0) / d).ceil() as i64;
+        let at = |k: i64| if k >= last { t0 } else { t1 - k as f32 * d };
+        // A point on the volume's boundary may lie just outside its
+        // half-open cells: then the field a step inside stands for it.
+        let value_at = |k: i64| -> Option<f32> {
+            match k {
+                0 => next.map(|s| s.value),
+                _ if k >= last && !v0.is_nan() => Some(v0),
+                _ => None,
+            }
+            .or_else(|| {
+                let t = at(k);
+                volume
+                    .sample(ray.at(t))
+                    .or_else(|| volume.sample(ray.at(t + min_step_at(t))))
+                    .map(|s| s.value)
+            })
+        };
+        // The lattice points evaluated so far, front to back: the last one.
+        let mut prev: Option<(i64, f32)> = None;
+        let mut stop = false;
+        'pieces: for piece in &pieces {
+            let (a, b) = (piece.t.lo.max(t0), piece.t.hi.min(t1));
+            if b < a {
+                continue;
+            }
+            // The points bracketing [a, b], front (large k) to back.
+            let k_front = (((t1 - a) / d).ceil() as i64).min(last);
+            let k_back = (((t1 - b) / d).floor() as i64).max(0);
+            let mut k = match prev {
+                Some((pk, _)) if pk <= k_front => pk - 1,
+                _ => {
+                    prev = None;
+                    k_front
+                }
+            };
+            while k >= k_back {
+                let v = value_at(k);
+                if let (Some((pk, pv)), Some(v)) = (prev, v)
+                    && self.crossings(volume, ray, None, (at(pk), pv), (at(k), v), None, ctx)
+                {
+                    stop = true;
+                    break 'pieces;
+                }
+                prev = v.map(|v| (k, v));
+                k -= 1;
+            }
+        }
+        self.gap_pieces = pieces;
+        stop
+    }
+
+    /// Iso-surfaces that three samples on one side of an iso-value dip
+    /// across between them: a ray grazing a surface, or crossing a thin
+    /// shell, inside one step. Where the middle sample is a local extremum
+    /// and the parabola through the three reaches past an iso-value, the
+    /// two steps are sampled [`DIP_SAMPLES`] times more finely for it. Cheap:
+    /// only extrema near an iso-value pay.
+    fn dip_crossings<V: Volume>(
+        &mut self,
+        volume: &V,
+        ray: &Ray,
+        [(ta, va), (tb, vb), (tc, vc)]: [(f32, f32); 3],
+        ctx: &Ctx,
+    ) -> bool {
+        if (vb - va) * (vc - vb) >= 0.0 || !(ta < tb && tb < tc) {
+            return false;
+        }
+        // Divided differences: p(t) = vb + d1 (t − tb) + c (t − ta)(t − tb).
+        let d1 = (vb - va) / (tb - ta);
+        let c = ((vc - vb) / (tc - tb) - d1) / (tc - ta);
+        let t_ext = (0.5 * (ta + tb) - d1 / (2.0 * c)).clamp(ta, tc);
+        let ext = vb + d1 * (t_ext - tb) + c * (t_ext - ta) * (t_ext - tb);
+        for &iso in &ctx.settings.iso {
+            let same_side = (va - iso) * (vb - iso) > 0.0 && (vb - iso) * (vc - iso) > 0.0;
+            if !same_side || (vb - iso) * (ext - iso) >= 0.0 {
+                continue;
+            }
+            let dt = (tc - ta) / DIP_SAMPLES as f32;
+            let mut last = (ta, va);
+            for i in 1..=DIP_SAMPLES {
+                let t = if i == DIP_SAMPLES {
+                    tc
+                } else {
+                    ta + i as f32 * dt
+                };
+                let v = if i == DIP_SAMPLES {
+                    Some(vc)
+                } else {
+                    volume.sample(ray.at(t)).map(|s| s.value)
+                };
+                let Some(v) = v else { continue };
+                if self.crossings(volume, ray, None, last, (t, v), Some(iso), ctx) {
+                    return true;
+                }
+                last = (t, v);
+            }
+        }
+        false
+    }
+
+    /// Iso-surfaces crossed between samples `(t0, v0)` and `(t1, v1)`: a
+    /// sign change of value − iso is a hit, placed by linear interpolation
+    /// and shaded with the field's sample and gradient there. `here` is the
+    /// interval holding `t1` with the sample and gradient taken at `t1`
+    /// (the hint and the fallback), when there is one; `only`: this
+    /// iso-value alone.
+    #[allow(clippy::too_many_arguments)]
+    fn crossings<V: Volume>(
+        &mut self,
+        volume: &V,
+        ray: &Ray,
+        here: Option<(&Interval, (Sample, Vec3))>,
+        (t0, v0): (f32, f32),
+        (t1, v1): (f32, f32),
+        only: Option<f32>,
+        ctx: &Ctx,
+    ) -> bool {
+        let settings = ctx.settings;
+        for &iso in &settings.iso {
+            if only.is_some_and(|o| o.to_bits() != iso.to_bits()) {
+                continue;
+            }
+            if (v0 - iso) * (v1 - iso) < 0.0 || (v1 == iso && v0 != iso) {
+                let th = t0 + (iso - v0) / (v1 - v0) * (t1 - t0);
+                let ph = ray.at(th);
+                // The hit may lie in the previous interval: only use this
+                // interval's hint when it contains the hit.
+                let hit = match here {
+                    Some((iv, _)) if iv.t.contains(th) => volume.sample_with_gradient_in(ph, iv),
+                    _ => volume.sample_with_gradient(ph),
+                };
+                let Some((hs, g)) = hit.or(here.map(|h| h.1)) else {
+                    continue;
+                };
+                self.stats.iso_hits += 1;
+                let seen = iso_visibility(
+                    volume,
+                    ph,
+                    g,
+                    ray,
+                    ctx,
+                    &self.rng,
+                    self.stats.iso_hits as u32,
+                );
+                let c =
+                    ctx.colour_of(&hs, settings.normalize(iso)) * (iso_shade(ray, g, ctx) * seen);
+                if self
+                    .acc
+                    .add(c, settings.iso_opacity, settings.early_termination)
+                {
+                    return true;
+                }
+            }
+        }
+        false
     }
 
     /// Iso-surfaces where a piecewise-constant field steps from `v0` to `v1`

@@ -184,10 +184,15 @@ pub struct MaterialDesc {
     pub value_range: Option<[f32; 2]>,
 }
 
-/// An AMR data source: ExaBricks cells + scalars, or AMRClaw output.
+/// An AMR data source: any AMR output by path (format detected),
+/// ExaBricks cells + scalars, or AMRClaw output.
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct AmrDesc {
+    /// Any AMR output, format detected: an AMReX/BoxLib plotfile
+    /// directory, FLASH HDF5, an Enzo parameter file, Athena++ `.athdf`,
+    /// AMRClaw `fort.qNNNN` or ExaBricks `.cells` (with its `.scalars`).
+    pub file: Option<String>,
     /// ExaBricks `.cells` (int32 x, y, z, level per cell).
     pub cells: Option<String>,
     /// ExaBricks `.scalars` files, one per field (float32 per cell).

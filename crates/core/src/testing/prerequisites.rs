@@ -10,6 +10,7 @@
 //! | `VOXLESS_REQUIRE_MPI` | `mpirun` (Open MPI) |
 //! | `VOXLESS_REQUIRE_BROWSER` | `chromium` and `chromedriver` |
 //! | `VOXLESS_REQUIRE_HDF5` | a build with the `hdf5` feature |
+//! | `VOXLESS_REQUIRE_YT` | `$VOXLESS_PYTHON` (else `python3`) importing numpy, h5py and yt |
 
 use std::path::PathBuf;
 

@@ -43,12 +43,18 @@ use hdf5_metno::types::{FloatSize, TypeDescriptor};
 
 use crate::{IoError, checked_product};
 
+mod athena;
 mod describe;
+mod enzo;
+mod flash;
 mod gadget;
 mod jaxpm;
 mod pysph;
 
+pub use athena::read_athena;
 pub use describe::describe_hdf5;
+pub use enzo::read_enzo;
+pub use flash::read_flash;
 pub use gadget::{
     GadgetHdf5, open_gadget_hdf5, read_gadget, read_gadget_share, read_gadget_snapshot,
 };
@@ -71,6 +77,11 @@ pub enum Hdf5Kind {
     Gadget,
     /// JaxPM run: a `q_index` dataset and `snap_<K>` groups.
     Jaxpm,
+    /// FLASH AMR output: an `unknown names` dataset beside `refine level`.
+    Flash,
+    /// Athena++ AMR output (`.athdf`): `RootGridSize` and `MeshBlockSize`
+    /// attributes on the root.
+    Athena,
     /// Any other HDF5 file.
     Other,
 }
@@ -78,7 +89,8 @@ pub enum Hdf5Kind {
 /// Decides which layout the HDF5 file at `path` follows: a `particles`
 /// group with an `arrays` subgroup in some child means PySPH, a top-level
 /// `PartType<N>` group means SWIFT/Gadget, a `q_index` dataset next to
-/// `snap_<K>` groups means JaxPM.
+/// `snap_<K>` groups means JaxPM; `unknown names` with `refine level`
+/// means FLASH, `RootGridSize` with `MeshBlockSize` attributes Athena++.
 pub fn hdf5_kind(path: &Path) -> Result<Hdf5Kind, IoError> {
     // A snapshot of several files: its first file says.
     let first = crate::snapshot::first_file(path);
@@ -110,6 +122,18 @@ pub fn hdf5_kind(path: &Path) -> Result<Hdf5Kind, IoError> {
         .any(|n| numbered(n, "snap_").is_some() && f.child_group(root, n).is_some());
     if has_snap && f.child_dataset(root, "q_index").is_some() {
         return Ok(Hdf5Kind::Jaxpm);
+    }
+    if f.child_dataset(root, "unknown names").is_some()
+        && f.child_dataset(root, "refine level").is_some()
+    {
+        return Ok(Hdf5Kind::Flash);
+    }
+    let attrs = root.attr_names().unwrap_or_default();
+    if ["RootGridSize", "MeshBlockSize"]
+        .iter()
+        .all(|a| attrs.iter().any(|n| n == a))
+    {
+        return Ok(Hdf5Kind::Athena);
     }
     Ok(Hdf5Kind::Other)
 }
