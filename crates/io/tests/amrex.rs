@@ -8,7 +8,9 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use voxless_io::{AmrCellData, AmrFormat, IoError, amr_field, amr_format, read_amr, read_amrex};
+use voxless_io::{
+    AmrCellData, AmrFormat, IoError, amr_field, amr_format, read_amr, read_amrex, read_amrex_files,
+};
 
 /// A fresh directory in the system temp dir, removed when dropped.
 struct TempDir(PathBuf);
@@ -197,6 +199,51 @@ fn two_levels_leave_the_uncovered_coarse_cells_and_every_fine_cell() {
     let (again, format) = read_amr(&dir.0).unwrap();
     assert_eq!(format, AmrFormat::Amrex);
     assert_eq!(again, data);
+}
+
+#[test]
+fn from_memory_reads_as_from_the_directory() {
+    let dir = TempDir::new("memory");
+    let coarse = vec![([0, 0, 0], [7, 7, 7])];
+    let fine = vec![([2, 4, 6], [9, 11, 13])];
+    write_plotfile(&dir.0, 8, 2, &[coarse, fine], Real::F64Le);
+    let names = [
+        "Header",
+        "Level_0/Cell_H",
+        "Level_0/Cell_D_00000",
+        "Level_1/Cell_H",
+        "Level_1/Cell_D_00000",
+    ];
+    let bytes: Vec<Vec<u8>> = names
+        .iter()
+        .map(|n| std::fs::read(dir.0.join(n)).unwrap())
+        .collect();
+    let files: Vec<(&str, &[u8])> = names
+        .iter()
+        .copied()
+        .zip(bytes.iter().map(|b| b.as_slice()))
+        .collect();
+    assert_eq!(
+        read_amrex_files(&dir.0, &files).unwrap(),
+        read_amrex(&dir.0).unwrap()
+    );
+    // A missing file is named as the directory would name it.
+    let msg = message(
+        "Level_1/Cell_D_00000",
+        read_amrex_files(&dir.0, &files[..4]),
+    );
+    assert!(msg.contains("No such file"), "{msg}");
+    // A box larger than its data file can hold is refused before any
+    // allocation of its size.
+    let h = String::from_utf8(bytes[3].clone()).unwrap();
+    let huge = h.replace(
+        "((2,4,6) (9,11,13)",
+        "((2,4,6) (2000000000,2000000000,2000000000)",
+    );
+    let mut patched = files.clone();
+    patched[3].1 = huge.as_bytes();
+    let msg = message("Level_1/Cell_D_00000", read_amrex_files(&dir.0, &patched));
+    assert!(msg.contains("needs") && msg.contains("bytes"), "{msg}");
 }
 
 #[test]

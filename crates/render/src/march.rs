@@ -167,6 +167,9 @@ pub(crate) struct RayState {
     gap_pieces: Vec<Interval>,
     /// Whether a sampled interval has been sampled yet.
     sampled: bool,
+    /// The last sampled segment's length (the gap lattice's step at the
+    /// ray's end).
+    last_step: f32,
     /// The last interval when it was constant: (end, value). A gap after it
     /// is a crossing to zero.
     last_constant: Option<(f32, f32)>,
@@ -204,6 +207,7 @@ impl RayState {
             prev2: None,
             gap_pieces: Vec::new(),
             sampled: false,
+            last_step: 0.0,
             last_constant: None,
             span,
             last_end: span.lo,
@@ -271,6 +275,7 @@ impl RayState {
         self.last_constant = None;
         self.last_end = iv.t.hi;
         self.sampled = true;
+        self.last_step = seg.len;
         let Some(s) = sample else {
             self.prev = None;
             return false;
@@ -390,10 +395,12 @@ impl RayState {
     /// never equals an iso-value outside the volume's pieces whose range
     /// holds one, so every crossing lies in such a piece; a visible piece
     /// in a gap is shorter than a step, or it would hold a sample. Each
-    /// piece is sampled on a lattice [`GAP_DIVS`] times finer than the
-    /// step, anchored at `t1`: the points depend on the ray and the step
-    /// alone, not on how a volume cuts or merges its pieces, so every path
-    /// finds the same crossings at the same places.
+    /// such stretch (touching pieces merged) is sampled at its ends and at
+    /// the points of a lattice [`GAP_DIVS`] times finer than the step,
+    /// anchored at `t1`, inside it: the points depend on the ray, the step
+    /// and the stretch alone, not on how a volume cuts its pieces or which
+    /// other pieces it reports (a prepared volume answers for its own
+    /// transfer function), so every path finds the same crossings.
     #[allow(clippy::too_many_arguments)]
     fn gap_crossings<V: Volume>(
         &mut self,
@@ -412,61 +419,58 @@ impl RayState {
         let mut pieces = std::mem::take(&mut self.gap_pieces);
         pieces.clear();
         volume.intervals(ray, Range1::new(t0, t1), &query, &mut pieces);
-        let d = step / GAP_DIVS as f32;
-        if !(d > 0.0 && t1 > t0) {
-            self.gap_pieces = pieces;
-            return false;
-        }
-        let last = ((t1 - t0) / d).ceil() as i64;
-        let at = |k: i64| if k >= last { t0 } else { t1 - k as f32 * d };
-        // A point on the volume's boundary may lie just outside its
-        // half-open cells: then the field a step inside stands for it.
-        let value_at = |k: i64| -> Option<f32> {
-            match k {
-                0 => next.map(|s| s.value),
-                _ if k >= last && !v0.is_nan() => Some(v0),
-                _ => None,
-            }
-            .or_else(|| {
-                let t = at(k);
-                volume
-                    .sample(ray.at(t))
-                    .or_else(|| volume.sample(ray.at(t + min_step_at(t))))
-                    .map(|s| s.value)
-            })
-        };
-        // The lattice points evaluated so far, front to back: the last one.
-        let mut prev: Option<(i64, f32)> = None;
-        let mut stop = false;
-        'pieces: for piece in &pieces {
-            let (a, b) = (piece.t.lo.max(t0), piece.t.hi.min(t1));
-            if b < a {
-                continue;
-            }
-            // The points bracketing [a, b], front (large k) to back.
-            let k_front = (((t1 - a) / d).ceil() as i64).min(last);
-            let k_back = (((t1 - b) / d).floor() as i64).max(0);
-            let mut k = match prev {
-                Some((pk, _)) if pk <= k_front => pk - 1,
-                _ => {
-                    prev = None;
-                    k_front
-                }
-            };
-            while k >= k_back {
-                let v = value_at(k);
-                if let (Some((pk, pv)), Some(v)) = (prev, v)
-                    && self.crossings(volume, ray, None, (at(pk), pv), (at(k), v), None, ctx)
-                {
-                    stop = true;
-                    break 'pieces;
-                }
-                prev = v.map(|v| (k, v));
-                k -= 1;
+        // Only pieces whose range holds an iso-value, clipped to the gap;
+        // touching ones are one stretch.
+        let mut stretches: Vec<(f32, f32)> = Vec::new();
+        for p in pieces.iter().filter(|p| holds_iso(p.value_range)) {
+            let (a, b) = (p.t.lo.max(t0), p.t.hi.min(t1));
+            match stretches.last_mut() {
+                Some(last) if last.1 >= a => last.1 = last.1.max(b),
+                _ if b >= a => stretches.push((a, b)),
+                _ => {}
             }
         }
         self.gap_pieces = pieces;
-        stop
+        let d = step / GAP_DIVS as f32;
+        if !(d > 0.0) {
+            return false;
+        }
+        // A point on the volume's boundary may lie just outside its
+        // half-open cells: then the field a step inside stands for it.
+        let value_at = |t: f32, inward: f32| -> Option<f32> {
+            if t == t1
+                && let Some(s) = next
+            {
+                return Some(s.value);
+            }
+            if t == t0 && !v0.is_nan() {
+                return Some(v0);
+            }
+            volume
+                .sample(ray.at(t))
+                .or_else(|| volume.sample(ray.at(t + inward * min_step_at(t))))
+                .map(|s| s.value)
+        };
+        for (a, b) in stretches {
+            let mut last = value_at(a, 1.0).map(|v| (a, v));
+            // Lattice points t1 − k·d strictly inside (a, b), front to back.
+            let k_hi = ((t1 - a) / d).ceil() as i64;
+            let k_lo = ((t1 - b) / d).floor().max(0.0) as i64;
+            let inside = (k_lo..=k_hi)
+                .rev()
+                .map(|k| t1 - k as f32 * d)
+                .filter(|&t| a < t && t < b);
+            for (t, inward) in inside.map(|t| (t, 1.0)).chain([(b, -1.0)]) {
+                let v = value_at(t, inward).map(|v| (t, v));
+                if let (Some(p), Some(q)) = (last, v)
+                    && self.crossings(volume, ray, None, p, q, None, ctx)
+                {
+                    return true;
+                }
+                last = v;
+            }
+        }
+        false
     }
 
     /// Iso-surfaces that three samples on one side of an iso-value dip
@@ -620,6 +624,15 @@ impl RayState {
             && self.span.hi - t_end > ROUNDING * f32::EPSILON * t_end.abs()
         {
             self.step_crossings(volume, ray, t_end, v0, 0.0, ctx);
+        }
+        // After the last sample the ray's last visible piece may go on for
+        // up to a step, and more pieces may follow that got no sample: a
+        // gap up to the span's end.
+        if let Some(prev) = self.prev.take()
+            && self.last_step > 0.0
+            && self.span.hi > prev.0
+        {
+            self.gap_crossings(volume, ray, prev, (self.span.hi, self.last_step), None, ctx);
         }
     }
 

@@ -28,7 +28,7 @@
 
 use std::collections::HashMap;
 use std::fs::File;
-use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
+use std::io::{BufRead, BufReader, Cursor, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 use super::{AmrCellData, MAX_LEVEL};
@@ -54,6 +54,13 @@ impl IBox {
         self.size().iter().product()
     }
 
+    /// The cell count, `None` when it does not fit 64 bits.
+    fn checked_cells(&self) -> Option<u64> {
+        self.size()
+            .iter()
+            .try_fold(1u64, |n, &s| n.checked_mul(u64::try_from(s).ok()?))
+    }
+
     fn coarsen(&self, r: i64) -> IBox {
         IBox {
             lo: self.lo.map(|v| v.div_euclid(r)),
@@ -68,6 +75,56 @@ impl IBox {
     }
 }
 
+/// A file of a plotfile, read in order and at offsets.
+trait Source: BufRead + Seek {}
+impl<T: BufRead + Seek> Source for T {}
+
+/// Where a plotfile's files come from: a directory on disk, or named byte
+/// slices in memory (the same parsing and checks for both).
+trait Files {
+    /// The name errors give file `rel` (relative to the plotfile).
+    fn label(&self, rel: &Path) -> PathBuf;
+    /// File `rel` to read, and its length.
+    fn open(&self, rel: &Path) -> Result<(Box<dyn Source + '_>, u64), IoError>;
+}
+
+/// A plotfile directory.
+struct Dir<'a>(&'a Path);
+
+impl Files for Dir<'_> {
+    fn label(&self, rel: &Path) -> PathBuf {
+        self.0.join(rel)
+    }
+    fn open(&self, rel: &Path) -> Result<(Box<dyn Source + '_>, u64), IoError> {
+        let path = self.label(rel);
+        let f = File::open(&path).map_err(|e| IoError::io(&path, e))?;
+        let len = f.metadata().map_err(|e| IoError::io(&path, e))?.len();
+        Ok((Box::new(BufReader::with_capacity(1 << 20, f)), len))
+    }
+}
+
+/// A plotfile in memory: each file's path relative to the plotfile
+/// (`Header`, `Level_0/Cell_H`, …) with its bytes; `root` names it.
+struct Memory<'a> {
+    root: &'a Path,
+    files: &'a [(&'a str, &'a [u8])],
+}
+
+impl Files for Memory<'_> {
+    fn label(&self, rel: &Path) -> PathBuf {
+        self.root.join(rel)
+    }
+    fn open(&self, rel: &Path) -> Result<(Box<dyn Source + '_>, u64), IoError> {
+        match self.files.iter().find(|(n, _)| Path::new(n) == rel) {
+            Some((_, bytes)) => Ok((Box::new(Cursor::new(*bytes)), bytes.len() as u64)),
+            None => Err(IoError::io(
+                &self.label(rel),
+                std::io::Error::new(std::io::ErrorKind::NotFound, "No such file"),
+            )),
+        }
+    }
+}
+
 /// Whitespace-separated tokens of a text file, with the line of each
 /// (errors name the file and line).
 struct Tokens {
@@ -78,25 +135,26 @@ struct Tokens {
 }
 
 impl Tokens {
-    fn read(path: &Path) -> Result<Tokens, IoError> {
-        let file = File::open(path).map_err(|e| IoError::io(path, e))?;
-        let len = file.metadata().map_err(|e| IoError::io(path, e))?.len();
+    /// The text file `rel` of the plotfile.
+    fn read(files: &dyn Files, rel: &Path) -> Result<Tokens, IoError> {
+        let path = files.label(rel);
+        let (mut reader, len) = files.open(rel)?;
         if len > MAX_HEADER {
             return Err(IoError::format(
-                path,
+                &path,
                 format!("{len} bytes is too long for a plotfile header"),
             ));
         }
         let mut text = String::new();
-        BufReader::new(file)
+        reader
             .read_to_string(&mut text)
             .map_err(|e| match e.kind() {
                 std::io::ErrorKind::InvalidData => {
-                    IoError::format(path, "is not text (invalid UTF-8)")
+                    IoError::format(&path, "is not text (invalid UTF-8)")
                 }
-                _ => IoError::io(path, e),
+                _ => IoError::io(&path, e),
             })?;
-        Ok(Tokens::from_text(&text, path))
+        Ok(Tokens::from_text(&text, &path))
     }
 
     fn from_text(text: &str, path: &Path) -> Tokens {
@@ -181,9 +239,13 @@ impl Tokens {
             lo: [v[0], v[1], v[2]],
             hi: [v[3], v[4], v[5]],
         };
-        if (0..3).any(|a| b.hi[a] < b.lo[a]) || v[6..].iter().any(|&t| t != 0) {
+        const LIMIT: i64 = 1 << 31;
+        if (0..3).any(|a| b.hi[a] < b.lo[a] || b.lo[a].abs() > LIMIT || b.hi[a].abs() > LIMIT)
+            || v[6..].iter().any(|&t| t != 0)
+        {
             return Err(self.error(format!(
-                "{what}: box {:?}..{:?} type {:?} is not a cell-centred box with lo ≤ hi",
+                "{what}: box {:?}..{:?} type {:?} is not a cell-centred box with lo ≤ hi \
+                 within ±2^31",
                 b.lo,
                 b.hi,
                 &v[6..]
@@ -206,14 +268,27 @@ struct Level {
 /// Reads the plotfile directory `dir` (the one holding `Header`) into leaf
 /// cells, every component a field named as the header names it.
 pub fn read_amrex(dir: &Path) -> Result<AmrCellData, IoError> {
-    let header_path = dir.join("Header");
-    if !header_path.is_file() {
+    if !dir.join("Header").is_file() {
         return Err(IoError::format(
             dir,
             "is not an AMReX plotfile: it has no `Header` file",
         ));
     }
-    let mut t = Tokens::read(&header_path)?;
+    read_plotfile(&Dir(dir))
+}
+
+/// [`read_amrex`] from memory: `files` names each file of the plotfile by
+/// its path inside it (`Header`, `Level_0/Cell_H`, `Level_0/Cell_D_00000`,
+/// …) with its bytes; errors name them under `root`, as the files of a
+/// directory `root` would be named. The same checks and messages, every
+/// allocation bounded by the slices' lengths.
+pub fn read_amrex_files(root: &Path, files: &[(&str, &[u8])]) -> Result<AmrCellData, IoError> {
+    read_plotfile(&Memory { root, files })
+}
+
+fn read_plotfile(files: &dyn Files) -> Result<AmrCellData, IoError> {
+    let header_path = files.label(Path::new("Header"));
+    let mut t = Tokens::read(files, Path::new("Header"))?;
     let version = t.word("the version line")?.to_string();
     if !version.starts_with("HyperCLaw") && !version.starts_with("NavierStokes") {
         return Err(t.error(format!(
@@ -301,7 +376,7 @@ pub fn read_amrex(dir: &Path) -> Result<AmrCellData, IoError> {
             t.real("a box's physical extent")?;
         }
         let prefix = t.word("the level's multi-FAB path")?.to_string();
-        levels.push(read_level(dir, &prefix, ncomp, domains[l].lo, widths[l])?);
+        levels.push(read_level(files, &prefix, ncomp, domains[l].lo, widths[l])?);
         if levels[l].boxes.len() != nboxes {
             return Err(IoError::format(
                 &header_path,
@@ -317,6 +392,7 @@ pub fn read_amrex(dir: &Path) -> Result<AmrCellData, IoError> {
     for l in 0..=finest {
         let covered = levels.get(l + 1).map(|f| (f, ratios[l]));
         read_leaf_cells(
+            files,
             &levels[l],
             covered,
             widths[l].trailing_zeros() as usize,
@@ -336,7 +412,7 @@ pub fn read_amrex(dir: &Path) -> Result<AmrCellData, IoError> {
 
 /// A level's `Cell_H`: its boxes and where each box's FAB lies.
 fn read_level(
-    dir: &Path,
+    files: &dyn Files,
     prefix: &str,
     ncomp: usize,
     domain_lo: [i64; 3],
@@ -349,12 +425,11 @@ fn read_level(
             .any(|c| c == std::path::Component::ParentDir)
     {
         return Err(IoError::format(
-            dir.join("Header"),
+            files.label(Path::new("Header")),
             format!("multi-FAB path `{prefix}` leaves the plotfile directory"),
         ));
     }
-    let header = dir.join(format!("{prefix}_H"));
-    let mut t = Tokens::read(&header)?;
+    let mut t = Tokens::read(files, Path::new(&format!("{prefix}_H")))?;
     t.int("the VisMF version")?;
     t.int("how it was written")?;
     let n = t.count("the component count", 1 << 16)?;
@@ -385,7 +460,10 @@ fn read_level(
     if nfabs != nboxes {
         return Err(t.error(format!("{nfabs} FABs for {nboxes} boxes")));
     }
-    let level_dir = dir.join(rel.parent().unwrap_or(Path::new("")));
+    let level_dir = rel.parent().unwrap_or(Path::new("")).to_path_buf();
+    // Data files' lengths bound every box: a box needs at least 4 bytes a
+    // value in its file, so no size below is larger than the input.
+    let mut lengths: Vec<(PathBuf, u64)> = Vec::new();
     let mut fabs = Vec::with_capacity(nfabs);
     for _ in 0..nfabs {
         let tag = t.word("a FabOnDisk line")?.to_string();
@@ -402,7 +480,33 @@ fn read_level(
         if offset < 0 {
             return Err(t.error(format!("negative offset {offset}")));
         }
-        fabs.push((level_dir.join(file), offset as u64));
+        let rel = level_dir.join(&file);
+        let len = match lengths.iter().find(|(p, _)| *p == rel) {
+            Some(&(_, len)) => len,
+            None => {
+                let len = files.open(&rel)?.1;
+                lengths.push((rel.clone(), len));
+                len
+            }
+        };
+        let b = &boxes[fabs.len()];
+        let need = b
+            .checked_cells()
+            .and_then(|c| c.checked_mul(4 * ncomp as u64))
+            .and_then(|c| c.checked_add(offset as u64));
+        if need.is_none_or(|n| n > len) {
+            return Err(IoError::format(
+                files.label(&rel),
+                format!(
+                    "box {:?}..{:?} of {prefix}_H needs {} bytes at offset {offset}, but the \
+                     file has {len}",
+                    b.lo,
+                    b.hi,
+                    need.map_or("more than 2^64".into(), |n| (n - offset as u64).to_string())
+                ),
+            ));
+        }
+        fabs.push((rel, offset as u64));
     }
     Ok(Level {
         boxes,
@@ -475,6 +579,7 @@ fn covered_masks(level: &Level, fine: Option<(&Level, i64)>) -> Vec<Option<Vec<b
 /// The cells of `level` that the finer level does not cover, appended with
 /// their values; `exa_level` is the ExaBricks level (0 = finest).
 fn read_leaf_cells(
+    files: &dyn Files,
     level: &Level,
     fine: Option<(&Level, i64)>,
     exa_level: usize,
@@ -482,17 +587,18 @@ fn read_leaf_cells(
     fields: &mut [(String, Vec<f32>)],
 ) -> Result<(), IoError> {
     let masks = covered_masks(level, fine);
-    let mut open: Option<(PathBuf, BufReader<File>, u64)> = None;
+    let mut open: Option<(&Path, Box<dyn Source + '_>, u64)> = None;
     let mut values = Vec::new();
     for (i, b) in level.boxes.iter().enumerate() {
-        let (path, offset) = &level.fabs[i];
-        if open.as_ref().is_none_or(|o| &o.0 != path) {
-            let f = File::open(path).map_err(|e| IoError::io(path, e))?;
-            let len = f.metadata().map_err(|e| IoError::io(path, e))?.len();
-            open = Some((path.clone(), BufReader::with_capacity(1 << 20, f), len));
+        let (rel, offset) = &level.fabs[i];
+        if open.as_ref().is_none_or(|o| o.0 != rel.as_path()) {
+            let (reader, len) = files.open(rel)?;
+            open = Some((rel, reader, len));
         }
         let (_, reader, len) = open.as_mut().expect("opened above");
-        read_fab(path, reader, *len, *offset, b, fields.len(), &mut values)?;
+        let path = files.label(rel);
+        read_fab(&path, reader, *len, *offset, b, fields.len(), &mut values)?;
+        let path = path.as_path();
         let n = b.cells() as usize;
         let s = b.size();
         let mask = masks[i].as_deref();
@@ -505,10 +611,14 @@ fn read_leaf_cells(
                 (k as i64 / s[0]) % s[1],
                 k as i64 / (s[0] * s[1]),
             ];
-            let corner = [0, 1, 2].map(|a| (b.lo[a] + idx[a] - level.domain_lo[a]) * level.width);
+            // Coordinates within ±2^31, widths within 2^30: i128 holds it.
+            let corner = [0, 1, 2].map(|a| {
+                (b.lo[a] as i128 + idx[a] as i128 - level.domain_lo[a] as i128)
+                    * level.width as i128
+            });
             if corner
                 .iter()
-                .any(|&c| c.unsigned_abs() > i32::MAX as u64 / 2)
+                .any(|&c| c.unsigned_abs() > i32::MAX as u128 / 2)
             {
                 return Err(IoError::format(
                     path,
@@ -537,7 +647,7 @@ fn read_leaf_cells(
 /// as f32.
 fn read_fab(
     path: &Path,
-    reader: &mut BufReader<File>,
+    reader: &mut Box<dyn Source + '_>,
     len: u64,
     offset: u64,
     b: &IBox,
