@@ -18,7 +18,15 @@ REPO = os.path.dirname(os.path.dirname(HERE))
 # --- the data files (relative to --data) ------------------------------------
 SPH_NPY = "sph-dam-break/npy_01000"
 SPH_HDF5 = "sph-dam-break/dam_break_3d_01000.hdf5"
-AMRCLAW = "amr-euler3d/fort.q0003"
+# `PEERS_AMR_FRAME` (2 or 3) and `PEERS_AMR_VIEW` (0, 1, 2) pick another
+# AMRClaw frame and camera for the AMR rows: `amr_sweep.sh` runs them all,
+# so the ratio reported is the worst over frames and views, not the tuned one.
+AMRCLAW = "amr-euler3d/fort.q%04d" % int(os.environ.get("PEERS_AMR_FRAME", "3"))
+AMR_VIEWS = [
+    dict(eye=(4.6, -3.2, 3.4), look_at=(1.0, 1.0, 1.0), up=(0, 0, 1), fov=30.0),
+    dict(eye=(2.2, 1.9, 1.8), look_at=(0.3, 0.3, 0.3), up=(0, 0, 1), fov=40.0),
+    dict(eye=(-2.5, 5.0, 0.6), look_at=(1.0, 0.8, 1.1), up=(0, 0, 1), fov=28.0),
+]
 NBODY = "nbody-jaxpm/npy_N64_a1/positions.npy"
 
 # --- row 1: SPH volume render ------------------------------------------------
@@ -46,7 +54,7 @@ SPH_PROJECT = dict(
 # --- rows 3 and 4: AMR --------------------------------------------------------
 AMR_RENDER = dict(
     size=(512, 512),
-    camera=dict(eye=(4.6, -3.2, 3.4), look_at=(1.0, 1.0, 1.0), up=(0, 0, 1), fov=30.0),
+    camera=AMR_VIEWS[int(os.environ.get("PEERS_AMR_VIEW", "0"))],
     value_range=(1.0, 1.1598),  # voxless's automatic choice (density)
     opacity_scale=7.40,
 )
