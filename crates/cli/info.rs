@@ -126,7 +126,7 @@ fn describe_file(args: &InfoArgs) -> Result<String> {
     }
     // AMR outputs told apart by their names and neighbours; HDF5 ones by
     // their layout (below).
-    if path.is_dir() || ext == "athdf" || ext == "hierarchy" || enzo(path) {
+    if path.join("Header").is_file() || ext == "athdf" || ext == "hierarchy" || enzo(path) {
         let format = voxless::io::amr_format(path)?;
         return amr(
             path,
