@@ -161,8 +161,6 @@ pub(crate) struct RayState {
     pub stats: RayStats,
     /// The previous sample (t, value), for iso-surface crossings.
     prev: Option<(f32, f32)>,
-    /// The sample before `prev`, for dips across an iso-value within a step.
-    prev2: Option<(f32, f32)>,
     /// The pieces of a gap that hold an iso-value (scratch).
     gap_pieces: Vec<Interval>,
     /// Whether a sampled interval has been sampled yet.
@@ -187,10 +185,7 @@ pub(crate) struct RayState {
 const ROUNDING: f32 = 4.0;
 
 /// Lattice points per step in a gap's pieces that may hold a crossing.
-const GAP_DIVS: usize = 4;
-
-/// Samples over the two steps around a dip that may cross an iso-value.
-const DIP_SAMPLES: usize = 8;
+const GAP_DIVS: usize = 1;
 
 impl RayState {
     /// The state at the start of a ray whose samples are cut to `span`,
@@ -204,7 +199,6 @@ impl RayState {
             },
             stats: RayStats::default(),
             prev: None,
-            prev2: None,
             gap_pieces: Vec::new(),
             sampled: false,
             last_step: 0.0,
@@ -287,16 +281,11 @@ impl RayState {
         // previous sample and this one is a hit, placed by linear interpolation.
         if let Some(prev) = self.prev {
             let here = Some((iv, (s, gradient)));
-            if self.crossings(volume, ray, here, prev, (tm, s.value), None, ctx) {
-                return true;
-            }
-            if let Some(prev2) = self.prev2
-                && self.dip_crossings(volume, ray, [prev2, prev, (tm, s.value)], ctx)
-            {
+            if self.crossings(volume, ray, here, prev, (tm, s.value), ctx) {
                 return true;
             }
         }
-        (self.prev2, self.prev) = (self.prev, Some((tm, s.value)));
+        self.prev = Some((tm, s.value));
         if !settings.volume {
             return false;
         }
@@ -334,7 +323,7 @@ impl RayState {
             }
             Some(0.0)
         };
-        (self.prev2, self.prev) = (None, Some((iv.t.hi, v)));
+        self.prev = Some((iv.t.hi, v));
         self.last_constant = Some((iv.t.hi, v));
         match before {
             Some(v0) => self.step_crossings(volume, ray, iv.t.lo, v0, v, ctx),
@@ -463,7 +452,7 @@ impl RayState {
             for (t, inward) in inside.map(|t| (t, 1.0)).chain([(b, -1.0)]) {
                 let v = value_at(t, inward).map(|v| (t, v));
                 if let (Some(p), Some(q)) = (last, v)
-                    && self.crossings(volume, ray, None, p, q, None, ctx)
+                    && self.crossings(volume, ray, None, p, q, ctx)
                 {
                     return true;
                 }
@@ -473,62 +462,11 @@ impl RayState {
         false
     }
 
-    /// Iso-surfaces that three samples on one side of an iso-value dip
-    /// across between them: a ray grazing a surface, or crossing a thin
-    /// shell, inside one step. Where the middle sample is a local extremum
-    /// and the parabola through the three reaches past an iso-value, the
-    /// two steps are sampled [`DIP_SAMPLES`] times more finely for it. Cheap:
-    /// only extrema near an iso-value pay.
-    fn dip_crossings<V: Volume>(
-        &mut self,
-        volume: &V,
-        ray: &Ray,
-        [(ta, va), (tb, vb), (tc, vc)]: [(f32, f32); 3],
-        ctx: &Ctx,
-    ) -> bool {
-        if (vb - va) * (vc - vb) >= 0.0 || !(ta < tb && tb < tc) {
-            return false;
-        }
-        // Divided differences: p(t) = vb + d1 (t − tb) + c (t − ta)(t − tb).
-        let d1 = (vb - va) / (tb - ta);
-        let c = ((vc - vb) / (tc - tb) - d1) / (tc - ta);
-        let t_ext = (0.5 * (ta + tb) - d1 / (2.0 * c)).clamp(ta, tc);
-        let ext = vb + d1 * (t_ext - tb) + c * (t_ext - ta) * (t_ext - tb);
-        for &iso in &ctx.settings.iso {
-            let same_side = (va - iso) * (vb - iso) > 0.0 && (vb - iso) * (vc - iso) > 0.0;
-            if !same_side || (vb - iso) * (ext - iso) >= 0.0 {
-                continue;
-            }
-            let dt = (tc - ta) / DIP_SAMPLES as f32;
-            let mut last = (ta, va);
-            for i in 1..=DIP_SAMPLES {
-                let t = if i == DIP_SAMPLES {
-                    tc
-                } else {
-                    ta + i as f32 * dt
-                };
-                let v = if i == DIP_SAMPLES {
-                    Some(vc)
-                } else {
-                    volume.sample(ray.at(t)).map(|s| s.value)
-                };
-                let Some(v) = v else { continue };
-                if self.crossings(volume, ray, None, last, (t, v), Some(iso), ctx) {
-                    return true;
-                }
-                last = (t, v);
-            }
-        }
-        false
-    }
-
     /// Iso-surfaces crossed between samples `(t0, v0)` and `(t1, v1)`: a
     /// sign change of value − iso is a hit, placed by linear interpolation
     /// and shaded with the field's sample and gradient there. `here` is the
     /// interval holding `t1` with the sample and gradient taken at `t1`
-    /// (the hint and the fallback), when there is one; `only`: this
-    /// iso-value alone.
-    #[allow(clippy::too_many_arguments)]
+    /// (the hint and the fallback), when there is one.
     fn crossings<V: Volume>(
         &mut self,
         volume: &V,
@@ -536,14 +474,10 @@ impl RayState {
         here: Option<(&Interval, (Sample, Vec3))>,
         (t0, v0): (f32, f32),
         (t1, v1): (f32, f32),
-        only: Option<f32>,
         ctx: &Ctx,
     ) -> bool {
         let settings = ctx.settings;
         for &iso in &settings.iso {
-            if only.is_some_and(|o| o.to_bits() != iso.to_bits()) {
-                continue;
-            }
             if (v0 - iso) * (v1 - iso) < 0.0 || (v1 == iso && v0 != iso) {
                 let th = t0 + (iso - v0) / (v1 - v0) * (t1 - t0);
                 let ph = ray.at(th);
