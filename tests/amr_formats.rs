@@ -189,5 +189,41 @@ fn every_format_reads_as_yt_reads_it() {
             ((sum - exact) / exact).abs() < 1e-5,
             "{fmt}: Σ {sum} vs ∫ {exact}"
         );
+        // A field the file does not have: named, with the ones it has.
+        let e = fails(&[
+            "render",
+            "--amr",
+            &path,
+            "--field",
+            "vorticity",
+            "-o",
+            &s.str("x.png"),
+        ]);
+        assert!(
+            e.contains(path.as_str()) && e.contains("vorticity"),
+            "{fmt}: {e}"
+        );
     }
+    // A plotfile missing a level directory: the missing file is named.
+    let plt = std::fs::read_to_string(out.join("amrex.path")).unwrap();
+    let broken = s.path("broken-plt");
+    std::fs::create_dir_all(&broken).unwrap();
+    for entry in std::fs::read_dir(&plt).unwrap() {
+        let entry = entry.unwrap();
+        if entry.file_name() == "Level_1" {
+            continue;
+        }
+        let to = broken.join(entry.file_name());
+        if entry.path().is_dir() {
+            std::fs::create_dir_all(&to).unwrap();
+            for f in std::fs::read_dir(entry.path()).unwrap() {
+                let f = f.unwrap();
+                std::fs::copy(f.path(), to.join(f.file_name())).unwrap();
+            }
+        } else {
+            std::fs::copy(entry.path(), to).unwrap();
+        }
+    }
+    let e = fails(&["info", &broken.to_string_lossy()]);
+    assert!(e.contains("Level_1/Cell_H"), "{e}");
 }
