@@ -46,11 +46,11 @@
 //! blocks around its box's far corner — by index inside the cell's brick,
 //! else among the bricks beside it — and recurses into coarser cells at
 //! level boundaries; there is no packet or lane form, so a volume render
-//! of that frame takes about four times the basis's (a sample about 1.6
-//! times a basis sample point by point). Line integrals are exact (a cubic
-//! per box piece, two Gauss nodes). A cell's octant weight vanishes outside
-//! its tent's support, so the regions, their value ranges and a
-//! decomposition's ghost cells serve it unchanged.
+//! of that frame takes about four times the basis's (twice, both point by
+//! point). Line integrals are exact (a cubic per box piece, two Gauss
+//! nodes). A cell's octant weight vanishes outside its tent's support, so
+//! the regions, their value ranges and a decomposition's ghost cells serve
+//! it unchanged.
 //!
 //! **Invariants.** Every basis or octant sample inside a region lies within
 //! the region's value range (a convex combination of the values of the
