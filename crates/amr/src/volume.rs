@@ -55,7 +55,7 @@ pub enum Reconstruction {
     Nearest,
     /// Trilinear on the dual grid in level-aware octant boxes (Wang et
     /// al. 2019, Open VKL's `octant`): C⁰ everywhere, exact for linear
-    /// fields on one level; see [`octant`].
+    /// fields on one level; see `volume/octant.rs`.
     Octant,
 }
 
