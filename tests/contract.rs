@@ -129,13 +129,15 @@ fn multi_material_particles_pass() {
 }
 
 #[test]
-fn amr_cells_pass_with_both_reconstructions() {
+fn amr_cells_pass_with_every_reconstruction() {
     // Without a colour field, basis samples are plain values, which the
     // volume also gives eight at a time in lanes (checked too).
     for (reconstruction, color_field) in [
         (ReconstructionName::Basis, Some("energy")),
         (ReconstructionName::Basis, None),
         (ReconstructionName::Nearest, Some("energy")),
+        (ReconstructionName::Octant, Some("energy")),
+        (ReconstructionName::Octant, None),
     ] {
         let desc = AmrDesc {
             reconstruction: Some(reconstruction),
@@ -148,7 +150,8 @@ fn amr_cells_pass_with_both_reconstructions() {
         let c = match reconstruction {
             // Tents are piecewise linear: differences across their kinks
             // disagree with the one-sided analytic gradient at few points.
-            ReconstructionName::Basis => Contract::default(),
+            // Octant is piecewise trilinear: the same at its box faces.
+            ReconstructionName::Basis | ReconstructionName::Octant => Contract::default(),
             // Nearest is piecewise constant: no gradient to compare, and
             // quadrature of its steps is only first order.
             ReconstructionName::Nearest => Contract {

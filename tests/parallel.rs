@@ -379,6 +379,29 @@ fn amr_renders_projects_and_samples_as_one_process() {
     assert_samples_equal(&desc, &dir.0, 3, &points);
 }
 
+#[test]
+fn amr_octant_renders_projects_and_samples_as_one_process() {
+    // Each box holds every cell whose tent reaches it; octant weights and
+    // the cells that decide a vertex's rule reach no further, so samples
+    // keep their bits, and each box integrates its part of a line exactly.
+    let dir = Scratch::new("parallel-amr-octant");
+    let mut desc = amr_files(&dir);
+    if let Some(a) = desc.amr.as_mut() {
+        a.reconstruction = Some(voxless::ReconstructionName::Octant);
+    }
+    for ranks in [2, 3] {
+        let d = render_difference(&desc, &dir.0, ranks);
+        assert!(d <= 1.0 / 255.0, "{ranks} ranks: render differs by {d}");
+        let p = project_difference(&desc, &dir.0, ranks, 2);
+        assert!(p <= 1e-5, "{ranks} ranks: projection differs by {p:e}");
+    }
+    let mut rng = Lcg(10);
+    let points: Vec<Vec3> = (0..300)
+        .map(|_| Vec3::new(rng.f(), rng.f(), rng.f()) * 2.2 - Vec3::splat(0.1))
+        .collect();
+    assert_samples_equal(&desc, &dir.0, 3, &points);
+}
+
 /// A 16³ Lagrangian grid folded by a sine wave (shell crossing: overlapping
 /// streams), as .npy positions.
 fn tets_files(dir: &Scratch) -> SceneDesc {

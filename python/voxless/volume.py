@@ -292,8 +292,8 @@ class AmrCells(Volume):
     dict of name → N values (one array: the field ``"value"``); ``origin``
     the world position of cell coordinate 0 (float64); ``cell_size`` the
     world width of a finest cell. Data flags: ``field`` (opacity, default the
-    first), ``color_field``, ``reconstruction`` (``"basis"`` or
-    ``"nearest"``). Other keywords are view flags.
+    first), ``color_field``, ``reconstruction`` (``"basis"``,
+    ``"nearest"`` or ``"octant"``). Other keywords are view flags.
     """
 
     def __init__(self, cells, fields, origin=(0.0, 0.0, 0.0), cell_size=1.0, **kwargs):

@@ -207,6 +207,7 @@ pub(crate) fn amr_settings(
     let reconstruction = match a.reconstruction.unwrap_or(ReconstructionName::Basis) {
         ReconstructionName::Basis => Reconstruction::Basis,
         ReconstructionName::Nearest => Reconstruction::Nearest,
+        ReconstructionName::Octant => Reconstruction::Octant,
     };
     let cell_size = a.cell_size.unwrap_or(data_cell_size);
     if !(cell_size.is_finite() && cell_size > 0.0) {

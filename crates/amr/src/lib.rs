@@ -25,9 +25,37 @@
 //! fields. Its gradient is analytic (quotient rule on the tents). *Nearest*:
 //! the value of the cell containing `p`.
 //!
-//! **Invariants.** Every basis sample inside a region lies within the region's
-//! value range (a convex combination of the values of the cells reaching into
-//! it); regions do not overlap; every point where some tent is non-zero lies
+//! *Octant* (Wang et al., TVCG 2019; Open VKL's AMR method `octant`): the
+//! cell `C` containing `p` is cut at its centre into eight octants, and the
+//! field is trilinear in the octant holding `p`, between its eight
+//! vertices (`C`'s centre, three face centres, three edge midpoints, a
+//! corner). A vertex takes the mean of the same-level cells around it (the
+//! dual-grid value), or, when a coarser cell touches it, that cell's own
+//! octant field there; finer cells and holes drop out of the mean.
+//! *Continuity*: the finer side always takes the coarser side's values, so
+//! the field is C⁰ everywhere — across any level jump and around holes, no
+//! T-junction cracks — and it interpolates the cell values at the centres;
+//! on one level it is the dual-grid trilinear field (the basis's too), exact
+//! for linear fields. It is not C¹: a coarse cell's vertices next to finer
+//! cells repeat its own side's values, so the field bends at level
+//! boundaries, and shaded iso-surfaces crossing one show a crease there
+//! (on the AMRClaw frame sharper than the basis's softer bend; removing it
+//! is what the later GTI interpolation of Wang et al. 2020 is for). The
+//! gradient is the analytic derivative of the trilinear form (discontinuous
+//! across box faces). *Cost*: a sample finds its cell, then the seven
+//! blocks around its box's far corner — by index inside the cell's brick,
+//! else among the bricks beside it — and recurses into coarser cells at
+//! level boundaries; there is no packet or lane form, so a volume render
+//! of that frame takes about four times the basis's (twice, both point by
+//! point). Line integrals are exact (a cubic per box piece, two Gauss
+//! nodes). A cell's octant weight vanishes outside its tent's support, so
+//! the regions, their value ranges and a decomposition's ghost cells serve
+//! it unchanged.
+//!
+//! **Invariants.** Every basis or octant sample inside a region lies within
+//! the region's value range (a convex combination of the values of the
+//! cells reaching into it);
+//! regions do not overlap; every point where some tent is non-zero lies
 //! in exactly one region (up to shared faces).
 
 pub mod bricks;
@@ -88,6 +116,8 @@ pub enum AmrError {
 
 #[cfg(test)]
 mod iso_tests;
+#[cfg(test)]
+mod octant_tests;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]

@@ -1,14 +1,15 @@
 //! [`AmrVolume`]: construction, intervals and the `Volume` impl; the
 //! reconstruction ([`recon`]), its packet form ([`batch`], eight samples
-//! at a time in [`lanes`]), the exact
-//! nearest-reconstruction answers ([`nearest`]) and the cell-location
-//! baseline ([`locator`]) live beside it.
+//! at a time in [`lanes`]), the octant reconstruction ([`octant`]), the
+//! exact nearest-reconstruction answers ([`nearest`]) and the
+//! cell-location baseline ([`locator`]) live beside it.
 
 mod batch;
 mod columns;
 mod lanes;
 mod locator;
 mod nearest;
+mod octant;
 mod recon;
 
 use std::time::{Duration, Instant};
@@ -52,6 +53,10 @@ pub enum Reconstruction {
     Basis,
     /// The value of the containing cell.
     Nearest,
+    /// Trilinear on the dual grid in level-aware octant boxes (Wang et
+    /// al. 2019, Open VKL's `octant`): C⁰ everywhere, exact for linear
+    /// fields on one level; see `volume/octant.rs`.
+    Octant,
 }
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -110,6 +115,8 @@ pub struct AmrVolume {
     region_bvh: Bvh,
     /// Brick boxes, for nearest-cell lookups and exact projections.
     brick_bvh: Bvh,
+    /// Octant reconstruction's cell location (built for it only).
+    octant: Option<octant::OctantIndex>,
     bounds: Aabb,
     stats: BuildStats,
 }
@@ -184,6 +191,8 @@ impl AmrVolume {
 
         let t = Instant::now();
         let regions = regions::build(&bricks);
+        // Octant samples too are convex combinations of the values whose
+        // tents reach in (see `volume/octant.rs`): one range serves all.
         let (region_ranges, region_finest) = regions::metadata(&regions, &bricks, &values);
         let region_group = regions::groups(&regions);
         stats.region_build = t.elapsed();
@@ -230,6 +239,8 @@ impl AmrVolume {
         // Regions come out of the k-d subdivision depth first: already coherent.
         let region_bvh = Bvh::build_in_order(&region_bounds);
         let brick_bvh = Bvh::build(&brick_bounds);
+        let octant = (settings.reconstruction == Reconstruction::Octant)
+            .then(|| octant::OctantIndex::new(&bricks));
         // Cut planes through the same mapping as the region boxes, so the
         // walk's intervals are the boxes' to the bit.
         let tree = RegionTree::new(&regions.tree, &region_bounds, |axis, at| {
@@ -263,6 +274,7 @@ impl AmrVolume {
             tree,
             region_bvh,
             brick_bvh,
+            octant,
             bounds,
             stats,
         })
@@ -678,7 +690,8 @@ impl Volume for AmrVolume {
     }
 
     /// Basis reconstruction down an axis: every region's pieces found
-    /// once for all the pixels whose rays cross it ([`crate::project`]).
+    /// once for all the pixels whose rays cross it ([`crate::project`]);
+    /// octant: none (per pixel, its exact [`Volume::line_integral`]).
     fn project_image(
         &self,
         camera: &Camera,
@@ -689,6 +702,7 @@ impl Volume for AmrVolume {
         match self.settings.reconstruction {
             Reconstruction::Basis => self.project_axis_view(camera, width, height, control),
             Reconstruction::Nearest => self.project_axis_nearest(camera, width, height, control),
+            Reconstruction::Octant => None,
         }
     }
 
@@ -696,6 +710,7 @@ impl Volume for AmrVolume {
         match self.settings.reconstruction {
             Reconstruction::Nearest => self.nearest_line_integral(ray, t),
             Reconstruction::Basis => self.basis_line_integral(ray, t),
+            Reconstruction::Octant => self.octant_line_integral(ray, t),
         }
     }
 }

@@ -83,6 +83,9 @@ choice! {
         Basis = "basis",
         /// The value of the cell containing the point.
         Nearest = "nearest",
+        /// Trilinear on the dual grid in level-aware octant boxes (Open
+        /// VKL's `octant`): crack-free iso-surfaces across levels.
+        Octant = "octant",
     }
 }
 

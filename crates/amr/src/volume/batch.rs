@@ -90,7 +90,8 @@ impl AmrVolume {
         out: &mut O,
     ) {
         let field = self.settings.field;
-        let nearest = self.settings.reconstruction == Reconstruction::Nearest;
+        // Only the basis has a packet form; the others go point by point.
+        let per_point = self.settings.reconstruction != Reconstruction::Basis;
         // Results go to their sample's slot, so runs may gather samples of
         // several rays and finish in any order. Every slot is written below,
         // so the caller's buffer is only sized, not filled (filling it took
@@ -119,7 +120,7 @@ impl AmrVolume {
                     Interval::NO_HINT => self.locate(p),
                     h => Some(h as usize),
                 };
-                match region.filter(|_| !nearest) {
+                match region.filter(|_| !per_point) {
                     Some(region) => {
                         let run = runs.for_region(region);
                         if run.region != region || run.len == RUN {
@@ -131,8 +132,9 @@ impl AmrVolume {
                         run.slot[k] = slot as u32;
                         run.len += 1;
                     }
-                    // Nearest reconstruction reads one cell: nothing to
-                    // share. No region: no data.
+                    // Nearest reconstruction reads one cell, octant finds
+                    // its cells by position: nothing to share. No region:
+                    // no data.
                     None => {
                         let x = region.and_then(|reg| self.reconstruct(p, reg, field, gradient));
                         out.put(self, slot, x);

@@ -1,4 +1,5 @@
-//! Basis and nearest reconstruction from one region's bricks.
+//! Basis and nearest reconstruction from one region's bricks (octant
+//! reconstruction is dispatched from here to [`super::octant`]).
 
 use voxless_core::{Attribute, Sample, Vec3};
 
@@ -35,8 +36,13 @@ impl AmrVolume {
     ) -> Option<Recon> {
         let pu = self.to_units(p);
         let color_field = self.settings.color_field.unwrap_or(field);
-        if self.settings.reconstruction == Reconstruction::Nearest {
-            return self.nearest(pu, region, field, color_field);
+        match self.settings.reconstruction {
+            Reconstruction::Nearest => return self.nearest(pu, region, field, color_field),
+            Reconstruction::Octant => {
+                let hint = self.regions.bricks_of(region);
+                return self.octant(pu, hint, field, color_field, gradient);
+            }
+            Reconstruction::Basis => {}
         }
         let fields = self.basis_fields(field);
         let bricks = self.regions.bricks_of(region).iter();
@@ -120,8 +126,15 @@ impl AmrVolume {
     ) -> Option<Recon> {
         let pu = self.to_units(p);
         let color_field = self.settings.color_field.unwrap_or(field);
-        if self.settings.reconstruction == Reconstruction::Nearest {
-            return self.nearest(pu, region, field, color_field);
+        match self.settings.reconstruction {
+            Reconstruction::Nearest => return self.nearest(pu, region, field, color_field),
+            // Cells found by position, terms in a fixed order: the same
+            // bits whatever the bricks.
+            Reconstruction::Octant => {
+                let hint = self.regions.bricks_of(region);
+                return self.octant(pu, hint, field, color_field, gradient);
+            }
+            Reconstruction::Basis => {}
         }
         let (v0, v1) = (&self.values[field], &self.values[color_field]);
         let two_fields = color_field != field;
