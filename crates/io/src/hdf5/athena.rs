@@ -18,7 +18,8 @@
 
 use std::path::Path;
 
-use super::flash::{Block, Layout, leaf_masks, push_cells, read_strings, same_width};
+use super::amr_blocks::{Block, Layout, leaf_masks, push_cells, same_width};
+use super::flash::read_strings;
 use super::{Hdf5File, shape_text};
 use crate::IoError;
 use crate::amr::{AmrCellData, MAX_LEVEL};

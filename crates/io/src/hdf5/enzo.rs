@@ -23,7 +23,9 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use super::flash::{Block, Layout, leaf_masks, on_lattice, push_cells, push_values, same_width};
+use super::amr_blocks::{
+    Block, Layout, leaf_masks, on_lattice, push_cells, push_values, same_width,
+};
 use super::{Hdf5File, shape_text};
 use crate::IoError;
 use crate::amr::{AmrCellData, MAX_LEVEL};

@@ -14,6 +14,11 @@
 //! - JaxPM particle-mesh runs ([`read_jaxpm`]): `snap_<K>/x` positions
 //!   reordered into Lagrangian grid order with `q_index`.
 //!
+//! And three block-structured AMR layouts into an
+//! [`AmrCellData`](crate::AmrCellData) of leaf cells ([`read_flash`],
+//! [`read_enzo`], [`read_athena`]), sharing the block checks of
+//! `amr_blocks`.
+//!
 //! [`hdf5_kind`] tells the layouts apart from the groups present, and
 //! [`describe_hdf5`] prints any HDF5 file as a tree (for `voxless info`).
 //!
@@ -43,6 +48,7 @@ use hdf5_metno::types::{FloatSize, TypeDescriptor};
 
 use crate::{IoError, checked_product};
 
+mod amr_blocks;
 mod athena;
 mod describe;
 mod enzo;
