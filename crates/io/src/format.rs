@@ -293,7 +293,10 @@ pub fn read_table(
         ParticleFormat::Csv => csv_table(crate::read_csv(path)?, path)?,
         ParticleFormat::Vtk => crate::read_vtk_points(path)?,
         ParticleFormat::Xyz => crate::read_xyz(path, frame)?,
-        ParticleFormat::Lammps => crate::read_lammps(path, frame)?,
+        ParticleFormat::Lammps => {
+            let (table, note) = crate::lammps::read_lammps_noted(path, frame)?;
+            return Ok(Table { table, note });
+        }
         ParticleFormat::Particles => crate::read_particles_file(path, frame)?,
         ParticleFormat::Hdf5 => return read_hdf5(path, opts),
         ParticleFormat::GadgetBinary => {

@@ -77,6 +77,9 @@ struct SimBox {
     hi: [f64; 3],
     /// Orthogonal and `pp` along every axis.
     periodic: bool,
+    /// The tilt factors `xy xz yz` of a triclinic box that is `pp` along
+    /// every axis: periodic in LAMMPS, not here (a note says so).
+    tilted_periodic: Option<[f64; 3]>,
 }
 
 impl SimBox {
@@ -170,6 +173,17 @@ fn count_frames<R: BufRead>(mut lines: LineReader<R>) -> Result<(usize, Option<I
 /// lines than it declares, or an atom line has the wrong number of values or
 /// a value that is not a number.
 pub fn read_lammps(path: &Path, frame: usize) -> Result<ParticleTable, IoError> {
+    read_frame(LineReader::open(path)?, frame).map(|r| r.0)
+}
+
+/// [`read_lammps`] with a note on what the frame's box means here: a
+/// triclinic box with periodic boundaries is periodic in LAMMPS, but
+/// periodic images are only made for orthogonal boxes, so its particles
+/// are used as they are.
+pub fn read_lammps_noted(
+    path: &Path,
+    frame: usize,
+) -> Result<(ParticleTable, Option<String>), IoError> {
     read_frame(LineReader::open(path)?, frame)
 }
 
@@ -182,13 +196,13 @@ pub fn read_lammps_from<R: Read + Seek>(
     name: &Path,
     frame: usize,
 ) -> Result<ParticleTable, IoError> {
-    read_frame(LineReader::from_seek(reader, name)?, frame)
+    read_frame(LineReader::from_seek(reader, name)?, frame).map(|r| r.0)
 }
 
 fn read_frame<R: BufRead>(
     mut lines: LineReader<R>,
     frame: usize,
-) -> Result<ParticleTable, IoError> {
+) -> Result<(ParticleTable, Option<String>), IoError> {
     // Skip the frames before, reading only their headers.
     for index in 0..frame {
         match read_header(&mut lines, index)? {
@@ -198,6 +212,16 @@ fn read_frame<R: BufRead>(
     }
     let header =
         read_header(&mut lines, frame)?.ok_or_else(|| past_end(lines.path(), frame, frame))?;
+    let note = header
+        .sim_box
+        .and_then(|b| b.tilted_periodic)
+        .map(|[xy, xz, yz]| {
+            format!(
+                "LAMMPS frame {frame}: a triclinic box (tilt xy {xy}, xz {xz}, yz {yz}) with \
+             periodic boundaries; periodic images are made for orthogonal boxes only, so the \
+             atoms are used as they are (their kernels are cut at the box faces)"
+            )
+        });
     let table = read_atoms(&mut lines, frame, header)?;
     // More atom rows than NUMBER OF ATOMS says: the count lies, as `info`
     // (which reads every frame) says too. The next frame, even one still
@@ -217,7 +241,7 @@ fn read_frame<R: BufRead>(
         }
         break;
     }
-    Ok(table)
+    Ok((table, note))
 }
 
 fn past_end(path: &Path, frame: usize, frames: usize) -> IoError {
@@ -402,6 +426,7 @@ fn read_box(
             lo,
             hi,
             periodic: false,
+            tilted_periodic: None,
         }
     } else if triclinic {
         let (xy, xz, yz) = (rows[0][2], rows[1][2], rows[2][2]);
@@ -422,6 +447,7 @@ fn read_box(
             lo: bound_lo,
             hi: bound_hi,
             periodic: false,
+            tilted_periodic: None,
         }
     } else {
         let lo = [rows[0][0], rows[1][0], rows[2][0]];
@@ -436,14 +462,19 @@ fn read_box(
             lo,
             hi,
             periodic: false,
+            tilted_periodic: None,
         }
     };
     let mut sim_box = sim_box;
-    let bounds: Vec<&&str> = flags.iter().filter(|f| f.len() == 2).collect();
-    sim_box.periodic = !general
-        && !triclinic
-        && bounds.len() == 3
-        && bounds.iter().all(|f| f.eq_ignore_ascii_case("pp"));
+    let bounds: Vec<&&str> = flags
+        .iter()
+        .filter(|f| f.len() == 2 && !["xy", "xz", "yz"].contains(f))
+        .collect();
+    let all_pp = bounds.len() == 3 && bounds.iter().all(|f| f.eq_ignore_ascii_case("pp"));
+    sim_box.periodic = !general && !triclinic && all_pp;
+    if triclinic && all_pp {
+        sim_box.tilted_periodic = Some([rows[0][2], rows[1][2], rows[2][2]]);
+    }
     if sim_box.lo.iter().chain(&sim_box.hi).any(|v| !v.is_finite()) {
         return Err(lines.error(format!("frame {frame}: BOX BOUNDS are not finite")));
     }

@@ -149,6 +149,23 @@ ITEM: ATOMS id xs ys zs
     assert_eq!(t.domain, Some(([0.0, -3.0, 0.0], [13.0, 10.0, 10.0])));
     // x = xlo + xs lx + ys xy + zs xz, y = ylo + ys ly + zs yz, z = zlo + zs lz.
     assert_eq!(t.positions, [[6.5, 3.5, 5.0], [13.0, 7.0, 10.0]]);
+    // Periodic in LAMMPS (pp), not here: not a periodic table, and a note
+    // that says so, with the tilts.
+    assert!(!t.periodic);
+    let (_, note) = voxless_io::lammps::read_lammps_noted(&path, 0).unwrap();
+    let note = note.expect("a note on the tilted periodic box");
+    assert!(
+        note.contains("triclinic") && note.contains("xy 2"),
+        "{note}"
+    );
+    // An orthogonal pp box is periodic, without a note.
+    let ortho = dir.write(
+        "dump.ortho",
+        "ITEM: TIMESTEP\n5\nITEM: NUMBER OF ATOMS\n1\nITEM: BOX BOUNDS pp pp pp\n0 10\n0 10\n0 10\n\
+         ITEM: ATOMS id x y z\n1 1 2 3\n",
+    );
+    let (t, note) = voxless_io::lammps::read_lammps_noted(&ortho, 0).unwrap();
+    assert!(t.periodic && note.is_none(), "{note:?}");
 }
 
 #[test]
