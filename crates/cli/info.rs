@@ -119,15 +119,22 @@ fn describe_file(args: &InfoArgs) -> Result<String> {
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     if ext == "cells" {
-        return amr(path, "ExaBricks cells", exabricks(path));
+        let scalars = voxless::io::exabricks_scalars(path)?;
+        return amr(
+            path,
+            "ExaBricks cells",
+            voxless::io::read_exabricks(path, &scalars),
+        );
     }
     if name.starts_with("fort.q") {
         return amr(path, "AMRClaw output", voxless::io::read_amrclaw(path));
     }
-    // AMR outputs told apart by their names and neighbours; HDF5 ones by
-    // their layout (below).
-    if path.join("Header").is_file() || ext == "athdf" || ext == "hierarchy" || enzo(path) {
-        let format = voxless::io::amr_format(path)?;
+    // AMR outputs the library tells apart by their paths (HDF5 ones with
+    // a FLASH or Athena++ layout also below, by their layout).
+    use voxless::io::AmrFormat;
+    if let Ok(format @ (AmrFormat::Amrex | AmrFormat::Enzo | AmrFormat::Athena)) =
+        voxless::io::amr_format(path)
+    {
         return amr(
             path,
             format.name(),
@@ -434,40 +441,6 @@ fn cube_root(n: usize) -> Option<usize> {
 
 /// The `.scalars` files beside an ExaBricks `.cells` file:
 /// `<stem>.<field>.scalars`.
-/// Whether `path` is an Enzo parameter file (its `.hierarchy` beside it).
-fn enzo(path: &Path) -> bool {
-    let mut h = path.as_os_str().to_owned();
-    h.push(".hierarchy");
-    Path::new(&h).is_file()
-}
-
-fn exabricks(cells: &Path) -> Result<voxless::io::AmrCellData, voxless::io::IoError> {
-    let stem = cells
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let dir = match cells.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let mut scalars: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .map_err(|source| voxless::io::IoError::Io {
-            path: dir.clone(),
-            source,
-        })?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            let n = p
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            n.starts_with(&format!("{stem}.")) && n.ends_with(".scalars")
-        })
-        .collect();
-    scalars.sort();
-    voxless::io::read_exabricks(cells, &scalars)
-}
-
 fn amr(
     path: &Path,
     what: &str,

@@ -40,6 +40,36 @@ fn monotone(v: &[f32]) -> bool {
     v.windows(2).all(|w| w[0] < w[1]) || v.windows(2).all(|w| w[0] > w[1])
 }
 
+/// An image of `height` rows made in bands of `band` rows on the thread
+/// pool: `f` gives a band's pixels (row-major), progress is reported as
+/// bands finish, and a cancelled control stops the bands not yet started.
+pub(crate) fn in_bands(
+    height: usize,
+    band: usize,
+    control: &Control,
+    f: impl Fn(std::ops::Range<usize>) -> Vec<f32> + Sync,
+) -> Result<Vec<f32>, Cancelled> {
+    let done = std::sync::atomic::AtomicU64::new(0);
+    let bands: Vec<Option<Vec<f32>>> = (0..height.div_ceil(band))
+        .into_par_iter()
+        .map(|k| {
+            if control.is_cancelled() {
+                return None;
+            }
+            let rows = k * band..((k + 1) * band).min(height);
+            let n = rows.len() as u64;
+            let pixels = f(rows);
+            let d = done.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+            control.report(d + n, height as u64);
+            Some(pixels)
+        })
+        .collect();
+    if control.is_cancelled() {
+        return Err(Cancelled);
+    }
+    Ok(bands.into_iter().flatten().flatten().collect())
+}
+
 /// The pixels of an orthographic view down axis `m`: every pixel's ray
 /// (row-major) and its range inside the bounds; the range `t` all rays
 /// that meet the bounds share; the axes `ax` and `ay` across the view and
@@ -133,32 +163,17 @@ impl AmrVolume {
             ys,
         } = self.axis_grid(camera, width, height)?;
         let w = width as usize;
-        let done = std::sync::atomic::AtomicU64::new(0);
-        let bands: Vec<Option<Vec<f32>>> = (0..height.div_ceil(BAND))
-            .into_par_iter()
-            .map(|band| {
-                if control.is_cancelled() {
-                    return None;
-                }
-                let rows = (band * BAND) as usize..((band + 1) * BAND).min(height) as usize;
-                let column = self.project_band(
-                    &rays[rows.start * w..rows.end * w],
-                    &ts,
-                    rows.start * w,
-                    m,
-                    t,
-                    (ax, &xs),
-                    (ay, &ys[rows.clone()]),
-                );
-                let d = done.fetch_add(rows.len() as u64, std::sync::atomic::Ordering::Relaxed);
-                control.report(d + rows.len() as u64, height as u64);
-                Some(column)
-            })
-            .collect();
-        if control.is_cancelled() {
-            return Some(Err(Cancelled));
-        }
-        Some(Ok(bands.into_iter().flatten().flatten().collect()))
+        Some(in_bands(height as usize, BAND as usize, control, |rows| {
+            self.project_band(
+                &rays[rows.start * w..rows.end * w],
+                &ts,
+                rows.start * w,
+                m,
+                t,
+                (ax, &xs),
+                (ay, &ys[rows]),
+            )
+        }))
     }
 
     /// The columns of a band of rows: `rays` row-major, `ts[base + i]` the

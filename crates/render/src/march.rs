@@ -184,9 +184,6 @@ pub(crate) struct RayState {
 /// rounding, not structure, for iso-surfaces.
 const ROUNDING: f32 = 4.0;
 
-/// Lattice points per step in a gap's pieces that may hold a crossing.
-const GAP_DIVS: usize = 1;
-
 impl RayState {
     /// The state at the start of a ray whose samples are cut to `span`,
     /// with opacity `alpha0` already in front of it (and no colour).
@@ -385,12 +382,11 @@ impl RayState {
     /// holds one, so every crossing lies in such a piece; a visible piece
     /// in a gap is shorter than a step, or it would hold a sample. Each
     /// such stretch (touching pieces merged) is sampled at its ends and at
-    /// the points of a lattice [`GAP_DIVS`] times finer than the step,
-    /// anchored at `t1`, inside it: the points depend on the ray, the step
+    /// the points of the step's lattice anchored at `t1` inside it (where a
+    /// stretch spans one): the points depend on the ray, the step
     /// and the stretch alone, not on how a volume cuts its pieces or which
     /// other pieces it reports (a prepared volume answers for its own
     /// transfer function), so every path finds the same crossings.
-    #[allow(clippy::too_many_arguments)]
     fn gap_crossings<V: Volume>(
         &mut self,
         volume: &V,
@@ -409,19 +405,25 @@ impl RayState {
         pieces.clear();
         volume.intervals(ray, Range1::new(t0, t1), &query, &mut pieces);
         // Only pieces whose range holds an iso-value, clipped to the gap;
-        // touching ones are one stretch.
-        let mut stretches: Vec<(f32, f32)> = Vec::new();
-        for p in pieces.iter().filter(|p| holds_iso(p.value_range)) {
+        // touching ones are one stretch (merged in place: `t` only).
+        let mut kept = 0;
+        for i in 0..pieces.len() {
+            let p = pieces[i];
             let (a, b) = (p.t.lo.max(t0), p.t.hi.min(t1));
-            match stretches.last_mut() {
-                Some(last) if last.1 >= a => last.1 = last.1.max(b),
-                _ if b >= a => stretches.push((a, b)),
-                _ => {}
+            if !holds_iso(p.value_range) || b < a {
+                continue;
+            }
+            if kept > 0 && pieces[kept - 1].t.hi >= a {
+                pieces[kept - 1].t.hi = pieces[kept - 1].t.hi.max(b);
+            } else {
+                pieces[kept].t = Range1::new(a, b);
+                kept += 1;
             }
         }
-        self.gap_pieces = pieces;
-        let d = step / GAP_DIVS as f32;
+        pieces.truncate(kept);
+        let d = step;
         if !(d > 0.0) {
+            self.gap_pieces = pieces;
             return false;
         }
         // A point on the volume's boundary may lie just outside its
@@ -440,7 +442,12 @@ impl RayState {
                 .or_else(|| volume.sample(ray.at(t + inward * min_step_at(t))))
                 .map(|s| s.value)
         };
-        for (a, b) in stretches {
+        let mut stop = false;
+        'stretches: for &Interval {
+            t: Range1 { lo: a, hi: b },
+            ..
+        } in &pieces
+        {
             let mut last = value_at(a, 1.0).map(|v| (a, v));
             // Lattice points t1 − k·d strictly inside (a, b), front to back.
             let k_hi = ((t1 - a) / d).ceil() as i64;
@@ -454,12 +461,14 @@ impl RayState {
                 if let (Some(p), Some(q)) = (last, v)
                     && self.crossings(volume, ray, None, p, q, ctx)
                 {
-                    return true;
+                    stop = true;
+                    break 'stretches;
                 }
                 last = v;
             }
         }
-        false
+        self.gap_pieces = pieces;
+        stop
     }
 
     /// Iso-surfaces crossed between samples `(t0, v0)` and `(t1, v1)`: a

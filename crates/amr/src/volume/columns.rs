@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use voxless_core::{Camera, Cancelled, Control, Volume};
 
 use super::AmrVolume;
-use crate::project::{AxisGrid, span};
+use crate::project::{AxisGrid, in_bands, span};
 
 /// Rows per task.
 const BAND: usize = 16;
@@ -67,51 +67,37 @@ impl AmrVolume {
             })
             .collect();
         let (w, h) = (width as usize, height as usize);
-        let done = std::sync::atomic::AtomicU64::new(0);
         let lower =
             |b: &crate::bricks::Brick, a: usize| self.origin[a] + b.lower[a] as f32 * self.h;
         let upper =
             |b: &crate::bricks::Brick, a: usize| self.origin[a] + b.upper()[a] as f32 * self.h;
-        let bands: Vec<Option<Vec<f32>>> = (0..h.div_ceil(BAND))
-            .into_par_iter()
-            .map(|band| {
-                if control.is_cancelled() {
-                    return None;
+        Some(in_bands(h, BAND, control, |rows| {
+            let band_ys = &ys[rows.clone()];
+            let mut sums = vec![0.0f64; rows.len() * w];
+            for (b, col) in self.bricks.iter().zip(&columns) {
+                let (x0, x1) = (lower(b, ax), upper(b, ax));
+                let (y0, y1) = (lower(b, ay), upper(b, ay));
+                let (cols, brows) = (span(&xs, x0, x1), span(band_ys, y0, y1));
+                if cols.is_empty() || brows.is_empty() {
+                    continue;
                 }
-                let rows = band * BAND..((band + 1) * BAND).min(h);
-                let band_ys = &ys[rows.clone()];
-                let mut sums = vec![0.0f64; rows.len() * w];
-                for (b, col) in self.bricks.iter().zip(&columns) {
-                    let (x0, x1) = (lower(b, ax), upper(b, ax));
-                    let (y0, y1) = (lower(b, ay), upper(b, ay));
-                    let (cols, brows) = (span(&xs, x0, x1), span(band_ys, y0, y1));
-                    if cols.is_empty() || brows.is_empty() {
-                        continue;
-                    }
-                    let (nx, ny) = (b.size[ax] as usize, b.size[ay] as usize);
-                    let cw = b.width() as f32 * self.h;
-                    // The cell a centre falls in: the half-open footprints
-                    // `span` decided on, clamped against rounding.
-                    let cell = |v: f32, lo: f32, n: usize| {
-                        (((v - lo) / cw).floor().max(0.0) as usize).min(n - 1)
-                    };
-                    let ix: Vec<usize> = cols.clone().map(|x| cell(xs[x], x0, nx)).collect();
-                    for y in brows {
-                        let row = &col[cell(band_ys[y], y0, ny) * nx..][..nx];
-                        let out = &mut sums[y * w..][..w];
-                        for (x, &i) in cols.clone().zip(&ix) {
-                            out[x] += row[i];
-                        }
+                let (nx, ny) = (b.size[ax] as usize, b.size[ay] as usize);
+                let cw = b.width() as f32 * self.h;
+                // The cell a centre falls in: the half-open footprints
+                // `span` decided on, clamped against rounding.
+                let cell = |v: f32, lo: f32, n: usize| {
+                    (((v - lo) / cw).floor().max(0.0) as usize).min(n - 1)
+                };
+                let ix: Vec<usize> = cols.clone().map(|x| cell(xs[x], x0, nx)).collect();
+                for y in brows {
+                    let row = &col[cell(band_ys[y], y0, ny) * nx..][..nx];
+                    let out = &mut sums[y * w..][..w];
+                    for (x, &i) in cols.clone().zip(&ix) {
+                        out[x] += row[i];
                     }
                 }
-                let d = done.fetch_add(rows.len() as u64, std::sync::atomic::Ordering::Relaxed);
-                control.report(d + rows.len() as u64, h as u64);
-                Some(sums.into_iter().map(|s| s as f32).collect::<Vec<f32>>())
-            })
-            .collect();
-        if control.is_cancelled() {
-            return Some(Err(Cancelled));
-        }
-        Some(Ok(bands.into_iter().flatten().flatten().collect()))
+            }
+            sums.into_iter().map(|s| s as f32).collect()
+        }))
     }
 }

@@ -226,7 +226,19 @@ pub fn read_amr(path: &Path) -> Result<(AmrCellData, AmrFormat), IoError> {
     let data = match format {
         AmrFormat::AmrClaw => read_amrclaw(path)?,
         AmrFormat::Amrex => read_amrex(path)?,
-        AmrFormat::ExaBricks => read_exabricks(path, &exabricks_scalars(path)?)?,
+        AmrFormat::ExaBricks => {
+            let scalars = exabricks_scalars(path)?;
+            if scalars.is_empty() {
+                let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+                return Err(IoError::format(
+                    path,
+                    format!(
+                        "has no {stem}.<field>.scalars beside it: give --cells with --scalars FILE"
+                    ),
+                ));
+            }
+            read_exabricks(path, &scalars)?
+        }
         AmrFormat::Flash | AmrFormat::Enzo | AmrFormat::Athena => read_hdf5_amr(path, format)?,
     };
     Ok((data, format))
@@ -260,8 +272,8 @@ fn read_hdf5_amr(path: &Path, format: AmrFormat) -> Result<AmrCellData, IoError>
 }
 
 /// The `.scalars` files beside ExaBricks cells `<stem>.cells`: every
-/// `<stem>.<field>.scalars`, sorted by name.
-fn exabricks_scalars(cells: &Path) -> Result<Vec<std::path::PathBuf>, IoError> {
+/// `<stem>.<field>.scalars`, sorted by name (none is not an error here).
+pub fn exabricks_scalars(cells: &Path) -> Result<Vec<std::path::PathBuf>, IoError> {
     let dir = cells
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -283,11 +295,5 @@ fn exabricks_scalars(cells: &Path) -> Result<Vec<std::path::PathBuf>, IoError> {
         })
         .collect();
     found.sort();
-    if found.is_empty() {
-        return Err(IoError::format(
-            cells,
-            format!("has no {stem}.<field>.scalars beside it: give --cells with --scalars FILE"),
-        ));
-    }
     Ok(found)
 }
