@@ -62,6 +62,7 @@
 pub mod autorange;
 pub mod budget;
 mod camera;
+pub mod camera_path;
 mod checks;
 mod columns;
 pub mod demo;
@@ -83,6 +84,7 @@ mod resolve;
 pub mod save;
 mod scene;
 pub mod series;
+pub mod slice;
 pub mod stream;
 mod surfaces;
 mod view;

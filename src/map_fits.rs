@@ -62,10 +62,39 @@ pub fn map_meta(desc: &SceneDesc, base: &Path, frame: usize) -> Result<MapMeta, 
 pub fn write_projection_fits(
     path: &Path,
     view: &ProjectionView,
+    size: (u32, u32),
+    column: &[f32],
+    meta: &MapMeta,
+    history: &[String],
+) -> Result<(), SceneError> {
+    write_map_fits(path, view, size, column, meta, history, None)
+}
+
+/// Writes the `w`×`h` slice `values` of `quantity` (see [`crate::slice`])
+/// through `view` as a FITS image at `path`: the plane's world coordinates,
+/// `BUNIT` mass per volume for a particle density in the snapshot's units,
+/// and the plane's position.
+pub fn write_slice_fits(
+    path: &Path,
+    view: &ProjectionView,
+    size: (u32, u32),
+    values: &[f32],
+    meta: &MapMeta,
+    quantity: &str,
+    history: &[String],
+) -> Result<(), SceneError> {
+    write_map_fits(path, view, size, values, meta, history, Some(quantity))
+}
+
+/// A projection's map (`slice` None) or a slice of `slice`'s quantity.
+fn write_map_fits(
+    path: &Path,
+    view: &ProjectionView,
     (w, h): (u32, u32),
     column: &[f32],
     meta: &MapMeta,
     history: &[String],
+    slice: Option<&str>,
 ) -> Result<(), SceneError> {
     let units = meta.snapshot.as_ref().and_then(|s| s.units.as_ref());
     let (length, per) = match units {
@@ -101,23 +130,40 @@ pub fn write_projection_fits(
     if per != 1.0 {
         wcs.cunit = [length.to_string(), length.to_string()];
     }
-    let mut cards = vec![
-        text(
-            "DATAKIND",
-            "column density",
-            "integral of the field along the line of sight",
-        ),
-        text(
-            "PROJAXES",
-            &format!("right {:?} up {:?}", round(view.right), round(view.up)),
-            "image axes in world coordinates",
-        ),
-        text(
-            "LOS",
-            &format!("{:?}", round(view.normal.map(|v| -v))),
-            "line of sight (away from the viewer)",
-        ),
-    ];
+    let axes = text(
+        "PROJAXES",
+        &format!("right {:?} up {:?}", round(view.right), round(view.up)),
+        "image axes in world coordinates",
+    );
+    let mut cards = match slice {
+        None => vec![
+            text(
+                "DATAKIND",
+                "column density",
+                "integral of the field along the line of sight",
+            ),
+            axes,
+            text(
+                "LOS",
+                &format!("{:?}", round(view.normal.map(|v| -v))),
+                "line of sight (away from the viewer)",
+            ),
+        ],
+        Some(q) => vec![
+            text("DATAKIND", &format!("slice of {q}"), "the field on a plane"),
+            axes,
+            text(
+                "PLANE",
+                &format!("{:?}", round(view.center)),
+                "a point of the plane (the image centre)",
+            ),
+            text(
+                "NORMAL",
+                &format!("{:?}", round(view.normal)),
+                "the plane's normal (towards the viewer)",
+            ),
+        ],
+    };
     if let Some(k) = &meta.kernel {
         cards.push(text("KERNEL", k, "RBF / SPH kernel"));
     }
@@ -160,7 +206,11 @@ pub fn write_projection_fits(
         height: h as usize,
         data: column,
         wcs: Some(wcs),
-        bunit: Some(units.map(fits_unit).unwrap_or_default()),
+        bunit: Some(match slice {
+            None => units.map(|u| fits_unit(u, 2)).unwrap_or_default(),
+            Some("density") => units.map(|u| fits_unit(u, 3)).unwrap_or_default(),
+            Some(_) => String::new(),
+        }),
         cards,
         history: history.to_vec(),
     };
@@ -183,14 +233,15 @@ fn round(v: [f64; 3]) -> [f64; 3] {
     v.map(|c| (c * 1e6).round() / 1e6 + 0.0)
 }
 
-/// Mass per area in the FITS standard's unit syntax ("10**10 solMass
-/// Mpc-2"); lengths in h⁻¹ units say so with "h".
-fn fits_unit(u: &Units) -> String {
+/// Mass per length^`power` (area: 2, volume: 3) in the FITS standard's
+/// unit syntax ("10**10 solMass Mpc-2"); lengths in h⁻¹ units say so with
+/// "h".
+fn fits_unit(u: &Units, power: i32) -> String {
     let (l, lf) = u.length_name();
     let (m, mf) = u.mass_name();
     let m = if m == "Msun" { "solMass" } else { m };
     // Factors: powers of ten as 10**k, others as plain numbers.
-    let factor = mf / (lf * lf);
+    let factor = mf / lf.powi(power);
     let scale = if (factor - 1.0).abs() < 1e-5 {
         String::new()
     } else {
@@ -202,5 +253,15 @@ fn fits_unit(u: &Units) -> String {
         }
     };
     let h = if u.hubble.is_some() { " h" } else { "" };
-    format!("{scale}{m} {l}-2{h}")
+    format!("{scale}{m} {l}-{power}{h}")
+}
+
+/// The unit world lengths are in, when the snapshot states it: its name
+/// (`kpc`, `Mpc/h`) and how many of it one world unit is — what a scale bar
+/// labels its length with.
+pub fn length_unit(meta: &MapMeta) -> Option<(String, f64)> {
+    let u = meta.snapshot.as_ref()?.units.as_ref()?;
+    let (name, per) = u.length_name();
+    let h = if u.hubble.is_some() { "/h" } else { "" };
+    Some((format!("{name}{h}"), per))
 }

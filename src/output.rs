@@ -46,6 +46,8 @@ pub enum OutputKind {
     Map,
     /// Float32 columns (sampled fields): `.npy`.
     Columns,
+    /// A slice: a map's formats, or `.png` (colormapped).
+    Slice,
 }
 
 impl OutputKind {
@@ -54,6 +56,7 @@ impl OutputKind {
             OutputKind::Image => &["png", "jpg", "jpeg", "exr"],
             OutputKind::Map => &["npy", "exr", "fits"],
             OutputKind::Columns => &["npy"],
+            OutputKind::Slice => &["npy", "exr", "fits", "png"],
         }
     }
 }

@@ -17,6 +17,7 @@ use voxless_scene::SceneDesc;
 
 use crate::load::{self, Loaded, Purpose};
 use crate::parallel::{self, FramePlan, Part, PartCounts, Timings};
+use crate::slice::SliceDesc;
 use crate::{
     DistributedScene, Fields, ParallelError, ProjectionDesc, ProjectionView, Resolved, Scene,
     SceneError, VolumeKind, WorldFrame,
@@ -487,6 +488,83 @@ impl PlacedData<'_> {
             PlacedData::Process(l) => l.volume.total_mass().map(|m| m * l.frame.scale.powi(3)),
             PlacedData::Ranks(..) => None,
         }
+    }
+
+    /// The fields at world `points`, exactly as [`Placed::sample`] gives
+    /// them (rank 0; `None` on the others).
+    pub fn sample(
+        &self,
+        points: &[[f64; 3]],
+        gradient: bool,
+    ) -> Result<Option<Vec<f32>>, ParallelError> {
+        match self {
+            PlacedData::Process(l) => {
+                let local: Vec<_> = points.iter().map(|&p| l.frame.to_local(p)).collect();
+                Ok(Some(l.volume.sample_points(&local, gradient)))
+            }
+            PlacedData::Ranks(c, p) => {
+                let local: Vec<_> = points.iter().map(|&x| p.frame.to_local(x)).collect();
+                let (part, d) = (p.volume.as_ref(), &p.decomposition);
+                parallel::sample(*c, part, d, &p.fields, &local, gradient)
+            }
+        }
+    }
+
+    /// The data's fields.
+    pub fn fields(&self) -> Fields {
+        match self {
+            PlacedData::Process(l) => l.volume.fields(),
+            PlacedData::Ranks(_, p) => p.fields.clone(),
+        }
+    }
+
+    /// The slice `slice` describes (see [`crate::slice`]) at `width` ×
+    /// `height`: its plane, the name of the quantity shown and (rank 0;
+    /// `None` on the others) its values, row-major. `progress` hears the
+    /// rows done of all.
+    pub fn slice(
+        &self,
+        desc: &SceneDesc,
+        slice: &SliceDesc,
+        (width, height): (u32, u32),
+        progress: &dyn Fn(u64, u64),
+    ) -> Result<(ProjectionView, String, Option<Vec<f32>>), ParallelError> {
+        let fields = self.fields();
+        let (column, name) =
+            crate::slice::quantity_column(&fields, desc, slice.quantity.as_deref())?;
+        let periodic = matches!(
+            fields,
+            Fields::Tets { .. }
+                | Fields::Particles {
+                    periodic: Some(_),
+                    ..
+                }
+        );
+        let (bounds, frame) = match self {
+            PlacedData::Process(l) => (l.volume.bounds(), &l.frame),
+            PlacedData::Ranks(_, p) => (p.summary.bounds, &p.frame),
+        };
+        let view = crate::slice::slice_view(&slice.plane, &bounds, frame, periodic)?;
+        let columns = fields.columns(false).len();
+        let mut values = Vec::with_capacity(width as usize * height as usize);
+        for rows in crate::slice::row_chunks(height) {
+            let end = rows.end;
+            let pts = crate::slice::slice_points(&view, (width, height), rows, slice.pixels);
+            if let Some(s) = self.sample(&pts, false)? {
+                values.extend(crate::slice::pixel_values(
+                    &s,
+                    columns,
+                    column,
+                    slice.pixels,
+                ));
+            }
+            progress(end as u64, height as u64);
+        }
+        let root = match self {
+            PlacedData::Process(_) => true,
+            PlacedData::Ranks(c, _) => c.rank() == 0,
+        };
+        Ok((view, name, root.then_some(values)))
     }
 
     /// The projection `projection` describes over the data's bounds, and

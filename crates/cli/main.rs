@@ -11,6 +11,7 @@ mod out;
 mod progress;
 mod render;
 mod sequence;
+mod slice;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -142,6 +143,73 @@ enum Command {
         /// Frame N of a time series (default 0).
         #[arg(long, value_name = "N")]
         frame: Option<usize>,
+        #[command(flatten)]
+        data: DataArgs,
+    },
+    /// The reconstructed field on a plane: one value per pixel, exactly what
+    /// `sample` gives at the pixel centres (row 0 at the top; for --axis z
+    /// the image's right is +x and its up +y). Geometry as `project`'s.
+    /// Writes raw values (.npy H×W float32, .exr, .fits with world
+    /// coordinates) or a colormapped picture (.png).
+    Slice {
+        /// The plane's normal axis (default z).
+        #[arg(long, value_enum, conflicts_with = "normal")]
+        axis: Option<Axis>,
+        /// Off-axis: the plane's normal (image right = north × normal).
+        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+        normal: Option<Vec<f64>>,
+        /// The image's up direction with --normal (default: yt's rule).
+        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, requires = "normal")]
+        north: Option<Vec<f64>>,
+        /// A point of the plane, at the image centre (default: the data's centre).
+        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+        center: Option<Vec<f64>>,
+        /// World width (and height; default: the width) the image covers
+        /// (default: the data's extent across the plane).
+        #[arg(long, num_args = 1..=2, value_names = ["W", "H"])]
+        width: Option<Vec<f64>>,
+        /// Override the bounds the default footprint covers: x0 y0 z0 x1 y1 z1.
+        #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], allow_negative_numbers = true)]
+        bounds: Option<Vec<f64>>,
+        /// Image size in pixels (default 800 600).
+        #[arg(long, num_args = 2, value_names = ["W", "H"])]
+        size: Option<Vec<u32>>,
+        /// What to show: a column `sample` writes — density (default),
+        /// attribute (or the attribute's name), streams (tessellations), an
+        /// AMR field by name (default: --field, else the first).
+        #[arg(long, value_name = "NAME")]
+        quantity: Option<String>,
+        /// centre (default): the value at each pixel's centre; area: the
+        /// mean over each pixel's square (4×4 Gauss–Legendre points).
+        #[arg(long, value_enum)]
+        pixels: Option<voxless::PixelsName>,
+        /// Output: .npy (float32 H×W), .exr, .fits (raw values) or .png
+        /// (colormapped).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Frame N of a time series (default 0).
+        #[arg(long, value_name = "N")]
+        frame: Option<usize>,
+        /// .png: the colormap (see `voxless colormaps`; default viridis).
+        #[arg(long, help_heading = "Picture (.png)")]
+        colormap: Option<String>,
+        /// .png: log scale (default: when no value is negative and the
+        /// largest is over 100× the median, as in clumpy fields).
+        #[arg(long, conflicts_with = "linear", help_heading = "Picture (.png)")]
+        log: bool,
+        /// .png: linear scale.
+        #[arg(long, help_heading = "Picture (.png)")]
+        linear: bool,
+        /// .png: the values mapped to the colormap's ends (default: the
+        /// slice's range).
+        #[arg(long, num_args = 2, value_names = ["LO", "HI"], allow_negative_numbers = true, help_heading = "Picture (.png)")]
+        value_range: Option<Vec<f32>>,
+        /// .png: draw a labelled colour bar.
+        #[arg(long, help_heading = "Picture (.png)")]
+        colorbar: bool,
+        /// .png: draw a scale bar in world units.
+        #[arg(long, help_heading = "Picture (.png)")]
+        scale_bar: bool,
         #[command(flatten)]
         data: DataArgs,
     },
@@ -350,6 +418,68 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
                 &projection,
                 &output,
                 radii.as_deref(),
+            )
+        }
+        Command::Slice {
+            axis,
+            normal,
+            north,
+            center,
+            width,
+            bounds,
+            size,
+            quantity,
+            pixels,
+            output,
+            frame,
+            colormap,
+            log,
+            linear,
+            value_range,
+            colorbar,
+            scale_bar,
+            data,
+        } => {
+            if data.save_radii.is_some() {
+                anyhow::bail!("--save-radii is written by render, project and sample, not slice");
+            }
+            let picked_colormap = colormap.is_some();
+            let args = SceneArgs {
+                data,
+                view: ViewArgs {
+                    size,
+                    colormap,
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
+            let (desc, base) = args.scene()?;
+            let slice = voxless::slice::SliceDesc {
+                plane: projection_desc(axis, bounds, normal, north, center, width, None),
+                quantity,
+                pixels: match pixels {
+                    Some(voxless::PixelsName::Area) => voxless::slice::SlicePixels::Area,
+                    _ => voxless::slice::SlicePixels::Centre,
+                },
+            };
+            let look = voxless::slice::SliceLook {
+                log: (log || linear).then_some(log),
+                range: value_range.map(|r| [r[0], r[1]]),
+                colorbar,
+            };
+            let picture = slice::Picture {
+                look,
+                scale_bar,
+                colormap: picked_colormap,
+            };
+            slice::run(
+                placement,
+                &desc,
+                &base,
+                frame.unwrap_or(0),
+                &slice,
+                &picture,
+                &output,
             )
         }
         // Commands without data to share run on rank 0.

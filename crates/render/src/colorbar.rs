@@ -100,13 +100,15 @@ pub fn format_tick(v: f32) -> String {
 
 /// What a pixel of the overlay holds.
 #[derive(Clone, Copy, PartialEq, Eq)]
-enum Mark {
+pub(crate) enum Mark {
     None,
     Outline,
     Ink,
 }
 
-struct Overlay {
+/// Marks drawn over an image: dark outlines and white ink (shared by the
+/// colour bar and the annotations, [`crate::annotate`]).
+pub(crate) struct Overlay {
     w: i64,
     h: i64,
     marks: Vec<Mark>,
@@ -115,7 +117,7 @@ struct Overlay {
 }
 
 impl Overlay {
-    fn new(w: i64, h: i64) -> Self {
+    pub(crate) fn new(w: i64, h: i64) -> Self {
         Overlay {
             w,
             h,
@@ -141,7 +143,7 @@ impl Overlay {
         self.touch(x, y);
     }
 
-    fn fill(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, m: Mark) {
+    pub(crate) fn fill(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, m: Mark) {
         for y in y0.max(0)..y1.min(self.h) {
             for x in x0.max(0)..x1.min(self.w) {
                 self.mark(x, y, m);
@@ -149,8 +151,19 @@ impl Overlay {
         }
     }
 
+    /// Draws the marks into `image` (of the overlay's size), opaque.
+    pub(crate) fn apply(&self, image: &mut Image) {
+        for (p, m) in image.pixels.iter_mut().zip(&self.marks) {
+            match m {
+                Mark::None => {}
+                Mark::Outline => *p = [0.0, 0.0, 0.0, 1.0],
+                Mark::Ink => *p = [1.0, 1.0, 1.0, 1.0],
+            }
+        }
+    }
+
     /// Text with its top left corner at (x, y), and an outline `o` pixels wide.
-    fn text(&mut self, s: &str, x: i64, y: i64, scale: u32, o: i64) {
+    pub(crate) fn text(&mut self, s: &str, x: i64, y: i64, scale: u32, o: i64) {
         let mut ink = Vec::new();
         font::rasterize(s, x, y, scale, |px, py| ink.push((px, py)));
         for &(px, py) in &ink {
@@ -267,16 +280,7 @@ pub fn draw_colorbar(
             ov.text(t, (bx1 - tw).max(o), ty, scale, o);
         }
     }
-    for y in 0..h {
-        for x in 0..w {
-            let p = &mut image.pixels[(y * w + x) as usize];
-            match ov.marks[(y * w + x) as usize] {
-                Mark::None => {}
-                Mark::Outline => *p = [0.0, 0.0, 0.0, 1.0],
-                Mark::Ink => *p = [1.0, 1.0, 1.0, 1.0],
-            }
-        }
-    }
+    ov.apply(image);
     for y in by0..by1 {
         let t = if bar_h > 1 {
             (by1 - 1 - y) as f32 / (bar_h - 1) as f32

@@ -39,6 +39,7 @@
 //! order, so the same inputs give the same image bit for bit regardless of
 //! thread count or tile scheduling.
 
+pub mod annotate;
 pub mod bluenoise;
 mod classify;
 pub mod colorbar;

@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::enums::{
-    AxisName, ClassificationName, FreeFlightName, KernelName, NoiseName, PixelsName,
+    AxisName, ClassificationName, FollowName, FreeFlightName, KernelName, NoiseName, PixelsName,
     ProjectionName, ReconstructionName, Species, TetModeName,
 };
 
@@ -278,6 +278,32 @@ pub struct CameraDesc {
     /// Zoom factor > 0: the eye's distance to the look-at point is divided by
     /// it (orthographic: the view height is).
     pub zoom: Option<f32>,
+    /// A camera path: keyframes in increasing `frame` order, interpolated
+    /// smoothly between them (see `voxless::camera_path`). A render of
+    /// `--frames A..B` follows the path; `orbit`, `elevation` and `zoom`
+    /// still apply on top of it.
+    pub keyframes: Option<Vec<KeyframeDesc>>,
+    /// Which data frame a path frame shows: hold (default: the last data
+    /// frame numbered at or before it), nearest (the data frame numbered
+    /// nearest to it) or stretch (the data frames spread evenly over the
+    /// path's frames, nearest).
+    pub follow: Option<FollowName>,
+}
+
+/// One keyframe of a camera path: where the camera is at path frame
+/// `frame`. Settings left out are those of the camera (or the defaults).
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct KeyframeDesc {
+    /// The path frame this keyframe is at (the number `--frames` counts).
+    pub frame: f64,
+    pub eye: Option<[f64; 3]>,
+    pub look_at: Option<[f64; 3]>,
+    pub up: Option<[f32; 3]>,
+    /// Vertical field of view in degrees (perspective).
+    pub fov: Option<f32>,
+    /// World-space height of the view: an orthographic camera.
+    pub orthographic: Option<f32>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]

@@ -131,6 +131,18 @@ choice! {
 }
 
 choice! {
+    /// Which data frame a camera path's frame shows.
+    pub enum FollowName {
+        /// The last data frame numbered at or before the path frame.
+        Hold = "hold",
+        /// The data frame numbered nearest to the path frame.
+        Nearest = "nearest",
+        /// The data frames spread evenly over the path's frames.
+        Stretch = "stretch",
+    }
+}
+
+choice! {
     /// The camera projection.
     pub enum ProjectionName {
         Perspective = "perspective",
