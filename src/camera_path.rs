@@ -402,6 +402,135 @@ pub fn data_frame(
     }
 }
 
+/// The most frames one sequence renders (a typo such as `0..10000000`
+/// is refused before any work, not started).
+pub const MAX_FRAMES: usize = 1_000_000;
+
+/// What a sequence renders: its frames, each a path frame (the number its
+/// output is numbered by) and the data frame it shows, in order, and the
+/// camera path when the scene has one.
+#[derive(Clone, Debug)]
+pub struct Sequence {
+    pub frames: Vec<(usize, usize)>,
+    pub path: Option<CameraPath>,
+    /// A turntable of this many frames: frame k orbits the camera by
+    /// 360°·k/n on top of the scene's orbit (and path).
+    pub turntable: Option<usize>,
+    /// What the plan noticed (a range reaching past the data).
+    pub notes: Vec<String>,
+}
+
+impl Sequence {
+    /// The distinct data frames shown, in order.
+    pub fn data_frames(&self) -> Vec<usize> {
+        let mut d: Vec<usize> = self.frames.iter().map(|f| f.1).collect();
+        d.dedup();
+        d
+    }
+
+    /// Whether the camera moves from frame to frame.
+    pub fn moves(&self) -> bool {
+        self.path.is_some() || self.turntable.is_some()
+    }
+
+    /// `desc` as frame `t` shows it: the path's camera, turned by the
+    /// turntable's orbit.
+    pub fn desc_at(&self, desc: &SceneDesc, t: usize) -> SceneDesc {
+        let mut d = match &self.path {
+            Some(p) => p.apply(desc, t as f64),
+            None => desc.clone(),
+        };
+        if let Some(n) = self.turntable {
+            let start = desc.camera.orbit.unwrap_or(0.0);
+            d.camera.orbit = Some(start + 360.0 * t as f32 / n as f32);
+        }
+        d
+    }
+}
+
+/// A turntable of `n` frames (numbered 0..n) of data frame `frame`: a full
+/// orbit about the look-at point, on top of the scene's camera (and of its
+/// camera path, whose frames 0..n it follows).
+pub fn turntable(desc: &SceneDesc, n: usize, frame: usize) -> Result<Sequence, SceneError> {
+    if n == 0 || n > MAX_FRAMES {
+        return Err(SceneError::setting(
+            "--turntable",
+            format!("{n} frames; a turntable has 1..={MAX_FRAMES}"),
+        ));
+    }
+    Ok(Sequence {
+        frames: (0..n).map(|k| (k, frame)).collect(),
+        path: CameraPath::new(&desc.camera)?,
+        turntable: Some(n),
+        notes: Vec::new(),
+    })
+}
+
+/// The frames `range` (A..B, inclusive) of `desc` (paths relative to
+/// `base`) renders. Without a camera path: the data frames numbered in the
+/// range (an error when none is, a note when the range reaches past the
+/// data). With one: every path frame A..B, each showing the data frame
+/// `camera.follow` picks ([`data_frame`]).
+pub fn sequence(
+    desc: &SceneDesc,
+    base: &std::path::Path,
+    range: std::ops::RangeInclusive<usize>,
+) -> Result<Sequence, SceneError> {
+    let numbers = crate::frame_numbers(desc, base)?;
+    let path = CameraPath::new(&desc.camera)?;
+    let list = crate::frames::list_numbers;
+    let mut notes = Vec::new();
+    let frames: Vec<(usize, usize)> = match &path {
+        Some(p) => {
+            let n = range.end() - range.start() + 1;
+            if n > MAX_FRAMES {
+                return Err(SceneError::setting(
+                    "--frames",
+                    format!("{n} path frames; at most {MAX_FRAMES} are rendered in one run"),
+                ));
+            }
+            let follow = desc.camera.follow;
+            range
+                .map(|t| (t, data_frame(t as f64, &numbers, follow, p.span())))
+                .collect()
+        }
+        None => {
+            let frames: Vec<(usize, usize)> = numbers
+                .iter()
+                .filter(|n| range.contains(n))
+                .map(|&n| (n, n))
+                .collect();
+            if frames.is_empty() {
+                return Err(SceneError::setting(
+                    "--frames",
+                    format!(
+                        "{}..{}: no frame is numbered in that range; the data has frames {}",
+                        range.start(),
+                        range.end(),
+                        list(&numbers)
+                    ),
+                ));
+            }
+            if range.start() < &numbers[0] || range.end() > &numbers[numbers.len() - 1] {
+                let shown: Vec<usize> = frames.iter().map(|f| f.0).collect();
+                notes.push(format!(
+                    "--frames {}..{} reaches past the data, whose frames in that range are {}",
+                    range.start(),
+                    range.end(),
+                    list(&shown)
+                ));
+            }
+            frames
+        }
+    };
+    Ok(Sequence {
+        frames,
+        path,
+        turntable: None,
+        notes,
+    })
+}
+
 #[cfg(test)]
 #[path = "tests/camera_path.rs"]
 mod tests;

@@ -74,6 +74,7 @@ pub mod histogram;
 pub mod load;
 pub mod map_fits;
 mod memory;
+pub mod movie;
 pub mod output;
 pub mod parallel;
 mod placement;

@@ -48,6 +48,8 @@ pub enum OutputKind {
     Columns,
     /// A slice: a map's formats, or `.png` (colormapped).
     Slice,
+    /// A movie: `.mp4`, `.webm` or `.gif` (see [`crate::movie`]).
+    Movie,
 }
 
 impl OutputKind {
@@ -57,6 +59,7 @@ impl OutputKind {
             OutputKind::Map => &["npy", "exr", "fits"],
             OutputKind::Columns => &["npy"],
             OutputKind::Slice => &["npy", "exr", "fits", "png"],
+            OutputKind::Movie => &["mp4", "webm", "gif"],
         }
     }
 }

@@ -169,6 +169,20 @@ impl<'c> Placement<'c> {
         Ok(parallel::frame_plan(frames.len(), k, bytes, per_rank))
     }
 
+    /// Rank 0's `flags`, on every rank (one process: `flags` itself).
+    pub fn broadcast_flags(&self, flags: Vec<bool>) -> Result<Vec<bool>, ParallelError> {
+        match self {
+            Placement::Process => Ok(flags),
+            Placement::Ranks(c) => {
+                let bytes: Vec<u8> = flags.iter().map(|&f| f as u8).collect();
+                Ok(c.broadcast(0, &bytes)?
+                    .into_iter()
+                    .map(|b| b != 0)
+                    .collect())
+            }
+        }
+    }
+
     /// Every rank's image (of a round of whole frames, one per rank; `None`
     /// from a rank without a frame), on rank 0 in rank order; empty on the
     /// others.

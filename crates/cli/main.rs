@@ -53,8 +53,11 @@ enum Command {
     /// Render a scene (TOML file and/or flags) to an image.
     Render {
         /// Output image: .png, .jpg/.jpeg, or .exr (linear float RGBA). With
-        /// --frames, `out.png` becomes out_0000.png, … named by the frame
-        /// numbers (or give a printf pattern such as frame_%03d.png).
+        /// --frames or --turntable, `out.png` becomes out_0000.png, … named
+        /// by the frame numbers (or give a printf pattern such as
+        /// frame_%03d.png), or a movie: .mp4, .webm or .gif (encoded by
+        /// ffmpeg as the frames are rendered; an interrupted movie resumes
+        /// from its frames on disk).
         #[arg(short, long, default_value = "out.png")]
         output: PathBuf,
         /// Render the frames numbered A through B of a time series (a
@@ -74,6 +77,23 @@ enum Command {
         /// Draw a labelled colour bar at the right edge of the image.
         #[arg(long)]
         colorbar: bool,
+        /// Movies: frames per second.
+        #[arg(
+            long,
+            default_value_t = 24.0,
+            help_heading = "Movies (-o .mp4, .webm, .gif)"
+        )]
+        fps: f64,
+        /// Movies: 1–100 (H.264 CRF 18 at 80; GIFs ignore it).
+        #[arg(
+            long,
+            default_value_t = 80,
+            help_heading = "Movies (-o .mp4, .webm, .gif)"
+        )]
+        quality: u32,
+        /// Movies: keep the frame PNGs (NAME.frames/) after encoding.
+        #[arg(long, help_heading = "Movies (-o .mp4, .webm, .gif)")]
+        keep_frames: bool,
         #[command(flatten)]
         data: DataArgs,
         #[command(flatten)]
@@ -293,6 +313,9 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             frame,
             turntable,
             colorbar,
+            fps,
+            quality,
+            keep_frames,
             data,
             kind,
             view,
@@ -300,23 +323,39 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             let radii = data.save_radii.clone();
             let radii = radii.as_deref();
             let (desc, base) = SceneArgs { data, kind, view }.scene()?;
-            if let Some(n) = turntable {
-                let outputs: Vec<PathBuf> = (0..n as usize)
-                    .map(|k| out::frame_path(&output, k))
-                    .collect::<Result<_>>()?;
-                out::check(&outputs, OutputKind::Image, &desc, &base, &[])?;
-                let f = frame.unwrap_or(0);
-                return render::render_turntable(
-                    placement, &desc, &base, f, &outputs, radii, colorbar,
+            let movie = sequence::MovieArgs {
+                settings: voxless::movie::MovieSettings { fps, quality },
+                keep_frames,
+            };
+            let is_movie = voxless::movie::MovieFormat::of(&output).is_some();
+            let frames = match (turntable, &frames) {
+                (Some(n), _) => Some(sequence::Frames::Turntable {
+                    n: n as usize,
+                    frame: frame.unwrap_or(0),
+                }),
+                (None, Some(range)) => Some(sequence::Frames::Range(range)),
+                (None, None) => None,
+            };
+            if let Some(frames) = frames {
+                return sequence::render(
+                    placement, &desc, &base, frames, &output, colorbar, movie, radii,
                 );
             }
-            if let Some(range) = frames {
-                if radii.is_some() {
-                    anyhow::bail!(
-                        "--save-radii writes one frame's radii: give --frame N instead of --frames"
+            if is_movie {
+                anyhow::bail!(
+                    "-o {}: a movie needs frames: give --frames A..B (a time series or the                      scene's camera path) or --turntable N",
+                    output.display()
+                );
+            }
+            let mut desc = desc;
+            if let Some(path) = voxless::camera_path::CameraPath::new(&desc.camera)? {
+                let (first, _) = path.span();
+                if placement.is_root() {
+                    eprintln!(
+                        "note: the scene has a camera path: this image is its first keyframe                          (frame {first}); give --frames A..B to render the path"
                     );
                 }
-                return sequence::render(placement, &desc, &base, &range, &output, colorbar);
+                desc = path.apply(&desc, first);
             }
             let f = frame.unwrap_or(0);
             render::render_one(placement, &desc, &base, f, &output, radii, colorbar)

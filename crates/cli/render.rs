@@ -2,7 +2,7 @@
 //! process, or the ranks of `mpirun`): one image, a turntable, and what
 //! every command prints — notes, what was loaded, timings, memory.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Result;
@@ -200,60 +200,6 @@ pub fn render_to(s: &Placed, desc: &SceneDesc, output: &Path, with_colorbar: boo
             st.spp,
             on_ranks(placement),
             output.display()
-        );
-    }
-    Ok(())
-}
-
-/// Renders `frames` images of a full orbit about the look-at point,
-/// starting from the scene's camera (its `orbit` included), to `outputs`,
-/// with one progress bar. The data is loaded once.
-pub fn render_turntable(
-    placement: Placement,
-    desc: &SceneDesc,
-    base: &Path,
-    data_frame: usize,
-    outputs: &[PathBuf],
-    radii: Option<&Path>,
-    with_colorbar: bool,
-) -> Result<()> {
-    check_radii_output(radii, desc, base)?;
-    let mut scene = open(placement, desc, base, data_frame)?;
-    save_radii(placement, radii, || scene.smoothing_lengths())?;
-    check_work(placement, &scene, desc)?;
-    let bar = colorbar(&scene, desc, with_colorbar);
-    let frames = outputs.len();
-    let progress = Progress::new("rendering turntable", frames as u64, placement.is_root());
-    let start = desc.camera.orbit.unwrap_or(0.0);
-    let mut view = desc.clone();
-    let t = Instant::now();
-    let mut timings = Timings::default();
-    for (k, path) in outputs.iter().enumerate() {
-        view.camera.orbit = Some(start + 360.0 * k as f32 / frames as f32);
-        scene.reaim(&view)?;
-        // Blue noise advances with the frame (spatiotemporal).
-        scene.view_mut().settings.frame = k as u32;
-        // Each frame's tiles are one unit of the bar, in fractions.
-        let report = |d: u64, total: u64| progress.set_fraction(k as u64, d, total);
-        let rendered = scene.render(&Control::new().with_progress(&report), &mut timings)?;
-        let written = rendered.map_or(Ok(()), |mut r| {
-            decorate(&mut r.image, scene.view(), bar.as_ref());
-            out::write_image(path, &r.image, scene.view().background)
-        });
-        agree(placement, written)?;
-    }
-    progress.finish();
-    say(placement.memory_report(scene.counts())?);
-    if placement.is_root() {
-        let st = &scene.view().settings;
-        eprintln!(
-            "rendered a {frames}-frame turntable ({}×{}){} in {:.2}s → {} … {}",
-            st.width,
-            st.height,
-            on_ranks(placement),
-            t.elapsed().as_secs_f64(),
-            outputs[0].display(),
-            outputs[frames - 1].display()
         );
     }
     Ok(())
