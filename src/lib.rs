@@ -59,6 +59,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod annotate;
 pub mod autorange;
 pub mod budget;
 mod camera;
@@ -71,6 +72,7 @@ mod fields;
 pub mod flags;
 mod frame;
 pub mod histogram;
+mod label;
 pub mod load;
 pub mod map_fits;
 mod memory;
@@ -115,6 +117,7 @@ pub use volume::{AnyVolume, VolumeKind, VolumeSummary};
 // written back into descriptions, progressive renders, histograms, saving.
 pub use columns::particle_columns;
 pub use histogram::{Histogram, field_histogram};
+pub use label::frame_label;
 pub use pose::Pose;
 pub use progressive::{CoarseBudget, Stage, render_progressive};
 pub use save::{scene_toml, with_absolute_paths};

@@ -14,7 +14,7 @@
 //!   and starts over (saying so) when it is not. The directory is removed
 //!   once the movie is written, unless asked to keep it.
 //! - [`Encoder`] pipes raw RGB frames, in order, into one `ffmpeg` process
-//!   writing a temporary file beside the output, renamed into place when
+//!   writing a temporary file in the frame directory, renamed into place when
 //!   `ffmpeg` succeeds: an interrupted or failed encode never leaves a
 //!   partial movie or destroys an old one.
 //! - `quality` 1–100 (default 80) maps to the codec's constant-quality
@@ -214,10 +214,13 @@ pub struct Encoder {
 
 impl Encoder {
     /// Starts encoding `w`×`h` frames into `output` (its format by its
-    /// extension). Odd sizes are padded by a black row or column for the
-    /// codecs that need even ones (H.264, VP9), with a note in `notes`.
+    /// extension), with its partial file and ffmpeg's log in `scratch` (an
+    /// interrupted encode leaves them there, not beside the output). Odd
+    /// sizes are padded by a black row or column for the codecs that need
+    /// even ones (H.264, VP9), with a note in `notes`.
     pub fn start(
         output: &Path,
+        scratch: &Path,
         (w, h): (u32, u32),
         settings: &MovieSettings,
         notes: &mut Vec<String>,
@@ -229,12 +232,8 @@ impl Encoder {
                 format!("{}: a movie is .mp4, .webm or .gif", output.display()),
             )
         })?;
-        let name = output
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let partial = output.with_file_name(format!(".{name}.partial"));
-        let log = output.with_file_name(format!(".{name}.ffmpeg.log"));
+        let partial = scratch.join("partial");
+        let log = scratch.join("ffmpeg.log");
         let q = settings.quality as f64;
         let mut args: Vec<String> = [
             "-y",
@@ -430,7 +429,7 @@ impl MovieWriter {
     ) -> Result<MovieWriter, SceneError> {
         check_encoder(output)?;
         let frames = MovieFrames::open(output, count, stamp, notes)?;
-        let encoder = Encoder::start(output, size, settings, notes)?;
+        let encoder = Encoder::start(output, frames.dir(), size, settings, notes)?;
         Ok(MovieWriter {
             frames,
             encoder,

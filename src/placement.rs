@@ -540,45 +540,20 @@ impl PlacedData<'_> {
         &self,
         desc: &SceneDesc,
         slice: &SliceDesc,
-        (width, height): (u32, u32),
+        size: (u32, u32),
         progress: &dyn Fn(u64, u64),
     ) -> Result<(ProjectionView, String, Option<Vec<f32>>), ParallelError> {
-        let fields = self.fields();
-        let (column, name) =
-            crate::slice::quantity_column(&fields, desc, slice.quantity.as_deref())?;
-        let periodic = matches!(
-            fields,
-            Fields::Tets { .. }
-                | Fields::Particles {
-                    periodic: Some(_),
-                    ..
-                }
-        );
         let (bounds, frame) = match self {
             PlacedData::Process(l) => (l.volume.bounds(), &l.frame),
             PlacedData::Ranks(_, p) => (p.summary.bounds, &p.frame),
         };
-        let view = crate::slice::slice_view(&slice.plane, &bounds, frame, periodic)?;
-        let columns = fields.columns(false).len();
-        let mut values = Vec::with_capacity(width as usize * height as usize);
-        for rows in crate::slice::row_chunks(height) {
-            let end = rows.end;
-            let pts = crate::slice::slice_points(&view, (width, height), rows, slice.pixels);
-            if let Some(s) = self.sample(&pts, false)? {
-                values.extend(crate::slice::pixel_values(
-                    &s,
-                    columns,
-                    column,
-                    slice.pixels,
-                ));
-            }
-            progress(end as u64, height as u64);
-        }
-        let root = match self {
-            PlacedData::Process(_) => true,
-            PlacedData::Ranks(c, _) => c.rank() == 0,
+        let mut sample = |pts: &[[f64; 3]]| self.sample(pts, false);
+        let space = crate::slice::Space {
+            fields: &self.fields(),
+            bounds: &bounds,
+            frame,
         };
-        Ok((view, name, root.then_some(values)))
+        crate::slice::slice_with(&space, desc, slice, size, &mut sample, progress)
     }
 
     /// The projection `projection` describes over the data's bounds, and

@@ -145,6 +145,53 @@ pub fn slice_view(
     Ok(view)
 }
 
+/// Where a slice's data lies: its fields, bounds (the volume's frame) and
+/// the frame.
+pub struct Space<'a> {
+    pub fields: &'a Fields,
+    pub bounds: &'a Aabb,
+    pub frame: &'a WorldFrame,
+}
+
+/// The slice `slice` describes of data in `space` at `w`×`h`, sampled
+/// through `sample` (world points → `sample`'s rows, `None` on ranks other
+/// than 0) in chunks of rows: its plane, the quantity's name and (where
+/// `sample` gives values) the values, row-major. `progress` hears the rows
+/// done of all. Every front-end slices through here.
+pub fn slice_with<E: From<SceneError>>(
+    space: &Space,
+    desc: &SceneDesc,
+    slice: &SliceDesc,
+    (w, h): (u32, u32),
+    sample: &mut dyn FnMut(&[[f64; 3]]) -> Result<Option<Vec<f32>>, E>,
+    progress: &dyn Fn(u64, u64),
+) -> Result<(ProjectionView, String, Option<Vec<f32>>), E> {
+    let fields = space.fields;
+    let (column, name) = quantity_column(fields, desc, slice.quantity.as_deref())?;
+    let periodic = matches!(
+        fields,
+        Fields::Tets { .. }
+            | Fields::Particles {
+                periodic: Some(_),
+                ..
+            }
+    );
+    let view = slice_view(&slice.plane, space.bounds, space.frame, periodic)?;
+    let columns = fields.columns(false).len();
+    let mut values = Vec::new();
+    let mut got = false;
+    for rows in row_chunks(h) {
+        let end = rows.end;
+        let pts = slice_points(&view, (w, h), rows, slice.pixels);
+        if let Some(s) = sample(&pts)? {
+            got = true;
+            values.extend(pixel_values(&s, columns, column, slice.pixels));
+        }
+        progress(end as u64, h as u64);
+    }
+    Ok((view, name, got.then_some(values)))
+}
+
 /// The sample points of rows `rows` of a `w`×`h` slice through `view`: one
 /// per pixel centre, or 16 per pixel (row-major pixels, each pixel's
 /// points consecutive) for [`SlicePixels::Area`].

@@ -54,6 +54,28 @@ impl Resolved {
         }
     }
 
+    /// The world width of one pixel (in `frame`'s world units) where a
+    /// scale bar applies: the image plane of an orthographic camera, or
+    /// for a perspective one the plane through the look-at point (the
+    /// description's, else the framed box's centre).
+    pub fn world_per_pixel(&self, desc: &SceneDesc, frame: &WorldFrame) -> f64 {
+        let h = self.settings.height.max(1) as f64;
+        let local = match self.camera.projection {
+            voxless_core::Projection::Orthographic { half_height, .. } => {
+                2.0 * half_height as f64 / h
+            }
+            voxless_core::Projection::Perspective { fov_y_deg } => {
+                let target = match desc.camera.look_at {
+                    Some(p) => frame.to_local(p),
+                    None => self.framed.center(),
+                };
+                let depth = (target - self.camera.eye).dot(self.camera.forward) as f64;
+                2.0 * depth.abs() * (0.5 * fov_y_deg as f64).to_radians().tan() / h
+            }
+        };
+        local * frame.scale
+    }
+
     /// An error when the render of `volume` (in `frame`) with this view
     /// would take absurdly long, naming the flag to change; else a note
     /// when the step was raised to what f32 resolves along the rays.

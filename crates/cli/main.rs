@@ -18,6 +18,7 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand, ValueEnum};
+use voxless::annotate::Marks;
 use voxless::output::OutputKind;
 use voxless::{Control, ParticlesDesc, Placement, ProjectionDesc, Purpose};
 
@@ -77,6 +78,14 @@ enum Command {
         /// Draw a labelled colour bar at the right edge of the image.
         #[arg(long)]
         colorbar: bool,
+        /// Draw a scale bar in world units (the file's length unit when it
+        /// states one) at the depth of the look-at point, bottom left.
+        #[arg(long)]
+        scale_bar: bool,
+        /// Label the image with the frame's time (t = …), redshift (z = …)
+        /// or LAMMPS step, top left.
+        #[arg(long)]
+        time_label: bool,
         /// Movies: frames per second.
         #[arg(
             long,
@@ -313,6 +322,8 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             frame,
             turntable,
             colorbar,
+            scale_bar,
+            time_label,
             fps,
             quality,
             keep_frames,
@@ -322,12 +333,18 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
         } => {
             let radii = data.save_radii.clone();
             let radii = radii.as_deref();
+            let placed_camera = view.eye.is_some() || view.look_at.is_some();
             let (desc, base) = SceneArgs { data, kind, view }.scene()?;
             let movie = sequence::MovieArgs {
                 settings: voxless::movie::MovieSettings { fps, quality },
                 keep_frames,
             };
             let is_movie = voxless::movie::MovieFormat::of(&output).is_some();
+            let marks = Marks {
+                colorbar,
+                scale_bar,
+                label: time_label,
+            };
             let frames = match (turntable, &frames) {
                 (Some(n), _) => Some(sequence::Frames::Turntable {
                     n: n as usize,
@@ -338,27 +355,35 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             };
             if let Some(frames) = frames {
                 return sequence::render(
-                    placement, &desc, &base, frames, &output, colorbar, movie, radii,
+                    placement, &desc, &base, frames, &output, marks, movie, radii,
                 );
             }
             if is_movie {
                 anyhow::bail!(
-                    "-o {}: a movie needs frames: give --frames A..B (a time series or the                      scene's camera path) or --turntable N",
+                    "-o {}: a movie needs frames: give --frames A..B (a time series or the \
+                     scene's camera path) or --turntable N",
                     output.display()
                 );
             }
             let mut desc = desc;
             if let Some(path) = voxless::camera_path::CameraPath::new(&desc.camera)? {
                 let (first, _) = path.span();
+                let note = if placed_camera {
+                    "--eye/--look-at place this image's camera, not the scene's camera path"
+                        .to_string()
+                } else {
+                    desc = path.apply(&desc, first);
+                    format!(
+                        "the scene has a camera path: this image is its first keyframe (frame \
+                         {first}); give --frames A..B to render the path"
+                    )
+                };
                 if placement.is_root() {
-                    eprintln!(
-                        "note: the scene has a camera path: this image is its first keyframe                          (frame {first}); give --frames A..B to render the path"
-                    );
+                    eprintln!("note: {note}");
                 }
-                desc = path.apply(&desc, first);
             }
             let f = frame.unwrap_or(0);
-            render::render_one(placement, &desc, &base, f, &output, radii, colorbar)
+            render::render_one(placement, &desc, &base, f, &output, radii, marks)
         }
         Command::Sample {
             points,
@@ -551,7 +576,11 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             desc.render.opacity_scale.get_or_insert(10.0);
             desc.camera.look_at.get_or_insert([0.0, -0.1, 0.0]);
             desc.light.get_or_insert_with(Default::default);
-            render::render_one(Placement::Process, &desc, &base, 0, &output, None, colorbar)
+            let marks = Marks {
+                colorbar,
+                ..Default::default()
+            };
+            render::render_one(Placement::Process, &desc, &base, 0, &output, None, marks)
         }
         Command::Serve {
             port,

@@ -6,11 +6,11 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Result;
+use voxless::annotate::{Annotations, Marks};
 use voxless::core::Image;
 use voxless::output::OutputKind;
 use voxless::parallel::Timings;
-use voxless::render::colorbar::{ColorbarSpec, draw_colorbar};
-use voxless::{Control, Placed, Placement, Resolved, SceneDesc};
+use voxless::{Control, Placed, Placement, SceneDesc};
 
 use crate::out;
 use crate::progress::Progress;
@@ -105,21 +105,37 @@ pub fn check_work(placement: Placement, s: &Placed, desc: &SceneDesc) -> Result<
     Ok(())
 }
 
-/// The colour bar to draw, when asked for.
-pub fn colorbar(s: &Placed, desc: &SceneDesc, on: bool) -> Option<ColorbarSpec> {
-    on.then(|| s.colorbar(desc))
+/// The annotations `marks` asks for on frame `frame` of the scene.
+pub fn annotations(
+    s: &Placed,
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+    marks: Marks,
+) -> Result<Annotations> {
+    Ok(Annotations::new(
+        marks,
+        s.colorbar(desc),
+        desc,
+        base,
+        frame,
+    )?)
 }
 
-/// Draws the colour bar (if any) into a rendered image.
-pub fn decorate(image: &mut Image, view: &Resolved, bar: Option<&ColorbarSpec>) {
-    if let Some(spec) = bar
-        && draw_colorbar(image, &view.tf, spec).is_none()
-    {
-        eprintln!(
-            "note: a {}×{} image is too small for a colour bar",
-            image.width, image.height
-        );
+/// Draws the annotations into a rendered image of data frame `frame` seen
+/// as `desc` describes it, with a note for what does not fit.
+pub fn decorate(
+    image: &mut Image,
+    s: &Placed,
+    a: &Annotations,
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+) -> Result<()> {
+    for note in a.draw(image, s.view(), s.frame(), desc, base, frame)? {
+        eprintln!("note: {note}");
     }
+    Ok(())
 }
 
 /// Renders frame `frame` of the scene to `output` (checked before loading),
@@ -132,13 +148,14 @@ pub fn render_one(
     frame: usize,
     output: &Path,
     radii: Option<&Path>,
-    with_colorbar: bool,
+    marks: Marks,
 ) -> Result<()> {
     out::check(&[output.to_path_buf()], OutputKind::Image, desc, base, &[])?;
     check_radii_output(radii, desc, base)?;
     let s = open(placement, desc, base, frame)?;
     save_radii(placement, radii, || s.smoothing_lengths())?;
-    render_to(&s, desc, output, with_colorbar)
+    let a = annotations(&s, desc, base, frame, marks)?;
+    render_to(&s, desc, output, &a, base, frame)
 }
 
 /// Refuses a radii output that would overwrite an input.
@@ -172,7 +189,14 @@ pub fn save_radii(
 
 /// Checks the scene's render work, renders it with a progress bar, checks
 /// the image shows something, and writes `output` (rank 0).
-pub fn render_to(s: &Placed, desc: &SceneDesc, output: &Path, with_colorbar: bool) -> Result<()> {
+pub fn render_to(
+    s: &Placed,
+    desc: &SceneDesc,
+    output: &Path,
+    a: &Annotations,
+    base: &Path,
+    frame: usize,
+) -> Result<()> {
     let placement = s.placement();
     check_work(placement, s, desc)?;
     let progress = Progress::new("rendering", 1, placement.is_root());
@@ -183,10 +207,9 @@ pub fn render_to(s: &Placed, desc: &SceneDesc, output: &Path, with_colorbar: boo
     progress.finish();
     let secs = t.elapsed().as_secs_f64();
     say(placement.timings_report(timings)?);
-    let bar = colorbar(s, desc, with_colorbar);
     let written = rendered.map_or(Ok(()), |mut r| {
         s.check_rendered(&r)?;
-        decorate(&mut r.image, s.view(), bar.as_ref());
+        decorate(&mut r.image, s, a, desc, base, frame)?;
         out::write_image(output, &r.image, s.view().background)
     });
     agree(placement, written)?;

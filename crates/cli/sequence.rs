@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Result;
+use voxless::annotate::Marks;
 use voxless::camera_path::Sequence;
 use voxless::movie::{MovieFormat, MovieSettings, MovieWriter};
 use voxless::output::OutputKind;
@@ -52,7 +53,7 @@ pub fn render(
     base: &Path,
     frames: Frames,
     output: &Path,
-    colorbar: bool,
+    marks: Marks,
     movie: MovieArgs,
     radii: Option<&Path>,
 ) -> Result<()> {
@@ -105,7 +106,7 @@ pub fn render(
     render::report_placed(placement, &scene, t);
     render::save_radii(placement, radii, || scene.smoothing_lengths())?;
     render::check_work(placement, &scene, desc)?;
-    let bar = render::colorbar(&scene, desc, colorbar);
+    let marks = render::annotations(&scene, desc, base, data_frames[0], marks)?;
     let n = seq.frames.len();
     let mut sink = if is_movie {
         let st = &scene.view().settings;
@@ -169,8 +170,9 @@ pub fn render(
                     scene.load_frame(&series, base, f)?;
                     showing = f;
                 }
+                let shown = seq.desc_at(desc, path_frame);
                 if seq.moves() {
-                    scene.reaim(&seq.desc_at(desc, path_frame))?;
+                    scene.reaim(&shown)?;
                 }
                 // Blue noise advances with the data frame (spatiotemporal),
                 // so a path's frame equals a still of its camera; a
@@ -181,13 +183,14 @@ pub fn render(
                 };
                 let report = |d: u64, total: u64| progress.set_fraction(done as u64, d, total);
                 let r = scene.render(&Control::new().with_progress(&report), &mut timings)?;
-                Ok(r.map(|mut r| {
+                r.map(|mut r| {
                     if let Err(e) = scene.check_rendered(&r) {
                         progress.println(&format!("note: frame {path_frame}: {e}"));
                     }
-                    render::decorate(&mut r.image, scene.view(), bar.as_ref());
-                    r.image
-                }))
+                    render::decorate(&mut r.image, &scene, &marks, &shown, base, f)?;
+                    Ok(r.image)
+                })
+                .transpose()
             })(),
             None => Ok(None),
         };

@@ -466,6 +466,147 @@ impl Volume {
         Ok((image, geometry))
     }
 
+    /// The field on a plane (see `voxless::slice`): H×W float32 (row 0 at
+    /// the top; NaN outside AMR cells), the quantity's name and the plane's
+    /// geometry — exactly what `sample` gives at the pixel centres.
+    #[pyo3(signature = (flags, axis=None, normal=None, north=None, center=None, width=None, quantity=None, area=false))]
+    #[allow(clippy::too_many_arguments)]
+    fn slice<'py>(
+        &self,
+        py: Python<'py>,
+        flags: &Bound<'py, PyAny>,
+        axis: Option<usize>,
+        normal: Option<[f64; 3]>,
+        north: Option<[f64; 3]>,
+        center: Option<[f64; 3]>,
+        width: Option<[f64; 2]>,
+        quantity: Option<String>,
+        area: bool,
+    ) -> PyResult<(Bound<'py, PyArray2<f32>>, String, Bound<'py, PyDict>)> {
+        let mut desc = self.held.desc.clone();
+        apply_flags(&mut desc, flags, &self.held.base, "slice", &[])?;
+        let slice = voxless::slice::SliceDesc {
+            plane: ProjectionDesc {
+                axis,
+                normal,
+                north,
+                center,
+                width,
+                ..Default::default()
+            },
+            quantity,
+            pixels: if area {
+                voxless::slice::SlicePixels::Area
+            } else {
+                voxless::slice::SlicePixels::Centre
+            },
+        };
+        let held = self.held.clone();
+        let done = run::detached(py, move || -> Result<_, voxless::SceneError> {
+            let (w, h) = voxless::projection::image_size(&desc.image)?;
+            let fields = held.volume().fields();
+            let bounds = held.volume().bounds();
+            let space = voxless::slice::Space {
+                fields: &fields,
+                bounds: &bounds,
+                frame: held.frame(),
+            };
+            let mut sample = |pts: &[[f64; 3]]| -> Result<_, voxless::SceneError> {
+                let local: Vec<Vec3> = pts.iter().map(|&p| held.frame().to_local(p)).collect();
+                Ok(Some(held.volume().sample_points(&local, false)))
+            };
+            let (view, name, values) =
+                voxless::slice::slice_with(&space, &desc, &slice, (w, h), &mut sample, &|_, _| {})?;
+            Ok((view, name, values.unwrap_or_default(), w, h))
+        })?;
+        let (view, name, values, w, h) = done.map_err(|e| errors::scene(py, e))?;
+        let image = PyArray1::from_vec(py, values).reshape([h as usize, w as usize])?;
+        let geometry = PyDict::new(py);
+        geometry.set_item("center", view.center)?;
+        geometry.set_item("right", view.right)?;
+        geometry.set_item("up", view.up)?;
+        geometry.set_item("normal", view.normal)?;
+        geometry.set_item("width", view.width)?;
+        Ok((image, name, geometry))
+    }
+
+    /// Renders path frames `first..=last` of the view's camera path (scene
+    /// `tables` with `camera.keyframes`, then view `flags`) into the movie
+    /// `output` (.mp4, .webm, .gif; see `voxless::movie`): the number of
+    /// frames encoded, how many were rendered (the rest resumed from disk)
+    /// and the notes.
+    #[pyo3(signature = (tables, flags, cwd, output, first, last, fps=24.0, quality=80, keep_frames=false))]
+    #[allow(clippy::too_many_arguments)]
+    fn movie(
+        &self,
+        py: Python<'_>,
+        tables: &Bound<'_, PyAny>,
+        flags: &Bound<'_, PyAny>,
+        cwd: PathBuf,
+        output: PathBuf,
+        first: usize,
+        last: usize,
+        fps: f64,
+        quality: u32,
+        keep_frames: bool,
+    ) -> PyResult<(usize, usize, Vec<String>)> {
+        let desc = self.view(tables, flags, &cwd, "movie")?;
+        let output = cwd.join(output);
+        let held = self.held.clone();
+        let done = run::cancellable(py, move |control| -> Result<_, Failure> {
+            let settings = voxless::movie::MovieSettings { fps, quality };
+            let mut notes = Vec::new();
+            let path = voxless::camera_path::CameraPath::new(&desc.camera)?;
+            if last < first || last - first >= voxless::camera_path::MAX_FRAMES {
+                return Err(voxless::SceneError::setting(
+                    "frames",
+                    format!(
+                        "{first}..{last} is not a range of at most {} frames",
+                        voxless::camera_path::MAX_FRAMES
+                    ),
+                )
+                .into());
+            }
+            let frames: Vec<usize> = (first..=last).collect();
+            let at = |t: usize| match &path {
+                Some(p) => p.apply(&desc, t as f64),
+                None => desc.clone(),
+            };
+            let mut r = held.resolve(&at(first))?;
+            let size = (r.settings.width, r.settings.height);
+            let stamp = format!(
+                "{{\"size\": [{}, {}], \"frames\": [{first}, {last}]}}\n{}",
+                size.0,
+                size.1,
+                voxless::scene_toml(&desc)?
+            );
+            let mut movie = voxless::movie::MovieWriter::start(
+                &output,
+                frames.len(),
+                &stamp,
+                size,
+                &settings,
+                keep_frames,
+                &mut notes,
+            )?;
+            let mut rendered = 0;
+            for (k, &t) in frames.iter().enumerate() {
+                if movie.has(k) {
+                    movie.put(k, None)?;
+                    continue;
+                }
+                r.reaim(&at(t), held.frame())?;
+                let image = r.render_film(held.volume(), control)?.resolve();
+                movie.put(k, Some(&image.to_srgb8(r.background)))?;
+                rendered += 1;
+            }
+            let (n, _) = movie.finish()?;
+            notes.extend(r.notes);
+            Ok((n, rendered, notes))
+        })?;
+        done.map_err(|f| raise(py, f))
+    }
+
     /// The fields at N×3 float64 world `points`: an N×k float32 array and
     /// the k column names.
     #[pyo3(signature = (points, gradient=false))]

@@ -22,7 +22,7 @@ yt data sets: ``voxless.yt.off_axis_projection`` and ``VoxlessSource``.
 """
 
 from ._voxless import VoxlessError, colormaps, default_north
-from .image import Fields, Image, Projection
+from .image import Fields, Image, Projection, Slice
 from .volume import AmrCells, Camera, Particles, Tessellation, Volume, load, render
 
 __all__ = [
@@ -32,6 +32,7 @@ __all__ = [
     "Image",
     "Particles",
     "Projection",
+    "Slice",
     "Tessellation",
     "Volume",
     "VoxlessError",

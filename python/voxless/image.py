@@ -131,6 +131,46 @@ class Projection(np.ndarray):
         return (u - w / 2, u + w / 2, v - h / 2, v + h / 2)
 
 
+class Slice(np.ndarray):
+    """H×W float32: the field on a plane, row 0 at the top (NaN outside AMR cells).
+
+    ``quantity`` names the field shown; ``geometry`` holds the plane:
+    ``center`` (a point of the plane, at the image centre), ``right``/``up``
+    (unit vectors of increasing column and decreasing row), ``normal`` and
+    ``width`` (world width and height).
+    """
+
+    geometry = {}
+    quantity = ""
+
+    @classmethod
+    def wrap(cls, values, quantity, geometry):
+        s = np.asarray(values, dtype=np.float32).view(cls)
+        s.quantity = quantity
+        s.geometry = {k: np.array(v) for k, v in geometry.items()}
+        return s
+
+    def __array_finalize__(self, obj):
+        if obj is not None:
+            self.geometry = getattr(obj, "geometry", {})
+            self.quantity = getattr(obj, "quantity", "")
+
+    def __getattr__(self, name):
+        geometry = self.__dict__.get("geometry") or type(self).geometry
+        if name in geometry:
+            return geometry[name]
+        raise AttributeError(name)
+
+    @property
+    def extent(self):
+        """``(left, right, bottom, top)`` in plane coordinates (world along ``right`` and ``up``), for imshow."""
+        g = self.geometry
+        u = float(np.dot(g["center"], g["right"]))
+        v = float(np.dot(g["center"], g["up"]))
+        w, h = g["width"]
+        return (u - w / 2, u + w / 2, v - h / 2, v + h / 2)
+
+
 class Fields(np.ndarray):
     """N×k float32 field values at points; ``columns`` names the k columns."""
 

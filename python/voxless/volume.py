@@ -17,7 +17,7 @@ import numpy as np
 
 from . import _options as opt
 from . import _voxless
-from .image import Fields, Image, Projection
+from .image import Fields, Image, Projection, Slice
 
 AXES = {"x": 0, "y": 1, "z": 2, 0: 0, 1: 1, 2: 2}
 
@@ -212,6 +212,76 @@ class Volume:
             depth=None if depth is None else opt.number("depth", depth),
         )
         return Projection.wrap(column, geometry)
+
+    def slice(
+        self, size=None, axis=None, normal=None, north=None, center=None, width=None, quantity=None, pixels="centre"
+    ) -> Slice:
+        """The field on a plane: a :class:`Slice`, H×W float32, row 0 at the top.
+
+        Exactly :meth:`sample` at the pixel centres (``pixels="area"``: the
+        mean over each pixel's square by a 4×4 Gauss–Legendre rule). The
+        geometry is :meth:`project`'s: the plane through ``center`` (default:
+        the data's centre) across ``axis`` or ``normal`` (with ``north``),
+        ``width`` wide. ``quantity`` is one of :meth:`columns` (``density``,
+        ``attribute``, ``streams``, an AMR field; default density, or the AMR
+        field the volume was made with). A plane beside the data raises.
+        """
+        flags = {} if size is None else opt.split("slice", {"size": size})[1]
+        if axis is not None and (not isinstance(axis, (str, int)) or axis not in AXES):
+            raise ValueError(f"axis: {axis!r} is not 'x', 'y' or 'z'")
+        if pixels not in ("centre", "center", "area"):
+            raise ValueError(f"pixels: {pixels!r} is not 'centre' or 'area'")
+        if width is not None and np.ndim(width) == 0:
+            width = (width, width)
+        values, name, geometry = self._native.slice(
+            flags,
+            axis=None if axis is None else AXES[axis],
+            normal=None if normal is None else opt.vector("normal", normal, 3),
+            north=None if north is None else opt.vector("north", north, 3),
+            center=None if center is None else opt.vector("center", center, 3),
+            width=None if width is None else opt.vector("width", width, 2),
+            quantity=None if quantity is None else str(quantity),
+            area=pixels == "area",
+        )
+        return Slice.wrap(values, name, geometry)
+
+    def movie(self, path, frames=None, camera_path=None, fps=24, quality=80, keep_frames=False, scene=None, **view):
+        """Renders a camera path into a movie (``.mp4``, ``.webm`` or ``.gif``, through ffmpeg).
+
+        ``camera_path`` is a list of keyframes, each a dict with ``frame``,
+        ``eye``, ``look_at`` and optionally ``up``, ``fov``,
+        ``orthographic`` (as ``[[camera.keyframes]]`` in a scene file; default:
+        the scene's). ``frames`` is ``(first, last)`` (inclusive; default: the
+        first to the last keyframe). The path is interpolated smoothly
+        (positions through every keyframe, orientation by slerp); an
+        interrupted movie resumes from its frames on disk (``PATH.frames/``).
+        Other keywords are :meth:`render`'s. Returns the number of frames.
+        """
+        tables, flags = opt.split("render", view)
+        tables = opt.merge(_scene_view(scene), tables)
+        if camera_path is not None:
+            keys = [dict(k) for k in camera_path]
+            camera = dict(tables.get("camera", {}))
+            camera["keyframes"] = keys
+            tables["camera"] = camera
+        keys = tables.get("camera", {}).get("keyframes")
+        if frames is None:
+            if not keys:
+                raise ValueError("movie: give camera_path (two or more keyframes) or frames=(first, last)")
+            frames = (int(keys[0]["frame"]), int(np.ceil(keys[-1]["frame"])))
+        first, last = (int(f) for f in frames)
+        n, _, notes = self._native.movie(
+            tables,
+            flags,
+            os.getcwd(),
+            os.fspath(path),
+            first,
+            last,
+            fps=float(fps),
+            quality=int(quality),
+            keep_frames=bool(keep_frames),
+        )
+        return n
 
     def sample(self, points, gradient=False) -> Fields:
         """The fields at world ``points`` (N×3): :class:`Fields`, N×k float32 with ``.columns``.

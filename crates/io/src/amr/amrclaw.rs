@@ -175,6 +175,15 @@ fn fort_t_too_long(path: &Path, len: u64) -> IoError {
     )
 }
 
+/// The simulation time of the AMRClaw frame `fort_q`, from the `fort.t`
+/// beside it (`None` when there is none).
+pub fn amrclaw_time(fort_q: &Path) -> Result<Option<f64>, IoError> {
+    match fort_t_path(fort_q).filter(|t| t.is_file()) {
+        Some(t) => Ok(Some(read_fort_t(&t)?.time)),
+        None => Ok(None),
+    }
+}
+
 /// Reads the file `fort.tNNNN` (see [`parse_fort_t`]).
 fn read_fort_t(path: &Path) -> Result<FrameHeader, IoError> {
     // Check the size before reading so a wrong, huge file is not loaded.
