@@ -145,6 +145,12 @@ pub fn slice_view(
     Ok(view)
 }
 
+/// Samples world points: `sample`'s rows on rank 0, `None` on the others.
+pub type Sampler<'a, E> = dyn FnMut(&[[f64; 3]]) -> Result<Option<Vec<f32>>, E> + 'a;
+
+/// A slice: its plane, the quantity's name and (rank 0) the values.
+pub type Sliced = (ProjectionView, String, Option<Vec<f32>>);
+
 /// Where a slice's data lies: its fields, bounds (the volume's frame) and
 /// the frame.
 pub struct Space<'a> {
@@ -163,9 +169,9 @@ pub fn slice_with<E: From<SceneError>>(
     desc: &SceneDesc,
     slice: &SliceDesc,
     (w, h): (u32, u32),
-    sample: &mut dyn FnMut(&[[f64; 3]]) -> Result<Option<Vec<f32>>, E>,
+    sample: &mut Sampler<E>,
     progress: &dyn Fn(u64, u64),
-) -> Result<(ProjectionView, String, Option<Vec<f32>>), E> {
+) -> Result<Sliced, E> {
     let fields = space.fields;
     let (column, name) = quantity_column(fields, desc, slice.quantity.as_deref())?;
     let periodic = matches!(

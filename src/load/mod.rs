@@ -155,8 +155,22 @@ pub(crate) fn source_at<'a>(
     frame: usize,
 ) -> Result<Source<'a>, SceneError> {
     let s = source(desc, base)?;
-    let what = match &s {
+    let what = match s {
         Source::Amr(_) => "AMR cells have",
+        // A sequence of numbered position files: the file of this frame.
+        Source::Tets(t)
+            if t.file
+                .as_deref()
+                .is_some_and(|f| frames::is_sequence(f, base)) =>
+        {
+            let spec = t.file.as_deref().unwrap_or_default();
+            let file = frames::file_numbered(spec, base, frame)?;
+            // Relative to `base` again, as the description's paths are.
+            let file = file.strip_prefix(base).unwrap_or(&file);
+            let mut t = t.into_owned();
+            t.file = Some(file.to_string_lossy().into_owned());
+            return Ok(Source::Tets(Cow::Owned(t)));
+        }
         Source::Tets(_) => "a phase-space tessellation has",
         Source::Particles(_) => return Ok(s),
     };
@@ -164,8 +178,9 @@ pub(crate) fn source_at<'a>(
         return Err(SceneError::setting(
             "frame (--frame, --frames)",
             format!(
-                "frame {frame} was asked for, but {what} one frame, 0 (AMR and tessellation \
-                 files are not read as time series)"
+                "frame {frame} was asked for, but {what} one frame, 0 (AMR files and single \
+                 tessellation files are not read as time series; number the files, e.g. \
+                 step_%03d.npy)"
             ),
         ));
     }

@@ -663,6 +663,15 @@ pub fn frame_numbers(
     desc: &voxless_scene::SceneDesc,
     base: &Path,
 ) -> Result<Vec<usize>, SceneError> {
+    // A tessellation over numbered position files (one grid per frame).
+    if let Some(f) = desc.tets.as_ref().and_then(|t| t.file.as_ref())
+        && frames::is_sequence(f, base)
+    {
+        return Ok(frames::numbered(f, base)?
+            .into_iter()
+            .map(|(n, _)| n)
+            .collect());
+    }
     let Some(p) = &desc.particles else {
         return Ok(vec![0]);
     };

@@ -202,10 +202,16 @@ impl Scene {
             self.volume = AnyVolume::Materials(Box::new(v));
             return Ok(());
         }
+        if let AnyVolume::Tets(_) = &self.volume {
+            // A tessellation over numbered position files: the next grid,
+            // in the same box (its frame is the box's).
+            self.volume = load::load_in(desc, base, frame, Some(&self.frame))?.volume;
+            return Ok(());
+        }
         let (AnyVolume::Particles(v), Some(p)) = (&mut self.volume, &desc.particles) else {
             return Err(SceneError::setting(
                 "frames",
-                "time series are supported for particle data",
+                "time series are supported for particles and tessellations",
             ));
         };
         let fd = particles::read_frame(p, base, frame)?;

@@ -151,11 +151,11 @@ impl DistributedScene {
     ) -> Result<(), ParallelError> {
         if !matches!(
             self.summary.kind,
-            VolumeKind::Particles | VolumeKind::Materials
+            VolumeKind::Particles | VolumeKind::Materials | VolumeKind::Tets
         ) {
             return Err(SceneError::setting(
                 "frames",
-                "time series are supported for particle data",
+                "time series are supported for particles and tessellations",
             )
             .into());
         }

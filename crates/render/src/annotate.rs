@@ -142,6 +142,6 @@ mod tests {
         assert!(draw_scale_bar(&mut Image::new(10, 10), 0.01, None).is_none());
         let mut image = Image::new(300, 100);
         assert!(draw_label(&mut image, "t = 1.25").is_some());
-        assert!(image.pixels.iter().any(|p| *p == [1.0, 1.0, 1.0, 1.0]));
+        assert!(image.pixels.contains(&[1.0, 1.0, 1.0, 1.0]));
     }
 }

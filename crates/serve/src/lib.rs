@@ -14,6 +14,9 @@
 //! then full-resolution passes up to the requested samples per pixel, and
 //! a lossless PNG once converged. "Save scene" returns the description as
 //! TOML, so `voxless render saved.toml` draws the converged image exactly.
+//! Camera-path keyframes recorded from the view are part of that
+//! description (`[[camera.keyframes]]`); a preview plays the path as coarse
+//! images (`path`).
 //!
 //! **Invariants.**
 //! - *Never stale*: an image is sent only for the latest interaction the
@@ -38,6 +41,7 @@ mod encode;
 mod http;
 mod outbox;
 mod patch;
+mod path;
 pub mod protocol;
 mod render;
 mod session;

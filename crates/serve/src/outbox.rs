@@ -4,9 +4,10 @@
 //! Model: the session's reader records every interaction (`seq`) here
 //! before anything else; renders offer their images and messages tagged
 //! with the `seq` they were made for. Each kind of message has one slot
-//! that keeps only the newest (ack, state, error, scene file, image,
-//! histogram, progress), so a client that reads slowly gets fewer, newer messages
-//! instead of a growing backlog, and a render never waits for a socket.
+//! that keeps only the newest (ack, state, error, scene file, keyframes,
+//! preview, image, histogram, progress), so a client that reads slowly gets
+//! fewer, newer messages instead of a growing backlog, and a render never
+//! waits for a socket.
 //!
 //! Invariants (all under one lock):
 //! - an offer whose `seq` is older than the latest recorded interaction is
@@ -35,12 +36,16 @@ pub enum Slot {
     State = 1,
     Error = 2,
     Scene = 3,
-    Image = 4,
-    Histogram = 5,
-    Progress = 6,
+    /// The keyframe list (camera paths).
+    Keyframes = 4,
+    /// A path preview's start and end.
+    Preview = 5,
+    Image = 6,
+    Histogram = 7,
+    Progress = 8,
 }
 
-const SLOTS: usize = 7;
+const SLOTS: usize = 9;
 
 #[derive(Default)]
 struct Inner {

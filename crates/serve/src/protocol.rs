@@ -15,14 +15,46 @@
 //! {"seq": 9, "type": "resize", "width": 800, "height": 600}
 //! {"seq": 10, "type": "colormap_import", "json": "[{\"Name\": …}]"}
 //! {"seq": 11, "type": "save_scene"}
+//! {"seq": 12, "type": "add_keyframe", "frame": 48}
+//! {"seq": 13, "type": "keyframes", "op": "remove_last"}
+//! {"seq": 14, "type": "keyframes", "op": "clear"}
+//! {"seq": 15, "type": "preview_path"}
+//! {"seq": 16, "type": "stop_preview"}
 //! ```
 //!
+//! **Camera paths** (see `path`): the keyframes live in the tab's scene
+//! description (`camera.keyframes`), so "save scene" writes them as
+//! `[[camera.keyframes]]`. `add_keyframe` records the current camera (eye,
+//! look-at point, up, field of view or orthographic view height) at path
+//! frame `frame` — when left out, the last keyframe's frame + 24 (0 for the
+//! first) — which must come after the last keyframe's. `keyframes` removes
+//! the last one or all. Each answers with a `keyframes` message —
+//! `{"type": "keyframes", "seq": 12, "keyframes": [{"frame": 48, "eye": …}],
+//! "next_frame": 72, "follow": null}`, the list as the scene file holds it
+//! and the frame the next one gets by default — as does `hello` (a scene
+//! may come with keyframes); a refused one answers `error`. None of them
+//! changes the image, so none is an interaction.
+//!
+//! `preview_path` (an interaction) plays the path: every path frame from
+//! the first keyframe to the last, the camera from
+//! `voxless::camera_path::CameraPath::apply` and, for a time series, the
+//! data frame `camera.follow` picks, as coarse images only, at up to 24
+//! frames per second (frames are skipped when rendering is slower). Its
+//! images carry the `path_frame` (and `data_frame`) they show. A `preview`
+//! message with `"state": "playing"` comes before its images, one with
+//! `"state": "done"` ends it, and the tab's own view (unchanged by the
+//! preview) renders as after any interaction; images being latest-only,
+//! the last preview image may follow `done`, but none follows an image of
+//! the view. Any newer interaction stops it — `stop_preview` is one that
+//! only renders the tab's view. Fewer than two keyframes, or keyframes the
+//! library refuses, answer `error` and leave the view alone.
+//!
 //! **Server → client**: JSON text messages (`ack`, `state`, `progress`,
-//! `error`, `scene`) and binary image frames. Every message carries the
-//! `seq` of the interaction it answers; an image is only ever sent for the
-//! latest interaction received (see `outbox`). A binary frame is a 4-byte
-//! little-endian length, a JSON [`FrameHeader`] of that length, then the
-//! image file (JPEG or PNG).
+//! `error`, `scene`, `imported`, `keyframes`, `preview`) and binary image
+//! frames. Every message carries the `seq` of the interaction it answers;
+//! an image is only ever sent for the latest interaction received (see
+//! `outbox`). A binary frame is a 4-byte little-endian length, a JSON
+//! [`FrameHeader`] of that length, then the image file (JPEG or PNG).
 
 use serde::{Deserialize, Serialize};
 
@@ -91,12 +123,40 @@ pub enum Action {
     },
     /// Asks for the view as a scene file.
     SaveScene,
+    /// Records the current camera as a keyframe at path frame `frame`
+    /// (default: the last keyframe's + 24, or 0).
+    AddKeyframe {
+        #[serde(default)]
+        frame: Option<f64>,
+    },
+    /// Edits the keyframes.
+    Keyframes {
+        op: KeyframeOp,
+    },
+    /// Plays the camera path as coarse images.
+    PreviewPath,
+    /// Stops a preview: renders the tab's own view.
+    StopPreview,
+}
+
+/// An edit of the keyframe list.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum KeyframeOp {
+    RemoveLast,
+    Clear,
 }
 
 impl Action {
     /// Whether the action changes the image (and so gets a new render).
     pub fn renders(&self) -> bool {
-        !matches!(self, Action::SaveScene | Action::ColormapImport { .. })
+        !matches!(
+            self,
+            Action::SaveScene
+                | Action::ColormapImport { .. }
+                | Action::AddKeyframe { .. }
+                | Action::Keyframes { .. }
+        )
     }
     /// Whether the user is in the middle of a drag (coarse images only).
     pub fn dragging(&self) -> bool {
@@ -122,8 +182,15 @@ pub struct FrameHeader {
     /// Passes in the image and the passes asked for.
     pub passes: u32,
     pub spp: u32,
-    /// Milliseconds from the interaction's arrival to this image.
+    /// Milliseconds from the interaction's arrival to this image (for a
+    /// path preview: from the start of this image).
     pub ms: f64,
+    /// The path frame a preview image shows and the data frame (0, 1, …
+    /// as `frame` counts them) it shows (absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path_frame: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub data_frame: Option<usize>,
 }
 
 /// Packs a header and an image file into one binary message.

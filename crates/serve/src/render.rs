@@ -9,10 +9,11 @@
 //! the converged image as PNG. While the user drags, only the coarse image
 //! is made. Every image is offered to the outbox with the job's `seq`, so
 //! none is sent once a newer interaction arrived; the worker also stops as
-//! soon as it sees one.
+//! soon as it sees one. A job with a camera path plays its preview first
+//! (`path`), coarse images only, then renders its view.
 
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use serde_json::json;
@@ -24,6 +25,7 @@ use voxless::{
 use crate::app::{App, Loaded};
 use crate::encode;
 use crate::outbox::{Outbox, Outgoing, Slot};
+use crate::path;
 use crate::protocol::{FrameHeader, pack_frame};
 use crate::session::Tab;
 
@@ -48,6 +50,8 @@ pub struct Job {
     pub drag: bool,
     /// When the interaction arrived (for the frames' latency).
     pub received: Instant,
+    /// A camera path to preview before rendering the view.
+    pub path: Option<Arc<path::Plan>>,
 }
 
 /// What the worker remembers between jobs.
@@ -74,6 +78,20 @@ pub fn worker_loop(
         if !outbox.is_current(job.seq) {
             continue;
         }
+        let job = match &job.path {
+            Some(plan) => {
+                if !path::play(app, outbox, &job, plan, &cancel, &mut memory.budget) {
+                    continue;
+                }
+                // The preview ended by itself: the view, as if just asked for.
+                Job {
+                    received: Instant::now(),
+                    path: None,
+                    ..job.clone()
+                }
+            }
+            None => job,
+        };
         run_job(app, outbox, tab, &job, &cancel, &mut memory);
     }
 }
@@ -193,7 +211,7 @@ fn run_job(
             *stage_name.lock().unwrap_or_else(|e| e.into_inner()) = "full";
             let converged = stage.is_converged();
             let bg = resolved.background;
-            if !send_frame(outbox, job, (stage, film, at), outline, bg, converged) {
+            if !send_frame(outbox, job, (stage, film, at), outline, bg, converged, None) {
                 return false;
             }
             // The controls follow the first image.
@@ -213,7 +231,61 @@ fn run_job(
     }
 }
 
-/// Encodes and offers one image; false when it is no longer wanted.
+/// One coarse image of `job`'s view (a frame of a path preview: path
+/// frame `path_frame`, data frame `job.frame`), with no state, histogram or
+/// refinement. Ok(false) when it was stopped or is no longer wanted; Err
+/// when the view cannot be rendered.
+pub fn coarse_image(
+    app: &App,
+    outbox: &Outbox,
+    job: &Job,
+    cancel: &CancelToken,
+    budget: &mut CoarseBudget,
+    path_frame: f64,
+) -> Result<bool, String> {
+    let seq = job.seq;
+    if !app.volumes.contains(&job.desc, job.frame) {
+        let msg =
+            json!({"type": "progress", "seq": seq, "stage": "loading", "done": 0, "total": 1});
+        outbox.offer(Slot::Progress, seq, text(msg));
+    }
+    let loaded = app.volumes.get(&job.desc, &app.base, job.frame)?;
+    if !outbox.is_current(seq) {
+        return Ok(false);
+    }
+    let resolved = loaded
+        .resolve(&job.desc, &app.base)
+        .map_err(|e| e.to_string())?;
+    let settings = &resolved.settings;
+    let coarse = budget.pixels(settings.width as u64 * settings.height as u64);
+    let outline = match &loaded.volume {
+        AnyVolume::Particles(v) => v.periodic().map(|b| (resolved.camera, b)),
+        _ => None,
+    };
+    let control = Control::new().with_cancel(cancel.clone());
+    let mut sent = false;
+    let result = voxless::render_progressive(
+        &loaded.volume,
+        &resolved.camera,
+        &resolved.tf,
+        settings,
+        Some(coarse),
+        Some(&mut *budget),
+        &control,
+        &mut |stage, film, at| {
+            // The first image only: a view too small for a coarse stage
+            // gives its first pass instead.
+            let bg = resolved.background;
+            let shows = Some((path_frame, job.frame));
+            sent = send_frame(outbox, job, (stage, film, at), outline, bg, false, shows);
+            false
+        },
+    );
+    Ok(result.is_ok() && sent)
+}
+
+/// Encodes and offers one image (of a path preview: `shows` the path and
+/// data frames); false when it is no longer wanted.
 fn send_frame(
     outbox: &Outbox,
     job: &Job,
@@ -221,6 +293,7 @@ fn send_frame(
     outline: Option<(voxless::core::Camera, voxless::core::Aabb)>,
     background: [f32; 3],
     converged: bool,
+    shows: Option<(f64, usize)>,
 ) -> bool {
     if !outbox.is_current(job.seq) {
         return false;
@@ -246,6 +319,8 @@ fn send_frame(
         passes: film.passes(),
         spp: at.spp,
         ms: job.received.elapsed().as_secs_f64() * 1e3,
+        path_frame: shows.map(|s| s.0),
+        data_frame: shows.map(|s| s.1),
     };
     outbox.offer(
         Slot::Image,

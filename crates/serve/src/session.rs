@@ -11,7 +11,9 @@
 //! loads (or shares) the volume, resolves the description exactly as the CLI
 //! does and renders progressively. A new job cancels the running one
 //! between tiles, and only the newest pending job runs next, so a burst of
-//! mouse moves costs one render, not one per move.
+//! mouse moves costs one render, not one per move. Keyframe edits change
+//! the description only; a path preview is a job that plays the path
+//! before rendering the view (`path`).
 
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::Instant;
@@ -24,6 +26,7 @@ use voxless::{Aabb, CancelToken, SceneDesc, WorldFrame};
 use crate::app::App;
 use crate::outbox::{Outbox, Outgoing, Slot};
 use crate::patch;
+use crate::path;
 use crate::protocol::{Action, ClientMessage, MAX_VIEW_SIDE};
 use crate::render::{self, Job};
 
@@ -179,6 +182,21 @@ fn error(outbox: &Outbox, message: &str) {
     outbox.offer(Slot::Error, seq, Outgoing::Text(text));
 }
 
+/// An error answering message `seq` that changed nothing (not an
+/// interaction): shown by the page like any other.
+fn refuse(outbox: &Outbox, seq: u64, message: &str) {
+    let seq = seq.max(outbox.latest());
+    let text = json!({"type": "error", "seq": seq, "message": message}).to_string();
+    outbox.offer(Slot::Error, seq, Outgoing::Text(text));
+}
+
+/// Width / height of the view `desc` asks for.
+pub fn aspect(desc: &SceneDesc) -> f32 {
+    let w = desc.image.width.unwrap_or(800).max(1) as f32;
+    let h = desc.image.height.unwrap_or(600).max(1) as f32;
+    w / h
+}
+
 fn lock(tab: &Mutex<Tab>) -> std::sync::MutexGuard<'_, Tab> {
     tab.lock().unwrap_or_else(|e| e.into_inner())
 }
@@ -230,8 +248,34 @@ fn handle_text(app: &App, outbox: &Outbox, tab: &Mutex<Tab>, worker: &Worker, te
             );
             return;
         }
+        Action::AddKeyframe { .. } | Action::Keyframes { .. } => {
+            let mut t = lock(tab);
+            let reply = match path::edit(&mut t, &msg.action) {
+                Ok(()) => path::keyframes_message(seq, &t.desc),
+                Err(e) => {
+                    drop(t);
+                    return refuse(outbox, seq, &e);
+                }
+            };
+            drop(t);
+            outbox.offer(
+                Slot::Keyframes,
+                seq.max(outbox.latest()),
+                Outgoing::Text(reply.to_string()),
+            );
+            return;
+        }
         _ => {}
     }
+    // A preview that cannot play is refused before it stops the view's
+    // render.
+    let preview = match &msg.action {
+        Action::PreviewPath => match path::plan(app, &lock(tab)) {
+            Ok(plan) => Some(Arc::new(plan)),
+            Err(e) => return refuse(outbox, seq, &e),
+        },
+        _ => None,
+    };
     let ack = json!({"type": "ack", "seq": seq}).to_string();
     if !outbox.interaction(seq, Outgoing::Text(ack)) {
         return error(
@@ -246,6 +290,15 @@ fn handle_text(app: &App, outbox: &Outbox, tab: &Mutex<Tab>, worker: &Worker, te
         drop(t);
         return error(outbox, &e);
     }
+    if matches!(msg.action, Action::Hello { .. }) {
+        // The keyframes the scene came with.
+        let list = path::keyframes_message(seq, &t.desc).to_string();
+        outbox.offer(Slot::Keyframes, seq, Outgoing::Text(list));
+    }
+    if let Some(plan) = &preview {
+        let playing = plan.message(seq, "playing", None).to_string();
+        outbox.offer(Slot::Preview, seq, Outgoing::Text(playing));
+    }
     let job = Job {
         seq,
         desc: t.desc.clone(),
@@ -253,6 +306,7 @@ fn handle_text(app: &App, outbox: &Outbox, tab: &Mutex<Tab>, worker: &Worker, te
         coarse: !matches!(msg.action, Action::EndDrag),
         drag: msg.action.dragging(),
         received,
+        path: preview,
     };
     drop(t);
     app.set_current(&job.desc, job.frame);
@@ -261,11 +315,7 @@ fn handle_text(app: &App, outbox: &Outbox, tab: &Mutex<Tab>, worker: &Worker, te
 
 /// Applies one action to the tab's view.
 fn apply(app: &App, t: &mut Tab, action: &Action) -> Result<(), String> {
-    let aspect = {
-        let w = t.desc.image.width.unwrap_or(800).max(1) as f32;
-        let h = t.desc.image.height.unwrap_or(600).max(1) as f32;
-        w / h
-    };
+    let aspect = aspect(&t.desc);
     let (bounds, world) = (t.bounds, t.world);
     let view = (&bounds, aspect, &world);
     let cam = &mut t.desc.camera;
@@ -285,7 +335,7 @@ fn apply(app: &App, t: &mut Tab, action: &Action) -> Result<(), String> {
             voxless::pose::zoom_camera(cam, view, *factor).map_err(|e| e.to_string())?;
         }
         Action::EndDrag => {}
-        Action::Reset => t.desc.camera = app.initial.camera.clone(),
+        Action::Reset => path::reset_camera(&app.initial.camera, t)?,
         Action::Set { patch } => {
             t.desc = patch::apply_patch(app, &t.desc, &t.imported, patch)?;
         }
@@ -306,7 +356,12 @@ fn apply(app: &App, t: &mut Tab, action: &Action) -> Result<(), String> {
             }
             t.frame = *frame;
         }
-        Action::SaveScene | Action::ColormapImport { .. } => {}
+        // A preview plays on the worker; stopping one renders the view.
+        Action::PreviewPath | Action::StopPreview => {}
+        Action::SaveScene
+        | Action::ColormapImport { .. }
+        | Action::AddKeyframe { .. }
+        | Action::Keyframes { .. } => {}
     }
     Ok(())
 }
