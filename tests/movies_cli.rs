@@ -357,3 +357,53 @@ fn movies_encode_every_frame_and_resume() {
     let (success, _, _) = voxless(&["render", &scene, "--frames", "0..1", "-o", &s.str("x.png")]);
     assert!(success);
 }
+
+/// A tessellation over numbered position files is a time series: each
+/// frame its own grid, rendered and sliced; one file has one frame.
+#[test]
+fn tessellation_time_series_from_numbered_files() {
+    let s = Scratch::new("tets-series");
+    let n = 8;
+    for f in 0..3 {
+        let mut pos = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                for k in 0..n {
+                    // A wave growing with the frame number.
+                    let q = [i, j, k].map(|c| (c as f32 + 0.5) / n as f32);
+                    let d = 0.08 * f as f32 * (std::f32::consts::TAU * q[0]).sin();
+                    pos.extend([(q[0] + d).rem_euclid(1.0), q[1], q[2]]);
+                }
+            }
+        }
+        voxless::io::write_npy_f32(&s.path(&format!("g_{f}.npy")), &[n * n * n, 3], &pos).unwrap();
+    }
+    let (t, sl, x) = (s.str("t.png"), s.str("s.npy"), s.str("x.png"));
+    let (g, g0) = (s.str("g_%d.npy"), s.str("g_0.npy"));
+    let data = ["--particles", &g, "--lagrangian", "8", "--box", "1"];
+    let mut a = vec!["render"];
+    a.extend(data);
+    a.extend(["--frames", "0..2", "--size", "40", "30", "-o", &t]);
+    let e = ok(&a);
+    assert!(e.contains("rendered 3 frames"), "{e}");
+    assert_ne!(pixels(&s.path("t_0000.png")), pixels(&s.path("t_0002.png")));
+    // Frame 2's slice is frame 2's grid: denser where the wave converges.
+    let mut a = vec!["slice"];
+    a.extend(data);
+    a.extend(["--frame", "2", "--size", "16", "4", "-o", &sl]);
+    ok(&a);
+    let (_, v) = read(&s.path("s.npy"));
+    let (lo, hi) = v
+        .iter()
+        .fold((f64::MAX, 0.0f64), |(l, h), &x| (l.min(x), h.max(x)));
+    assert!(hi > 1.5 * lo, "frame 2 is not uniform: {lo} .. {hi}");
+    let single = ["--particles", &g0, "--lagrangian", "8", "--box", "1"];
+    let mut a = vec!["render"];
+    a.extend(single);
+    a.extend(["--frame", "1", "-o", &x]);
+    let e = fails(&a);
+    assert!(
+        e.contains("one frame") && e.contains("number the files"),
+        "{e}"
+    );
+}

@@ -451,3 +451,80 @@ fn snapshots_and_their_regions_under_mpirun_equal_one_process() {
         &points,
     );
 }
+
+/// Slices and movies under `mpirun`: a slice equals one process's bit for
+/// bit; a movie's frames (a series by whole frames per rank, and a
+/// turntable) equal one process's within 1/255, rank 0 encoding.
+#[test]
+fn slices_and_movies_under_mpirun_equal_one_process() {
+    if !have_mpirun() {
+        return;
+    }
+    let dir = Scratch::new("mpi-movies");
+    for f in 0..4 {
+        let mut rng = Lcg(50 + f);
+        let pos: Vec<f32> = (0..3 * 600)
+            .map(|i| rng.f() * 0.5 + 0.08 * (f as f32) * (i % 3 == 0) as u8 as f32)
+            .collect();
+        voxless_io::write_npy_f32(&dir.path(&format!("s_{f}.npy")), &[600, 3], &pos).unwrap();
+    }
+    let pattern = dir.str("s_%d.npy");
+    let data = ["--particles", &pattern, "--radius", "0.05"];
+    let (one_s, k_s) = (dir.str("one.npy"), dir.str("k.npy"));
+    let slice = |out: &str| -> Vec<String> {
+        ["slice"]
+            .iter()
+            .chain(&data)
+            .chain(&[
+                "--frame", "2", "--axis", "x", "--size", "40", "30", "-o", out,
+            ])
+            .map(|s| s.to_string())
+            .collect()
+    };
+    one(&slice(&one_s).iter().map(String::as_str).collect::<Vec<_>>());
+    mpi_ok(
+        3,
+        &slice(&k_s).iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    same_bits(Path::new(&one_s), Path::new(&k_s));
+    let ffmpeg = Command::new("ffmpeg")
+        .arg("-version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !voxless_core::testing::prerequisite(ffmpeg, "VOXLESS_REQUIRE_FFMPEG", "ffmpeg") {
+        return;
+    }
+    for (k, frames, how) in [
+        (2, ["--frames", "0..3"], "whole frames per rank"),
+        (3, ["--turntable", "3"], "on 3 ranks"),
+    ] {
+        let movie = |out: &str| -> Vec<String> {
+            ["render"]
+                .iter()
+                .chain(&data)
+                .chain(&frames)
+                .chain(&["--size", "40", "30", "--keep-frames", "-o", out])
+                .map(|s| s.to_string())
+                .collect()
+        };
+        let (one_m, k_m) = (
+            dir.str(&format!("one{k}.gif")),
+            dir.str(&format!("k{k}.gif")),
+        );
+        one(&movie(&one_m).iter().map(String::as_str).collect::<Vec<_>>());
+        let err = mpi_ok(
+            k,
+            &movie(&k_m).iter().map(String::as_str).collect::<Vec<_>>(),
+        );
+        assert!(err.contains(how), "{err}");
+        assert!(Path::new(&k_m).is_file(), "rank 0 wrote the movie");
+        let n = if k == 2 { 4 } else { 3 };
+        for f in 0..n {
+            let name = format!("frame_{f:06}.png");
+            let a = dir.path(&format!("one{k}.gif.frames")).join(&name);
+            let b = dir.path(&format!("k{k}.gif.frames")).join(&name);
+            let d = png_difference(&a, &b);
+            assert!(d <= 1, "{k} ranks, movie frame {f}: {d}/255");
+        }
+    }
+}
