@@ -208,10 +208,9 @@ enum Command {
         /// AMR field by name (default: --field, else the first).
         #[arg(long, value_name = "NAME")]
         quantity: Option<String>,
-        /// centre (default): the value at each pixel's centre; area: the
-        /// mean over each pixel's square (4×4 Gauss–Legendre points).
+        /// How each pixel takes its value.
         #[arg(long, value_enum)]
-        pixels: Option<voxless::PixelsName>,
+        pixels: Option<SlicePixelsArg>,
         /// Output: .npy (float32 H×W), .exr, .fits (raw values) or .png
         /// (colormapped).
         #[arg(short, long)]
@@ -268,6 +267,17 @@ enum Command {
     Info(info::InfoArgs),
     /// List the built-in colormaps.
     Colormaps,
+}
+
+/// How a slice's pixel takes its value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum SlicePixelsArg {
+    /// The value at the pixel's centre: exactly `sample`'s (default).
+    #[value(alias = "center")]
+    Centre,
+    /// The mean over the pixel's square by a 4×4 Gauss–Legendre rule (16
+    /// samples a pixel).
+    Area,
 }
 
 /// A coordinate axis.
@@ -522,7 +532,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
                 plane: projection_desc(axis, bounds, normal, north, center, width, None),
                 quantity,
                 pixels: match pixels {
-                    Some(voxless::PixelsName::Area) => voxless::slice::SlicePixels::Area,
+                    Some(SlicePixelsArg::Area) => voxless::slice::SlicePixels::Area,
                     _ => voxless::slice::SlicePixels::Centre,
                 },
             };
