@@ -36,6 +36,11 @@ pub struct Resolved {
     pub framed: Aabb,
 }
 
+/// The most samples per pixel a render takes: the noise falls as
+/// 1/√spp, so 65,536 passes leave 1/256 of one pass's noise, well below
+/// 8-bit output, and more only costs time.
+pub const MAX_SPP: u32 = 65_536;
+
 /// Fills every default of `desc` for `volume`, whose coordinates are the
 /// world's. Colormap files are read relative to `base` (the scene file's
 /// directory).
@@ -180,10 +185,13 @@ fn march_settings(
     }
     crate::budget::check_image_memory(width, height)?;
     let spp = desc.image.spp.unwrap_or(1);
-    if spp == 0 {
+    if spp == 0 || spp > MAX_SPP {
         return Err(SceneError::setting(
-            "image.spp",
-            "samples per pixel must be ≥ 1",
+            "image.spp (--spp)",
+            format!(
+                "{spp} samples per pixel: give 1..={MAX_SPP} (the noise of {MAX_SPP} passes is \
+                 already 1/256 of one pass's; a million would take days)"
+            ),
         ));
     }
     let mut settings = RenderSettings::for_data(

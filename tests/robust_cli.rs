@@ -411,3 +411,28 @@ fn degenerate_inputs_render_or_say_why() {
     let (good, e, _) = amr("zero.scalars");
     assert!(!good && e.contains("0 everywhere"), "{e}");
 }
+
+/// Absurd sample counts are refused before any work, naming the flag and
+/// the limit (a million passes would take days).
+#[test]
+fn absurd_samples_per_pixel_are_refused() {
+    let s = Scratch::new("spp");
+    write_positions(&s.path("p.npy"), 200, 4);
+    let p = s.str("p.npy");
+    let out = s.str("x.png");
+    let e = fails(&["render", "--particles", &p, "--spp", "1000000", "-o", &out]);
+    assert!(e.contains("--spp") && e.contains("65536"), "{e}");
+    assert!(!s.path("x.png").exists());
+    ok(&[
+        "render",
+        "--particles",
+        &p,
+        "--spp",
+        "2",
+        "--size",
+        "16",
+        "16",
+        "-o",
+        &out,
+    ]);
+}

@@ -253,8 +253,15 @@ pub fn render(
             None => {
                 let first = out::frame_path(output, seq.frames[0].0)?;
                 let last = out::frame_path(output, seq.frames[n - 1].0)?;
+                let what = match seq.turntable {
+                    Some(_) => {
+                        let st = &scene.view().settings;
+                        format!("a {n}-frame turntable ({}×{})", st.width, st.height)
+                    }
+                    None => format!("{n} {what}"),
+                };
                 eprintln!(
-                    "rendered {n} {what}{how} in {secs:.2}s → {} … {}",
+                    "rendered {what}{how} in {secs:.2}s → {} … {}",
                     first.display(),
                     last.display()
                 );
