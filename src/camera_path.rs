@@ -26,7 +26,9 @@
 //! numbered at or before it (hold), the nearest one, or the data frames
 //! spread evenly over the path (stretch).
 
-use voxless_scene::{CameraDesc, FollowName, KeyframeDesc, ProjectionName, SceneDesc};
+use voxless_scene::{
+    CameraDesc, DEFAULT_PATH_FPS, FollowName, KeyframeDesc, ProjectionName, SceneDesc,
+};
 
 use crate::SceneError;
 use crate::camera::{DEFAULT_UP, VIEW_FOV_DEG};
@@ -106,24 +108,42 @@ impl CameraPath {
                  keyframe or in none",
             ));
         }
+        let fps = camera.fps.unwrap_or(DEFAULT_PATH_FPS);
+        if !(fps.is_finite() && fps > 0.0) {
+            return Err(SceneError::setting(
+                "camera.fps",
+                format!("{fps} is not a frame rate > 0"),
+            ));
+        }
         let mut poses = Vec::with_capacity(keys.len());
+        let mut frames: Vec<f64> = Vec::with_capacity(keys.len());
         for (i, k) in keys.iter().enumerate() {
             let name = |field: &str| format!("camera.keyframes[{i}].{field}");
-            if !k.frame.is_finite() {
-                return Err(setting(name("frame"), format!("{} is not finite", k.frame)));
+            let f = match (k.frame, k.time) {
+                (Some(f), None) => f,
+                (None, Some(t)) => t * fps,
+                _ => {
+                    return Err(setting(
+                        name("frame"),
+                        "give each keyframe a frame or a time (seconds), one of them",
+                    ));
+                }
+            };
+            if !f.is_finite() {
+                return Err(setting(name("frame"), format!("{f} is not finite")));
             }
-            if i > 0 && !(k.frame > keys[i - 1].frame) {
+            if i > 0 && !(f > frames[i - 1]) {
                 return Err(setting(
                     name("frame"),
                     format!(
-                        "{} does not follow keyframe {} at frame {}: keyframes must be in \
+                        "{f} does not follow keyframe {} at frame {}: keyframes must be in \
                          increasing frame order",
-                        k.frame,
                         i - 1,
-                        keys[i - 1].frame
+                        frames[i - 1]
                     ),
                 ));
             }
+            frames.push(f);
             poses.push(pose_of(k, camera, ortho_camera, &name)?);
         }
         let mut quats: Vec<[f64; 4]> = poses.iter().map(orientation).collect();
@@ -134,7 +154,7 @@ impl CameraPath {
             }
         }
         Ok(Some(CameraPath {
-            frames: keys.iter().map(|k| k.frame).collect(),
+            frames,
             poses,
             quats,
         }))

@@ -344,7 +344,10 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             let radii = data.save_radii.clone();
             let radii = radii.as_deref();
             let placed_camera = view.eye.is_some() || view.look_at.is_some();
-            let (desc, base) = SceneArgs { data, kind, view }.scene()?;
+            let (mut desc, base) = SceneArgs { data, kind, view }.scene()?;
+            // Keyframe times count in the movie's frame rate unless the
+            // scene gives its path's.
+            desc.camera.fps.get_or_insert(fps);
             let movie = sequence::MovieArgs {
                 settings: voxless::movie::MovieSettings { fps, quality },
                 keep_frames,
@@ -375,7 +378,6 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
                     output.display()
                 );
             }
-            let mut desc = desc;
             if let Some(path) = voxless::camera_path::CameraPath::new(&desc.camera)? {
                 let (first, _) = path.span();
                 let note = if placed_camera {

@@ -550,7 +550,8 @@ impl Volume {
         quality: u32,
         keep_frames: bool,
     ) -> PyResult<(usize, usize, Vec<String>)> {
-        let desc = self.view(tables, flags, &cwd, "movie")?;
+        let mut desc = self.view(tables, flags, &cwd, "movie")?;
+        desc.camera.fps.get_or_insert(fps);
         let output = cwd.join(output);
         let held = self.held.clone();
         let done = run::cancellable(py, move |control| -> Result<_, Failure> {

@@ -2,7 +2,7 @@ use super::*;
 
 fn key(frame: f64, eye: V3, look_at: V3) -> KeyframeDesc {
     KeyframeDesc {
-        frame,
+        frame: Some(frame),
         eye: Some(eye),
         look_at: Some(look_at),
         up: Some([0.0, 0.0, 1.0]),
@@ -102,7 +102,7 @@ fn orientation_turns_smoothly_without_roll() {
 fn two_identical_keyframes_are_a_still_camera() {
     let k = key(0.0, [1.0, 2.0, 3.0], [0.0, 0.0, 0.0]);
     let mut k2 = k.clone();
-    k2.frame = 10.0;
+    k2.frame = Some(10.0);
     let p = path(vec![k, k2]).unwrap().unwrap();
     let first = p.at(0.0);
     // The up vector as the renderer uses it: across the look direction.
@@ -148,6 +148,40 @@ fn bad_paths_are_refused_by_name() {
     assert!(
         CameraPath::new(&CameraDesc::default()).unwrap().is_none(),
         "no keyframes, no path"
+    );
+}
+
+#[test]
+fn keyframes_by_time_count_in_the_path_rate() {
+    let mut a = key(0.0, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]);
+    let mut b = key(0.0, [0.0, 1.0, 0.0], [0.0, 0.0, 0.0]);
+    (a.frame, a.time) = (None, Some(0.0));
+    (b.frame, b.time) = (None, Some(2.0));
+    let camera = |keys: Vec<KeyframeDesc>, fps| CameraDesc {
+        keyframes: Some(keys),
+        fps,
+        ..Default::default()
+    };
+    // 2 s at the default 24 fps is frame 48; at 30 fps, frame 60.
+    let p = CameraPath::new(&camera(vec![a.clone(), b.clone()], None))
+        .unwrap()
+        .unwrap();
+    assert_eq!(p.span(), (0.0, 48.0));
+    assert_eq!(p.at(48.0).eye, [0.0, 1.0, 0.0]);
+    let p = CameraPath::new(&camera(vec![a.clone(), b.clone()], Some(30.0)))
+        .unwrap()
+        .unwrap();
+    assert_eq!(p.span(), (0.0, 60.0));
+    let e = CameraPath::new(&camera(vec![a.clone(), b.clone()], Some(0.0))).unwrap_err();
+    assert!(e.to_string().contains("camera.fps"), "{e}");
+    // A keyframe with both, or neither, is refused by name.
+    b.frame = Some(3.0);
+    let e = CameraPath::new(&camera(vec![a, b], None))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("keyframes[1].frame") && e.contains("time"),
+        "{e}"
     );
 }
 

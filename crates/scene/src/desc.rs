@@ -288,15 +288,24 @@ pub struct CameraDesc {
     /// nearest to it) or stretch (the data frames spread evenly over the
     /// path's frames, nearest).
     pub follow: Option<FollowName>,
+    /// Path frames per second: what a keyframe's `time` is counted in
+    /// (default [`DEFAULT_PATH_FPS`]; a movie's frame rate when unset).
+    pub fps: Option<f64>,
 }
 
+/// Path frames per second when a scene gives none.
+pub const DEFAULT_PATH_FPS: f64 = 24.0;
+
 /// One keyframe of a camera path: where the camera is at path frame
-/// `frame`. Settings left out are those of the camera (or the defaults).
+/// `frame` (or at `time` seconds, `time × fps` frames). Settings left out
+/// are those of the camera (or the defaults).
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct KeyframeDesc {
     /// The path frame this keyframe is at (the number `--frames` counts).
-    pub frame: f64,
+    pub frame: Option<f64>,
+    /// Or its time in seconds from the path's start.
+    pub time: Option<f64>,
     pub eye: Option<[f64; 3]>,
     pub look_at: Option<[f64; 3]>,
     pub up: Option<[f32; 3]>,
@@ -304,6 +313,13 @@ pub struct KeyframeDesc {
     pub fov: Option<f32>,
     /// World-space height of the view: an orthographic camera.
     pub orthographic: Option<f32>,
+}
+
+impl KeyframeDesc {
+    /// The path frame this keyframe is at: `frame`, else `time × fps`.
+    pub fn path_frame(&self, fps: f64) -> Option<f64> {
+        self.frame.or(self.time.map(|t| t * fps))
+    }
 }
 
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]

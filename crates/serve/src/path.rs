@@ -52,14 +52,22 @@ pub fn keyframes_message(seq: u64, desc: &SceneDesc) -> Value {
         "type": "keyframes",
         "seq": seq,
         "keyframes": keys,
-        "next_frame": next_frame(keys),
+        "next_frame": next_frame(keys, &desc.camera),
         "follow": desc.camera.follow,
     })
 }
 
+/// The path frame a keyframe of `camera` is at (its frame, or its time at
+/// the camera's rate; the viewer records frames).
+fn key_frame(k: &KeyframeDesc, camera: &CameraDesc) -> f64 {
+    k.path_frame(camera.fps.unwrap_or(voxless::DEFAULT_PATH_FPS))
+        .unwrap_or(0.0)
+}
+
 /// The frame a keyframe added without one gets.
-fn next_frame(keys: &[KeyframeDesc]) -> f64 {
-    keys.last().map_or(0.0, |k| k.frame + KEYFRAME_STEP)
+fn next_frame(keys: &[KeyframeDesc], camera: &CameraDesc) -> f64 {
+    keys.last()
+        .map_or(0.0, |k| key_frame(k, camera) + KEYFRAME_STEP)
 }
 
 /// Applies a keyframe action (`add_keyframe` or `keyframes`) to the tab.
@@ -101,19 +109,19 @@ pub fn edit(t: &mut Tab, action: &Action) -> Result<(), String> {
 /// Records the tab's camera as a keyframe at `frame` (see the module docs).
 fn add(t: &mut Tab, frame: Option<f64>) -> Result<(), String> {
     let mut keys = t.desc.camera.keyframes.clone().unwrap_or_default();
-    let frame = frame.unwrap_or_else(|| next_frame(&keys));
+    let frame = frame.unwrap_or_else(|| next_frame(&keys, &t.desc.camera));
     if !(frame.is_finite() && (0.0..=MAX_FRAME).contains(&frame)) {
         return Err(format!(
             "keyframe frame {frame}: a path frame is a number from 0 to {MAX_FRAME}"
         ));
     }
     if let Some(last) = keys.last()
-        && !(frame > last.frame)
+        && !(frame > key_frame(last, &t.desc.camera))
     {
         return Err(format!(
             "keyframe frame {frame} is not after the last keyframe's ({}): keyframes are \
              added in increasing frame order (remove the last one to record it again)",
-            last.frame
+            key_frame(last, &t.desc.camera)
         ));
     }
     if keys.len() >= MAX_KEYFRAMES {
@@ -126,7 +134,8 @@ fn add(t: &mut Tab, frame: Option<f64>) -> Result<(), String> {
         None
     };
     let mut key = KeyframeDesc {
-        frame,
+        frame: Some(frame),
+        time: None,
         eye: camera.eye,
         look_at: camera.look_at,
         up: camera.up,
@@ -138,11 +147,11 @@ fn add(t: &mut Tab, frame: Option<f64>) -> Result<(), String> {
     let still = CameraDesc {
         keyframes: Some(vec![
             KeyframeDesc {
-                frame: 0.0,
+                frame: Some(0.0),
                 ..key.clone()
             },
             KeyframeDesc {
-                frame: 1.0,
+                frame: Some(1.0),
                 ..key.clone()
             },
         ]),
@@ -366,7 +375,7 @@ mod tests {
 
     fn plan(first: f64, last: f64) -> Plan {
         let key = |frame: f64, x: f64| KeyframeDesc {
-            frame,
+            frame: Some(frame),
             eye: Some([x, -5.0, 1.0]),
             look_at: Some([0.0, 0.0, 0.0]),
             ..Default::default()

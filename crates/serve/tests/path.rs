@@ -91,7 +91,7 @@ fn keyframes_recorded_from_the_view_are_saved_and_read_back() {
         assert_eq!(r["keyframes"].as_array().unwrap().len(), 1, "{r}");
         assert_eq!(r["next_frame"], json!(24.0));
         let first: KeyframeDesc = serde_json::from_value(r["keyframes"][0].clone()).unwrap();
-        assert_eq!(first.frame, 0.0);
+        assert_eq!(first.frame, Some(0.0));
         assert_default_view(&desc, &first);
 
         // Moved views: recorded exactly as the tab's camera.
@@ -213,12 +213,12 @@ fn assert_default_view(desc: &voxless::SceneDesc, k: &KeyframeDesc) {
     with.camera.keyframes = Some(vec![
         k.clone(),
         KeyframeDesc {
-            frame: k.frame + 1.0,
+            frame: Some(k.frame.unwrap() + 1.0),
             ..k.clone()
         },
     ]);
     let path = CameraPath::new(&with.camera).unwrap().unwrap();
-    let recorded = resolve(&path.apply(&with, k.frame));
+    let recorded = resolve(&path.apply(&with, k.frame.unwrap()));
     let scale = (default.eye - loaded.frame.to_local(k.look_at.unwrap())).length();
     assert!(
         (recorded.eye - default.eye).length() <= 1e-5 * scale,
