@@ -149,8 +149,14 @@ fn run_job(
         Ok(r) => r,
         Err(e) => return fail(e.to_string()),
     };
-    {
+    // The CLI's refusal of absurd work (a step far below the data's
+    // scale, a sampling rate of 10⁹), before anything renders.
+    if let Err(e) = resolved.check_work(&loaded.volume, &loaded.frame, &job.desc) {
+        return fail(e.to_string());
+    }
+    let previous_good = {
         let mut t = tab.lock().unwrap_or_else(|e| e.into_inner());
+        let previous = t.last_good.clone();
         t.last_good = Some((job.desc.clone(), job.frame));
         // What the default camera framed (the part of the data the
         // transfer function shows), so camera moves start from that view.
@@ -159,7 +165,8 @@ fn run_job(
         let vr = resolved.settings.value_range;
         t.value_range = Some([vr.lo, vr.hi]);
         t.attribute_range = resolved.settings.attribute_range.map(|r| [r.lo, r.hi]);
-    }
+        previous
+    };
 
     let last_progress = AtomicU64::new(0);
     let stage_name = Mutex::new("coarse");
@@ -216,8 +223,23 @@ fn run_job(
             }
             // The controls follow the first image.
             send_state(memory);
-            if converged && let Err(e) = resolved.check_iso(film.stats()) {
-                fail(e.to_string());
+            // The CLI's checks of a finished image: iso-surfaces asked for
+            // but absent, or nothing visible at all (a value range above
+            // the data, a camera or clip box away from it) — an error, not
+            // a black "converged" image; the tab goes back to the view
+            // that rendered before.
+            if converged {
+                let bounds = loaded.frame.box_to_world(loaded.volume.bounds());
+                let image = film.resolve();
+                if let Err(e) = resolved.check_image(bounds, film.stats(), &image) {
+                    {
+                        let mut t = tab.lock().unwrap_or_else(|e| e.into_inner());
+                        if t.last_good.as_ref() == Some(&(job.desc.clone(), job.frame)) {
+                            t.last_good = previous_good.clone();
+                        }
+                    }
+                    fail(e.to_string());
+                }
             }
             !job.drag && outbox.is_current(seq)
         },

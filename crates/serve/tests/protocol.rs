@@ -394,3 +394,50 @@ fn a_tab_sets_neighbour_radii_in_a_periodic_box() {
         assert_eq!(state["scene"]["particles"]["box"], json!(1.0), "{state}");
     });
 }
+
+/// The CLI's checks hold in the viewer: a view that shows nothing (a value
+/// range above the data, a clip box away from it) is an error naming the
+/// cause, not a black "converged" image, and the tab goes back to the view
+/// that rendered last.
+#[test]
+fn a_view_that_shows_nothing_is_an_error_not_a_black_image() {
+    let s = Scratch::new("black");
+    let server = serve(particle_scene(&s, 600), "127.0.0.1");
+    runtime().block_on(async {
+        let mut ws = connect(server.addr, None).await;
+        send(
+            &mut ws,
+            json!({"seq": 1, "type": "hello", "width": 40, "height": 30}),
+        )
+        .await;
+        until_converged(&mut ws, 1).await;
+        let cases = [
+            json!({"transfer": {"value_range": [1e6, 2e6]}}),
+            json!({"render": {"clip": [50.0, 50.0, 50.0, 51.0, 51.0, 51.0]}}),
+        ];
+        for (k, patch) in cases.into_iter().enumerate() {
+            let seq = 2 + 2 * k as u64;
+            send(&mut ws, json!({"seq": seq, "type": "set", "patch": patch})).await;
+            loop {
+                match next(&mut ws).await.expect("socket open") {
+                    Msg::Text(v) if v["type"] == "error" && v["seq"] == seq => {
+                        let m = v["message"].as_str().unwrap();
+                        assert!(m.contains("back to the last one"), "{m}");
+                        break;
+                    }
+                    Msg::Frame(h, _) if h.seq == seq && h.stage == "converged" => {
+                        // The image may come first; the error must follow.
+                    }
+                    _ => {}
+                }
+            }
+            // The next move renders from the last good view.
+            send(
+                &mut ws,
+                json!({"seq": seq + 1, "type": "orbit", "yaw": 5.0, "pitch": 0.0}),
+            )
+            .await;
+            until_converged(&mut ws, seq + 1).await;
+        }
+    });
+}
