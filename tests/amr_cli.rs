@@ -327,3 +327,60 @@ fn amrclaw_and_exabricks_frames_agree() {
         assert_eq!(claw[i * 5], exa[i], "density at point {i}");
     }
 }
+
+/// Numbered AMRClaw outputs are a time series: `fort.q%04d` has frames 2
+/// and 3, each slice equals that file's own, and a movie-style sequence
+/// renders both with their `fort.t` times as labels.
+#[test]
+fn amrclaw_outputs_by_pattern_are_a_time_series() {
+    let Some(dir) = shared_data("amr-euler3d") else {
+        return;
+    };
+    let s = Scratch::new("amr-series");
+    let f = |p: &str| dir.join(p).to_string_lossy().into_owned();
+    let pattern = f("fort.q%04d");
+    let (out, one, two) = (s.str("a.png"), s.str("one.npy"), s.str("two.npy"));
+    let e = ok(&[
+        "render",
+        "--amrclaw",
+        &pattern,
+        "--frames",
+        "0..9",
+        "--size",
+        "48",
+        "36",
+        "--time-label",
+        "-o",
+        &out,
+    ]);
+    assert!(
+        e.contains("rendered 2 frames") && e.contains("frames in that range are 2, 3"),
+        "{e}"
+    );
+    assert!(s.path("a_0002.png").is_file() && s.path("a_0003.png").is_file());
+    ok(&[
+        "slice",
+        "--amrclaw",
+        &pattern,
+        "--frame",
+        "2",
+        "--size",
+        "32",
+        "32",
+        "-o",
+        &one,
+    ]);
+    ok(&[
+        "slice",
+        "--amrclaw",
+        &f("fort.q0002"),
+        "--size",
+        "32",
+        "32",
+        "-o",
+        &two,
+    ]);
+    assert_eq!(read(&s.path("one.npy")).1, read(&s.path("two.npy")).1);
+    let e = fails(&["slice", "--amrclaw", &pattern, "--frame", "5", "-o", &one]);
+    assert!(e.contains("2") && e.contains("3"), "{e}");
+}

@@ -185,11 +185,24 @@ fn wildcard(pattern: &str, name: &str) -> bool {
 }
 
 /// The last run of digits in a file name before its extension (the `5` of
-/// `.hdf5` is no frame number): its frame number.
+/// `.hdf5` is no frame number): its frame number. An "extension" that is
+/// a frame number itself — at most one letter, then two or more digits, as
+/// AMRClaw's `fort.q0002` — counts when the stem has none.
 fn last_number(name: &str) -> Option<usize> {
-    let stem = match name.rfind('.') {
-        Some(dot) if dot > 0 => &name[..dot],
-        _ => name,
+    let (stem, ext) = match name.rfind('.') {
+        Some(dot) if dot > 0 => (&name[..dot], &name[dot + 1..]),
+        _ => (name, ""),
+    };
+    let numbered_ext = {
+        let digits = ext.trim_start_matches(|c: char| c.is_ascii_alphabetic());
+        ext.len() - digits.len() <= 1
+            && digits.len() >= 2
+            && digits.bytes().all(|b| b.is_ascii_digit())
+    };
+    let stem = if numbered_ext && !stem.bytes().any(|b| b.is_ascii_digit()) {
+        name
+    } else {
+        stem
     };
     let digits: String = stem
         .chars()
@@ -310,6 +323,17 @@ pub fn parse_range(s: &str) -> Result<std::ops::RangeInclusive<usize>, SceneErro
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn frame_numbers_come_from_the_name() {
+        assert_eq!(last_number("step_0007.npy"), Some(7));
+        assert_eq!(last_number("dam_break_3d_01750.hdf5"), Some(1750));
+        assert_eq!(last_number("fort.q0002"), Some(2));
+        assert_eq!(last_number("plt00100"), Some(100));
+        assert_eq!(last_number("run.hdf5"), None);
+        assert_eq!(last_number("snap.h5"), None);
+        assert_eq!(last_number("a1.q0002"), Some(1));
+    }
 
     #[test]
     fn patterns_globs_and_directories_expand_in_numeric_order() {

@@ -106,7 +106,7 @@ pub(crate) enum Source<'a> {
     /// snapshot types become materials, see
     /// [`materials::with_types`]).
     Particles(Box<Cow<'a, ParticlesDesc>>),
-    Amr(&'a AmrDesc),
+    Amr(Cow<'a, AmrDesc>),
     /// A phase-space tessellation: a `[tets]` table, or a JaxPM run given
     /// as particles.
     Tets(Cow<'a, TetsDesc>),
@@ -134,7 +134,7 @@ pub(crate) fn source<'a>(desc: &'a SceneDesc, base: &Path) -> Result<Source<'a>,
         });
     }
     match (&desc.amr, &desc.tets) {
-        (Some(a), _) => Ok(Source::Amr(a)),
+        (Some(a), _) => Ok(Source::Amr(Cow::Borrowed(a))),
         (_, Some(t)) => Ok(Source::Tets(Cow::Borrowed(t))),
         (None, None) => Err(SceneError::setting(
             "scene",
@@ -144,6 +144,18 @@ pub(crate) fn source<'a>(desc: &'a SceneDesc, base: &Path) -> Result<Source<'a>,
              --amrclaw FILE (or use `voxless demo`)",
         )),
     }
+}
+
+/// The AMR output `a` names when it is a sequence of numbered outputs
+/// (`file` or `amrclaw`, e.g. `fort.q%04d` or `plt*`): the spec and
+/// whether it is `file`.
+pub(crate) fn amr_sequence(a: &AmrDesc, base: &Path) -> Option<(String, bool)> {
+    let (spec, is_file) = match (&a.file, &a.amrclaw) {
+        (Some(f), _) => (f, true),
+        (None, Some(q)) => (q, false),
+        _ => return None,
+    };
+    frames::is_sequence(spec, base).then(|| (spec.clone(), is_file))
 }
 
 /// [`source`], refusing a frame other than 0 of data that has one frame
@@ -156,6 +168,21 @@ pub(crate) fn source_at<'a>(
 ) -> Result<Source<'a>, SceneError> {
     let s = source(desc, base)?;
     let what = match s {
+        // A sequence of AMR outputs (fort.q%04d, plt*): the file of this frame.
+        Source::Amr(a) if amr_sequence(&a, base).is_some() => {
+            let Some((spec, _)) = amr_sequence(&a, base) else {
+                unreachable!()
+            };
+            let file = frames::file_numbered(&spec, base, frame)?;
+            let file = file.strip_prefix(base).unwrap_or(&file);
+            let file = Some(file.to_string_lossy().into_owned());
+            let mut a = a.into_owned();
+            match a.file {
+                Some(_) => a.file = file,
+                None => a.amrclaw = file,
+            }
+            return Ok(Source::Amr(Cow::Owned(a)));
+        }
         Source::Amr(_) => "AMR cells have",
         // A sequence of numbered position files: the file of this frame.
         Source::Tets(t)
@@ -178,9 +205,8 @@ pub(crate) fn source_at<'a>(
         return Err(SceneError::setting(
             "frame (--frame, --frames)",
             format!(
-                "frame {frame} was asked for, but {what} one frame, 0 (AMR files and single \
-                 tessellation files are not read as time series; number the files, e.g. \
-                 step_%03d.npy)"
+                "frame {frame} was asked for, but {what} one frame, 0 (a single file is not a \
+                 time series; give numbered files, e.g. fort.q%04d or step_%03d.npy)"
             ),
         ));
     }
@@ -215,7 +241,7 @@ pub fn load_in(
             }
         },
         Source::Amr(a) => {
-            let (v, f) = amr::load_amr(a, base)?;
+            let (v, f) = amr::load_amr(&a, base)?;
             (AnyVolume::Amr(Box::new(v)), f)
         }
         Source::Tets(t) => {

@@ -672,6 +672,13 @@ pub fn frame_numbers(
             .map(|(n, _)| n)
             .collect());
     }
+    // Numbered AMR outputs (fort.q%04d, plt*).
+    if let Some((spec, _)) = desc.amr.as_ref().and_then(|a| super::amr_sequence(a, base)) {
+        return Ok(frames::numbered(&spec, base)?
+            .into_iter()
+            .map(|(n, _)| n)
+            .collect());
+    }
     let Some(p) = &desc.particles else {
         return Ok(vec![0]);
     };

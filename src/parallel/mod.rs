@@ -120,7 +120,7 @@ pub(crate) fn open_part(
     crate::checks::check_ranks(desc, tets, comm.size(), projecting)?;
     match source {
         Source::Particles(p) => particles::open(comm, &p, base, frame, earlier),
-        Source::Amr(a) => amr::open(comm, a, base),
+        Source::Amr(a) => amr::open(comm, &a, base),
         Source::Tets(t) => tets::open(comm, &t, base, purpose),
     }
 }

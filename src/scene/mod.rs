@@ -202,16 +202,26 @@ impl Scene {
             self.volume = AnyVolume::Materials(Box::new(v));
             return Ok(());
         }
-        if let AnyVolume::Tets(_) = &self.volume {
-            // A tessellation over numbered position files: the next grid,
-            // in the same box (its frame is the box's).
-            self.volume = load::load_in(desc, base, frame, Some(&self.frame))?.volume;
+        if let AnyVolume::Tets(_) | AnyVolume::Amr(_) = &self.volume {
+            // Numbered tessellation grids or AMR outputs: the next one, in
+            // the frame of the first (a box's, a domain's).
+            let next = load::load_in(desc, base, frame, Some(&self.frame))?;
+            if next.frame != self.frame {
+                return Err(SceneError::setting(
+                    "frames",
+                    format!(
+                        "frame {frame} lies in another domain than the series' first frame: \
+                         a series keeps one box"
+                    ),
+                ));
+            }
+            self.volume = next.volume;
             return Ok(());
         }
         let (AnyVolume::Particles(v), Some(p)) = (&mut self.volume, &desc.particles) else {
             return Err(SceneError::setting(
                 "frames",
-                "time series are supported for particles and tessellations",
+                "time series are supported for particles, tessellations and AMR",
             ));
         };
         let fd = particles::read_frame(p, base, frame)?;

@@ -151,11 +151,11 @@ impl DistributedScene {
     ) -> Result<(), ParallelError> {
         if !matches!(
             self.summary.kind,
-            VolumeKind::Particles | VolumeKind::Materials | VolumeKind::Tets
+            VolumeKind::Particles | VolumeKind::Materials | VolumeKind::Tets | VolumeKind::Amr
         ) {
             return Err(SceneError::setting(
                 "frames",
-                "time series are supported for particles and tessellations",
+                "time series are supported for particles, tessellations and AMR",
             )
             .into());
         }
