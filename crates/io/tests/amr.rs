@@ -528,3 +528,43 @@ fn real_frame_3_matches_exabricks() {
 fn real_frame_2_matches_exabricks() {
     compare_frame(2, None);
 }
+
+/// Cells whose coordinates reach past ±2³⁰ finest cells (a corrupt file, or
+/// one near i32::MAX that would wrap around downstream) are an error naming
+/// the file and the cell, not a render that blames the camera.
+#[test]
+fn exabricks_cells_near_the_i32_limit_are_refused_by_name() {
+    let cell = |x: i32, level: i32| -> Vec<u8> {
+        [x, 0, 0, level]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect()
+    };
+    let mut bytes = cell(0, 0);
+    bytes.extend(cell(i32::MAX - 1, 2));
+    let values: Vec<u8> = [1.0f32, 2.0].iter().flat_map(|v| v.to_le_bytes()).collect();
+    let e = voxless_io::read_exabricks_bytes(
+        &bytes,
+        std::path::Path::new("big.cells"),
+        &[("rho", &values)],
+        None,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("big.cells") && e.contains("cell 1") && e.contains("2^30"),
+        "{e}"
+    );
+    // The largest coordinates allowed read.
+    let mut ok = cell(0, 0);
+    ok.extend(cell((1 << 30) - 4, 2));
+    assert!(
+        voxless_io::read_exabricks_bytes(
+            &ok,
+            std::path::Path::new("ok.cells"),
+            &[("rho", &values)],
+            None
+        )
+        .is_ok()
+    );
+}

@@ -150,6 +150,10 @@ fn assemble(
     Ok(data)
 }
 
+/// The largest |coordinate| + cell width a cell may reach, in finest
+/// cells: well inside i32, so brick corners never overflow.
+const MAX_COORD: i64 = 1 << 30;
+
 /// The cells of a `.cells` file: four little-endian `int32` per cell, with
 /// levels checked; the first is cell `first` of the file (errors name it).
 fn decode_cells(bytes: &[u8], cells: &Path, first: usize) -> Result<Vec<[i32; 4]>, IoError> {
@@ -180,6 +184,24 @@ fn decode_cells(bytes: &[u8], cells: &Path, first: usize) -> Result<Vec<[i32; 4]
                 format!(
                     "cell {} has level {}; levels must be 0 (finest) to {MAX_LEVEL}",
                     first + index,
+                    cell[3]
+                ),
+            ));
+        }
+        // Bricks and cell corners are computed in i32 (corner + width):
+        // coordinates whose cell would reach past ±2³⁰ finest cells would
+        // wrap around downstream, so they are an error naming the cell.
+        let reach = |c: i32| (c as i64).abs() + (1i64 << cell[3]);
+        if cell[..3].iter().any(|&c| reach(c) > MAX_COORD) {
+            return Err(IoError::format(
+                cells,
+                format!(
+                    "cell {} at ({}, {}, {}) level {} reaches beyond ±2^30 finest cells (the \
+                     coordinates are corrupt, or not in finest-cell units)",
+                    first + index,
+                    cell[0],
+                    cell[1],
+                    cell[2],
                     cell[3]
                 ),
             ));
