@@ -177,6 +177,20 @@ struct FrameQuery {
     token: Option<String>,
 }
 
+/// How many `/frame.png` renders run at once.
+const FRAME_PNG_AT_ONCE: usize = 2;
+static FRAME_PNG_TURNS: tokio::sync::Semaphore =
+    tokio::sync::Semaphore::const_new(FRAME_PNG_AT_ONCE);
+
+/// Cancels its token when dropped (the request's future going away).
+struct CancelOnDrop(voxless::CancelToken);
+
+impl Drop for CancelOnDrop {
+    fn drop(&mut self) {
+        self.0.cancel();
+    }
+}
+
 async fn frame_png(
     State(app): State<Arc<App>>,
     query: Result<Query<FrameQuery>, axum::extract::rejection::QueryRejection>,
@@ -196,9 +210,19 @@ async fn frame_png(
             return (StatusCode::BAD_REQUEST, msg).into_response();
         }
     }
-    let result =
-        tokio::task::spawn_blocking(move || crate::render::frame_png(&app, q.width, q.height))
-            .await;
+    // At most FRAME_PNG_AT_ONCE renders at a time (each holds a film of up
+    // to 4096²); a client that drops while waiting costs nothing.
+    let Ok(_turn) = FRAME_PNG_TURNS.acquire().await else {
+        return (StatusCode::SERVICE_UNAVAILABLE, "shutting down\n").into_response();
+    };
+    // A client that drops mid-render drops this future, and with it the
+    // guard, which cancels the render at its next tile.
+    let cancel = voxless::CancelToken::new();
+    let _guard = CancelOnDrop(cancel.clone());
+    let result = tokio::task::spawn_blocking(move || {
+        crate::render::frame_png(&app, q.width, q.height, &cancel)
+    })
+    .await;
     match result {
         Ok(Ok(png)) => ([(header::CONTENT_TYPE, "image/png")], png).into_response(),
         Ok(Err(e)) => (StatusCode::UNPROCESSABLE_ENTITY, format!("{e}\n")).into_response(),

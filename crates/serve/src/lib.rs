@@ -305,13 +305,19 @@ pub fn run(
         .worker_threads(2)
         .enable_all()
         .build()?;
-    runtime.block_on(async {
+    let served = runtime.block_on(async {
         let bound = bind(prepared, options).await?;
         on_ready(&bound);
-        bound
-            .serve(async {
-                let _ = tokio::signal::ctrl_c().await;
-            })
-            .await
-    })
+        // Ctrl-C ends serving at once: open websockets and renders in
+        // flight are not waited for (a graceful shutdown would wait for
+        // every tab to close).
+        tokio::select! {
+            r = bound.serve(std::future::pending()) => r,
+            _ = tokio::signal::ctrl_c() => Ok(()),
+        }
+    });
+    // Renders still running on blocking threads get a moment to see their
+    // cancellation, then the process goes on without them.
+    runtime.shutdown_timeout(std::time::Duration::from_millis(500));
+    served
 }

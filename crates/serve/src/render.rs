@@ -481,7 +481,12 @@ fn state_message(
 
 /// `/frame.png`: the latest view (or the initial one) at `width`×`height`
 /// (the view's own size when not given), all passes, as PNG bytes.
-pub fn frame_png(app: &App, width: Option<u32>, height: Option<u32>) -> Result<Vec<u8>, String> {
+pub fn frame_png(
+    app: &App,
+    width: Option<u32>,
+    height: Option<u32>,
+    cancel: &CancelToken,
+) -> Result<Vec<u8>, String> {
     let (mut desc, frame) = app.current();
     if let Some(w) = width {
         desc.image.width = Some(w);
@@ -493,17 +498,25 @@ pub fn frame_png(app: &App, width: Option<u32>, height: Option<u32>) -> Result<V
     let resolved = loaded
         .resolve(&desc, &app.base)
         .map_err(|e| e.to_string())?;
+    // The CLI's checks: absurd work refused, an image of nothing an error.
+    resolved
+        .check_work(&loaded.volume, &loaded.frame, &desc)
+        .map_err(|e| e.to_string())?;
     let film = loaded
         .volume
         .render_passes(
             &resolved.camera,
             &resolved.tf,
             &resolved.settings,
-            &Control::new(),
+            &Control::new().with_cancel(cancel.clone()),
             &mut |_| true,
         )
         .map_err(|e| e.to_string())?;
-    let image =
-        encode::encode(&film.resolve(), resolved.background, true).map_err(|e| e.to_string())?;
+    let image = film.resolve();
+    let bounds = loaded.frame.box_to_world(loaded.volume.bounds());
+    resolved
+        .check_image(bounds, film.stats(), &image)
+        .map_err(|e| e.to_string())?;
+    let image = encode::encode(&image, resolved.background, true).map_err(|e| e.to_string())?;
     Ok(image.bytes)
 }
