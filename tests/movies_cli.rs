@@ -403,7 +403,7 @@ fn tessellation_time_series_from_numbered_files() {
     a.extend(["--frame", "1", "-o", &x]);
     let e = fails(&a);
     assert!(
-        e.contains("one frame") && e.contains("number the files"),
+        e.contains("one frame") && e.contains("numbered files"),
         "{e}"
     );
 }
