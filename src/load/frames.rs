@@ -93,7 +93,12 @@ pub fn expand(spec: &str, base: &Path) -> Result<Vec<PathBuf>, SceneError> {
     let mut files: Vec<PathBuf> = entries
         .filter_map(|e| e.ok())
         .map(|e| e.path())
-        .filter(|p| p.is_file() && p.file_name().is_some_and(|n| matcher(&n.to_string_lossy())))
+        .filter(|p| {
+            // Files, and under a pattern also AMReX plotfiles (directories
+            // with a Header: plt00000, plt00100, …).
+            let frame = p.is_file() || (!full.is_dir() && p.join("Header").is_file());
+            frame && p.file_name().is_some_and(|n| matcher(&n.to_string_lossy()))
+        })
         .collect();
     files.sort_by_key(|p| {
         let name = p
@@ -323,6 +328,26 @@ pub fn parse_range(s: &str) -> Result<std::ops::RangeInclusive<usize>, SceneErro
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn plotfile_directories_are_frames_of_a_pattern() {
+        let dir = std::env::temp_dir().join(format!("voxless-plt-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        for d in ["plt00010", "plt00002", "plt_empty"] {
+            std::fs::create_dir_all(dir.join(d)).unwrap();
+        }
+        std::fs::write(dir.join("plt00010/Header"), b"HyperCLaw-V1.1\n").unwrap();
+        std::fs::write(dir.join("plt00002/Header"), b"HyperCLaw-V1.1\n").unwrap();
+        let spec = dir.join("plt*").to_string_lossy().into_owned();
+        let got: Vec<(usize, String)> = numbered(&spec, Path::new(""))
+            .unwrap()
+            .into_iter()
+            .map(|(n, p)| (n, p.file_name().unwrap().to_string_lossy().into_owned()))
+            .collect();
+        // Numeric order; a directory without a Header is no plotfile.
+        assert_eq!(got, vec![(2, "plt00002".into()), (10, "plt00010".into())]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     #[test]
     fn frame_numbers_come_from_the_name() {
