@@ -403,6 +403,21 @@ impl Drop for Encoder {
     }
 }
 
+/// What a movie's frames depend on — the scene, the (path frame, data
+/// frame) list and the size — as the stamp [`MovieFrames::open`] compares:
+/// an interrupted movie resumes only when it is unchanged.
+pub fn stamp(
+    desc: &voxless_scene::SceneDesc,
+    frames: &[(usize, usize)],
+    size: (u32, u32),
+) -> String {
+    let scene = crate::scene_toml(desc).unwrap_or_else(|_| format!("{desc:?}"));
+    format!(
+        "{{\"size\": [{}, {}], \"frames\": {frames:?}}}\n{scene}",
+        size.0, size.1
+    )
+}
+
 /// A movie being written: frames kept for resume ([`MovieFrames`]) and
 /// encoded in order ([`Encoder`]). Front-ends render frame `k` only when
 /// [`MovieWriter::has`] says it is not on disk, and hand every frame over

@@ -163,7 +163,7 @@ fn finite(name: &str, v: &[f64]) -> Result<(), SceneError> {
 }
 
 /// The eight corners of a world box.
-fn corners(lo: V3, hi: V3) -> impl Iterator<Item = V3> {
+pub(crate) fn corners(lo: V3, hi: V3) -> impl Iterator<Item = V3> {
     (0..8).map(move |k| {
         [
             if k & 1 == 0 { lo[0] } else { hi[0] },

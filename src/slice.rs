@@ -124,12 +124,11 @@ pub fn slice_view(
     }
     let (lo, hi) = (frame.to_world(bounds.min), frame.to_world(bounds.max));
     let along = |p: [f64; 3]| (0..3).map(|a| p[a] * view.normal[a]).sum::<f64>();
-    let (mut a, mut b) = (f64::INFINITY, f64::NEG_INFINITY);
-    for k in 0..8 {
-        let c = std::array::from_fn(|i| if k >> i & 1 == 1 { hi[i] } else { lo[i] });
-        a = a.min(along(c));
-        b = b.max(along(c));
-    }
+    let (a, b) = crate::projection::corners(lo, hi)
+        .map(along)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), d| {
+            (a.min(d), b.max(d))
+        });
     let at = along(view.center);
     if at < a || at > b {
         return Err(SceneError::setting(

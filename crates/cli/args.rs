@@ -4,9 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
-use clap::Args;
+use clap::{Args, ValueEnum};
 use voxless::flags::{DataFlags, KindFlags, ViewFlags};
-use voxless::{SceneDesc, SceneFlags};
+use voxless::{ProjectionDesc, SceneDesc, SceneFlags};
 
 /// What data to read and how to reconstruct its field: every command that
 /// loads data takes these (they override the scene file).
@@ -62,4 +62,70 @@ impl SceneArgs {
         flags.apply(&mut d, &cwd)?;
         Ok((d, base))
     }
+}
+
+/// Where the image of `project` and `slice` lies: looking along an axis or
+/// a normal (the plane's normal, for a slice), centred and sized.
+#[derive(Args, Debug, Default, Clone)]
+pub struct PlaneArgs {
+    /// The axis looked along (a projection) or across (a slice's plane);
+    /// default z.
+    #[arg(long, value_enum, conflicts_with = "normal")]
+    pub axis: Option<Axis>,
+    /// Override the bounds the default footprint covers: x0 y0 z0 x1 y1 z1
+    /// (default: the data's).
+    #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], allow_negative_numbers = true)]
+    pub bounds: Option<Vec<f64>>,
+    /// Off-axis: this direction instead (image right = north × normal).
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    pub normal: Option<Vec<f64>>,
+    /// The image's up direction with --normal (default: yt's rule, so that
+    /// --normal 0 0 1 equals --axis z).
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, requires = "normal")]
+    pub north: Option<Vec<f64>>,
+    /// World position of the image centre (a slice's plane passes through
+    /// it; default: the bounds' centre).
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    pub center: Option<Vec<f64>>,
+    /// World width (and height; default: the width) the image covers
+    /// (default: the bounds' extent across the view).
+    #[arg(long, num_args = 1..=2, value_names = ["W", "H"])]
+    pub width: Option<Vec<f64>>,
+    /// Image size in pixels (default 800 600).
+    #[arg(long, num_args = 2, value_names = ["W", "H"])]
+    pub size: Option<Vec<u32>>,
+}
+
+impl PlaneArgs {
+    /// The projection these flags describe (with a slab `depth`, for
+    /// `project`).
+    pub fn desc(&self, depth: Option<f64>) -> ProjectionDesc {
+        let v3 = |v: &Option<Vec<f64>>| v.as_ref().map(|v| [v[0], v[1], v[2]]);
+        ProjectionDesc {
+            axis: self.axis.map(|a| a as usize),
+            normal: v3(&self.normal),
+            north: v3(&self.north),
+            center: v3(&self.center),
+            width: self
+                .width
+                .as_ref()
+                .map(|w| [w[0], *w.get(1).unwrap_or(&w[0])]),
+            bounds: self
+                .bounds
+                .as_ref()
+                .map(|v| [v[0], v[1], v[2], v[3], v[4], v[5]]),
+            depth,
+        }
+    }
+}
+
+/// A coordinate axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Axis {
+    #[value(alias = "X")]
+    X,
+    #[value(alias = "Y")]
+    Y,
+    #[value(alias = "Z")]
+    Z,
 }

@@ -22,7 +22,7 @@ use voxless::annotate::Marks;
 use voxless::output::OutputKind;
 use voxless::{Control, ParticlesDesc, Placement, ProjectionDesc, Purpose};
 
-use args::{DataArgs, KindArgs, SceneArgs, ViewArgs};
+use args::{DataArgs, KindArgs, PlaneArgs, SceneArgs, ViewArgs};
 use progress::Progress;
 
 #[derive(Parser)]
@@ -132,26 +132,8 @@ enum Command {
     /// --normal), covering the data bounds: float32 H×W .npy (or .exr), row 0
     /// at the top.
     Project {
-        /// View axis (looking down −axis; default z).
-        #[arg(long, value_enum, conflicts_with = "normal")]
-        axis: Option<Axis>,
-        /// Override the bounds covered: x0 y0 z0 x1 y1 z1 (default: the data's).
-        #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], allow_negative_numbers = true)]
-        bounds: Option<Vec<f64>>,
-        /// Off-axis: look along this direction (image right = north × normal).
-        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
-        normal: Option<Vec<f64>>,
-        /// The image's up direction with --normal (default: yt's rule, so that
-        /// --normal 0 0 1 equals --axis z).
-        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, requires = "normal")]
-        north: Option<Vec<f64>>,
-        /// World position of the image centre (default: the bounds' centre).
-        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
-        center: Option<Vec<f64>>,
-        /// World width (and height; default: the width) the image covers
-        /// (default: the bounds' extent across the view).
-        #[arg(long, num_args = 1..=2, value_names = ["W", "H"])]
-        width: Option<Vec<f64>>,
+        #[command(flatten)]
+        plane: PlaneArgs,
         /// Integrate only over a slab this thick centred on the image plane
         /// (default: the whole line).
         #[arg(long)]
@@ -159,9 +141,6 @@ enum Command {
         /// Output .npy (float32 H×W) or .exr (one channel "Y").
         #[arg(short, long)]
         output: PathBuf,
-        /// Image size in pixels (default 800 600).
-        #[arg(long, num_args = 2, value_names = ["W", "H"])]
-        size: Option<Vec<u32>>,
         /// Phase-space tessellations: how each pixel is integrated — centre
         /// (default): the column along the line through the pixel's centre;
         /// area: the column averaged over the pixel's square, exactly, so
@@ -181,28 +160,8 @@ enum Command {
     /// Writes raw values (.npy H×W float32, .exr, .fits with world
     /// coordinates) or a colormapped picture (.png).
     Slice {
-        /// The plane's normal axis (default z).
-        #[arg(long, value_enum, conflicts_with = "normal")]
-        axis: Option<Axis>,
-        /// Off-axis: the plane's normal (image right = north × normal).
-        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
-        normal: Option<Vec<f64>>,
-        /// The image's up direction with --normal (default: yt's rule).
-        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, requires = "normal")]
-        north: Option<Vec<f64>>,
-        /// A point of the plane, at the image centre (default: the data's centre).
-        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
-        center: Option<Vec<f64>>,
-        /// World width (and height; default: the width) the image covers
-        /// (default: the data's extent across the plane).
-        #[arg(long, num_args = 1..=2, value_names = ["W", "H"])]
-        width: Option<Vec<f64>>,
-        /// Override the bounds the default footprint covers: x0 y0 z0 x1 y1 z1.
-        #[arg(long, num_args = 6, value_names = ["X0", "Y0", "Z0", "X1", "Y1", "Z1"], allow_negative_numbers = true)]
-        bounds: Option<Vec<f64>>,
-        /// Image size in pixels (default 800 600).
-        #[arg(long, num_args = 2, value_names = ["W", "H"])]
-        size: Option<Vec<u32>>,
+        #[command(flatten)]
+        plane: PlaneArgs,
         /// What to show: a column `sample` writes — density (default),
         /// attribute (or the attribute's name), streams (tessellations), an
         /// AMR field by name (default: --field, else the first).
@@ -278,17 +237,6 @@ enum SlicePixelsArg {
     /// The mean over the pixel's square by a 4×4 Gauss–Legendre rule (16
     /// samples a pixel).
     Area,
-}
-
-/// A coordinate axis.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum Axis {
-    #[value(alias = "X")]
-    X,
-    #[value(alias = "Y")]
-    Y,
-    #[value(alias = "Z")]
-    Z,
 }
 
 fn main() {
@@ -448,15 +396,9 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             Ok(())
         }
         Command::Project {
-            axis,
-            bounds,
-            normal,
-            north,
-            center,
-            width,
+            plane,
             depth,
             output,
-            size,
             pixels,
             frame,
             data,
@@ -465,13 +407,13 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             let args = SceneArgs {
                 data,
                 view: ViewArgs {
-                    size,
+                    size: plane.size.clone(),
                     ..Default::default()
                 },
                 ..Default::default()
             };
             let (mut desc, base) = args.scene()?;
-            let projection = projection_desc(axis, bounds, normal, north, center, width, depth);
+            let projection = plane.desc(depth);
             voxless::set_projection_pixels(&mut desc, pixels, &projection)?;
             out::check(
                 std::slice::from_ref(&output),
@@ -497,13 +439,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             )
         }
         Command::Slice {
-            axis,
-            normal,
-            north,
-            center,
-            width,
-            bounds,
-            size,
+            plane,
             quantity,
             pixels,
             output,
@@ -523,7 +459,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             let args = SceneArgs {
                 data,
                 view: ViewArgs {
-                    size,
+                    size: plane.size.clone(),
                     colormap,
                     ..Default::default()
                 },
@@ -531,7 +467,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             };
             let (desc, base) = args.scene()?;
             let slice = voxless::slice::SliceDesc {
-                plane: projection_desc(axis, bounds, normal, north, center, width, None),
+                plane: plane.desc(None),
                 quantity,
                 pixels: match pixels {
                     Some(SlicePixelsArg::Area) => voxless::slice::SlicePixels::Area,
@@ -608,28 +544,6 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             Ok(())
         }
         Command::Info(args) => info::run(&args),
-    }
-}
-
-/// The projection the `project` flags describe.
-fn projection_desc(
-    axis: Option<Axis>,
-    bounds: Option<Vec<f64>>,
-    normal: Option<Vec<f64>>,
-    north: Option<Vec<f64>>,
-    center: Option<Vec<f64>>,
-    width: Option<Vec<f64>>,
-    depth: Option<f64>,
-) -> ProjectionDesc {
-    let v3 = |v: Option<Vec<f64>>| v.map(|v| [v[0], v[1], v[2]]);
-    ProjectionDesc {
-        axis: axis.map(|a| a as usize),
-        normal: v3(normal),
-        north: v3(north),
-        center: v3(center),
-        width: width.map(|w| [w[0], *w.get(1).unwrap_or(&w[0])]),
-        bounds: bounds.map(|v| [v[0], v[1], v[2], v[3], v[4], v[5]]),
-        depth,
     }
 }
 

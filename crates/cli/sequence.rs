@@ -6,7 +6,6 @@ use std::time::Instant;
 
 use anyhow::Result;
 use voxless::annotate::Marks;
-use voxless::camera_path::Sequence;
 use voxless::movie::{MovieFormat, MovieSettings, MovieWriter};
 use voxless::output::OutputKind;
 use voxless::parallel::{FramePlan, Timings};
@@ -114,7 +113,7 @@ pub fn render(
         let started = root
             .then(|| {
                 let mut notes = Vec::new();
-                let stamp = stamp(desc, &seq, size);
+                let stamp = voxless::movie::stamp(desc, &seq.frames, size);
                 let w = MovieWriter::start(
                     output,
                     n,
@@ -292,13 +291,4 @@ fn put(
             Ok(())
         }
     }
-}
-
-/// What a movie's frames depend on: the scene, the frames and the size.
-fn stamp(desc: &SceneDesc, seq: &Sequence, size: (u32, u32)) -> String {
-    let scene = voxless::scene_toml(desc).unwrap_or_else(|_| format!("{desc:?}"));
-    format!(
-        "{{\"size\": [{}, {}], \"frames\": {:?}}}\n{scene}",
-        size.0, size.1, seq.frames
-    )
 }

@@ -364,6 +364,19 @@ fn read_scene<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyAny>
     convert::desc_to_python(py, &desc)
 }
 
+/// Where a projection's or slice's image lies: its centre, the unit
+/// vectors of increasing column and decreasing row, the normal and the
+/// world width and height.
+fn plane_geometry<'py>(py: Python<'py>, view: &ProjectionView) -> PyResult<Bound<'py, PyDict>> {
+    let geometry = PyDict::new(py);
+    geometry.set_item("center", view.center)?;
+    geometry.set_item("right", view.right)?;
+    geometry.set_item("up", view.up)?;
+    geometry.set_item("normal", view.normal)?;
+    geometry.set_item("width", view.width)?;
+    Ok(geometry)
+}
+
 impl Volume {
     /// The volume's description with a view over it: scene `tables`
     /// (camera, image, transfer, render, light), then view `flags`.
@@ -454,12 +467,7 @@ impl Volume {
         })?;
         let (column, view, w, h) = done.map_err(|f| raise(py, f))?;
         let image = PyArray1::from_vec(py, column).reshape([h as usize, w as usize])?;
-        let geometry = PyDict::new(py);
-        geometry.set_item("center", view.center)?;
-        geometry.set_item("right", view.right)?;
-        geometry.set_item("up", view.up)?;
-        geometry.set_item("normal", view.normal)?;
-        geometry.set_item("width", view.width)?;
+        let geometry = plane_geometry(py, &view)?;
         geometry.set_item("pixel_area", view.pixel_area(w, h))?;
         geometry.set_item("depth", depth)?;
         geometry.set_item("total_mass", self.held.total_mass())?;
@@ -521,13 +529,7 @@ impl Volume {
         })?;
         let (view, name, values, w, h) = done.map_err(|e| errors::scene(py, e))?;
         let image = PyArray1::from_vec(py, values).reshape([h as usize, w as usize])?;
-        let geometry = PyDict::new(py);
-        geometry.set_item("center", view.center)?;
-        geometry.set_item("right", view.right)?;
-        geometry.set_item("up", view.up)?;
-        geometry.set_item("normal", view.normal)?;
-        geometry.set_item("width", view.width)?;
-        Ok((image, name, geometry))
+        Ok((image, name, plane_geometry(py, &view)?))
     }
 
     /// Renders path frames `first..=last` of the view's camera path (scene
@@ -575,12 +577,8 @@ impl Volume {
             };
             let mut r = held.resolve(&at(first))?;
             let size = (r.settings.width, r.settings.height);
-            let stamp = format!(
-                "{{\"size\": [{}, {}], \"frames\": [{first}, {last}]}}\n{}",
-                size.0,
-                size.1,
-                voxless::scene_toml(&desc)?
-            );
+            let plan: Vec<(usize, usize)> = frames.iter().map(|&t| (t, 0)).collect();
+            let stamp = voxless::movie::stamp(&desc, &plan, size);
             let mut movie = voxless::movie::MovieWriter::start(
                 &output,
                 frames.len(),
