@@ -351,6 +351,20 @@ pub(crate) fn check_ranks(
             ),
         ));
     }
+    let (area, key) = match tets {
+        Some(t) if t.pixels == Some(PixelsName::Area) => (true, "tets.pixels"),
+        _ => area_pixels(desc),
+    };
+    if area && projecting {
+        return Err(SceneError::setting(
+            "pixels",
+            format!(
+                "the pixel-area projection (--pixels area, {key}) runs in one process; under \
+                 mpirun each rank projects its box through pixel centres (leave it out, or run \
+                 voxless project without mpirun)"
+            ),
+        ));
+    }
     let Some(t) = tets else {
         return Ok(());
     };
@@ -369,44 +383,55 @@ pub(crate) fn check_ranks(
             ),
         ));
     }
-    if projecting && t.pixels == Some(PixelsName::Area) {
-        return Err(SceneError::setting(
-            "pixels",
-            "the pixel-area projection (--pixels area, tets.pixels) runs in one process; under \
-             mpirun each rank projects its box through pixel centres (leave it out, or run \
-             voxless project without mpirun)",
-        ));
-    }
     Ok(())
 }
 
 /// The pixel integral `pixels` (the `project` command's `--pixels`, Python's
 /// `pixels=`) written into `desc` for `projection`, refused where it cannot
-/// act: on data other than a tessellation (projected through pixel
-/// centres), and the exact pixel area together with a slab (`depth`), which
-/// integrates through pixel centres.
+/// act: on data other than particles or a tessellation (projected through
+/// pixel centres), and the exact pixel area together with a slab (`depth`),
+/// which integrates through pixel centres.
 pub fn set_projection_pixels(
     desc: &mut SceneDesc,
     pixels: Option<PixelsName>,
     projection: &ProjectionDesc,
 ) -> Result<(), SceneError> {
     if let Some(p) = pixels {
-        let Some(t) = desc.tets.as_mut() else {
+        if let Some(t) = desc.tets.as_mut() {
+            t.pixels = Some(p);
+        } else if let Some(q) = desc.particles.as_mut() {
+            q.pixels = Some(p);
+        } else {
             return Err(SceneError::setting(
                 "pixels",
-                "--pixels applies to phase-space tessellations (--lagrangian, --box, or a \
-                 [tets] scene); other data is projected through pixel centres",
+                "--pixels applies to particles and phase-space tessellations (--particles, \
+                 --lagrangian, --box, or their scenes); other data is projected through pixel \
+                 centres",
             ));
-        };
-        t.pixels = Some(p);
+        }
     }
-    let area = desc.tets.as_ref().and_then(|t| t.pixels) == Some(PixelsName::Area);
+    let (area, key) = area_pixels(desc);
     if area && projection.depth.is_some() {
         return Err(SceneError::setting(
             "pixels",
-            "area integrates whole lines of sight; with --depth a projection integrates the \
-             slab through pixel centres (leave out --pixels area, or tets.pixels in the scene)",
+            format!(
+                "area integrates whole lines of sight; with --depth a projection integrates \
+                 the slab through pixel centres (leave out --pixels area, or {key} in the scene)"
+            ),
         ));
     }
     Ok(())
+}
+
+/// Whether the scene asks projections for pixel areas, and the scene key
+/// that says so.
+fn area_pixels(desc: &SceneDesc) -> (bool, &'static str) {
+    let area = |p: Option<PixelsName>| p == Some(PixelsName::Area);
+    if desc.tets.as_ref().is_some_and(|t| area(t.pixels)) {
+        (true, "tets.pixels")
+    } else if desc.particles.as_ref().is_some_and(|p| area(p.pixels)) {
+        (true, "particles.pixels")
+    } else {
+        (false, "")
+    }
 }

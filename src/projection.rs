@@ -122,6 +122,27 @@ pub fn image_size(image: &ImageDesc) -> Result<(u32, u32), SceneError> {
     Ok((width, height))
 }
 
+/// A note when a projection's `Σ column × pixel area` falls short of the
+/// data's exact mass `mass` by more than 0.1 %: part of the data lies
+/// outside the view, or (`centres`: pixel-centre projections of
+/// particles) kernels narrower than a pixel are sampled, not integrated.
+pub fn mass_note(integral: f64, mass: f64, centres: bool) -> Option<String> {
+    let short = 1.0 - integral / mass;
+    if !(mass > 0.0) || !(short.abs() > 1e-3) {
+        return None;
+    }
+    let why = if centres {
+        "kernels narrower than a pixel are sampled at pixel centres (--pixels area \
+         conserves their mass), or part of the data lies outside the view"
+    } else {
+        "part of the data lies outside the view"
+    };
+    Some(format!(
+        "the projected mass differs from the data's by {:+.2} %: {why}",
+        -100.0 * short
+    ))
+}
+
 /// yt's default north for a view along `normal`: the coordinate axis `e`
 /// whose `e × n` has the largest component sum gives east = `e × n`, and
 /// north = `n × east`. Along x the image axes are (y, z) and along z (x, y),

@@ -191,7 +191,7 @@ def projection(a, pos_path):
                              "--kernel", "wendland-c2", "--radii", h_path, "--axis", "z",
                              "--size", str(res), str(res), "--bounds", "0", "0", "0",
                              str(L), str(L), str(L), "-o", img_path], ours["cpu"])
-        ours["proj"].append(seconds(out, rf"projected {res}×{res} in"))
+        ours["proj"].append(seconds(out, rf"projected {res}×{res}[^\n]*? in"))
         ours["wall"].append(wall)
         for key, par in (("par", True), ("ser", False)):
             c, t = time.process_time(), time.perf_counter()

@@ -141,11 +141,13 @@ enum Command {
         /// Output .npy (float32 H×W) or .exr (one channel "Y").
         #[arg(short, long)]
         output: PathBuf,
-        /// Phase-space tessellations: how each pixel is integrated — centre
-        /// (default): the column along the line through the pixel's centre;
-        /// area: the column averaged over the pixel's square, exactly, so
-        /// Σ column × pixel area is the mass in view at every resolution
-        /// (4–6× the time; not with --depth). Scene: tets.pixels.
+        /// Particles and phase-space tessellations: how each pixel is
+        /// integrated — centre (default): the column along the line through
+        /// the pixel's centre; area: the column averaged over the pixel's
+        /// square, so Σ column × pixel area is the mass in view at every
+        /// resolution, however small a kernel is against a pixel (one
+        /// process; not with --depth; tessellations take 4–6× the time).
+        /// Scene: particles.pixels, tets.pixels.
         #[arg(long, value_enum)]
         pixels: Option<voxless::PixelsName>,
         /// Frame N of a time series (default 0).
@@ -585,6 +587,11 @@ fn project(
                 output.display(),
                 s.mass
             );
+            let centres =
+                desc.particles.as_ref().and_then(|p| p.pixels) != Some(voxless::PixelsName::Area);
+            if let Some(n) = voxless::projection::mass_note(integral, s.mass, centres) {
+                eprintln!("note: {n}");
+            }
             return Ok(());
         }
     }
@@ -600,8 +607,8 @@ fn project(
     let written = column.map_or(Ok(()), |column| {
         write_map(output, desc, base, frame, &view, (w, h), &column)?;
         let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * view.pixel_area(w, h);
-        let mass = data
-            .total_mass()
+        let exact = data.total_mass();
+        let mass = exact
             .map(|m| format!(", exact ∫ field dV = {m:.6e}"))
             .unwrap_or_default();
         eprintln!(
@@ -610,6 +617,11 @@ fn project(
             t.elapsed().as_secs_f64(),
             output.display()
         );
+        let centres = desc.particles.is_some()
+            && desc.particles.as_ref().and_then(|p| p.pixels) != Some(voxless::PixelsName::Area);
+        if let Some(n) = exact.and_then(|m| voxless::projection::mass_note(integral, m, centres)) {
+            eprintln!("note: {n}");
+        }
         Ok(())
     });
     render::agree(placement, written)?;

@@ -1,4 +1,5 @@
 mod camera;
+mod pixels;
 mod scene;
 mod surfaces;
 mod viewer;

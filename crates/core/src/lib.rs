@@ -38,7 +38,7 @@ pub use rng::SmallRng;
 pub use simd::{Lanes, Simd};
 pub use tiles::{IntervalLists, TILE, TileIntervals, TileRays, View};
 pub use volume::{
-    Attribute, Interval, IntervalKind, IntervalQuery, Sample, SampleBatch, Volume,
+    Attribute, Interval, IntervalKind, IntervalQuery, PixelIntegral, Sample, SampleBatch, Volume,
     quadrature_line_integral, simpson,
 };
 

@@ -138,6 +138,20 @@ impl Sample {
     }
 }
 
+/// How a projection integrates each pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PixelIntegral {
+    /// The column density along the line through the pixel's centre.
+    #[default]
+    Centre,
+    /// The column density averaged over the pixel's square, so that
+    /// Σ pixels × pixel area is the mass in view at every resolution:
+    /// tessellations integrate each tet's column exactly over the square,
+    /// particles each kernel's (see the particle crate's `kernel::area`).
+    /// Orthographic projections of whole lines of sight.
+    Area,
+}
+
 /// A renderable field. See the module docs for the contract.
 ///
 /// A new hook must be added to [`forward_volume!`](crate::forward_volume)

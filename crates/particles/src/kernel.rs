@@ -32,6 +32,7 @@
 use voxless_core::Vec3;
 use voxless_core::simd::Lanes;
 
+pub mod area;
 pub mod sph;
 
 pub use sph::{Sph, SphFamily};
@@ -478,6 +479,11 @@ impl Column {
     #[inline]
     pub fn support2(&self) -> f64 {
         self.support2
+    }
+
+    /// `∫ column dA` per unit weight: the kernel's whole mass.
+    pub fn mass(&self) -> f64 {
+        self.kernel.integral(self.r)
     }
 
     /// The integral along the line at squared distance `b2` from the centre

@@ -3,8 +3,8 @@
 use rayon::prelude::*;
 use voxless_bvh::{Bvh, order};
 use voxless_core::{
-    Aabb, Attribute, Interval, IntervalQuery, MacroGrid, Range1, Ray, Sample, SampleBatch, Vec3,
-    Volume, simd::Simd,
+    Aabb, Attribute, Interval, IntervalQuery, MacroGrid, PixelIntegral, Range1, Ray, Sample,
+    SampleBatch, Vec3, Volume, simd::Simd,
 };
 use voxless_transfer::{ControlPoints, TransferFunction};
 
@@ -64,6 +64,9 @@ pub struct ParticleSettings {
     /// A periodic box: the field repeats with it (see the `periodic`
     /// module); positions outside are wrapped into it.
     pub periodic: Option<Aabb>,
+    /// How orthographic projections integrate each pixel (see
+    /// [`crate::kernel::area`]).
+    pub pixels: PixelIntegral,
 }
 
 impl Default for ParticleSettings {
@@ -77,6 +80,7 @@ impl Default for ParticleSettings {
             attribute_range: None,
             classification: Classification::Post,
             periodic: None,
+            pixels: PixelIntegral::Centre,
         }
     }
 }

@@ -140,6 +140,12 @@ pub struct ParticlesDesc {
     /// distances in a box). Default: on (N = 32) for particle types of
     /// cosmological snapshots that carry no smoothing length.
     pub neighbours: Option<usize>,
+    /// How projections integrate each pixel: centre (default; the column
+    /// through the pixel's centre) or area (the column averaged over the
+    /// pixel's square, so every kernel's mass is conserved however small it
+    /// is against a pixel; orthographic views of whole lines of sight, one
+    /// process).
+    pub pixels: Option<PixelsName>,
 }
 
 /// A periodic box: a side L (`[0, L)³`) or `[x0, y0, z0, x1, y1, z1]`.

@@ -14,19 +14,7 @@ use crate::mesh::TetMesh;
 use crate::ortho::{Kernel, OrthoMap, TileJob};
 use crate::raster::{Frame, Screen, TILE, box_spans, for_each_crossing, for_each_tet};
 
-/// How a projection integrates each pixel.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum PixelIntegral {
-    /// The column density along the line through the pixel's centre.
-    #[default]
-    Centre,
-    /// The column density averaged over the pixel's square: each tet's
-    /// column (linear over the pieces of its projected outline) integrated
-    /// exactly over the part of the square it covers, so Σ pixels × pixel
-    /// area is the mass in view at every resolution. Orthographic cameras;
-    /// perspective ones integrate through pixel centres.
-    Area,
-}
+pub use voxless_core::PixelIntegral;
 
 /// Options of the projection beyond the camera.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -31,7 +31,8 @@ impl ParticleVolume {
             height,
             self.settings.kernel,
             self.settings.periodic,
-        )?;
+        )?
+        .with_pixels(self.settings.pixels);
         // The particles without their ghosts, CHUNK at a time.
         let mut own = (0..self.packed.len())
             .filter(|&i| !self.is_ghost(i))
