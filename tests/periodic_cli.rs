@@ -158,6 +158,80 @@ fn pixel_areas_conserve_the_mass_of_kernels_far_smaller_than_a_pixel() {
 }
 
 #[test]
+fn a_whole_pixel_shift_modulo_the_box_rolls_the_projection_bit_for_bit() {
+    // Positions, radii and the shift on a 1/1024 grid: the shifted file
+    // holds exactly p + s mod 1, so a whole-pixel shift must give the same
+    // bits rolled (sub-pixel positions, kernels crossing faces, corners).
+    let dir = Scratch::new("periodic-roll");
+    let n = 2000;
+    let mut seed = 7u64;
+    let mut grid = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((seed >> 33) % 1024) as f64 / 1024.0
+    };
+    let p: Vec<[f64; 3]> = (0..n).map(|_| [grid(), grid(), grid()]).collect();
+    let radii: Vec<f32> = (0..n)
+        .map(|_| (8.0 + 40.0 * grid()).round() as f32 / 1024.0)
+        .collect();
+    let shift = [0.25, 0.125, 0.375];
+    let shifted: Vec<[f64; 3]> = p
+        .iter()
+        .map(|q| std::array::from_fn(|a| (q[a] + shift[a]).rem_euclid(1.0)))
+        .collect();
+    common::write_f64(&dir.path("p.npy"), &p);
+    common::write_f64(&dir.path("s.npy"), &shifted);
+    common::write_values(&dir.path("h.npy"), &radii);
+    let h = dir.str("h.npy");
+    let project = |file: &str, pixels: &str, out: &str| {
+        ok(&[
+            "project",
+            "--particles",
+            &dir.str(file),
+            "--radii",
+            &h,
+            "--box",
+            "1",
+            "--kernel",
+            "wendland-c2",
+            "--axis",
+            "z",
+            "--size",
+            "128",
+            "128",
+            "--pixels",
+            pixels,
+            "-o",
+            out,
+        ]);
+        read(std::path::Path::new(out)).1
+    };
+    for pixels in ["centre", "area"] {
+        let a = project("p.npy", pixels, &dir.str("a.npy"));
+        let b = project("s.npy", pixels, &dir.str("b.npy"));
+        // x right by 32 pixels, y up by 16 (row 0 at the top: rows up by 16).
+        let rolled: Vec<f64> = (0..128 * 128)
+            .map(|k| {
+                let (row, col) = (k / 128, k % 128);
+                a[((row + 16) % 128) * 128 + (col + 128 - 32) % 128]
+            })
+            .collect();
+        let same = rolled
+            .iter()
+            .zip(&b)
+            .filter(|(x, y)| x.to_bits() == y.to_bits())
+            .count();
+        assert_eq!(
+            same,
+            128 * 128,
+            "{pixels}: {same} of {} pixels equal",
+            128 * 128
+        );
+    }
+}
+
+#[test]
 fn bad_boxes_and_counts_are_refused_naming_the_flag() {
     let dir = Scratch::new("periodic-bad");
     write_positions(&dir.path("p.npy"), 300, 4);

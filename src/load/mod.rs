@@ -28,6 +28,7 @@ pub(crate) mod scale;
 pub(crate) mod snapshot;
 pub(crate) mod spacing;
 mod sph;
+pub(crate) mod spread_radii;
 pub(crate) mod table;
 pub(crate) mod tets;
 pub(crate) mod whole_set;

@@ -290,6 +290,25 @@ pub(crate) fn neighbour_count(
     }
 }
 
+/// The note of radii from neighbours: `(lo, median, hi)` of the radii and
+/// the search's seconds.
+pub(crate) fn radii_note(
+    n: usize,
+    periodic: bool,
+    kernel: Kernel,
+    (lo, mid, hi): (f64, f64, f64),
+    seconds: f64,
+) -> String {
+    format!(
+        "radii from the {n} nearest neighbours ({}the particle itself counted; {} kernel, support \
+         {}·h): h from {lo:.4e} to {hi:.4e}, median {mid:.4e}; {seconds:.2} s (change with \
+         --neighbours or --radius)",
+        if periodic { "periodic distances, " } else { "" },
+        kernel.name(),
+        kernel.support_factor(),
+    )
+}
+
 /// Each particle's radius parameter (world units) so that its support
 /// reaches its `n`-th nearest neighbour, with a note saying so.
 pub(crate) fn neighbour_radii(
@@ -307,23 +326,17 @@ pub(crate) fn neighbour_radii(
     })?;
     let mut sorted = h.to_vec();
     sorted.sort_unstable_by(f64::total_cmp);
-    let (lo, mid, hi) = (
+    let range = (
         sorted[0],
         sorted[sorted.len() / 2],
         sorted[sorted.len() - 1],
     );
-    notes.push(format!(
-        "radii from the {n} nearest neighbours ({}the particle itself counted; {} kernel, support \
-         {}·h): h from {lo:.4e} to {hi:.4e}, median {mid:.4e}; {:.2} s (change with --neighbours \
-         or --radius)",
-        if b.is_some() {
-            "periodic distances, "
-        } else {
-            ""
-        },
-        kernel.name(),
-        kernel.support_factor(),
-        start.elapsed().as_secs_f64()
+    notes.push(radii_note(
+        n,
+        b.is_some(),
+        kernel,
+        range,
+        start.elapsed().as_secs_f64(),
     ));
     Ok(h.into_iter().map(|v| v as f32).collect())
 }

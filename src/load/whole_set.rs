@@ -27,7 +27,7 @@ use super::particles::{
 };
 use super::reach::{Reach, Unresolvable, WorldBox};
 use super::spacing::{self, OccupancyGrid, PROBES};
-use crate::{ParallelError, WorldFrame};
+use crate::{ParallelError, SceneError, WorldFrame};
 
 /// Every rank's outcome of a local step: `Ok` everywhere or an error
 /// everywhere (this rank's own, or the failing rank's).
@@ -362,8 +362,10 @@ fn check_resolvable(
     Err(found.error(far, scale).into())
 }
 
-/// Radii from neighbours for a set read in shares: every rank gathers all
-/// positions (24 bytes per particle) and searches; each keeps its rows'.
+/// Radii from neighbours for a set read in shares: the ranks search slabs
+/// of space with halos ([`super::spread_radii`]), each keeping its rows';
+/// where a slab would hold fewer than N points, every rank gathers all
+/// positions (24 bytes per particle) and searches.
 pub(crate) fn neighbour_radii(
     comm: &dyn Comm,
     p: &ParticlesDesc,
@@ -375,6 +377,71 @@ pub(crate) fn neighbour_radii(
     let Some(n) = agree(comm, n)? else {
         return Ok(());
     };
+    let kernel = rows.kernel(p);
+    let start = std::time::Instant::now();
+    let periodic = rows.periodic.as_ref();
+    if comm.size() > 1
+        && let Some(d) = super::spread_radii::spread_distances(
+            comm,
+            &rows.positions,
+            rows.offset,
+            n,
+            periodic,
+            &rows.main_file,
+        )?
+    {
+        // A radius of 0: n − 1 others at the particle's own position.
+        let zero = d
+            .iter()
+            .position(|&v| !(v > 0.0))
+            .map(|i| SceneError::Particles {
+                path: rows.main_file.clone(),
+                source: ParticleError::CoincidentNeighbours {
+                    index: rows.offset + i,
+                    others: n - 1,
+                },
+            });
+        agree(comm, zero.map_or(Ok(()), Err))?;
+        let factor = kernel.support_factor() as f64;
+        let h: Vec<f64> = d.iter().map(|v| v / factor).collect();
+        // The note's median from every rank's quantiles (4096 each, weighted
+        // by the rank's count): within 1/4096 of the ranks' rows.
+        let lo = comm.all_min(&[h.iter().copied().fold(f64::INFINITY, f64::min)])?[0];
+        let hi = comm.all_max(&[h.iter().copied().fold(f64::NEG_INFINITY, f64::max)])?[0];
+        let mut sorted = h.clone();
+        sorted.sort_unstable_by(f64::total_cmp);
+        let m = sorted.len().min(4096);
+        let mut sketch = Vec::with_capacity(2 * m);
+        for k in 0..m {
+            sketch.push(sorted[(2 * k + 1) * sorted.len() / (2 * m)]);
+            sketch.push(sorted.len() as f64 / m as f64);
+        }
+        let mut all: Vec<(f64, f64)> = comm
+            .all_gather_f64(&sketch)?
+            .iter()
+            .flat_map(|s| s.chunks_exact(2).map(|c| (c[0], c[1])).collect::<Vec<_>>())
+            .collect();
+        all.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        let half = all.iter().map(|c| c.1).sum::<f64>() / 2.0;
+        let mut below = 0.0;
+        let mid = all
+            .iter()
+            .find(|c| {
+                below += c.1;
+                below >= half
+            })
+            .map_or(lo, |c| c.0);
+        let seconds = start.elapsed().as_secs_f64();
+        notes.push(super::periodic::radii_note(
+            n,
+            periodic.is_some(),
+            kernel,
+            (lo, mid, hi),
+            seconds,
+        ));
+        rows.data.radii = Some(h.iter().map(|&v| v as f32).collect());
+        return Ok(());
+    }
     let mut w = Writer::with_capacity(16 + 24 * rows.positions.len());
     w.u64(rows.offset as u64);
     w.u64(rows.positions.len() as u64);
@@ -389,7 +456,6 @@ pub(crate) fn neighbour_radii(
             *q = [r.f64()?, r.f64()?, r.f64()?];
         }
     }
-    let kernel = rows.kernel(p);
     let mut said = Vec::new();
     let found = super::periodic::neighbour_radii(
         &all,

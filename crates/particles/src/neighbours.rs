@@ -107,7 +107,20 @@ pub fn neighbour_distances(
     n: usize,
     periodic: Option<&PeriodicBox>,
 ) -> Result<Vec<f64>, ParticleError> {
+    neighbour_distances_of(positions, positions.len(), n, periodic)
+}
+
+/// [`neighbour_distances`] of the first `queries` of `positions` only,
+/// among all of them (a part of a set with its halo: the rest are there to
+/// be found, not asked about).
+pub fn neighbour_distances_of(
+    positions: &[[f64; 3]],
+    queries: usize,
+    n: usize,
+    periodic: Option<&PeriodicBox>,
+) -> Result<Vec<f64>, ParticleError> {
     let count = positions.len();
+    let queries = queries.min(count);
     if n < 2 || n > count {
         return Err(ParticleError::BadNeighbours { n, count });
     }
@@ -124,7 +137,7 @@ pub fn neighbour_distances(
         });
     }
     let search = Search::new(positions, periodic);
-    let mut out = vec![0.0f64; count];
+    let mut out = vec![0.0f64; queries];
     let found: Vec<Vec<(u32, f64)>> = search
         .sorted
         .par_chunks(CHUNK)
@@ -143,12 +156,17 @@ pub fn neighbour_distances(
                 // A chunk's first cluster seeds the reach with one heap
                 // search.
                 let mut answer = [f64::NAN; CLUSTER];
-                let mut pending: Vec<usize> = (0..members.len()).collect();
+                let mut pending: Vec<usize> = (0..members.len())
+                    .filter(|&j| (members[j].1 as usize) < queries)
+                    .collect();
+                if pending.is_empty() {
+                    continue;
+                }
                 if !(reach > 0.0) {
+                    let j = pending.remove(0);
                     best.items.clear();
-                    answer[0] = search.kth(members[0].0, &mut best);
-                    pending.remove(0);
-                    reach = answer[0] * 1.5;
+                    answer[j] = search.kth(members[j].0, &mut best);
+                    reach = answer[j] * 1.5;
                 }
                 let mut r = reach;
                 for _ in 0..3 {
@@ -176,8 +194,10 @@ pub fn neighbour_distances(
                 }
                 let mut largest = 0.0f64;
                 for (j, &(_, i)) in members.iter().enumerate() {
-                    largest = largest.max(answer[j]);
-                    found.push((i, answer[j]));
+                    if (i as usize) < queries {
+                        largest = largest.max(answer[j]);
+                        found.push((i, answer[j]));
+                    }
                 }
                 reach = largest * 1.1;
             }
