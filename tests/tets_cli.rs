@@ -201,15 +201,16 @@ fn pixel_area_projections_conserve_mass_at_every_resolution() {
             "{res}²: {total}\n{stderr}"
         );
     }
-    // Pixel areas are a tessellation's; a slab is integrated through pixel
-    // centres: both refused by name.
+    // A slab is integrated through pixel centres: refused by name.
     let slab = s.str("d.npy");
     let mut a = vec!["project"];
     a.extend(base);
     a.extend(["--pixels", "area", "--depth", "0.5", "-o", &slab]);
     let e = fails(&a);
     assert!(e.contains("pixels") && e.contains("--depth"), "{e}");
-    let e = fails(&[
+    // The same positions as particles take pixel areas too (their own
+    // kernels'; other data is refused, tested in the library).
+    let e = ok(&[
         "project",
         "--particles",
         &p,
@@ -220,7 +221,7 @@ fn pixel_area_projections_conserve_mass_at_every_resolution() {
         "-o",
         &s.str("q.npy"),
     ]);
-    assert!(e.contains("--pixels") && e.contains("tessellation"), "{e}");
+    assert!(!e.contains("projected mass differs"), "{e}");
 }
 
 #[test]
