@@ -443,9 +443,25 @@ impl ProjectionView {
         h: u32,
         control: &Control,
     ) -> Result<Vec<f32>, Cancelled> {
-        let local = match self.t_range {
-            None => volume.project(&self.camera, w, h, control)?,
-            Some(t) => volume.project_in(&self.camera, w, h, t, control)?,
+        self.project_pixels(volume, w, h, None, control)
+    }
+
+    /// [`ProjectionView::project`] with each pixel integrated by `pixels`
+    /// (particles; `None`: the volume's own rule). A slab (`depth`) always
+    /// goes through pixel centres: [`crate::set_projection_pixels`] refuses
+    /// the area with it.
+    pub fn project_pixels(
+        &self,
+        volume: &AnyVolume,
+        w: u32,
+        h: u32,
+        pixels: Option<voxless_core::PixelIntegral>,
+        control: &Control,
+    ) -> Result<Vec<f32>, Cancelled> {
+        let local = match (self.t_range, pixels) {
+            (None, None) => volume.project(&self.camera, w, h, control)?,
+            (None, Some(p)) => volume.project_pixels(&self.camera, w, h, p, control)?,
+            (Some(t), _) => volume.project_in(&self.camera, w, h, t, control)?,
         };
         // ∫ field dt with dt in the frame's units: in world units.
         Ok(if self.scale == 1.0 {

@@ -5,7 +5,7 @@
 use crate::{SceneError, WorldFrame};
 use rayon::prelude::*;
 use voxless_amr::AmrVolume;
-use voxless_core::{Aabb, Camera, Cancelled, Control, Image, Range1, Vec3, Volume};
+use voxless_core::{Aabb, Camera, Cancelled, Control, Image, PixelIntegral, Range1, Vec3, Volume};
 use voxless_particles::{MaterialVolume, ParticleVolume};
 use voxless_render::{Film, RenderSettings};
 use voxless_tets::TetVolume;
@@ -140,6 +140,26 @@ impl AnyVolume {
         control: &Control,
     ) -> Result<Vec<f32>, Cancelled> {
         with_volume!(self, v => voxless_render::project(v, camera, width, height, control))
+    }
+
+    /// [`AnyVolume::project`] with each pixel integrated by `pixels` where
+    /// the volume chooses per projection (particles: see
+    /// `voxless_particles::kernel::area`); other volumes keep the rule they
+    /// were loaded with.
+    pub fn project_pixels(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        pixels: PixelIntegral,
+        control: &Control,
+    ) -> Result<Vec<f32>, Cancelled> {
+        if let AnyVolume::Particles(v) = self
+            && let Some(image) = v.project_with_pixels(camera, width, height, pixels, control)
+        {
+            return image;
+        }
+        self.project(camera, width, height, control)
     }
 
     /// [`AnyVolume::project`] over the part `t` of every pixel's line (one

@@ -28,7 +28,7 @@ use numpy::{
     PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
     PyReadonlyArray3, PyUntypedArrayMethods,
 };
-use pyo3::exceptions::{PyKeyboardInterrupt, PyTypeError};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 use voxless::{
@@ -428,7 +428,7 @@ impl Volume {
     /// Column density `∫ field dt` per pixel (H×W float32, row 0 at the top)
     /// along an axis or a normal (see `voxless::projection`), at the view's
     /// image size (`flags` may give `size`), and the projection's geometry.
-    #[pyo3(signature = (flags, axis=None, normal=None, north=None, center=None, width=None, bounds=None, depth=None))]
+    #[pyo3(signature = (flags, axis=None, normal=None, north=None, center=None, width=None, bounds=None, depth=None, pixels=None))]
     #[allow(clippy::too_many_arguments)]
     fn project<'py>(
         &self,
@@ -441,6 +441,7 @@ impl Volume {
         width: Option<[f64; 2]>,
         bounds: Option<[f64; 6]>,
         depth: Option<f64>,
+        pixels: Option<&str>,
     ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyDict>)> {
         let mut desc = self.held.desc.clone();
         apply_flags(&mut desc, flags, &self.held.base, "project", &[])?;
@@ -453,16 +454,38 @@ impl Volume {
             bounds,
             depth,
         };
-        // The CLI's refusals: a pixel-area tessellation integrates whole
-        // lines, not a slab.
-        voxless::set_projection_pixels(&mut desc, None, &projection)
+        // The pixel rule: particles choose it per projection; a
+        // tessellation's is part of how it was opened.
+        let pixels = match pixels {
+            None => None,
+            Some("centre" | "center") => Some(voxless::PixelsName::Centre),
+            Some("area") => Some(voxless::PixelsName::Area),
+            Some(other) => {
+                return Err(PyValueError::new_err(format!(
+                    "pixels: {other:?} is not \"centre\" or \"area\""
+                )));
+            }
+        };
+        if pixels.is_some() && desc.tets.is_some() {
+            return Err(PyValueError::new_err(
+                "pixels: a tessellation's pixel rule is chosen when it is opened (tets.pixels \
+                 in its scene), not per projection",
+            ));
+        }
+        // The CLI's refusals: pixel areas integrate whole lines, not a
+        // slab, of particles or tessellations only.
+        voxless::set_projection_pixels(&mut desc, pixels, &projection)
             .map_err(|e| errors::scene(py, e))?;
+        let rule = pixels.map(|p| match p {
+            voxless::PixelsName::Area => voxless::core::PixelIntegral::Area,
+            voxless::PixelsName::Centre => voxless::core::PixelIntegral::Centre,
+        });
         let held = self.held.clone();
         let done = run::cancellable(py, move |control| -> Result<_, Failure> {
             let (w, h) = voxless::projection::image_size(&desc.image)?;
             let view = ProjectionView::new(&projection, &held.volume().bounds(), held.frame())?;
             view.check(held.volume())?;
-            let column = view.project(held.volume(), w, h, control)?;
+            let column = view.project_pixels(held.volume(), w, h, rule, control)?;
             Ok((column, view, w, h))
         })?;
         let (column, view, w, h) = done.map_err(|f| raise(py, f))?;

@@ -132,6 +132,28 @@ def test_the_cli_and_python_agree(cosmic, cli, tmp_path):
         np.testing.assert_allclose(vol.smoothing_lengths, np.load(radii), rtol=1e-6)
 
 
+def test_pixel_areas_keep_the_mass_of_sub_pixel_kernels_as_the_cli_does(cosmic, cli, tmp_path):
+    pos, m = cosmic
+    pos = pos.astype(np.float32)
+    np.save(tmp_path / "pos.npy", pos)
+    # Supports of 1/20 of a pixel: pixel centres sample them, areas keep them.
+    view = dict(size=(100, 80), axis="z", bounds=BOX)
+    vol = voxless.Particles(pos, weights=m, kernel="cubic-spline", box=L, radius=0.025)
+    centre, area = vol.project(**view), vol.project(pixels="area", **view)
+    assert abs(area.mass() / N - 1) <= 1e-6
+    assert abs(centre.mass() / N - 1) > 1e-2
+    out = tmp_path / "area.npy"
+    cli("project", "--particles", tmp_path / "pos.npy", "--kernel", "cubic-spline", "--box", L,
+        "--radius", 0.025, "--axis", "z", "--size", 100, 80, "--bounds", *BOX, "--pixels", "area",
+        "-o", out)  # fmt: skip
+    theirs = np.load(out)
+    assert np.abs(np.asarray(area) - theirs).max() <= 1e-6 * theirs.max()
+    with pytest.raises(ValueError, match="pixels"):
+        vol.project(pixels="corner", **view)
+    with pytest.raises(voxless.VoxlessError, match="depth"):
+        vol.project(pixels="area", depth=10.0, **view)
+
+
 def test_the_box_as_a_side_six_numbers_or_corners(cosmic):
     pos, m = cosmic
     side = voxless.Particles(pos, box=L, neighbours=8)

@@ -182,7 +182,16 @@ class Volume:
         return Image.wrap(rgba, background=tuple(background), notes=notes)
 
     def project(
-        self, size=None, axis=None, normal=None, north=None, center=None, width=None, bounds=None, depth=None
+        self,
+        size=None,
+        axis=None,
+        normal=None,
+        north=None,
+        center=None,
+        width=None,
+        bounds=None,
+        depth=None,
+        pixels=None,
     ) -> Projection:
         """Column density ∫ field dt per pixel: a :class:`Projection`, H×W float32, row 0 at the top.
 
@@ -194,7 +203,10 @@ class Volume:
         covering the data. Every line is integrated through all the data, or
         over a slab ``depth`` thick centred on the image plane.
         ``Projection.mass()`` (``sum(pixels) * pixel_area``) equals the total
-        mass when the image covers the data.
+        mass when the image covers the data. ``pixels``: ``"centre"`` (the
+        default: the column through each pixel's centre) or, for particles,
+        ``"area"`` (the column averaged over each pixel, so kernels smaller
+        than a pixel keep their mass too; not with ``depth``).
         """
         flags = {} if size is None else opt.split("project", {"size": size})[1]
         if axis is not None and (not isinstance(axis, (str, int)) or axis not in AXES):
@@ -210,6 +222,7 @@ class Volume:
             width=None if width is None else opt.vector("width", width, 2),
             bounds=None if bounds is None else opt.box("bounds", bounds),
             depth=None if depth is None else opt.number("depth", depth),
+            pixels=pixels,
         )
         return Projection.wrap(column, geometry)
 

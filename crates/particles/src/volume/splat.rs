@@ -4,7 +4,7 @@
 //! periodic images itself. Chunks are fixed in size, so the image has the
 //! same bits for any thread count.
 
-use voxless_core::{Camera, Cancelled, Control};
+use voxless_core::{Camera, Cancelled, Control, PixelIntegral};
 
 use crate::splat::{CHUNK, SplatParticle, Splatter};
 
@@ -22,6 +22,20 @@ impl ParticleVolume {
         height: u32,
         control: &Control,
     ) -> Option<Result<Vec<f32>, Cancelled>> {
+        self.project_with_pixels(camera, width, height, self.settings.pixels, control)
+    }
+
+    /// [`Self::splat_projection`] with each pixel integrated by `pixels`
+    /// instead of the settings' rule (front-ends that choose it per
+    /// projection).
+    pub fn project_with_pixels(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        pixels: PixelIntegral,
+        control: &Control,
+    ) -> Option<Result<Vec<f32>, Cancelled>> {
         if self.settings.periodic.is_some() && !self.own_images {
             return None;
         }
@@ -32,7 +46,7 @@ impl ParticleVolume {
             self.settings.kernel,
             self.settings.periodic,
         )?
-        .with_pixels(self.settings.pixels);
+        .with_pixels(pixels);
         // The particles without their ghosts, CHUNK at a time.
         let mut own = (0..self.packed.len())
             .filter(|&i| !self.is_ghost(i))
