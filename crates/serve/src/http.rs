@@ -220,7 +220,17 @@ async fn frame_png(
     let cancel = voxless::CancelToken::new();
     let _guard = CancelOnDrop(cancel.clone());
     let result = tokio::task::spawn_blocking(move || {
-        crate::render::frame_png(&app, q.width, q.height, &cancel)
+        let png = crate::render::frame_png(&app, q.width, q.height, &cancel);
+        // Nobody awaits a dropped request's render: say here that it
+        // stopped (its film freed), so a terminal shows where the core went.
+        if cancel.is_cancelled() {
+            let size = match (q.width, q.height) {
+                (Some(w), Some(h)) => format!(" {w}×{h}"),
+                _ => String::new(),
+            };
+            eprintln!("note: a /frame.png{size} render stopped: its client left");
+        }
+        png
     })
     .await;
     match result {
