@@ -107,8 +107,8 @@ pub use memory::ParticleArrays;
 pub use placement::{Placed, PlacedData, Placement, Rendered};
 pub use projection::{ProjectionDesc, ProjectionView};
 pub use resolve::{
-    Resolved, resolve, resolve_in, resolve_summary, resolve_with, transfer_function,
-    transfer_function_at,
+    Resolved, check_settings, resolve, resolve_in, resolve_summary, resolve_with,
+    transfer_function, transfer_function_at,
 };
 pub use scene::{DistributedScene, Scene};
 pub use volume::{AnyVolume, VolumeKind, VolumeSummary};

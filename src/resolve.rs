@@ -148,14 +148,7 @@ pub fn resolve_summary(
     let camera = camera(&desc.camera, &framed_box, aspect, frame)?;
     light_settings(desc, &camera, frame, &mut settings)?;
     refuse_what_the_kind_cannot_honour(volume.kind, &settings)?;
-    refuse_settings_without_effect(desc)?;
     let background = desc.render.background.unwrap_or([0.0; 3]);
-    if !background.iter().all(|c| c.is_finite() && *c >= 0.0) {
-        return Err(SceneError::setting(
-            "render.background (--background)",
-            format!("{background:?} is not a colour: give three finite linear RGB values ≥ 0"),
-        ));
-    }
     Ok(Resolved {
         camera,
         tf,
@@ -166,15 +159,13 @@ pub fn resolve_summary(
     })
 }
 
-/// The image size, samples per pixel and how rays march (step, rate, early
-/// termination, packets, log scale, clip box) the description gives, over
-/// the library's generic defaults for the data.
-fn march_settings(
-    volume: &VolumeSummary,
-    frame: &WorldFrame,
-    desc: &SceneDesc,
-) -> Result<RenderSettings, SceneError> {
-    let kind = volume.kind;
+/// The settings of `desc` that are wrong whatever the data: the image size
+/// and its memory, samples per pixel, the step, sampling rate and early
+/// termination, the background, a value range that is not a range, and
+/// settings that act only with another one. The renderer checks them as it
+/// resolves a view; a front-end that edits a view (the viewer's patches)
+/// checks them first, so a bad setting never becomes the view it renders.
+pub fn check_settings(desc: &SceneDesc) -> Result<(), SceneError> {
     let width = desc.image.width.unwrap_or(800);
     let height = desc.image.height.unwrap_or(600);
     if width == 0 || height == 0 || width > 32768 || height > 32768 {
@@ -194,6 +185,55 @@ fn march_settings(
             ),
         ));
     }
+    let r = &desc.render;
+    if let Some(step) = r.step {
+        positive("render.step (--step)", step)?;
+    }
+    if let Some(rate) = r.sampling_rate {
+        positive("render.sampling_rate (--sampling-rate)", rate)?;
+    }
+    if let Some(et) = r.early_termination
+        && !(et > 0.0 && et <= 1.0)
+    {
+        return Err(SceneError::setting(
+            "render.early_termination",
+            format!("{et} is outside (0, 1]"),
+        ));
+    }
+    let background = r.background.unwrap_or([0.0; 3]);
+    if !background.iter().all(|c| c.is_finite() && *c >= 0.0) {
+        return Err(SceneError::setting(
+            "render.background (--background)",
+            format!("{background:?} is not a colour: give three finite linear RGB values ≥ 0"),
+        ));
+    }
+    if let Some([lo, hi]) = desc.transfer.value_range {
+        const NAME: &str = "transfer.value_range (--value-range)";
+        range(NAME, lo, hi)?;
+        if lo == hi {
+            return Err(SceneError::setting(
+                NAME,
+                format!("[{lo}, {hi}] has zero width: the transfer function needs lo < hi"),
+            ));
+        }
+    }
+    refuse_settings_without_effect(desc)
+}
+
+/// The image size, samples per pixel and how rays march (step, rate, early
+/// termination, packets, log scale, clip box) the description gives, over
+/// the library's generic defaults for the data (the settings checked by
+/// [`check_settings`]).
+fn march_settings(
+    volume: &VolumeSummary,
+    frame: &WorldFrame,
+    desc: &SceneDesc,
+) -> Result<RenderSettings, SceneError> {
+    check_settings(desc)?;
+    let kind = volume.kind;
+    let width = desc.image.width.unwrap_or(800);
+    let height = desc.image.height.unwrap_or(600);
+    let spp = desc.image.spp.unwrap_or(1);
     let mut settings = RenderSettings::for_data(
         volume.bounds,
         volume.value_range,
@@ -204,20 +244,12 @@ fn march_settings(
     settings.spp = spp;
     let r = &desc.render;
     if let Some(step) = r.step {
-        positive("render.step (--step)", step)?;
         settings.step = Some(frame.length_to_local(step as f64));
     }
     if let Some(rate) = r.sampling_rate {
-        positive("render.sampling_rate (--sampling-rate)", rate)?;
         settings.sampling_rate = rate;
     }
     if let Some(et) = r.early_termination {
-        if !(et > 0.0 && et <= 1.0) {
-            return Err(SceneError::setting(
-                "render.early_termination",
-                format!("{et} is outside (0, 1]"),
-            ));
-        }
         settings.early_termination = et;
     }
     if kind == VolumeKind::Tets {
@@ -267,13 +299,8 @@ fn data_defaults(
     match desc.transfer.value_range {
         Some([lo, hi]) => {
             const NAME: &str = "transfer.value_range (--value-range)";
+            // A range with lo < hi (check_settings).
             settings.value_range = range(NAME, lo, hi)?;
-            if lo == hi {
-                return Err(SceneError::setting(
-                    NAME,
-                    format!("[{lo}, {hi}] has zero width: the transfer function needs lo < hi"),
-                ));
-            }
             above_the_data(volume.value_range, lo, settings.log_scale)?;
         }
         None => {

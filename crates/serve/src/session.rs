@@ -337,7 +337,13 @@ fn apply(app: &App, t: &mut Tab, action: &Action) -> Result<(), String> {
         Action::EndDrag => {}
         Action::Reset => path::reset_camera(&app.initial.camera, t)?,
         Action::Set { patch } => {
-            t.desc = patch::apply_patch(app, &t.desc, &t.imported, patch)?;
+            let desc = patch::apply_patch(app, &t.desc, &t.imported, patch)?;
+            // Settings wrong whatever the data are refused here, so they
+            // never become the view (nor a job queued behind it); what
+            // depends on the data is found by the worker, which goes back
+            // to the last view that rendered.
+            voxless::check_settings(&desc).map_err(|e| e.to_string())?;
+            t.desc = desc;
         }
         Action::Frame { frame } => {
             if *frame >= app.frames {

@@ -342,6 +342,30 @@ fn a_tab_colours_by_a_column_of_the_file_and_by_nothing_else() {
         )
         .await;
         until_converged(&mut ws, 6).await;
+        // A setting wrong whatever the data, with a move right behind it:
+        // refused as it arrives, so the move renders the good view and the
+        // tab's scene never holds it.
+        send(
+            &mut ws,
+            json!({"seq": 7, "type": "set", "patch": {"image": {"spp": 0}}}),
+        )
+        .await;
+        send(
+            &mut ws,
+            json!({"seq": 8, "type": "orbit", "yaw": 10.0, "pitch": 0.0}),
+        )
+        .await;
+        until_converged(&mut ws, 8).await;
+        send(&mut ws, json!({"seq": 9, "type": "save_scene"})).await;
+        loop {
+            if let Some(Msg::Text(v)) = next(&mut ws).await
+                && v["type"] == "scene"
+            {
+                let toml = v["toml"].as_str().unwrap();
+                assert!(!toml.contains("spp = 0"), "{toml}");
+                break;
+            }
+        }
     });
 }
 
