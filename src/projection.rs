@@ -31,7 +31,7 @@ use voxless_core::{Aabb, Camera, Cancelled, Control, Projection, Range1, Vec3};
 
 use crate::AnyVolume;
 
-use crate::{ImageDesc, SceneError, WorldFrame};
+use crate::{ImageDesc, PixelsName, SceneDesc, SceneError, WorldFrame};
 
 /// What a projection is asked to show; every field is optional. World
 /// coordinates are float64 (see [`WorldFrame`]).
@@ -122,15 +122,30 @@ pub fn image_size(image: &ImageDesc) -> Result<(u32, u32), SceneError> {
     Ok((width, height))
 }
 
-/// A note when a projection's `Σ column × pixel area` falls short of the
-/// data's exact mass `mass` by more than 0.1 %: part of the data lies
-/// outside the view, or (`centres`: pixel-centre projections of
-/// particles) kernels narrower than a pixel are sampled, not integrated.
-pub fn mass_note(integral: f64, mass: f64, centres: bool) -> Option<String> {
+/// The pixel integral a description asks for of its projections (pixel
+/// centres by default: pixel areas keep every kernel's or tet's mass but
+/// take 1.5–6× as long).
+pub fn pixel_integral(p: Option<PixelsName>) -> voxless_core::PixelIntegral {
+    match p.unwrap_or(PixelsName::Centre) {
+        PixelsName::Area => voxless_core::PixelIntegral::Area,
+        PixelsName::Centre => voxless_core::PixelIntegral::Centre,
+    }
+}
+
+/// A note when a projection of `desc`'s data whose `Σ column × pixel
+/// area` is `integral` misses the data's exact mass `mass` by more than
+/// 0.1 %: part of the data lies outside the view, or (particles projected
+/// through pixel centres) kernels narrower than a pixel are sampled, not
+/// integrated.
+pub fn mass_note(integral: f64, mass: f64, desc: &SceneDesc) -> Option<String> {
     let short = 1.0 - integral / mass;
     if !(mass > 0.0) || !(short.abs() > 1e-3) {
         return None;
     }
+    let centres = desc
+        .particles
+        .as_ref()
+        .is_some_and(|p| p.pixels != Some(PixelsName::Area));
     let why = if centres {
         "kernels narrower than a pixel are sampled at pixel centres (--pixels area \
          conserves their mass), or part of the data lies outside the view"

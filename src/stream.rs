@@ -194,7 +194,7 @@ pub fn project(
     let Some(splatter) = Splatter::new(&view.camera, w, h, kernel, local_box) else {
         return Ok(None);
     };
-    let mut splatter = splatter.with_pixels(crate::load::tets::pixel_integral(p.pixels));
+    let mut splatter = splatter.with_pixels(crate::projection::pixel_integral(p.pixels));
 
     // Pass 3: splat chunk by chunk.
     let mut mass = 0.0;

@@ -587,9 +587,7 @@ fn project(
                 output.display(),
                 s.mass
             );
-            let centres =
-                desc.particles.as_ref().and_then(|p| p.pixels) != Some(voxless::PixelsName::Area);
-            if let Some(n) = voxless::projection::mass_note(integral, s.mass, centres) {
+            if let Some(n) = voxless::projection::mass_note(integral, s.mass, desc) {
                 eprintln!("note: {n}");
             }
             return Ok(());
@@ -617,9 +615,7 @@ fn project(
             t.elapsed().as_secs_f64(),
             output.display()
         );
-        let centres = desc.particles.is_some()
-            && desc.particles.as_ref().and_then(|p| p.pixels) != Some(voxless::PixelsName::Area);
-        if let Some(n) = exact.and_then(|m| voxless::projection::mass_note(integral, m, centres)) {
+        if let Some(n) = exact.and_then(|m| voxless::projection::mass_note(integral, m, desc)) {
             eprintln!("note: {n}");
         }
         Ok(())

@@ -456,16 +456,16 @@ impl Volume {
         };
         // The pixel rule: particles choose it per projection; a
         // tessellation's is part of how it was opened.
-        let pixels = match pixels {
-            None => None,
-            Some("centre" | "center") => Some(voxless::PixelsName::Centre),
-            Some("area") => Some(voxless::PixelsName::Area),
-            Some(other) => {
-                return Err(PyValueError::new_err(format!(
-                    "pixels: {other:?} is not \"centre\" or \"area\""
-                )));
-            }
-        };
+        // The scene's names (aliases included).
+        let pixels: Option<voxless::PixelsName> = pixels
+            .map(|p| serde_json::from_value(serde_json::Value::from(p)))
+            .transpose()
+            .map_err(|_| {
+                PyValueError::new_err(format!(
+                    "pixels: {:?} is not \"centre\" or \"area\"",
+                    pixels.unwrap_or_default()
+                ))
+            })?;
         if pixels.is_some() && desc.tets.is_some() {
             return Err(PyValueError::new_err(
                 "pixels: a tessellation's pixel rule is chosen when it is opened (tets.pixels \
@@ -476,10 +476,7 @@ impl Volume {
         // slab, of particles or tessellations only.
         voxless::set_projection_pixels(&mut desc, pixels, &projection)
             .map_err(|e| errors::scene(py, e))?;
-        let rule = pixels.map(|p| match p {
-            voxless::PixelsName::Area => voxless::core::PixelIntegral::Area,
-            voxless::PixelsName::Centre => voxless::core::PixelIntegral::Centre,
-        });
+        let rule = pixels.map(|p| voxless::projection::pixel_integral(Some(p)));
         let held = self.held.clone();
         let done = run::cancellable(py, move |control| -> Result<_, Failure> {
             let (w, h) = voxless::projection::image_size(&desc.image)?;

@@ -634,7 +634,7 @@ pub(crate) fn particle_settings(
         attribute_range,
         classification,
         periodic: None,
-        pixels: super::tets::pixel_integral(p.pixels),
+        pixels: crate::projection::pixel_integral(p.pixels),
     })
 }
 

@@ -51,20 +51,21 @@ pub(crate) fn spread_distances(
     };
     let ranks = comm.size();
     let me = comm.rank();
-    // The axis and its extent: the box's, or the data's.
-    let lo3: Vec<f64> = (0..3)
-        .map(|a| mine.iter().fold(f64::INFINITY, |m, p| m.min(p[a])))
-        .collect();
-    let hi3: Vec<f64> = (0..3)
-        .map(|a| mine.iter().fold(f64::NEG_INFINITY, |m, p| m.max(p[a])))
-        .collect();
-    let (lo3, hi3) = (comm.all_min(&lo3)?, comm.all_max(&hi3)?);
+    // The axis and its extent: the box's, or the data's (every rank has
+    // the same box, so all take the same branch).
     let (axis, lo, hi) = match periodic {
         Some(b) => {
             let a = (0..3).fold(0, |m, a| if b.size[a] > b.size[m] { a } else { m });
             (a, b.lo[a], b.lo[a] + b.size[a])
         }
         None => {
+            let fold = |start: f64, f: fn(f64, f64) -> f64| -> Vec<f64> {
+                (0..3)
+                    .map(|a| mine.iter().fold(start, |m, p| f(m, p[a])))
+                    .collect()
+            };
+            let lo3 = comm.all_min(&fold(f64::INFINITY, f64::min))?;
+            let hi3 = comm.all_max(&fold(f64::NEG_INFINITY, f64::max))?;
             let a = (0..3).fold(0, |m, a| {
                 if hi3[a] - lo3[a] > hi3[m] - lo3[m] {
                     a
@@ -184,11 +185,10 @@ pub(crate) fn spread_distances(
         ranges.push((r.u64()?, r.u64()?));
     }
     let mut send: Vec<Writer> = (0..ranks).map(|_| Writer::new()).collect();
+    // Shares are consecutive in rank order: a row's rank is the last one
+    // starting at or before it.
     for (&row, &v) in rows.iter().zip(&d) {
-        let k = ranges
-            .iter()
-            .position(|&(o, len)| row >= o && row < o + len)
-            .unwrap_or(me);
+        let k = ranges.partition_point(|&(o, _)| o <= row).saturating_sub(1);
         send[k].u64(row);
         send[k].f64(v);
     }

@@ -11,8 +11,8 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use voxless_scene::{PixelsName, TetsDesc};
-use voxless_tets::{BLOCK, LagrangianGrid, PixelIntegral, TetSettings, TetVolume};
+use voxless_scene::TetsDesc;
+use voxless_tets::{BLOCK, LagrangianGrid, TetSettings, TetVolume};
 
 use super::formats::ParticleFormat;
 use super::{Share, WorldGrid};
@@ -335,14 +335,5 @@ pub(crate) fn build_tets(
         source: e,
     })?;
     Ok(v.with_lod_pixels(t.lod_pixels)
-        .with_pixel_integral(pixel_integral(t.pixels)))
-}
-
-/// The projections' pixel integral a description asks for (pixel centres
-/// by default: pixel areas are exact but take 4–6× as long).
-pub(crate) fn pixel_integral(p: Option<PixelsName>) -> PixelIntegral {
-    match p.unwrap_or(PixelsName::Centre) {
-        PixelsName::Area => PixelIntegral::Area,
-        PixelsName::Centre => PixelIntegral::Centre,
-    }
+        .with_pixel_integral(crate::projection::pixel_integral(t.pixels)))
 }

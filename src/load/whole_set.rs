@@ -17,6 +17,7 @@
 
 use voxless_core::{Aabb, Range1, Vec3};
 use voxless_parallel::{Comm, CommError, CommExt, Reader, Writer};
+use voxless_particles::neighbours::radii_from_distances;
 use voxless_particles::{
     ParticleError, ParticleSettings, check_data, median, probe_stride, support_box,
 };
@@ -390,47 +391,27 @@ pub(crate) fn neighbour_radii(
             &rows.main_file,
         )?
     {
-        // A radius of 0: n − 1 others at the particle's own position.
-        let zero = d
-            .iter()
-            .position(|&v| !(v > 0.0))
-            .map(|i| SceneError::Particles {
+        // A radius of 0 (n − 1 others at a particle's position) names the
+        // particle's row in the whole set.
+        let h = radii_from_distances(d, n, kernel).map_err(|e| {
+            let e = match e {
+                ParticleError::CoincidentNeighbours { index, others } => {
+                    ParticleError::CoincidentNeighbours {
+                        index: rows.offset + index,
+                        others,
+                    }
+                }
+                e => e,
+            };
+            SceneError::Particles {
                 path: rows.main_file.clone(),
-                source: ParticleError::CoincidentNeighbours {
-                    index: rows.offset + i,
-                    others: n - 1,
-                },
-            });
-        agree(comm, zero.map_or(Ok(()), Err))?;
-        let factor = kernel.support_factor() as f64;
-        let h: Vec<f64> = d.iter().map(|v| v / factor).collect();
-        // The note's median from every rank's quantiles (4096 each, weighted
-        // by the rank's count): within 1/4096 of the ranks' rows.
+                source: e,
+            }
+        });
+        let h = agree(comm, h)?;
         let lo = comm.all_min(&[h.iter().copied().fold(f64::INFINITY, f64::min)])?[0];
         let hi = comm.all_max(&[h.iter().copied().fold(f64::NEG_INFINITY, f64::max)])?[0];
-        let mut sorted = h.clone();
-        sorted.sort_unstable_by(f64::total_cmp);
-        let m = sorted.len().min(4096);
-        let mut sketch = Vec::with_capacity(2 * m);
-        for k in 0..m {
-            sketch.push(sorted[(2 * k + 1) * sorted.len() / (2 * m)]);
-            sketch.push(sorted.len() as f64 / m as f64);
-        }
-        let mut all: Vec<(f64, f64)> = comm
-            .all_gather_f64(&sketch)?
-            .iter()
-            .flat_map(|s| s.chunks_exact(2).map(|c| (c[0], c[1])).collect::<Vec<_>>())
-            .collect();
-        all.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-        let half = all.iter().map(|c| c.1).sum::<f64>() / 2.0;
-        let mut below = 0.0;
-        let mid = all
-            .iter()
-            .find(|c| {
-                below += c.1;
-                below >= half
-            })
-            .map_or(lo, |c| c.0);
+        let mid = whole_median(comm, &h)?.unwrap_or(lo);
         let seconds = start.elapsed().as_secs_f64();
         notes.push(super::periodic::radii_note(
             n,
@@ -470,6 +451,35 @@ pub(crate) fn neighbour_radii(
     rows.data.radii = Some(h[mine].to_vec());
     notes.extend(said);
     Ok(())
+}
+
+/// The median of every rank's `values`, from each rank's 4096 quantiles
+/// weighted by its count (within 1/4096 of the ranks' rows); `None` when
+/// there are none.
+fn whole_median(comm: &dyn Comm, values: &[f64]) -> Result<Option<f64>, CommError> {
+    let mut sorted = values.to_vec();
+    sorted.sort_unstable_by(f64::total_cmp);
+    let m = sorted.len().min(4096);
+    let mut sketch = Vec::with_capacity(2 * m);
+    for k in 0..m {
+        sketch.push(sorted[(2 * k + 1) * sorted.len() / (2 * m)]);
+        sketch.push(sorted.len() as f64 / m as f64);
+    }
+    let mut all: Vec<(f64, f64)> = comm
+        .all_gather_f64(&sketch)?
+        .iter()
+        .flat_map(|s| s.chunks_exact(2).map(|c| (c[0], c[1])).collect::<Vec<_>>())
+        .collect();
+    all.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    let half = all.iter().map(|c| c.1).sum::<f64>() / 2.0;
+    let mut below = 0.0;
+    Ok(all
+        .iter()
+        .find(|c| {
+            below += c.1;
+            below >= half
+        })
+        .map(|c| c.0))
 }
 
 /// Radius parameters of rows `offset..offset + values.len()` of a particle

@@ -24,9 +24,10 @@ use voxless_tets::{
 
 use super::share::{exchange, outboxes, root_box};
 use super::{ParallelError, Part, PartCounts};
-use crate::load::tets::{box_frame, particle_mass, pixel_integral, read_grid, slab_planes};
+use crate::load::tets::{box_frame, particle_mass, read_grid, slab_planes};
 use crate::load::whole_set::agree;
 use crate::load::{Purpose, Share};
+use crate::projection::pixel_integral;
 use crate::{AnyVolume, Fields, SceneError, VolumeKind, VolumeSummary, WorldFrame};
 
 /// This rank's slab of the run `t` names, placed in the frame its box

@@ -175,7 +175,7 @@ pub fn neighbour_distances_of(
                     }
                     #[cfg(test)]
                     let first_try = r == reach;
-                    pending.retain(|&j| match batch.kth(j, n, r) {
+                    pending.retain(|&j| match batch.kth(members[j].0, n, r) {
                         Some(d) => {
                             #[cfg(test)]
                             tally::count(if first_try { 0 } else { 1 });
@@ -220,7 +220,18 @@ pub fn smoothing_lengths(
     periodic: Option<&PeriodicBox>,
     kernel: crate::Kernel,
 ) -> Result<Vec<f64>, ParticleError> {
-    let mut d = neighbour_distances(positions, n, periodic)?;
+    radii_from_distances(neighbour_distances(positions, n, periodic)?, n, kernel)
+}
+
+/// Radius parameters for `kernel` from the distances `d` to each
+/// particle's `n`-th nearest neighbour (its support reaches that far). A
+/// distance of 0 — `n − 1` others at the particle's own position — is an
+/// error naming the particle (its index in `d`).
+pub fn radii_from_distances(
+    mut d: Vec<f64>,
+    n: usize,
+    kernel: crate::Kernel,
+) -> Result<Vec<f64>, ParticleError> {
     if let Some(index) = d.iter().position(|&v| !(v > 0.0)) {
         return Err(ParticleError::CoincidentNeighbours {
             index,
@@ -375,7 +386,6 @@ impl<'a> Search<'a> {
         let members = &self.sorted[first..(first + CLUSTER).min(self.sorted.len())];
         let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         for (p, _) in members {
-            batch.members.push(*p);
             for a in 0..3 {
                 lo[a] = lo[a].min(p[a]);
                 hi[a] = hi[a].max(p[a]);
@@ -504,8 +514,6 @@ struct Batch {
     x: Vec<f64>,
     y: Vec<f64>,
     z: Vec<f64>,
-    /// The cluster's own points.
-    members: Vec<[f64; 3]>,
     near: Vec<f64>,
 }
 
@@ -514,14 +522,13 @@ impl Batch {
         self.x.clear();
         self.y.clear();
         self.z.clear();
-        self.members.clear();
     }
 
-    /// The n-th nearest distance of member `j`, when at least n gathered
-    /// points lie within `reach` of it (then every point nearer than the
-    /// n-th was gathered: the rest lie beyond `reach` of the whole box).
-    fn kth(&mut self, j: usize, n: usize, reach: f64) -> Option<f64> {
-        let q = self.members[j];
+    /// The n-th nearest distance of `q`, a point of the cluster, when at
+    /// least n gathered points lie within `reach` of it (then every point
+    /// nearer than the n-th was gathered: the rest lie beyond `reach` of
+    /// the whole box).
+    fn kth(&mut self, q: [f64; 3], n: usize, reach: f64) -> Option<f64> {
         let r2 = reach * reach;
         // Branch-free: every distance is written, the count only grows for
         // those within reach (about half of them: a branch would mispredict).

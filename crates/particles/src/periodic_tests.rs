@@ -143,9 +143,40 @@ fn sum(image: &[f32]) -> f64 {
     image.iter().map(|&v| v as f64).sum()
 }
 
+/// Checks `Σ × pixel area` of `v`'s n×n projections of the unit box, along
+/// `axis` and off axis (1.8 wide), against its mass (`tolerances`: on,
+/// off); returns the off-axis image and its camera.
+fn box_mass(
+    v: &ParticleVolume,
+    n: u32,
+    axis: usize,
+    (on_tol, off_tol): (f64, f64),
+) -> (Vec<f32>, Camera) {
+    let ctl = Control::new();
+    let mass = v.total_mass();
+    let name = v.settings().kernel.name();
+    let on = v
+        .project_image(&axis_camera(axis), n, n, &ctl)
+        .unwrap()
+        .unwrap();
+    let on_mass = sum(&on) * (L as f64 / n as f64).powi(2);
+    assert!(
+        (on_mass / mass - 1.0).abs() <= on_tol,
+        "{name}: on-axis Σ = {on_mass}, mass {mass}"
+    );
+    let w = 1.8;
+    let cam = off_axis_camera(Vec3::new(1.0, 0.7, 0.4), w);
+    let off = v.project_image(&cam, n, n, &ctl).unwrap().unwrap();
+    let off_mass = sum(&off) * (w as f64 / n as f64).powi(2);
+    assert!(
+        (off_mass / mass - 1.0).abs() <= off_tol,
+        "{name}: off-axis Σ = {off_mass}, mass {mass}"
+    );
+    (off, cam)
+}
+
 #[test]
 fn pixel_areas_conserve_the_mass_of_sub_pixel_kernels_on_and_off_axis() {
-    let ctl = Control::new();
     let n = 128u32;
     for kernel in KERNELS {
         // Supports of 0.1–0.3 pixels (pixel centres miss most of them);
@@ -161,26 +192,7 @@ fn pixel_areas_conserve_the_mass_of_sub_pixel_kernels_on_and_off_axis() {
             },
         )
         .unwrap();
-        let mass = v.total_mass();
-        let on = v
-            .project_image(&axis_camera(0), n, n, &ctl)
-            .unwrap()
-            .unwrap();
-        let on_mass = sum(&on) * (L as f64 / n as f64).powi(2);
-        assert!(
-            (on_mass / mass - 1.0).abs() <= 1e-6,
-            "{}: on-axis Σ = {on_mass}, mass {mass}",
-            kernel.name()
-        );
-        let w = 1.8;
-        let cam = off_axis_camera(Vec3::new(1.0, 0.7, 0.4), w);
-        let off = v.project_image(&cam, n, n, &ctl).unwrap().unwrap();
-        let off_mass = sum(&off) * (w as f64 / n as f64).powi(2);
-        assert!(
-            (off_mass / mass - 1.0).abs() <= 1e-5,
-            "{}: off-axis Σ = {off_mass}, mass {mass}",
-            kernel.name()
-        );
+        box_mass(&v, n, 0, (1e-6, 1e-5));
     }
 }
 
@@ -190,27 +202,8 @@ fn projections_of_the_box_conserve_mass_for_every_kernel() {
     for kernel in KERNELS {
         // Kernels several pixels wide, many of them crossing the faces.
         let v = periodic(data(4000, 0.03, 5), kernel);
-        let mass = v.total_mass();
         let n = 256u32;
-        let on = v
-            .project_image(&axis_camera(2), n, n, &ctl)
-            .unwrap()
-            .unwrap();
-        let on_mass = sum(&on) * (L as f64 / n as f64).powi(2);
-        assert!(
-            (on_mass / mass - 1.0).abs() <= 1e-6,
-            "{}: on-axis Σ = {on_mass}, mass {mass}",
-            kernel.name()
-        );
-        let w = 1.8;
-        let cam = off_axis_camera(Vec3::new(1.0, 0.7, 0.4), w);
-        let off = v.project_image(&cam, n, n, &ctl).unwrap().unwrap();
-        let off_mass = sum(&off) * (w as f64 / n as f64).powi(2);
-        assert!(
-            (off_mass / mass - 1.0).abs() <= 1e-4,
-            "{}: off-axis Σ = {off_mass}, mass {mass}",
-            kernel.name()
-        );
+        let (off, cam) = box_mass(&v, n, 2, (1e-6, 1e-4));
         // The fast path against the per-pixel line integrals through the box.
         let slow = voxless_render::project_per_pixel(&v, &cam, n, n, &ctl).unwrap();
         let peak = off.iter().fold(0.0f32, |m, &x| m.max(x));

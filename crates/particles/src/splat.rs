@@ -159,7 +159,7 @@ impl Splatter {
         self.place(particles, offset)?;
         let lists = Bands::bin(&self.splats, self.height);
         let w = self.width as usize;
-        let (camera, mode, kernel, half) = (&self.camera, self.mode, self.kernel, self.half);
+        let (camera, mode, kernel) = (&self.camera, self.mode, self.kernel);
         let (width, height) = (self.width, self.height);
         let splats = &self.splats;
         // The Gaussians read no table (their columns are closed forms).
@@ -179,32 +179,19 @@ impl Splatter {
                 if let Some(table) = area {
                     area_band(splats, members, table, (y0, y0 + rows), w, &mut *out);
                 }
-                {
-                    dispatch(
-                        simd,
-                        SplatBand {
-                            splats,
-                            members,
-                            y: (y0, y0 + rows),
-                            width: w,
-                            pairs,
-                            out: &mut *out,
-                        },
-                    );
-                }
-                if let Periodic::OffAxis(b) = mode {
-                    let area = area.is_some();
-                    clipped(
+                dispatch(
+                    simd,
+                    SplatBand {
                         splats,
                         members,
-                        camera,
-                        &b,
-                        (width, height),
-                        half,
-                        y0,
-                        area,
-                        out,
-                    );
+                        y: (y0, y0 + rows),
+                        width: w,
+                        pairs,
+                        out: &mut *out,
+                    },
+                );
+                if let Periodic::OffAxis(b) = mode {
+                    clipped(splats, members, camera, &b, (width, height), y0, out);
                 }
             });
         Ok(())
@@ -297,7 +284,7 @@ impl Splatter {
                 if rows.0 >= rows.1 || cols.0 >= cols.1 {
                     continue;
                 }
-                self.splats.push(Splat {
+                let mut splat = Splat {
                     cx,
                     cy,
                     // Table position per pixel² along x and y.
@@ -316,7 +303,18 @@ impl Splatter {
                     // Supports narrower than table_pixels take the table;
                     // wider ones are sampled at pixel centres.
                     area: self.area.is_some() && rx.min(ry) < table_pixels(self.kernel),
-                });
+                    cells: SubCells {
+                        n: 1,
+                        size: (self.width, self.height),
+                        half: self.half,
+                    },
+                    clip_scale: p.weight as f64,
+                };
+                if clip && self.area.is_some() {
+                    splat.cells = SubCells::new(&splat, (self.width, self.height), self.half);
+                    splat.clip_scale = splat.cells.scale(&splat);
+                }
+                self.splats.push(splat);
             }
         }
         Ok(())
@@ -376,6 +374,10 @@ struct Splat {
     clip: bool,
     /// Average each pixel from the area table ([`area_band`]).
     area: bool,
+    /// A clipped splat's sub-cells per pixel side, and the factor of its
+    /// samples' sum in a pixel ([`clipped`]).
+    cells: SubCells,
+    clip_scale: f64,
 }
 
 /// A chunk's splats binned to bands of rows (counting sort, in order).
@@ -553,118 +555,141 @@ fn area_band(
     }
 }
 
+/// The sub-pixel cells a clipped splat is sampled at ([`clipped`]): with
+/// pixel areas, `n × n` cells a pixel, no wider than an eighth of the
+/// support (only those near the support are visited); else one, the pixel
+/// centre.
+#[derive(Clone, Copy)]
+struct SubCells {
+    n: u32,
+    /// Image width and height, and half the image plane's width and height.
+    size: (u32, u32),
+    half: (f64, f64),
+}
+
+impl SubCells {
+    fn new(p: &Splat, size: (u32, u32), half: (f64, f64)) -> SubCells {
+        let (pw, ph) = p.pixel;
+        let n = (8.0 * pw.max(ph) / p.column.support2().sqrt())
+            .ceil()
+            .clamp(1.0, 4096.0) as u32;
+        SubCells { n, size, half }
+    }
+
+    /// The image plane's (u, v) of the centre of sub-cell `(kx, ky)` of
+    /// pixel `(x, y)`.
+    fn at(&self, (x, kx): (u32, u32), (y, ky): (u32, u32)) -> (f64, f64) {
+        let n = self.n as f64;
+        let (w, h) = (self.size.0 as f64, self.size.1 as f64);
+        let u = (2.0 * (x as f64 + (kx as f64 + 0.5) / n) / w - 1.0) * self.half.0;
+        let v = (1.0 - 2.0 * (y as f64 + (ky as f64 + 0.5) / n) / h) * self.half.1;
+        (u, v)
+    }
+
+    /// The cells of pixel `k` (along an axis where the splat's centre is at
+    /// `centre` pixels and the support spans `support` pixels) whose centres
+    /// may lie in the support.
+    fn near(&self, k: u32, centre: f64, support: f64) -> std::ops::Range<u32> {
+        if self.n == 1 {
+            return 0..1;
+        }
+        let n = self.n as f64;
+        let c = (centre - k as f64) * n - 0.5;
+        let lo = (c - support * n).floor().clamp(0.0, n) as u32;
+        let hi = ((c + support * n).ceil() + 1.0).clamp(0.0, n) as u32;
+        lo..hi
+    }
+
+    /// The factor of a pixel's sum of samples: the weight, or with cells
+    /// the mean over a pixel's cells scaled so that the splat's unclipped
+    /// samples add up to its exact mass.
+    fn scale(&self, p: &Splat) -> f64 {
+        if self.n == 1 {
+            return p.weight;
+        }
+        let mut full = 0.0;
+        self.each(p, p.rows.0..p.rows.1, |_, _, b2, _, _| {
+            full += p.column.at(b2);
+        });
+        let cells = (self.n as f64).powi(2);
+        let cell_area = p.pixel.0 * p.pixel.1 / cells;
+        if full > 0.0 {
+            p.weight * p.column.mass() / (full * cell_area) / cells
+        } else {
+            0.0
+        }
+    }
+
+    /// Calls `f(x, y, b², u, v)` for every cell centre of rows `rows` inside
+    /// the splat's support (`b²` its squared distance from the centre).
+    fn each(
+        &self,
+        p: &Splat,
+        rows: std::ops::Range<u32>,
+        mut f: impl FnMut(u32, u32, f64, f64, f64),
+    ) {
+        let support2 = p.column.support2();
+        let (sx, sy) = (support2.sqrt() / p.pixel.0, support2.sqrt() / p.pixel.1);
+        for y in rows {
+            for ky in self.near(y, p.cy, sy) {
+                for x in p.cols.0..p.cols.1 {
+                    for kx in self.near(x, p.cx, sx) {
+                        let (u, v) = self.at((x, kx), (y, ky));
+                        let (du, dv) = (u - p.a, v - p.b);
+                        let b2 = du * du + dv * dv;
+                        if b2 < support2 {
+                            f(x, y, b2, u, v);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// The clipped splats of a band (off-axis periodic projections): the part
-/// of each pixel's chord inside the box `b`, in f64. Pixel centres, or with
-/// `area` the mean over sub-pixel cells no wider than an eighth of the
+/// of each sample's chord inside the box `b`, in f64, at pixel centres or,
+/// with pixel areas, at sub-pixel cells no wider than an eighth of the
 /// support, scaled so that the kernel's unclipped samples would hold its
 /// exact mass (then the images of a particle crossing faces add up to its
-/// mass to the quadrature's error along the faces).
-#[allow(clippy::too_many_arguments)]
+/// mass to the quadrature's error along the faces; [`SubCells`]).
 fn clipped(
     splats: &[Splat],
     members: &[u32],
     camera: &Camera,
     b: &Aabb,
     (width, height): (u32, u32),
-    (hw, hh): (f64, f64),
     y0: u32,
-    area: bool,
     out: &mut [f64],
 ) {
     let [eye, right, up, fwd] = camera.basis_f64();
     let y1 = (y0 + BAND).min(height);
-    // The plane coordinates of the centre of sub-cell `k` of `n` in pixel `x`.
-    let u_at = |x: u32, k: u32, n: u32| {
-        ((2.0 * (x as f64 + (k as f64 + 0.5) / n as f64)) / width as f64 - 1.0) * hw
-    };
-    let v_at = |y: u32, k: u32, n: u32| {
-        (1.0 - (2.0 * (y as f64 + (k as f64 + 0.5) / n as f64)) / height as f64) * hh
-    };
     for &i in members {
         let p = &splats[i as usize];
         if !p.clip {
             continue;
         }
-        let support2 = p.column.support2();
-        let (x0, x1) = p.cols;
-        let n = if area {
-            let (pw, ph) = p.pixel;
-            (8.0 * pw.max(ph) / support2.sqrt())
-                .ceil()
-                .clamp(1.0, 4096.0) as u32
-        } else {
-            1
-        };
-        // Sub-cells of pixel `x` whose centres may lie in the support.
-        let cells = |x: u32, n: u32, centre: f64, pixel_of: f64| {
-            if n == 1 {
-                return 0..1;
-            }
-            let s = support2.sqrt() / pixel_of * n as f64;
-            let c = (centre - x as f64) * n as f64 - 0.5;
-            let lo = (c - s).floor().clamp(0.0, n as f64) as u32;
-            let hi = ((c + s).ceil() + 1.0).clamp(0.0, n as f64) as u32;
-            lo..hi
-        };
-        let (pw, ph) = p.pixel;
-        let scale = if n == 1 {
-            p.weight
-        } else {
-            // The unclipped samples' sum over the whole support.
-            let mut full = 0.0;
-            for y in p.rows.0..p.rows.1 {
-                for ky in cells(y, n, p.cy, ph) {
-                    let dv = v_at(y, ky, n) - p.b;
-                    for x in x0..x1 {
-                        for kx in cells(x, n, p.cx, pw) {
-                            let du = u_at(x, kx, n) - p.a;
-                            full += p.column.at(du * du + dv * dv);
+        p.cells
+            .each(p, p.rows.0.max(y0)..p.rows.1.min(y1), |x, y, b2, u, v| {
+                // The line's segment [t0, t1] through the box.
+                let mut t = (f64::NEG_INFINITY, f64::INFINITY);
+                for k in 0..3 {
+                    let o = eye[k] + right[k] * u + up[k] * v;
+                    let (lo, hi) = (b.min[k] as f64, b.max[k] as f64);
+                    if fwd[k] == 0.0 {
+                        if o < lo || o > hi {
+                            t = (1.0, 0.0);
                         }
+                        continue;
                     }
+                    let (t0, t1) = ((lo - o) / fwd[k], (hi - o) / fwd[k]);
+                    t = (t.0.max(t0.min(t1)), t.1.min(t0.max(t1)));
                 }
-            }
-            let cell = pw * ph / (n as f64 * n as f64);
-            if full > 0.0 {
-                p.weight * p.column.mass() / (full * cell) / (n as f64 * n as f64)
-            } else {
-                0.0
-            }
-        };
-        for y in p.rows.0.max(y0)..p.rows.1.min(y1) {
-            for x in x0..x1 {
-                let mut sum = 0.0;
-                for ky in cells(y, n, p.cy, ph) {
-                    let vv = v_at(y, ky, n);
-                    let dv = vv - p.b;
-                    for kx in cells(x, n, p.cx, pw) {
-                        let uu = u_at(x, kx, n);
-                        let du = uu - p.a;
-                        let b2 = du * du + dv * dv;
-                        if b2 >= support2 {
-                            continue;
-                        }
-                        // The line's segment [t0, t1] through the box.
-                        let mut t = (f64::NEG_INFINITY, f64::INFINITY);
-                        for k in 0..3 {
-                            let o = eye[k] + right[k] * uu + up[k] * vv;
-                            let (lo, hi) = (b.min[k] as f64, b.max[k] as f64);
-                            if fwd[k] == 0.0 {
-                                if o < lo || o > hi {
-                                    t = (1.0, 0.0);
-                                }
-                                continue;
-                            }
-                            let (t0, t1) = ((lo - o) / fwd[k], (hi - o) / fwd[k]);
-                            t = (t.0.max(t0.min(t1)), t.1.min(t0.max(t1)));
-                        }
-                        if t.0 < t.1 {
-                            sum += p.column.chord(b2, t.0 - p.depth, t.1 - p.depth);
-                        }
-                    }
+                if t.0 < t.1 {
+                    let c = p.column.chord(b2, t.0 - p.depth, t.1 - p.depth);
+                    out[(y - y0) as usize * width as usize + x as usize] += p.clip_scale * c;
                 }
-                out[(y - y0) as usize * width as usize + x as usize] += scale * sum;
-            }
-        }
+            });
     }
 }
 

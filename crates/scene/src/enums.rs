@@ -100,10 +100,11 @@ choice! {
 }
 
 choice! {
-    /// How a projection of a tessellation integrates each pixel.
+    /// How a projection of particles or a tessellation integrates each
+    /// pixel.
     pub enum PixelsName {
-        /// The column averaged over the pixel's square, exactly: the
-        /// projected mass is the same at every resolution.
+        /// The column averaged over the pixel's square: the projected mass
+        /// is the same at every resolution.
         Area = "area",
         /// The column along the line through the pixel's centre.
         Centre = "centre" | "center",
