@@ -5,6 +5,12 @@
 //! The memory available is `VOXLESS_MEMORY_LIMIT` when set (bytes, or with
 //! a `K`, `M`, `G` or `T` suffix: `8G`), else the system's available memory
 //! (`MemAvailable` on Linux); where neither is known nothing is checked.
+//!
+//! Disk space for a sequence of frames is checked the same way: what the
+//! files cannot take less than (a filesystem block and an inode each) is
+//! refused against the free space, what they may take at most gets a note.
+//! `VOXLESS_DISK_LIMIT` (bytes, with the same suffixes) caps the free space
+//! believed.
 
 use crate::SceneError;
 
@@ -97,11 +103,134 @@ pub fn check_kbuffer_memory(k: usize, layers: usize) -> Result<(), SceneError> {
     }
 }
 
+/// Free space of the filesystem holding `dir`: (bytes, inodes, block size)
+/// available to this user; `None` where the system does not say.
+pub fn available_disk(dir: &std::path::Path) -> Option<(u64, u64, u64)> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::ffi::OsStrExt;
+        let c = std::ffi::CString::new(dir.as_os_str().as_bytes()).ok()?;
+        let mut st = std::mem::MaybeUninit::<libc::statvfs>::zeroed();
+        // SAFETY: `c` is a valid NUL-terminated path and `st` a buffer of
+        // the type statvfs fills; it is read only when the call succeeds.
+        let rc = unsafe { libc::statvfs(c.as_ptr(), st.as_mut_ptr()) };
+        if rc != 0 {
+            return None;
+        }
+        // SAFETY: statvfs returned 0, so it wrote the whole struct.
+        let st = unsafe { st.assume_init() };
+        #[allow(clippy::unnecessary_cast)]
+        let (block, blocks, inodes) = (
+            (st.f_frsize as u64).max(1),
+            st.f_bavail as u64,
+            st.f_favail as u64,
+        );
+        let mut free = blocks.saturating_mul(block);
+        if let Some(limit) = std::env::var("VOXLESS_DISK_LIMIT")
+            .ok()
+            .and_then(|v| parse_bytes(&v))
+        {
+            free = free.min(limit);
+        }
+        Some((free, inodes, block))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = dir;
+        None
+    }
+}
+
+/// Checks that `files` files of at most `max_bytes` each fit in `dir`'s
+/// filesystem (module docs). An error names `what` (the flag that asked
+/// for them) and what they would need; a note when they fit only if they
+/// compress.
+pub fn check_disk(
+    dir: &std::path::Path,
+    files: u64,
+    max_bytes: u64,
+    what: &str,
+) -> Result<Option<String>, SceneError> {
+    let Some((free, inodes, block)) = available_disk(dir) else {
+        return Ok(None);
+    };
+    let at_least = files.saturating_mul(block);
+    let at_most = files.saturating_mul(max_bytes.div_ceil(block) * block);
+    let shown = dir.display();
+    if files > inodes {
+        return Err(SceneError::setting(
+            what,
+            format!(
+                "{files} files, but the filesystem of {shown} has room for {inodes} more: \
+                 render fewer frames, or write a movie"
+            ),
+        ));
+    }
+    if at_least > free {
+        return Err(SceneError::setting(
+            what,
+            format!(
+                "{files} files need at least {} on the filesystem of {shown} (a {block}-byte \
+                 block each), but {} is free: render fewer frames or free space",
+                human(at_least),
+                human(free)
+            ),
+        ));
+    }
+    Ok((at_most > free).then(|| {
+        format!(
+            "{files} files may take up to {} and {} is free on the filesystem of {shown}: \
+             the run stops with an error if they do not compress",
+            human(at_most),
+            human(free)
+        )
+    }))
+}
+
+/// Bytes for people: KiB to TiB.
+fn human(b: u64) -> String {
+    const UNITS: [&str; 5] = ["bytes", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = b as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < UNITS.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{b} bytes")
+    } else {
+        format!("{v:.1} {}", UNITS[u])
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_that_cannot_fit_are_refused_and_those_that_may_not_get_a_note() {
+        let dir = std::env::temp_dir();
+        let Some((free, inodes, block)) = available_disk(&dir) else {
+            eprintln!("note: skipped: this system does not report free disk space");
+            return;
+        };
+        assert_eq!(check_disk(&dir, 1, 100, "--frames").unwrap(), None);
+        // More blocks (or inodes) than are free: an error naming the flag.
+        let files = (free / block + 1).max(inodes + 1);
+        let e = check_disk(&dir, files, 1, "--turntable")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--turntable") && e.contains(&files.to_string()),
+            "{e}"
+        );
+        // Files that fit only if they compress: a note.
+        let note = check_disk(&dir, 1, free + block, "--frames").unwrap();
+        assert!(note.is_some_and(|n| n.contains("may take up to")));
+    }
+
     #[test]
     fn sizes_parse_with_units() {
-        use super::parse_bytes;
         assert_eq!(parse_bytes("8G"), Some(8 << 30));
         assert_eq!(parse_bytes("512m"), Some(512 << 20));
         assert_eq!(parse_bytes("1000"), Some(1000));

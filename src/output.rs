@@ -6,6 +6,7 @@
 //! through a temporary file and rename it, so a failed or interrupted run
 //! leaves no partial file and keeps what was there.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use voxless_scene::SceneDesc;
@@ -64,6 +65,35 @@ impl OutputKind {
     }
 }
 
+/// The most bytes an image file of `width`×`height` in `path`'s format
+/// takes: float32 RGBA for EXR; RGB8 with a filter byte a row and stored
+/// deflate blocks' headers for PNG (JPEG stays below that too); plus the
+/// headers.
+pub fn image_bytes_at_most(path: &Path, width: u32, height: u32) -> u64 {
+    let pixels = width as u64 * height as u64;
+    let headers = 4096;
+    match extension(path).as_deref() {
+        Some("exr") => pixels * 16 + height as u64 * 8 + headers,
+        _ => {
+            let raw = pixels * 3 + height as u64;
+            raw + raw.div_ceil(65535) * 5 + headers
+        }
+    }
+}
+
+/// Checks before a sequence renders that its `frames` image files, each
+/// `width`×`height` and named like `first`, fit on the disk (see
+/// [`crate::budget::check_disk`]); `what` is the flag that asked for them.
+pub fn check_frames_disk(
+    first: &Path,
+    frames: usize,
+    (width, height): (u32, u32),
+    what: &str,
+) -> Result<Option<String>, SceneError> {
+    let at_most = image_bytes_at_most(first, width, height);
+    crate::budget::check_disk(&directory_of(first), frames as u64, at_most, what)
+}
+
 fn extension(path: &Path) -> Option<String> {
     path.extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
@@ -104,21 +134,32 @@ pub fn input_files(desc: &SceneDesc, base: &Path) -> Vec<PathBuf> {
     files
 }
 
-/// Whether `a` and `b` are the same file: the same device and inode (so
-/// hard and symbolic links count), or failing that the same canonical
-/// path.
-fn same_file(a: &Path, b: &Path) -> bool {
+/// What makes two paths the same file: the same device and inode (so
+/// hard and symbolic links count) for a file that exists, else the
+/// canonical directory and the name.
+#[derive(Clone, PartialEq, Eq, Hash)]
+enum Identity {
+    Inode(u64, u64),
+    Path(PathBuf),
+}
+
+fn identity(path: &Path) -> Identity {
     #[cfg(unix)]
     {
         use std::os::unix::fs::MetadataExt;
-        if let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) {
-            return ma.dev() == mb.dev() && ma.ino() == mb.ino();
+        if let Ok(m) = std::fs::metadata(path) {
+            return Identity::Inode(m.dev(), m.ino());
         }
     }
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(x), Ok(y)) => x == y,
-        _ => false,
+    if let Ok(c) = path.canonicalize() {
+        return Identity::Path(c);
     }
+    let dir = directory_of(path);
+    let dir = dir.canonicalize().unwrap_or(dir);
+    Identity::Path(match path.file_name() {
+        Some(name) => dir.join(name),
+        None => path.to_path_buf(),
+    })
 }
 
 /// The directory `path` is written into.
@@ -138,8 +179,13 @@ pub fn check_outputs(
     inputs: &[PathBuf],
 ) -> Result<(), SceneError> {
     let allowed = kind.extensions();
+    // One identity per file, so a million frames cost a million lookups
+    // (comparing each output with every earlier one took minutes).
+    let inputs: HashMap<Identity, &PathBuf> = inputs.iter().map(|p| (identity(p), p)).collect();
+    let mut seen: HashMap<Identity, usize> = HashMap::with_capacity(outputs.len());
     for (i, out) in outputs.iter().enumerate() {
-        if let Some(input) = inputs.iter().find(|input| same_file(out, input)) {
+        let id = identity(out);
+        if let Some(&input) = inputs.get(&id) {
             let how = if out == input {
                 String::new()
             } else {
@@ -179,10 +225,7 @@ pub fn check_outputs(
         if out.is_dir() {
             return Err(SceneError::output(out, "is a directory; give a file name"));
         }
-        if let Some(j) = outputs[..i]
-            .iter()
-            .position(|o| o == out || same_file(o, out))
-        {
+        if let Some(&j) = seen.get(&id) {
             return Err(SceneError::output(
                 out,
                 format!(
@@ -193,6 +236,7 @@ pub fn check_outputs(
                 ),
             ));
         }
+        seen.insert(id, i);
     }
     Ok(())
 }

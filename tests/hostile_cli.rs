@@ -65,6 +65,29 @@ fn sizes_that_cannot_fit_are_refused_before_any_work() {
         e.contains("render.ao (--ao)") && e.contains("at most 4096"),
         "{e}"
     );
+    // A million tiny frames are a million files: the disk's free space is
+    // checked before any work (capped here to 1 MiB).
+    let out = std::process::Command::new(bin())
+        .env("VOXLESS_DISK_LIMIT", "1M")
+        .args(["render", "--particles", &s.str("p.npy"), "--radius", "0.05"])
+        .args([
+            "--size",
+            "1",
+            "1",
+            "--turntable",
+            "1000000",
+            "-o",
+            &s.str("t.png"),
+        ])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        e.contains("--turntable") && e.contains("1000000 files") && !e.contains("rendering"),
+        "{e}"
+    );
+    assert!(!s.path("t_0000.png").exists());
 }
 
 #[cfg(unix)]

@@ -111,6 +111,23 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
     }
 
+    #[test]
+    fn a_legal_name_of_251_characters_is_written() {
+        let dir = std::env::temp_dir().join(format!("voxless-atomic-long-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        // 251 characters: the longest most filesystems take (255) less
+        // room for nothing; a temporary named after it whole would fail.
+        let path = dir.join(format!("{}.png", "n".repeat(247)));
+        write_atomically(&path, |out| {
+            out.write_all(b"png").map_err(|e| IoError::io(&path, e))
+        })
+        .unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"png");
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     #[cfg(unix)]
     #[test]
     fn a_link_stays_a_link_and_devices_are_refused() {

@@ -90,7 +90,21 @@
 //! says what is wrong with it. Bad input never panics, and readers check the
 //! sizes a header declares against the file's length before allocating, so a
 //! corrupt or hostile header cannot make them allocate more memory than the
-//! file's contents could fill.
+//! file's contents could fill. The bounds, per byte of input:
+//!
+//! - binary arrays (`.npy`, Gadget, Tipsy, FITS, ExaBricks, AMReX FABs,
+//!   uncompressed HDF5 and VTK): values are held as float32 or float64, at
+//!   most 8× the bytes the file holds (one-byte integers widened to
+//!   float64; 2× for float32 data), checked against the file's length
+//!   before the first allocation;
+//! - text (CSV, XYZ, LAMMPS, AMRClaw, legacy VTK): at most 16 bytes held per
+//!   byte read (a one-digit value and its separator become a float64), and
+//!   each reader is linear in its input (wide headers, many attributes);
+//! - compressed blocks (VTK zlib, HDF5 filters, PNG colormaps): at most
+//!   1100× the compressed size (zlib's own limit is 1032×), checked against
+//!   the sizes the block declares before inflating;
+//! - special files (devices, FIFOs) are refused before they are opened for
+//!   reading.
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};

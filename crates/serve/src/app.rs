@@ -4,6 +4,7 @@
 
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
 
 use voxless::autorange::Probe;
@@ -174,6 +175,18 @@ pub struct App {
     pub colormap_file: Option<(String, Vec<String>)>,
     /// The view of the tab that changed last, and its frame.
     pub current: Mutex<(SceneDesc, usize)>,
+    /// Renders running now (tabs' workers and `/frame.png`): what a closed
+    /// tab or a dropped request must bring back to zero.
+    pub busy: AtomicUsize,
+}
+
+/// Counts one running render in [`App::busy`] while it lives.
+pub struct BusyGuard<'a>(&'a AtomicUsize);
+
+impl Drop for BusyGuard<'_> {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::SeqCst);
+    }
 }
 
 impl App {
@@ -186,6 +199,12 @@ impl App {
 
     pub fn set_current(&self, desc: &SceneDesc, frame: usize) {
         *self.current.lock().unwrap_or_else(|e| e.into_inner()) = (desc.clone(), frame);
+    }
+
+    /// Marks a render as running until the guard drops.
+    pub fn busy(&self) -> BusyGuard<'_> {
+        self.busy.fetch_add(1, Ordering::SeqCst);
+        BusyGuard(&self.busy)
     }
 }
 

@@ -155,6 +155,7 @@ pub fn prepare(mut desc: SceneDesc, base: PathBuf) -> Result<Prepared, ServeErro
         particle_columns,
         current: Mutex::new((desc.clone(), 0)),
         initial: desc,
+        busy: Default::default(),
     };
     Ok(Prepared {
         app,
@@ -256,6 +257,7 @@ pub struct Running {
     pub url: String,
     stop: Option<tokio::sync::oneshot::Sender<()>>,
     thread: Option<std::thread::JoinHandle<()>>,
+    app: Arc<app::App>,
 }
 
 impl Running {
@@ -267,6 +269,7 @@ impl Running {
             .build()?;
         let bound = runtime.block_on(bind(prepared, options))?;
         let (addr, token, url) = (bound.addr, bound.token.clone(), bound.url());
+        let app = bound.app.clone();
         let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
         let thread = std::thread::spawn(move || {
             let _ = runtime.block_on(bound.serve(async {
@@ -279,7 +282,14 @@ impl Running {
             url,
             stop: Some(stop),
             thread: Some(thread),
+            app,
         })
+    }
+
+    /// Renders running now, tabs' and `/frame.png`'s together (zero once
+    /// every tab has closed and every request has gone).
+    pub fn renders_running(&self) -> usize {
+        self.app.busy.load(std::sync::atomic::Ordering::SeqCst)
     }
 }
 

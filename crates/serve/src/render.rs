@@ -78,6 +78,7 @@ pub fn worker_loop(
         if !outbox.is_current(job.seq) {
             continue;
         }
+        let _busy = app.busy();
         let job = match &job.path {
             Some(plan) => {
                 if !path::play(app, outbox, &job, plan, &cancel, &mut memory.budget) {
@@ -92,8 +93,20 @@ pub fn worker_loop(
             }
             None => job,
         };
-        run_job(app, outbox, tab, &job, &cancel, &mut memory);
+        let mut job = job;
+        // A setting that failed on the data may leave a view to render:
+        // the last good settings with the camera moved since.
+        while let Some(next) = run_job(app, outbox, tab, &job, &cancel, &mut memory) {
+            if !outbox.is_current(next.seq) || cancel.is_cancelled() {
+                break;
+            }
+            job = next;
+        }
     }
+}
+
+fn taken(slot: Mutex<Option<Job>>) -> Option<Job> {
+    slot.into_inner().unwrap_or_else(|e| e.into_inner())
 }
 
 fn text(v: serde_json::Value) -> Outgoing {
@@ -107,8 +120,12 @@ fn run_job(
     job: &Job,
     cancel: &CancelToken,
     memory: &mut Memory,
-) {
+) -> Option<Job> {
     let seq = job.seq;
+    // What to render after a failure: the last good view with the camera
+    // moves made since the failing setting (rendered once; if it fails
+    // too, the view stays the last good one).
+    let follow_up: Mutex<Option<Job>> = Mutex::new(None);
     let fail = |message: String| {
         // Back to the view that rendered last (unless the page moved on):
         // the next interaction starts from it, not from the failed setting.
@@ -118,9 +135,25 @@ fn run_job(
             && t.frame == job.frame
             && let Some((desc, frame)) = t.last_good.clone()
         {
-            app.set_current(&desc, frame);
             (t.desc, t.frame) = (desc, frame);
-            message.push_str(" (the view is back to the last one that rendered)");
+            let moves = std::mem::take(&mut t.moves_since_set);
+            let replayed = !moves.is_empty()
+                && moves
+                    .iter()
+                    .all(|m| crate::session::apply(app, &mut t, m).is_ok());
+            if replayed {
+                message.push_str(" (the view is back to the last settings that rendered, with the camera moved since)");
+                *follow_up.lock().unwrap_or_else(|e| e.into_inner()) = Some(Job {
+                    desc: t.desc.clone(),
+                    frame: t.frame,
+                    received: Instant::now(),
+                    ..job.clone()
+                });
+            } else {
+                (t.desc, t.frame) = t.last_good.clone().unwrap_or((t.desc.clone(), t.frame));
+                message.push_str(" (the view is back to the last one that rendered)");
+            }
+            app.set_current(&t.desc, t.frame);
         }
         drop(t);
         outbox.offer(
@@ -140,19 +173,26 @@ fn run_job(
     }
     let loaded = match app.volumes.get(&job.desc, &app.base, job.frame) {
         Ok(l) => l,
-        Err(e) => return fail(e),
+        Err(e) => {
+            fail(e);
+            return taken(follow_up);
+        }
     };
     if !outbox.is_current(seq) {
-        return;
+        return None;
     }
     let resolved = match loaded.resolve(&job.desc, &app.base) {
         Ok(r) => r,
-        Err(e) => return fail(e.to_string()),
+        Err(e) => {
+            fail(e.to_string());
+            return taken(follow_up);
+        }
     };
     // The CLI's refusal of absurd work (a step far below the data's
     // scale, a sampling rate of 10⁹), before anything renders.
     if let Err(e) = resolved.check_work(&loaded.volume, &loaded.frame, &job.desc) {
-        return fail(e.to_string());
+        fail(e.to_string());
+        return taken(follow_up);
     }
     let previous_good = {
         let mut t = tab.lock().unwrap_or_else(|e| e.into_inner());
@@ -206,6 +246,7 @@ fn run_job(
     };
     let outline = outline.map(|b| (resolved.camera, b));
     let mut budget = memory.budget.clone();
+    let mut failed = false;
     let result = voxless::render_progressive(
         &loaded.volume,
         &resolved.camera,
@@ -217,17 +258,11 @@ fn run_job(
         &mut |stage, film, at| {
             *stage_name.lock().unwrap_or_else(|e| e.into_inner()) = "full";
             let converged = stage.is_converged();
-            let bg = resolved.background;
-            if !send_frame(outbox, job, (stage, film, at), outline, bg, converged, None) {
-                return false;
-            }
-            // The controls follow the first image.
-            send_state(memory);
-            // The CLI's checks of a finished image: iso-surfaces asked for
-            // but absent, or nothing visible at all (a value range above
-            // the data, a camera or clip box away from it) — an error, not
-            // a black "converged" image; the tab goes back to the view
-            // that rendered before.
+            // The CLI's checks of a finished image, before it is sent:
+            // iso-surfaces asked for but absent, or nothing visible at all
+            // (a value range above the data, a camera or clip box away from
+            // it) — an error, not a black "converged" image; the tab goes
+            // back to the view that rendered before.
             if converged {
                 let bounds = loaded.frame.box_to_world(loaded.volume.bounds());
                 let image = film.resolve();
@@ -238,19 +273,28 @@ fn run_job(
                             t.last_good = previous_good.clone();
                         }
                     }
+                    failed = true;
                     fail(e.to_string());
+                    return false;
                 }
             }
+            let bg = resolved.background;
+            if !send_frame(outbox, job, (stage, film, at), outline, bg, converged, None) {
+                return false;
+            }
+            // The controls follow the first image.
+            send_state(memory);
             !job.drag && outbox.is_current(seq)
         },
     );
     memory.budget = budget;
-    if result.is_ok() && outbox.is_current(seq) {
+    if result.is_ok() && !failed && outbox.is_current(seq) {
         send_state(memory);
         if !job.drag {
             send_histogram(outbox, job, &loaded, settings, memory);
         }
     }
+    taken(follow_up)
 }
 
 /// One coarse image of `job`'s view (a frame of a path preview: path
@@ -487,6 +531,7 @@ pub fn frame_png(
     height: Option<u32>,
     cancel: &CancelToken,
 ) -> Result<Vec<u8>, String> {
+    let _busy = app.busy();
     let (mut desc, frame) = app.current();
     if let Some(w) = width {
         desc.image.width = Some(w);

@@ -57,6 +57,10 @@ pub struct Tab {
     /// resolve goes back to it, so one bad patch does not stick to every
     /// later interaction.
     pub last_good: Option<(SceneDesc, usize)>,
+    /// Camera moves since the last setting changed: when that setting
+    /// fails on the data, the view goes back to `last_good` with these
+    /// moves made again, so a move queued behind a bad setting is kept.
+    pub moves_since_set: Vec<Action>,
 }
 
 /// The pending job and the cancel token of the running one.
@@ -125,6 +129,7 @@ pub async fn run(socket: WebSocket, app: Arc<App>) {
         attribute_range: None,
         imported: Vec::new(),
         last_good: None,
+        moves_since_set: Vec::new(),
     }));
     let worker = Arc::new(Worker::default());
 
@@ -290,6 +295,13 @@ fn handle_text(app: &App, outbox: &Outbox, tab: &Mutex<Tab>, worker: &Worker, te
         drop(t);
         return error(outbox, &e);
     }
+    match &msg.action {
+        Action::Set { .. } => t.moves_since_set.clear(),
+        a @ (Action::Orbit { .. } | Action::Pan { .. } | Action::Zoom { .. } | Action::Reset) => {
+            t.moves_since_set.push(a.clone())
+        }
+        _ => {}
+    }
     if matches!(msg.action, Action::Hello { .. }) {
         // The keyframes the scene came with.
         let list = path::keyframes_message(seq, &t.desc).to_string();
@@ -314,7 +326,7 @@ fn handle_text(app: &App, outbox: &Outbox, tab: &Mutex<Tab>, worker: &Worker, te
 }
 
 /// Applies one action to the tab's view.
-fn apply(app: &App, t: &mut Tab, action: &Action) -> Result<(), String> {
+pub fn apply(app: &App, t: &mut Tab, action: &Action) -> Result<(), String> {
     let aspect = aspect(&t.desc);
     let (bounds, world) = (t.bounds, t.world);
     let view = (&bounds, aspect, &world);

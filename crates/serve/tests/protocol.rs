@@ -463,5 +463,87 @@ fn a_view_that_shows_nothing_is_an_error_not_a_black_image() {
             .await;
             until_converged(&mut ws, seq + 1).await;
         }
+        // A zero-width value range, an eye a light year away and a zoom
+        // of 1e-30: each an error for its own message, never a black
+        // "converged" image; the next move renders.
+        let cases = [
+            json!({"seq": 10, "type": "set", "patch": {"transfer": {"value_range": [0.5, 0.5]}}}),
+            json!({"seq": 12, "type": "set", "patch": {"camera": {"eye": [1e30, 0.0, 0.0]}}}),
+            json!({"seq": 14, "type": "zoom", "factor": 1e-30}),
+        ];
+        for msg in cases {
+            let seq = msg["seq"].as_u64().unwrap();
+            send(&mut ws, msg).await;
+            loop {
+                match next(&mut ws).await.expect("socket open") {
+                    Msg::Text(v) if v["type"] == "error" && v["seq"] == seq => break,
+                    Msg::Frame(h, _) => {
+                        assert!(
+                            h.seq != seq || h.stage != "converged",
+                            "a converged image for {seq}"
+                        )
+                    }
+                    _ => {}
+                }
+            }
+            send(
+                &mut ws,
+                json!({"seq": seq + 1, "type": "orbit", "yaw": 5.0, "pitch": 0.0}),
+            )
+            .await;
+            until_converged(&mut ws, seq + 1).await;
+        }
+    });
+}
+
+/// A setting that fails only on the data (a value range above it) with a
+/// camera move queued behind it: the error says the view went back to the
+/// last good settings, and the move is kept — the next image is that view
+/// moved, the same image a fresh tab gets for the same move.
+#[test]
+fn a_move_queued_behind_a_setting_that_fails_on_the_data_is_kept() {
+    let s = Scratch::new("queued");
+    let server = serve(particle_scene(&s, 600), "127.0.0.1");
+    let orbit = |seq: u64| json!({"seq": seq, "type": "orbit", "yaw": 25.0, "pitch": 10.0});
+    let hello = json!({"seq": 1, "type": "hello", "width": 40, "height": 30});
+    runtime().block_on(async {
+        let mut ws = connect(server.addr, None).await;
+        send(&mut ws, hello.clone()).await;
+        until_converged(&mut ws, 1).await;
+        let bad = json!({"transfer": {"value_range": [1e6, 2e6]}});
+        send(&mut ws, json!({"seq": 2, "type": "set", "patch": bad})).await;
+        send(&mut ws, orbit(3)).await;
+        // Usually the move arrives before the setting's render fails (the
+        // case this test is for); should the render fail first, the error
+        // is the setting's own and the move renders from the good view.
+        loop {
+            match next(&mut ws).await.expect("socket open") {
+                Msg::Text(v) if v["type"] == "error" && v["seq"] == 2 => break,
+                Msg::Text(v) if v["type"] == "error" => {
+                    assert_eq!(v["seq"], 3, "{v}");
+                    let m = v["message"].as_str().unwrap();
+                    assert!(m.contains("with the camera moved since"), "{m}");
+                    break;
+                }
+                _ => {}
+            }
+        }
+        let kept = until_converged(&mut ws, 3).await;
+        let Some(Msg::Frame(_, kept)) = kept.last() else {
+            unreachable!()
+        };
+
+        let mut fresh = connect(server.addr, None).await;
+        send(&mut fresh, hello).await;
+        until_converged(&mut fresh, 1).await;
+        send(&mut fresh, orbit(2)).await;
+        let moved = until_converged(&mut fresh, 2).await;
+        let Some(Msg::Frame(_, moved)) = moved.last() else {
+            unreachable!()
+        };
+        assert!(
+            kept == moved,
+            "the kept move's image differs from a fresh tab's"
+        );
     });
 }
