@@ -113,6 +113,7 @@ use std::path::{Path, PathBuf};
 pub mod amr;
 mod atomic;
 pub mod csv;
+mod decimal;
 pub mod fits;
 pub mod format;
 pub mod gadget_bin;

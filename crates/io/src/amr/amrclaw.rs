@@ -5,14 +5,12 @@
 //! files; [`read_amrclaw_from`] takes the `fort.q` text from a reader and
 //! the `fort.t` text as bytes. Both parse with the same code.
 
-use std::io::{BufRead, BufReader, Read, Seek};
+use std::io::{BufRead, Read, Seek};
 use std::path::{Path, PathBuf};
 
 use super::{AmrCellData, MAX_LEVEL};
+use crate::decimal::fast_decimal;
 use crate::{IoError, checked_product, open_with_len, remaining_len};
-
-/// Buffer size for `fort.q` text (its rows are long and many).
-const BUFFER: usize = 1 << 16;
 
 /// The longest `fort.t` accepted: a header is a few short lines.
 const MAX_FORT_T: u64 = 1 << 16;
@@ -30,6 +28,9 @@ struct Lines<R> {
     line: usize,
     /// `next_nonblank` returns `buf` again instead of reading.
     replay: bool,
+    /// The text ends where the next grid's header starts (not at the end
+    /// of the file).
+    ends_at_header: bool,
 }
 
 impl<R: BufRead> Lines<R> {
@@ -40,6 +41,7 @@ impl<R: BufRead> Lines<R> {
             buf: Vec::with_capacity(256),
             line: 0,
             replay: false,
+            ends_at_header: false,
         }
     }
 
@@ -300,7 +302,7 @@ pub fn read_amrclaw(fort_q: &Path) -> Result<AmrCellData, IoError> {
         _ => None,
     };
     let (file, len) = open_with_len(fort_q)?;
-    read_grids(BufReader::with_capacity(BUFFER, file), len, fort_q, header)
+    read_grids(file, len, fort_q, header)
 }
 
 /// [`read_amrclaw`] from memory: `fort_q` yields the `fort.qNNNN` text
@@ -322,49 +324,119 @@ pub fn read_amrclaw_from<R: Read + Seek>(
         None => None,
     };
     let len = remaining_len(&mut fort_q, name)?;
-    read_grids(BufReader::with_capacity(BUFFER, fort_q), len, name, header)
+    read_grids(fort_q, len, name, header)
 }
+
+/// Text read at a time: the grids a window holds parse in parallel, and
+/// memory stays a window of text beside the values (a grid longer than a
+/// window widens it to that grid).
+const WINDOW: u64 = 16 << 20;
+
+/// The marker of a grid's first header line.
+const GRID_NUMBER: &[u8] = b"grid_number";
 
 /// The grids of a `fort.q` (`reader`, `file_len` bytes, labelled `fort_q`)
 /// converted to leaf cells, with the `fort.t` header when there is one.
+///
+/// The text is read a window at a time and cut at the lines that name
+/// `grid_number`, so each piece holds whole grids; pieces parse on every
+/// core, each knowing its first line's number for errors. Grids come out
+/// in file order, and the first error in file order is the one reported.
 fn read_grids(
-    reader: impl BufRead,
+    reader: impl Read,
     file_len: u64,
     fort_q: &Path,
     header: Option<FrameHeader>,
 ) -> Result<AmrCellData, IoError> {
-    let mut lines = Lines::new(reader, fort_q);
+    read_grids_in(reader, file_len, fort_q, header, WINDOW)
+}
+
+/// [`read_grids`] a `window` of bytes at a time.
+fn read_grids_in(
+    mut reader: impl Read,
+    file_len: u64,
+    fort_q: &Path,
+    header: Option<FrameHeader>,
+    window: u64,
+) -> Result<AmrCellData, IoError> {
+    use rayon::prelude::*;
     let mut meqn = header.as_ref().map(|h| h.meqn);
     let mut grids: Vec<Grid> = Vec::new();
+    let mut text: Vec<u8> = Vec::new();
+    // Lines before `text[0]`.
+    let mut line = 0usize;
     loop {
-        if let Some(h) = &header
-            && grids.len() == h.ngrids
-        {
-            if let Some(extra) = lines.next_nonblank()? {
-                let extra: String = extra.chars().take(40).collect();
-                return Err(lines.error(format!(
-                    "unexpected `{extra}` after the last of the {} grids fort.t declares",
+        // Room for the window at once (and no more than the file holds).
+        text.reserve(window.min(file_len) as usize);
+        let read = (&mut reader)
+            .take(window)
+            .read_to_end(&mut text)
+            .map_err(|e| IoError::io(fort_q, e))?;
+        let end = read == 0;
+        // Whole grids: up to the last header line, or all of it at the end.
+        let cut = match end {
+            true => text.len(),
+            false => match header_starts(&text).last() {
+                Some(&c) if c > 0 => c,
+                _ => continue,
+            },
+        };
+        let mut starts = header_starts(&text[..cut]);
+        if starts.first() != Some(&0) {
+            starts.insert(0, 0);
+        }
+        starts.push(cut);
+        let pieces: Vec<(&[u8], bool)> = starts
+            .windows(2)
+            .map(|w| (&text[w[0]..w[1]], w[1] < text.len()))
+            .collect();
+        let mut firsts = Vec::with_capacity(pieces.len());
+        for p in &pieces {
+            firsts.push(line);
+            line += memchr::memchr_iter(b'\n', p.0).count();
+        }
+        // Without fort.t the first data row gives meqn: the pieces up to
+        // the first grid parse alone.
+        let mut k = 0;
+        while meqn.is_none() && k < pieces.len() {
+            grids.extend(read_piece(
+                pieces[k], firsts[k], fort_q, &mut meqn, file_len,
+            )?);
+            k += 1;
+        }
+        let parsed: Vec<Result<Vec<Grid>, IoError>> = pieces[k..]
+            .par_iter()
+            .zip(&firsts[k..])
+            .map(|(&p, &first)| read_piece(p, first, fort_q, &mut meqn.clone(), file_len))
+            .collect();
+        for piece in parsed {
+            grids.extend(piece?);
+        }
+        text.drain(..cut);
+        if end {
+            break;
+        }
+    }
+    if let Some(h) = &header {
+        if let Some(extra) = grids.get(h.ngrids) {
+            return Err(IoError::format(
+                fort_q,
+                format!(
+                    "line {}: unexpected grid {} after the last of the {} grids fort.t declares",
+                    extra.line, extra.number, h.ngrids
+                ),
+            ));
+        }
+        if grids.len() < h.ngrids {
+            return Err(IoError::format(
+                fort_q,
+                format!(
+                    "file ends at line {line} after {} grids, but fort.t declares {}",
+                    grids.len(),
                     h.ngrids
-                )));
-            }
-            break;
+                ),
+            ));
         }
-        if lines.next_nonblank()?.is_none() {
-            if let Some(h) = &header {
-                return Err(IoError::format(
-                    fort_q,
-                    format!(
-                        "file ends at line {} after {} grids, but fort.t declares {}",
-                        lines.line,
-                        grids.len(),
-                        h.ngrids
-                    ),
-                ));
-            }
-            break;
-        }
-        lines.unread();
-        grids.push(read_grid(&mut lines, &mut meqn, file_len)?);
     }
     let meqn = meqn.unwrap_or(0);
     if grids.is_empty() {
@@ -375,9 +447,42 @@ fn read_grids(
     Ok(data)
 }
 
+/// Where the lines of `text` that name `grid_number` start.
+fn header_starts(text: &[u8]) -> Vec<usize> {
+    memchr::memmem::find_iter(text, GRID_NUMBER)
+        .map(|at| memchr::memrchr(b'\n', &text[..at]).map_or(0, |nl| nl + 1))
+        .collect()
+}
+
+/// The grids of one piece of text whose first line is line `first + 1`
+/// (`at_header`: the next grid's header follows it).
+fn read_piece(
+    (piece, at_header): (&[u8], bool),
+    first: usize,
+    fort_q: &Path,
+    meqn: &mut Option<usize>,
+    file_len: u64,
+) -> Result<Vec<Grid>, IoError> {
+    let mut lines = Lines::new(piece, fort_q);
+    lines.line = first;
+    lines.ends_at_header = at_header;
+    let mut grids = Vec::new();
+    while lines.next_nonblank()?.is_some() {
+        lines.unread();
+        grids.push(read_grid(&mut lines, meqn, file_len)?);
+    }
+    Ok(grids)
+}
+
+/// `token` quoted for an error (its first 40 characters).
+fn not_a_number(token: &[u8]) -> String {
+    let token: String = String::from_utf8_lossy(token).chars().take(40).collect();
+    format!("`{token}` is not a number")
+}
+
 /// Reads one grid's header and values.
-fn read_grid<R: BufRead>(
-    lines: &mut Lines<R>,
+fn read_grid(
+    lines: &mut Lines<&[u8]>,
     meqn: &mut Option<usize>,
     file_len: u64,
 ) -> Result<Grid, IoError> {
@@ -401,7 +506,7 @@ fn read_grid<R: BufRead>(
             parse_fortran(t).filter(|v| v.is_finite() && *v > 0.0)
         })?;
     }
-    let grid_error = |lines: &Lines<R>, message: String| {
+    let grid_error = |lines: &Lines<&[u8]>, message: String| {
         IoError::format(
             &lines.path,
             format!("grid {number} (header at line {line}): {message}"),
@@ -432,41 +537,82 @@ fn read_grid<R: BufRead>(
             )
         })?;
     let mut values = Vec::with_capacity(count);
-    while values.len() < count {
-        let Some(row) = lines.next_nonblank()? else {
-            return Err(grid_error(
-                lines,
-                format!(
-                    "file ends at line {} after {} of its {count} values (mx·my·mz·meqn); \
-                     the file is truncated",
-                    lines.line,
-                    values.len()
-                ),
-            ));
-        };
+    let fault = |line: usize, problem: String, done: usize| {
+        format!(
+            "line {line}: {problem}, after {done} of {count} values (mx·my·mz·meqn); the grid is \
+             truncated, or its header or meqn is wrong"
+        )
+    };
+    // The row read to count meqn comes first, from the line buffer.
+    if std::mem::take(&mut lines.replay) {
+        let row = std::str::from_utf8(lines.buf.trim_ascii()).unwrap_or_default();
         for token in row.split_ascii_whitespace() {
-            let problem = match parse_fortran(token) {
+            let problem = match fast_decimal(token.as_bytes()).or_else(|| parse_fortran(token)) {
                 Some(value) if values.len() < count => {
                     values.push(value as f32);
                     continue;
                 }
                 Some(_) => "a row runs past the grid's last value".to_string(),
-                None => {
-                    let token: String = token.chars().take(40).collect();
-                    format!("`{token}` is not a number")
-                }
+                None => not_a_number(token.as_bytes()),
             };
-            return Err(grid_error(
-                lines,
-                format!(
-                    "line {}: {problem}, after {} of {count} values (mx·my·mz·meqn); \
-                     the grid is truncated, or its header or meqn is wrong",
-                    lines.line,
-                    values.len()
-                ),
-            ));
+            return Err(grid_error(lines, fault(lines.line, problem, values.len())));
         }
     }
+    // The rest straight from the text: tokens between whitespace, lines
+    // counted as they pass (no copy of each line).
+    let text: &[u8] = lines.reader;
+    let mut at = 0;
+    let mut line = lines.line + 1;
+    while values.len() < count {
+        while at < text.len() && text[at].is_ascii_whitespace() {
+            line += usize::from(text[at] == b'\n');
+            at += 1;
+        }
+        if at == text.len() {
+            lines.line = line - 1;
+            let message = match lines.ends_at_header {
+                true => format!(
+                    "line {line}: the next grid's header (`grid_number`) comes after {} of its \
+                     {count} values (mx·my·mz·meqn); the grid is truncated, or its header or \
+                     meqn is wrong",
+                    values.len()
+                ),
+                false => format!(
+                    "file ends at line {} after {} of its {count} values (mx·my·mz·meqn); \
+                     the file is truncated",
+                    line - 1,
+                    values.len()
+                ),
+            };
+            return Err(grid_error(lines, message));
+        }
+        let start = at;
+        while at < text.len() && !text[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        let token = &text[start..at];
+        let value =
+            fast_decimal(token).or_else(|| std::str::from_utf8(token).ok().and_then(parse_fortran));
+        match value {
+            Some(v) => values.push(v as f32),
+            None => {
+                lines.line = line;
+                let problem = not_a_number(token);
+                return Err(grid_error(lines, fault(line, problem, values.len())));
+            }
+        }
+    }
+    // The last value's row must end with it.
+    while at < text.len() && text[at] != b'\n' {
+        if !text[at].is_ascii_whitespace() {
+            lines.line = line;
+            let problem = "a row runs past the grid's last value".to_string();
+            return Err(grid_error(lines, fault(line, problem, count)));
+        }
+        at += 1;
+    }
+    lines.reader = &text[at..];
+    lines.line = line - 1;
     Ok(Grid {
         number,
         amr_level,
@@ -649,3 +795,7 @@ fn grids_to_cells(path: &Path, grids: Vec<Grid>, meqn: usize) -> Result<AmrCellD
         time: None,
     })
 }
+
+#[cfg(test)]
+#[path = "amrclaw_tests.rs"]
+mod tests;

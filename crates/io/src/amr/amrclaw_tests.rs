@@ -1,0 +1,151 @@
+//! The fort.q reader's fast paths against the slow ones they replace.
+
+use super::{FrameHeader, parse_fortran, read_grids_in};
+use crate::decimal::fast_decimal;
+use std::path::Path;
+
+/// `n` coarse grids side by side along x and a fine one in the first,
+/// with blank lines between grids, as AMRClaw writes them.
+fn grids_text(n: usize) -> String {
+    let mut t = String::new();
+    let mut grid = |number: usize, level: usize, low: [f64; 3], dx: f64, m: usize| {
+        t += &format!(
+            "{number:6}                 grid_number\n{level:6}                 AMR_level\n"
+        );
+        for name in ["mx", "my", "mz"] {
+            t += &format!("{m:6}                 {name}\n");
+        }
+        for (v, name) in low.iter().zip(["xlow", "ylow", "zlow"]) {
+            t += &format!("{v:26.16E}    {name}\n");
+        }
+        for name in ["dx", "dy", "dz"] {
+            t += &format!("{dx:26.16E}    {name}\n");
+        }
+        t += "\n";
+        for c in 0..m * m * m {
+            let v = (number * 1000 + c) as f64 * 0.001 + 0.5;
+            t += &format!("{v:26.16E}{:26.16E}\n", -v);
+        }
+        t += "\n";
+    };
+    for g in 0..n {
+        grid(g + 1, 1, [g as f64, 0.0, 0.0], 0.25, 4);
+    }
+    grid(n + 1, 2, [0.25, 0.25, 0.25], 0.125, 2);
+    t
+}
+
+/// Any window — a byte, a few lines, the whole file — reads the same
+/// cells and values, and a fault names the same line.
+#[test]
+fn windows_read_the_grids_the_whole_text_reads() {
+    let text = grids_text(9);
+    let path = Path::new("fort.q0000");
+    let read = |text: &str, window: u64, ngrids: usize| {
+        let header = FrameHeader {
+            time: 0.0,
+            meqn: 2,
+            ngrids,
+        };
+        read_grids_in(
+            text.as_bytes(),
+            text.len() as u64,
+            path,
+            Some(header),
+            window,
+        )
+    };
+    let whole = read(&text, u64::MAX, 10).unwrap();
+    assert_eq!(whole.fields.len(), 2);
+    for window in [1, 37, 500, 4096] {
+        let got = read(&text, window, 10).unwrap();
+        assert_eq!(got.cells, whole.cells, "window {window}");
+        assert_eq!(got.fields, whole.fields, "window {window}");
+    }
+    let error = |text: &str, window: u64, ngrids: usize| match read(text, window, ngrids) {
+        Ok(_) => panic!("window {window}: no error"),
+        Err(e) => e.to_string(),
+    };
+    let broken = text.replacen("1.5060000000000000E0", "x", 1);
+    assert_ne!(broken, text);
+    let e = error(&broken, u64::MAX, 10);
+    for window in [1, 37, 500] {
+        assert_eq!(error(&broken, window, 10), e);
+    }
+    let at = text.find("1.5060000000000000E0").unwrap();
+    let line = text[..at].matches('\n').count() + 1;
+    assert!(
+        e.contains("`x` is not a number") && e.contains("grid 1 "),
+        "{e}"
+    );
+    assert!(e.contains(&format!("line {line}:")), "line {line}: {e}");
+    let e = error(&text, 100, 9);
+    assert!(e.contains("grid 10 after the last of the 9 grids"), "{e}");
+    let e = error(&text, 100, 11);
+    assert!(e.contains("after 10 grids, but fort.t declares 11"), "{e}");
+}
+
+/// The fast path gives the bits the general parser (`str::parse`, with
+/// Fortran's exponent letters) gives, or defers to it.
+#[test]
+fn fast_decimals_equal_the_general_parser() {
+    let mut state = 0x9e3779b97f4a7c15u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut fast = 0;
+    let mut tokens: Vec<String> = [
+        "0",
+        "-0.0",
+        "+1",
+        "1.",
+        ".5",
+        "1e5",
+        "1E-22",
+        "1e23",
+        "0.1D+01",
+        "9007199254740993",
+        "9007199254740992",
+        "123456789012345678",
+        "0.0000000000000000E+00",
+        "1e",
+        "1e+",
+        ".",
+        "-",
+        "1.5-100",
+        "inf",
+        "nan",
+        "1e00001",
+        "00000000000000000000001",
+    ]
+    .map(String::from)
+    .to_vec();
+    for _ in 0..200_000 {
+        let r = next();
+        let digits = 1 + (r % 17) as usize;
+        let mantissa: String = (0..digits)
+            .map(|k| char::from(b'0' + ((next() >> (k % 8)) % 10) as u8))
+            .collect();
+        let e = (next() % 61) as i32 - 30;
+        let sign = if r & 1 == 0 { "-" } else { "" };
+        tokens.push(format!(
+            "{sign}{}.{}E{e:+03}",
+            &mantissa[..1],
+            &mantissa[1..]
+        ));
+        tokens.push(format!("{sign}0.{mantissa}E{e:+03}"));
+    }
+    for t in &tokens {
+        let general = parse_fortran(t);
+        if let Some(v) = fast_decimal(t.as_bytes()) {
+            fast += 1;
+            let g = general.unwrap_or_else(|| panic!("`{t}`: fast {v}, general none"));
+            assert_eq!(v.to_bits(), g.to_bits(), "`{t}`");
+        }
+    }
+    // Most of AMRClaw-like tokens take the fast path.
+    assert!(fast > tokens.len() / 2, "{fast} of {}", tokens.len());
+}
