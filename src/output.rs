@@ -143,23 +143,33 @@ enum Identity {
     Path(PathBuf),
 }
 
-fn identity(path: &Path) -> Identity {
+/// The identity of `path` (see [`Identity`]) and whether it is a
+/// directory; `dirs` caches each parent directory's canonical form (`None`:
+/// not a directory), so the frames of one directory cost a `stat` each.
+fn identity(path: &Path, dirs: &mut HashMap<PathBuf, Option<PathBuf>>) -> (Identity, bool) {
+    let meta = std::fs::metadata(path).ok();
+    let is_dir = meta.as_ref().is_some_and(|m| m.is_dir());
     #[cfg(unix)]
-    {
+    if let Some(m) = &meta {
         use std::os::unix::fs::MetadataExt;
-        if let Ok(m) = std::fs::metadata(path) {
-            return Identity::Inode(m.dev(), m.ino());
-        }
+        return (Identity::Inode(m.dev(), m.ino()), is_dir);
     }
-    if let Ok(c) = path.canonicalize() {
-        return Identity::Path(c);
+    if meta.is_some()
+        && let Ok(c) = path.canonicalize()
+    {
+        return (Identity::Path(c), is_dir);
     }
     let dir = directory_of(path);
-    let dir = dir.canonicalize().unwrap_or(dir);
-    Identity::Path(match path.file_name() {
+    let canonical = dirs.entry(dir.clone()).or_insert_with(|| {
+        dir.is_dir()
+            .then(|| dir.canonicalize().unwrap_or(dir.clone()))
+    });
+    let dir = canonical.clone().unwrap_or(dir);
+    let id = match path.file_name() {
         Some(name) => dir.join(name),
         None => path.to_path_buf(),
-    })
+    };
+    (Identity::Path(id), is_dir)
 }
 
 /// The directory `path` is written into.
@@ -181,10 +191,14 @@ pub fn check_outputs(
     let allowed = kind.extensions();
     // One identity per file, so a million frames cost a million lookups
     // (comparing each output with every earlier one took minutes).
-    let inputs: HashMap<Identity, &PathBuf> = inputs.iter().map(|p| (identity(p), p)).collect();
+    let mut dirs = HashMap::new();
+    let inputs: HashMap<Identity, &PathBuf> = inputs
+        .iter()
+        .map(|p| (identity(p, &mut dirs).0, p))
+        .collect();
     let mut seen: HashMap<Identity, usize> = HashMap::with_capacity(outputs.len());
     for (i, out) in outputs.iter().enumerate() {
-        let id = identity(out);
+        let (id, is_dir) = identity(out, &mut dirs);
         if let Some(&input) = inputs.get(&id) {
             let how = if out == input {
                 String::new()
@@ -213,7 +227,11 @@ pub fn check_outputs(
             }
         }
         let dir = directory_of(out);
-        if !dir.is_dir() {
+        let dir_exists = match dirs.get(&dir) {
+            Some(known) => known.is_some(),
+            None => dir.is_dir(),
+        };
+        if !dir_exists {
             return Err(SceneError::output(
                 out,
                 format!(
@@ -222,7 +240,7 @@ pub fn check_outputs(
                 ),
             ));
         }
-        if out.is_dir() {
+        if is_dir {
             return Err(SceneError::output(out, "is a directory; give a file name"));
         }
         if let Some(&j) = seen.get(&id) {

@@ -71,6 +71,22 @@ pub fn render(
         }
     }
     let is_movie = MovieFormat::of(output).is_some();
+    // A million frames is a million files: refused before any work when
+    // the disk cannot hold them (a movie's frames wait as PNGs in a
+    // directory beside it).
+    let first = match is_movie {
+        true => output.with_file_name("frame.png"),
+        false => out::frame_path(output, seq.frames[0].0)?,
+    };
+    let size = voxless::projection::image_size(&desc.image)?;
+    let flag = match seq.turntable {
+        Some(_) => "--turntable",
+        None => "--frames",
+    };
+    let disk = voxless::output::check_frames_disk(&first, seq.frames.len(), size, flag)?;
+    if let (true, Some(note)) = (root, disk) {
+        eprintln!("note: {note}");
+    }
     let outputs: Vec<PathBuf> = if is_movie {
         out::check(&[output.to_path_buf()], OutputKind::Movie, desc, base, &[])?;
         voxless::movie::check_encoder(output)?;
@@ -85,22 +101,6 @@ pub fn render(
         out::check(&o, OutputKind::Image, desc, base, &[])?;
         o
     };
-    // A million frames is a million files: refused before any work when
-    // the disk cannot hold them (a movie's frames wait as PNGs in a
-    // directory beside it).
-    let first = match outputs.first() {
-        Some(o) => o.clone(),
-        None => output.with_file_name("frame.png"),
-    };
-    let size = voxless::projection::image_size(&desc.image)?;
-    let flag = match seq.turntable {
-        Some(_) => "--turntable",
-        None => "--frames",
-    };
-    let disk = voxless::output::check_frames_disk(&first, seq.frames.len(), size, flag)?;
-    if let (true, Some(note)) = (root, disk) {
-        eprintln!("note: {note}");
-    }
     let data_frames = seq.data_frames();
     if radii.is_some() && data_frames.len() > 1 {
         anyhow::bail!("--save-radii writes one frame's radii: give --frame N instead of --frames");
