@@ -136,7 +136,19 @@ fn run_job(
             && let Some((desc, frame)) = t.last_good.clone()
         {
             (t.desc, t.frame) = (desc, frame);
+            // Only when a setting changed after the view that rendered
+            // (else the moves themselves failed), the moves made after
+            // both.
             let moves = std::mem::take(&mut t.moves_since_set);
+            let after = t.last_good_seq.max(t.set_seq);
+            let moves: Vec<crate::protocol::Action> = match t.set_seq > t.last_good_seq {
+                true => moves
+                    .into_iter()
+                    .filter(|m| m.0 > after)
+                    .map(|m| m.1)
+                    .collect(),
+                false => Vec::new(),
+            };
             let replayed = !moves.is_empty()
                 && moves
                     .iter()
@@ -196,8 +208,9 @@ fn run_job(
     }
     let previous_good = {
         let mut t = tab.lock().unwrap_or_else(|e| e.into_inner());
-        let previous = t.last_good.clone();
+        let previous = (t.last_good.clone(), t.last_good_seq);
         t.last_good = Some((job.desc.clone(), job.frame));
+        t.last_good_seq = job.seq;
         // What the default camera framed (the part of the data the
         // transfer function shows), so camera moves start from that view.
         t.bounds = resolved.framed;
@@ -270,7 +283,7 @@ fn run_job(
                     {
                         let mut t = tab.lock().unwrap_or_else(|e| e.into_inner());
                         if t.last_good.as_ref() == Some(&(job.desc.clone(), job.frame)) {
-                            t.last_good = previous_good.clone();
+                            (t.last_good, t.last_good_seq) = previous_good.clone();
                         }
                     }
                     failed = true;

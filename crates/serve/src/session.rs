@@ -57,10 +57,15 @@ pub struct Tab {
     /// resolve goes back to it, so one bad patch does not stick to every
     /// later interaction.
     pub last_good: Option<(SceneDesc, usize)>,
-    /// Camera moves since the last setting changed: when that setting
-    /// fails on the data, the view goes back to `last_good` with these
-    /// moves made again, so a move queued behind a bad setting is kept.
-    pub moves_since_set: Vec<Action>,
+    /// The interaction `last_good` rendered for.
+    pub last_good_seq: u64,
+    /// The interaction that changed a setting last.
+    pub set_seq: u64,
+    /// Camera moves (with their interactions) since the last setting
+    /// changed: when that setting fails on the data, the view goes back to
+    /// `last_good` with the moves made after it, so a move queued behind a
+    /// bad setting is kept.
+    pub moves_since_set: Vec<(u64, Action)>,
 }
 
 /// The pending job and the cancel token of the running one.
@@ -129,6 +134,8 @@ pub async fn run(socket: WebSocket, app: Arc<App>) {
         attribute_range: None,
         imported: Vec::new(),
         last_good: None,
+        last_good_seq: 0,
+        set_seq: 0,
         moves_since_set: Vec::new(),
     }));
     let worker = Arc::new(Worker::default());
@@ -296,9 +303,12 @@ fn handle_text(app: &App, outbox: &Outbox, tab: &Mutex<Tab>, worker: &Worker, te
         return error(outbox, &e);
     }
     match &msg.action {
-        Action::Set { .. } => t.moves_since_set.clear(),
+        Action::Set { .. } => {
+            t.moves_since_set.clear();
+            t.set_seq = seq;
+        }
         a @ (Action::Orbit { .. } | Action::Pan { .. } | Action::Zoom { .. } | Action::Reset) => {
-            t.moves_since_set.push(a.clone())
+            t.moves_since_set.push((seq, a.clone()))
         }
         _ => {}
     }

@@ -545,5 +545,39 @@ fn a_move_queued_behind_a_setting_that_fails_on_the_data_is_kept() {
             kept == moved,
             "the kept move's image differs from a fresh tab's"
         );
+
+        // A move that fails by itself (a pan far off the data) is not made
+        // again: the view is the last good one, and the next move starts
+        // from it, as a fresh tab's second move does.
+        send(
+            &mut ws,
+            json!({"seq": 4, "type": "pan", "dx": 40.0, "dy": 0.0}),
+        )
+        .await;
+        loop {
+            match next(&mut ws).await.expect("socket open") {
+                Msg::Text(v) if v["type"] == "error" && v["seq"] == 4 => {
+                    let m = v["message"].as_str().unwrap();
+                    assert!(!m.contains("moved since"), "{m}");
+                    break;
+                }
+                Msg::Frame(h, _) => assert!(h.seq != 4 || h.stage != "converged"),
+                _ => {}
+            }
+        }
+        send(&mut ws, orbit(5)).await;
+        let again = until_converged(&mut ws, 5).await;
+        let Some(Msg::Frame(_, again)) = again.last() else {
+            unreachable!()
+        };
+        send(&mut fresh, orbit(3)).await;
+        let twice = until_converged(&mut fresh, 3).await;
+        let Some(Msg::Frame(_, twice)) = twice.last() else {
+            unreachable!()
+        };
+        assert!(
+            again == twice,
+            "after a failed move the view is not the last good one"
+        );
     });
 }
