@@ -661,24 +661,32 @@ fn grids_to_cells(path: &Path, grids: Vec<Grid>, meqn: usize) -> Result<AmrCellD
         }
         levels.push(level as u32);
     }
-    // Each AMR level must have one cell size, and finer AMR levels smaller cells.
-    for (a, ga) in grids.iter().enumerate() {
-        for (b, gb) in grids.iter().enumerate().skip(a + 1) {
-            let consistent = match ga.amr_level.cmp(&gb.amr_level) {
-                std::cmp::Ordering::Equal => levels[a] == levels[b],
-                std::cmp::Ordering::Less => levels[a] > levels[b],
-                std::cmp::Ordering::Greater => levels[a] < levels[b],
-            };
-            if !consistent {
-                return Err(grid_error(
-                    gb,
-                    format!(
-                        "AMR level {} with dx = {} is inconsistent with grid {} (AMR level {}, \
-                         dx = {})",
-                        gb.amr_level, gb.d[0], ga.number, ga.amr_level, ga.d[0]
-                    ),
-                ));
-            }
+    // Each AMR level must have one cell size, and finer AMR levels smaller
+    // cells: the first grid of each AMR level stands for it (one pass and a
+    // sort, not every pair of grids).
+    let mut first_of: std::collections::BTreeMap<i64, usize> = Default::default();
+    let inconsistent = |a: usize, b: usize| {
+        let (ga, gb) = (&grids[a], &grids[b]);
+        grid_error(
+            gb,
+            format!(
+                "AMR level {} with dx = {} is inconsistent with grid {} (AMR level {}, dx = {})",
+                gb.amr_level, gb.d[0], ga.number, ga.amr_level, ga.d[0]
+            ),
+        )
+    };
+    for (b, gb) in grids.iter().enumerate() {
+        let a = *first_of.entry(gb.amr_level).or_insert(b);
+        if levels[a] != levels[b] {
+            return Err(inconsistent(a, b));
+        }
+    }
+    let firsts: Vec<usize> = first_of.values().copied().collect();
+    for pair in firsts.windows(2) {
+        // AMR levels ascending: cell sizes (log2) strictly descending.
+        if levels[pair[1]] >= levels[pair[0]] {
+            let (a, b) = (pair[0].min(pair[1]), pair[0].max(pair[1]));
+            return Err(inconsistent(a, b));
         }
     }
 
@@ -723,12 +731,25 @@ fn grids_to_cells(path: &Path, grids: Vec<Grid>, meqn: usize) -> Result<AmrCellD
         boxes.push((lo, hi));
     }
 
-    // Mark cells that a grid of a finer AMR level contains.
+    // Mark cells that a grid of a finer AMR level contains. Grids sorted by
+    // their lower x: the grids that may overlap one lie in a window of that
+    // order (lower x within the widest grid's width of it), found by binary
+    // search, so many grids cost far less than every pair.
+    let mut by_x: Vec<usize> = (0..grids.len()).collect();
+    by_x.sort_unstable_by_key(|&b| boxes[b].0[0]);
+    let widest = boxes
+        .iter()
+        .map(|(lo, hi)| hi[0] - lo[0])
+        .max()
+        .unwrap_or(0);
     let mut covered: Vec<Vec<bool>> = vec![Vec::new(); grids.len()];
     for (a, ga) in grids.iter().enumerate() {
         let (lo, hi) = boxes[a];
         let width = 1i64 << levels[a];
-        for (b, gb) in grids.iter().enumerate() {
+        let start = by_x.partition_point(|&b| boxes[b].0[0] <= lo[0] - widest);
+        let end = by_x.partition_point(|&b| boxes[b].0[0] < hi[0]);
+        for &b in &by_x[start..end] {
+            let gb = &grids[b];
             let (flo, fhi) = boxes[b];
             if gb.amr_level <= ga.amr_level || (0..3).any(|k| fhi[k] <= lo[k] || flo[k] >= hi[k]) {
                 continue;

@@ -149,3 +149,55 @@ fn fast_decimals_equal_the_general_parser() {
     // Most of AMRClaw-like tokens take the fast path.
     assert!(fast > tokens.len() / 2, "{fast} of {}", tokens.len());
 }
+
+/// Grids of one AMR level with two cell sizes, and a finer AMR level with
+/// larger cells, are errors naming both grids.
+#[test]
+fn inconsistent_levels_name_the_grids() {
+    let text = grids_text(2);
+    let path = Path::new("fort.q0000");
+    let read = |text: &str| {
+        let header = FrameHeader {
+            time: 0.0,
+            meqn: 2,
+            ngrids: 3,
+        };
+        match read_grids_in(
+            text.as_bytes(),
+            text.len() as u64,
+            path,
+            Some(header),
+            1 << 20,
+        ) {
+            Ok(_) => panic!("no error"),
+            Err(e) => e.to_string(),
+        }
+    };
+    // The fine grid (AMR level 2) with cells twice the coarse ones.
+    let coarser = ["dx", "dy", "dz"].iter().fold(text.clone(), |t, d| {
+        t.replace(
+            &format!("1.2500000000000000E-1    {d}"),
+            &format!("5.0000000000000000E-1    {d}"),
+        )
+    });
+    let e = read(&coarser);
+    assert!(
+        e.contains("grid 3") && e.contains("inconsistent with grid 1"),
+        "{e}"
+    );
+    // The second coarse grid (AMR level 1) with the fine grid's cells.
+    let second = text.match_indices("grid_number").nth(1).unwrap().0;
+    let (head, tail) = text.split_at(second);
+    let tail = ["dx", "dy", "dz"].iter().fold(tail.to_string(), |t, d| {
+        t.replacen(
+            &format!("2.5000000000000000E-1    {d}"),
+            &format!("1.2500000000000000E-1    {d}"),
+            1,
+        )
+    });
+    let e = read(&format!("{head}{tail}"));
+    assert!(
+        e.contains("grid 2") && e.contains("inconsistent with grid 1"),
+        "{e}"
+    );
+}
