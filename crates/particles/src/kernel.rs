@@ -373,11 +373,28 @@ impl Kernel {
     /// the peak column, and parts of one chord add up to the whole): what
     /// a projection pays per pixel for a kernel cut by a periodic face.
     pub fn chord_integral_tabled(&self, b2: f64, r: f64, u0: f64, u1: f64) -> f64 {
-        let (shape, id): (fn(Sph, f64) -> f64, usize) = match (*self, self.sph()) {
-            (Kernel::CubicSpline, _) => (|_, q| m4(q), 5),
-            (_, Some(s)) => (Sph::w, s as usize),
-            _ => return self.chord_integral(b2, r, u0, u1),
+        match self.partial_norm(r) {
+            Some(nr) => self.partial_chord(nr, b2, r, u0, u1),
+            None => self.chord_integral(b2, r, u0, u1),
+        }
+    }
+
+    /// An SPH kernel's `norm · r` for partial chords of radius `r` (`None`
+    /// for the Gaussians, whose chords are closed forms).
+    #[inline]
+    fn partial_norm(&self, r: f64) -> Option<f64> {
+        let norm = match (*self, self.sph()) {
+            (Kernel::CubicSpline, _) => 1.0 / (std::f64::consts::PI * r * r * r),
+            (_, Some(s)) => s.sigma() / (r * r * r),
+            _ => return None,
         };
+        Some(norm * r)
+    }
+
+    /// [`Kernel::chord_integral_tabled`] of an SPH kernel with its
+    /// [`Kernel::partial_norm`] `nr` given.
+    #[inline]
+    fn partial_chord(&self, nr: f64, b2: f64, r: f64, u0: f64, u1: f64) -> f64 {
         let support = self.support_factor() as f64;
         let l2 = (support * r).powi(2) - b2;
         if l2 <= 0.0 {
@@ -387,13 +404,11 @@ impl Kernel {
         if u0 <= -l && u1 >= l {
             return self.chord_integral(b2, r, u0, u1);
         }
-        let s = self.sph().unwrap_or(Sph::M5);
-        let norm = match *self {
-            Kernel::CubicSpline => 1.0 / (std::f64::consts::PI * r * r * r),
-            _ => s.sigma() / (r * r * r),
+        let table = match self.sph() {
+            Some(s) => chords::partial_chords(s as usize, |q| s.w(q), support),
+            None => chords::partial_chords(5, m4, support),
         };
-        let table = chords::partial_chords(id, |q| shape(s, q), support);
-        norm * r * table.chord(b2 / (r * r), u0 / r, u1 / r)
+        nr * table.chord(b2 / (r * r), u0 / r, u1 / r)
     }
 }
 
@@ -416,6 +431,8 @@ pub struct Column {
     scale: f64,
     to_index: f64,
     table: &'static [f32; PROJ_Q2_TABLE],
+    /// SPH kernels: `norm · r` of their partial chords.
+    partial_norm: Option<f64>,
 }
 
 /// Entries of the projected-M4 table over `q² ∈ [0, 4]`.
@@ -483,6 +500,7 @@ impl Kernel {
             // For the cubic spline (N − 1)/4 is exact, as before.
             to_index: 1.0 / (r * r) * ((PROJ_Q2_TABLE - 1) as f64 / (factor * factor)),
             table,
+            partial_norm: self.partial_norm(r),
         }
     }
 }
@@ -522,7 +540,10 @@ impl Column {
     /// over the line parameter `u0..u1` (0 at the closest point).
     #[inline]
     pub fn chord(&self, b2: f64, u0: f64, u1: f64) -> f64 {
-        self.kernel.chord_integral_tabled(b2, self.r, u0, u1)
+        match self.partial_norm {
+            Some(nr) => self.kernel.partial_chord(nr, b2, self.r, u0, u1),
+            None => self.kernel.chord_integral(b2, self.r, u0, u1),
+        }
     }
 
     /// An SPH kernel's column at `b2` inside the support, from the table.
