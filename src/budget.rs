@@ -51,10 +51,6 @@ pub fn available_memory() -> Option<u64> {
     Some(kb * 1024)
 }
 
-fn gib(b: u64) -> String {
-    format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
-}
-
 /// An error when a `width`×`height` image would not fit in the memory
 /// available.
 pub fn check_image_memory(width: u32, height: u32) -> Result<(), SceneError> {
@@ -65,8 +61,8 @@ pub fn check_image_memory(width: u32, height: u32) -> Result<(), SceneError> {
             format!(
                 "a {width}×{height} image needs about {} of memory, but {} is available; \
                  give a smaller --size",
-                gib(needed),
-                gib(avail)
+                human(needed),
+                human(avail)
             ),
         )),
         _ => Ok(()),
@@ -95,8 +91,8 @@ pub fn check_kbuffer_memory(k: usize, layers: usize) -> Result<(), SceneError> {
             format!(
                 "k = {k} events and {layers} depth layers per pixel need about {} for the \
                  k-buffer's tiles ({threads} at a time), but {} is available",
-                gib(needed),
-                gib(avail)
+                human(needed),
+                human(avail)
             ),
         )),
         _ => Ok(()),
@@ -123,7 +119,12 @@ pub fn available_disk(dir: &std::path::Path) -> Option<(u64, u64, u64)> {
         let (block, blocks, inodes) = (
             (st.f_frsize as u64).max(1),
             st.f_bavail as u64,
-            st.f_favail as u64,
+            // Filesystems without an inode table (btrfs, some network
+            // ones) report none at all: no limit, not zero.
+            match st.f_files {
+                0 => u64::MAX,
+                _ => st.f_favail as u64,
+            },
         );
         let mut free = blocks.saturating_mul(block);
         if let Some(limit) = std::env::var("VOXLESS_DISK_LIMIT")
@@ -216,7 +217,7 @@ mod tests {
         };
         assert_eq!(check_disk(&dir, 1, 100, "--frames").unwrap(), None);
         // More blocks (or inodes) than are free: an error naming the flag.
-        let files = (free / block + 1).max(inodes + 1);
+        let files = (free / block + 1).max(inodes.saturating_add(1));
         let e = check_disk(&dir, files, 1, "--turntable")
             .unwrap_err()
             .to_string();

@@ -88,11 +88,18 @@ pub fn write_atomically(
 mod tests {
     use super::*;
 
-    #[test]
-    fn a_failed_write_leaves_the_old_file_and_no_temporary() {
-        let dir = std::env::temp_dir().join(format!("voxless-atomic-{}", std::process::id()));
+    /// An empty directory of its own for test `name`.
+    fn empty_dir(name: &str) -> std::path::PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("voxless-atomic-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn a_failed_write_leaves_the_old_file_and_no_temporary() {
+        let dir = empty_dir("plain");
         let path = dir.join("out.bin");
         std::fs::write(&path, b"old").unwrap();
         let e = write_atomically(&path, |out| {
@@ -113,9 +120,7 @@ mod tests {
 
     #[test]
     fn a_legal_name_of_251_characters_is_written() {
-        let dir = std::env::temp_dir().join(format!("voxless-atomic-long-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = empty_dir("long");
         // 251 characters: the longest most filesystems take (255) less
         // room for nothing; a temporary named after it whole would fail.
         let path = dir.join(format!("{}.png", "n".repeat(247)));
@@ -131,9 +136,7 @@ mod tests {
     #[cfg(unix)]
     #[test]
     fn a_link_stays_a_link_and_devices_are_refused() {
-        let dir = std::env::temp_dir().join(format!("voxless-atomic-link-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = empty_dir("link");
         let (target, link) = (dir.join("target.bin"), dir.join("link.bin"));
         std::fs::write(&target, b"old").unwrap();
         std::os::unix::fs::symlink("target.bin", &link).unwrap();

@@ -135,26 +135,26 @@ fn run_job(
             && t.frame == job.frame
             && let Some((desc, frame)) = t.last_good.clone()
         {
-            (t.desc, t.frame) = (desc, frame);
-            // Only when a setting changed after the view that rendered
-            // (else the moves themselves failed), the moves made after
-            // both.
-            let moves = std::mem::take(&mut t.moves_since_set);
-            let after = t.last_good_seq.max(t.set_seq);
-            let moves: Vec<crate::protocol::Action> = match t.set_seq > t.last_good_seq {
-                true => moves
-                    .into_iter()
-                    .filter(|m| m.0 > after)
-                    .map(|m| m.1)
-                    .collect(),
-                false => Vec::new(),
-            };
+            (t.desc, t.frame) = (desc.clone(), frame);
+            // Moves made after the last good view are made again when a
+            // setting changed after it too (else the moves themselves
+            // failed); moves before a setting are cleared with it.
+            let after = t.last_good_seq;
+            let setting_failed = t.set_seq > after;
+            let moves: Vec<crate::protocol::Action> = std::mem::take(&mut t.moves_since_set)
+                .into_iter()
+                .filter(|m| setting_failed && m.0 > after)
+                .map(|m| m.1)
+                .collect();
             let replayed = !moves.is_empty()
                 && moves
                     .iter()
                     .all(|m| crate::session::apply(app, &mut t, m).is_ok());
             if replayed {
-                message.push_str(" (the view is back to the last settings that rendered, with the camera moved since)");
+                message.push_str(
+                    " (the view is back to the last settings that rendered, with the camera \
+                     moved since)",
+                );
                 *follow_up.lock().unwrap_or_else(|e| e.into_inner()) = Some(Job {
                     desc: t.desc.clone(),
                     frame: t.frame,
@@ -162,7 +162,7 @@ fn run_job(
                     ..job.clone()
                 });
             } else {
-                (t.desc, t.frame) = t.last_good.clone().unwrap_or((t.desc.clone(), t.frame));
+                (t.desc, t.frame) = (desc, frame);
                 message.push_str(" (the view is back to the last one that rendered)");
             }
             app.set_current(&t.desc, t.frame);
@@ -211,6 +211,11 @@ fn run_job(
         let previous = (t.last_good.clone(), t.last_good_seq);
         t.last_good = Some((job.desc.clone(), job.frame));
         t.last_good_seq = job.seq;
+        // Moves before the previous good view can never be made again
+        // (the image check may still restore that one): a tab that only
+        // moves keeps a short list.
+        let before = previous.1;
+        t.moves_since_set.retain(|m| m.0 > before);
         // What the default camera framed (the part of the data the
         // transfer function shows), so camera moves start from that view.
         t.bounds = resolved.framed;

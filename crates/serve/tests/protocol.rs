@@ -442,19 +442,8 @@ fn a_view_that_shows_nothing_is_an_error_not_a_black_image() {
         for (k, patch) in cases.into_iter().enumerate() {
             let seq = 2 + 2 * k as u64;
             send(&mut ws, json!({"seq": seq, "type": "set", "patch": patch})).await;
-            loop {
-                match next(&mut ws).await.expect("socket open") {
-                    Msg::Text(v) if v["type"] == "error" && v["seq"] == seq => {
-                        let m = v["message"].as_str().unwrap();
-                        assert!(m.contains("back to the last one"), "{m}");
-                        break;
-                    }
-                    Msg::Frame(h, _) if h.seq == seq && h.stage == "converged" => {
-                        // The image may come first; the error must follow.
-                    }
-                    _ => {}
-                }
-            }
+            let m = until_error(&mut ws, seq).await;
+            assert!(m.contains("back to the last one"), "{m}");
             // The next move renders from the last good view.
             send(
                 &mut ws,
@@ -474,18 +463,7 @@ fn a_view_that_shows_nothing_is_an_error_not_a_black_image() {
         for msg in cases {
             let seq = msg["seq"].as_u64().unwrap();
             send(&mut ws, msg).await;
-            loop {
-                match next(&mut ws).await.expect("socket open") {
-                    Msg::Text(v) if v["type"] == "error" && v["seq"] == seq => break,
-                    Msg::Frame(h, _) => {
-                        assert!(
-                            h.seq != seq || h.stage != "converged",
-                            "a converged image for {seq}"
-                        )
-                    }
-                    _ => {}
-                }
-            }
+            until_error(&mut ws, seq).await;
             send(
                 &mut ws,
                 json!({"seq": seq + 1, "type": "orbit", "yaw": 5.0, "pitch": 0.0}),
@@ -554,17 +532,8 @@ fn a_move_queued_behind_a_setting_that_fails_on_the_data_is_kept() {
             json!({"seq": 4, "type": "pan", "dx": 40.0, "dy": 0.0}),
         )
         .await;
-        loop {
-            match next(&mut ws).await.expect("socket open") {
-                Msg::Text(v) if v["type"] == "error" && v["seq"] == 4 => {
-                    let m = v["message"].as_str().unwrap();
-                    assert!(!m.contains("moved since"), "{m}");
-                    break;
-                }
-                Msg::Frame(h, _) => assert!(h.seq != 4 || h.stage != "converged"),
-                _ => {}
-            }
-        }
+        let m = until_error(&mut ws, 4).await;
+        assert!(!m.contains("moved since"), "{m}");
         send(&mut ws, orbit(5)).await;
         let again = until_converged(&mut ws, 5).await;
         let Some(Msg::Frame(_, again)) = again.last() else {

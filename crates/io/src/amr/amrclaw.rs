@@ -374,14 +374,13 @@ fn read_grids_in(
             .map_err(|e| IoError::io(fort_q, e))?;
         let end = read == 0;
         // Whole grids: up to the last header line, or all of it at the end.
-        let cut = match end {
-            true => text.len(),
-            false => match header_starts(&text).last() {
-                Some(&c) if c > 0 => c,
-                _ => continue,
-            },
+        let mut starts = header_starts(&text);
+        let cut = match (end, starts.last()) {
+            (true, _) => text.len(),
+            (false, Some(&c)) if c > 0 => c,
+            (false, _) => continue,
         };
-        let mut starts = header_starts(&text[..cut]);
+        starts.retain(|&s| s < cut);
         if starts.first() != Some(&0) {
             starts.insert(0, 0);
         }
@@ -514,15 +513,23 @@ fn read_grid(
     };
 
     if meqn.is_none() {
-        // No fort.t: the first data row has one value per equation.
-        let Some(first) = lines.next_nonblank()? else {
+        // No fort.t: the first data row has one value per equation (read
+        // ahead, not consumed).
+        let rest: &[u8] = lines.reader;
+        let Some(start) = rest.iter().position(|c| !c.is_ascii_whitespace()) else {
+            let end = lines.line + memchr::memchr_iter(b'\n', rest).count();
             return Err(grid_error(
                 lines,
-                format!("file ends at line {} before its data", lines.line),
+                format!("file ends at line {end} before its data"),
             ));
         };
-        *meqn = Some(first.split_ascii_whitespace().count());
-        lines.unread();
+        let row = &rest[start..];
+        let row = &row[..memchr::memchr(b'\n', row).unwrap_or(row.len())];
+        *meqn = Some(
+            row.split(u8::is_ascii_whitespace)
+                .filter(|t| !t.is_empty())
+                .count(),
+        );
     }
     let meqn = meqn.unwrap_or(1);
     let count = checked_product(&[size[0], size[1], size[2], meqn])
@@ -543,22 +550,7 @@ fn read_grid(
              truncated, or its header or meqn is wrong"
         )
     };
-    // The row read to count meqn comes first, from the line buffer.
-    if std::mem::take(&mut lines.replay) {
-        let row = std::str::from_utf8(lines.buf.trim_ascii()).unwrap_or_default();
-        for token in row.split_ascii_whitespace() {
-            let problem = match fast_decimal(token.as_bytes()).or_else(|| parse_fortran(token)) {
-                Some(value) if values.len() < count => {
-                    values.push(value as f32);
-                    continue;
-                }
-                Some(_) => "a row runs past the grid's last value".to_string(),
-                None => not_a_number(token.as_bytes()),
-            };
-            return Err(grid_error(lines, fault(lines.line, problem, values.len())));
-        }
-    }
-    // The rest straight from the text: tokens between whitespace, lines
+    // Values straight from the text: tokens between whitespace, lines
     // counted as they pass (no copy of each line).
     let text: &[u8] = lines.reader;
     let mut at = 0;

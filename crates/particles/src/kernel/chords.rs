@@ -8,10 +8,9 @@
 //!
 //! `T(q_b², u) = ∫₀ᵘ w(√(q_b² + s²)) ds`   (u ≥ 0, units of h)
 //!
-//! is tabulated once per kernel (4 MB, on first use) on a 1025 × 1025 grid
-//! over
-//! `q_b ∈ [0, Q]`, `u ∈ [0, Q]` (`Q` the support) and read bilinearly; a
-//! chord `[u0, u1]` is `S(u1) − S(u0)` with `S(u) = sign(u)·T(q_b², |u|)`.
+//! is tabulated once per kernel (4 MB, on first use) on a 1025 × 1025
+//! grid over `q_b ∈ [0, Q]`, `u ∈ [0, Q]` (`Q` the support) and read
+//! bilinearly; a chord `[u0, u1]` is `S(u1) − S(u0)` with `S(u) = sign(u)·T(q_b², |u|)`.
 //! The grid is uniform in `q_b`, not `q_b²`: the splines' odd powers
 //! (`q³` in the cubic spline) make `T` singular in its second derivative
 //! along `q_b²` at the centre, where linear interpolation lost 2·10⁻⁵.

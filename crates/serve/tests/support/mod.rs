@@ -131,6 +131,23 @@ pub async fn until_converged(ws: &mut Ws, seq: u64) -> Vec<Msg> {
     }
 }
 
+/// Messages until the error for `seq`, whose text it returns; a converged
+/// image for `seq` before it fails the test (an error, not a black image).
+pub async fn until_error(ws: &mut Ws, seq: u64) -> String {
+    loop {
+        match next(ws).await.expect("socket open") {
+            Msg::Text(v) if v["type"] == "error" && v["seq"] == seq => {
+                return v["message"].as_str().unwrap_or_default().to_string();
+            }
+            Msg::Frame(h, _) => assert!(
+                h.seq != seq || h.stage != "converged",
+                "a converged image for {seq}, which should be an error"
+            ),
+            _ => {}
+        }
+    }
+}
+
 /// Status code of `GET path` sent as is (no normalisation), with `extra`
 /// header lines.
 pub fn status(addr: SocketAddr, path: &str, extra: &str) -> u16 {
