@@ -137,7 +137,7 @@ impl<'c> Placement<'c> {
         purpose: Purpose,
     ) -> Result<PlacedData<'c>, ParallelError> {
         Ok(match *self {
-            Placement::Process => PlacedData::Process(load::load(desc, base, frame)?),
+            Placement::Process => PlacedData::Process(load::load_for(desc, base, frame, purpose)?),
             Placement::Ranks(c) => {
                 PlacedData::Ranks(c, parallel::open_part(c, desc, base, frame, purpose, None)?)
             }

@@ -2,6 +2,8 @@
 //! off-axis along an axis = the axis projection), mass conservation off
 //! axis, slabs against the closed-form chord, pixel geometry and errors.
 
+mod common;
+
 use voxless::projection::default_north;
 use voxless::{
     AmrArrays, AmrDesc, AnyVolume, Control, KernelName, Loaded, ParticleArrays, ParticlesDesc,
@@ -505,6 +507,81 @@ fn projections_do_not_depend_on_the_units() {
                 assert!((ma - 300.0).abs() <= 1e-3 * 300.0, "{ma}");
                 assert!((mb - 300.0).abs() <= 1e-3 * 300.0, "{s}: {mb}");
             }
+        }
+    }
+}
+
+/// A projection's load parses only the projected field of AMRClaw text:
+/// its image has the bits of the image of a load that reads every field,
+/// for the default field and a named one, with either reconstruction; a
+/// colour field the description names is read too.
+#[test]
+fn amr_projection_loads_read_only_the_projected_field() {
+    use std::fmt::Write as _;
+    let dir = common::Scratch::new("amr-picked-projection");
+    let mut q = String::new();
+    let grids = [
+        (1, [4, 4, 4], [0.0; 3], 0.25),
+        (2, [4, 2, 4], [0.25, 0.5, 0.25], 0.125),
+    ];
+    for (g, (level, n, lo, dx)) in grids.iter().enumerate() {
+        writeln!(q, "{:6}                 grid_number", g + 1).unwrap();
+        writeln!(q, "{level:6}                 AMR_level").unwrap();
+        for (v, name) in n.iter().zip(["mx", "my", "mz"]) {
+            writeln!(q, "{v:6}                 {name}").unwrap();
+        }
+        for (v, name) in lo.iter().zip(["xlow", "ylow", "zlow"]) {
+            writeln!(q, "{v:26.16E}    {name}").unwrap();
+        }
+        for name in ["dx", "dy", "dz"] {
+            writeln!(q, "{dx:26.16E}    {name}").unwrap();
+        }
+        writeln!(q).unwrap();
+        for c in 0..n[0] * n[1] * n[2] {
+            let v = 1.0 + (c * 7 + g * 3) as f64 * 0.013;
+            writeln!(q, "{v:26.16E}{:26.16E}{:26.16E}", -v, v * v).unwrap();
+        }
+        writeln!(q).unwrap();
+    }
+    let path = dir.path("fort.q0001");
+    std::fs::write(&path, q).unwrap();
+    let view = ProjectionDesc {
+        axis: Some(2),
+        ..Default::default()
+    };
+    for recon in [
+        voxless::ReconstructionName::Nearest,
+        voxless::ReconstructionName::Basis,
+    ] {
+        for (field, color) in [(None, None), (Some("q2"), None), (Some("q1"), Some("q2"))] {
+            let desc = voxless::SceneDesc {
+                amr: Some(AmrDesc {
+                    amrclaw: Some(path.to_string_lossy().into()),
+                    field: field.map(Into::into),
+                    color_field: color.map(Into::into),
+                    reconstruction: Some(recon),
+                    ..Default::default()
+                }),
+                ..Default::default()
+            };
+            let whole = voxless::load(&desc, &dir.0, 0).unwrap();
+            let picked =
+                voxless::load::load_for(&desc, &dir.0, 0, voxless::Purpose::Project).unwrap();
+            let names = |l: &Loaded| match &l.volume {
+                AnyVolume::Amr(v) => v.field_names().to_vec(),
+                _ => panic!("not AMR"),
+            };
+            assert_eq!(names(&whole), ["q0", "q1", "q2"]);
+            let expected: Vec<&str> = match (field, color) {
+                (None, _) => vec!["q0"],
+                (Some(f), None) => vec![f],
+                (Some(f), Some(c)) => vec![f, c],
+            };
+            assert_eq!(names(&picked), expected, "{field:?} {color:?}");
+            let (a, _) = project(&whole, &view, 48, 40);
+            let (b, _) = project(&picked, &view, 48, 40);
+            assert!(a.iter().any(|&v| v != 0.0));
+            assert_eq!(a, b, "{recon:?} {field:?}");
         }
     }
 }

@@ -5,9 +5,10 @@ use std::path::{Path, PathBuf};
 
 use voxless_amr::{AmrCells, AmrSettings, AmrVolume, Reconstruction};
 use voxless_core::Vec3;
+use voxless_io::FieldPick;
 use voxless_scene::{AmrDesc, ReconstructionName};
 
-use super::Share;
+use super::{Purpose, Share};
 use crate::{SceneError, WorldFrame};
 
 /// Leaf cells in memory: `(x, y, z, level)` per cell (lower corner in
@@ -24,8 +25,12 @@ pub struct AmrArrays {
     pub cell_size: f32,
 }
 
-pub(crate) fn load_amr(a: &AmrDesc, base: &Path) -> Result<(AmrVolume, WorldFrame), SceneError> {
-    let run = read_cells(a, base, Share::WHOLE)?;
+pub(crate) fn load_amr(
+    a: &AmrDesc,
+    base: &Path,
+    pick: FieldPick,
+) -> Result<(AmrVolume, WorldFrame), SceneError> {
+    let run = read_cells(a, base, Share::WHOLE, &pick)?;
     let arrays = AmrArrays {
         cells: run.data.cells,
         fields: run.data.fields,
@@ -33,6 +38,17 @@ pub(crate) fn load_amr(a: &AmrDesc, base: &Path) -> Result<(AmrVolume, WorldFram
         cell_size: run.data.finest_cell_size as f32,
     };
     build_amr(arrays, a, &run.source)
+}
+
+/// The fields a load for `purpose` decodes (see [`super::load_for`]).
+pub(crate) fn field_pick(a: &AmrDesc, purpose: Purpose) -> FieldPick {
+    match purpose {
+        Purpose::Render => FieldPick::All,
+        Purpose::Project => FieldPick::Named {
+            names: a.field.iter().chain(&a.color_field).cloned().collect(),
+            first: a.field.is_none(),
+        },
+    }
 }
 
 /// A run of cells a process read: the cells and their fields, the run's
@@ -47,7 +63,12 @@ pub(crate) struct CellRun {
 /// Share `share` of the cells `a` names: ExaBricks cells by offset (whole,
 /// with every check of the whole-file reader, for one process); AMRClaw
 /// output is read whole and cut.
-pub(crate) fn read_cells(a: &AmrDesc, base: &Path, share: Share) -> Result<CellRun, SceneError> {
+pub(crate) fn read_cells(
+    a: &AmrDesc,
+    base: &Path,
+    share: Share,
+    pick: &FieldPick,
+) -> Result<CellRun, SceneError> {
     if let Some(file) = &a.file {
         if a.cells.is_some() || a.amrclaw.is_some() {
             return Err(SceneError::setting(
@@ -56,7 +77,7 @@ pub(crate) fn read_cells(a: &AmrDesc, base: &Path, share: Share) -> Result<CellR
             ));
         }
         let path = base.join(file);
-        let (data, _) = voxless_io::read_amr(&path)?;
+        let (data, _) = voxless_io::read_amr_picked(&path, pick)?;
         return Ok(cut_run(data, share, path));
     }
     match (&a.cells, &a.amrclaw) {
@@ -96,7 +117,7 @@ pub(crate) fn read_cells(a: &AmrDesc, base: &Path, share: Share) -> Result<CellR
         }
         (None, Some(q)) => {
             let path = base.join(q);
-            let data = voxless_io::read_amrclaw(&path)?;
+            let data = voxless_io::read_amrclaw_picked(&path, pick)?;
             Ok(cut_run(data, share, path))
         }
         (Some(_), Some(_)) => Err(SceneError::setting(

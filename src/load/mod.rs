@@ -221,6 +221,18 @@ pub fn load(desc: &SceneDesc, base: &Path, frame: usize) -> Result<Loaded, Scene
     load_in(desc, base, frame, None)
 }
 
+/// [`load`] for `purpose`: a projection integrates one field, so AMR text
+/// output has only that field parsed (and the colour field a description
+/// names, so its settings resolve); renders and samples read every field.
+pub fn load_for(
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+    purpose: Purpose,
+) -> Result<Loaded, SceneError> {
+    load_with(desc, base, frame, None, purpose)
+}
+
 /// [`load`] in a given world frame (`None`: the one the policy picks) —
 /// how every frame of a time series lands in the frame of the first.
 pub fn load_in(
@@ -228,6 +240,16 @@ pub fn load_in(
     base: &Path,
     frame: usize,
     world: Option<&WorldFrame>,
+) -> Result<Loaded, SceneError> {
+    load_with(desc, base, frame, world, Purpose::Render)
+}
+
+fn load_with(
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+    world: Option<&WorldFrame>,
+    purpose: Purpose,
 ) -> Result<Loaded, SceneError> {
     let mut notes = Vec::new();
     let (volume, world) = match source_at(desc, base, frame)? {
@@ -242,7 +264,7 @@ pub fn load_in(
             }
         },
         Source::Amr(a) => {
-            let (v, f) = amr::load_amr(&a, base)?;
+            let (v, f) = amr::load_amr(&a, base, amr::field_pick(&a, purpose))?;
             (AnyVolume::Amr(Box::new(v)), f)
         }
         Source::Tets(t) => {

@@ -52,7 +52,7 @@ pub(crate) fn open(comm: &dyn Comm, a: &AmrDesc, base: &Path) -> Result<Part, Pa
         rank: comm.rank(),
         ranks: comm.size(),
     };
-    let run = agree(comm, read_cells(a, base, share))?;
+    let run = agree(comm, read_cells(a, base, share, &Default::default()))?;
     let names: Vec<String> = run.data.fields.iter().map(|f| f.0.clone()).collect();
     let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
     // The frame's scale from how far the whole data reaches (as one

@@ -53,59 +53,79 @@ pub fn validate(cells: &[[i32; 4]]) -> Result<(), AmrError> {
     if cells.is_empty() {
         return Err(AmrError::Empty);
     }
-    for (i, c) in cells.iter().enumerate() {
+    // Levels and alignment, and the extent with the coarsest width, in one
+    // pass on every core; the first bad cell in input order is reported.
+    let bad = cells.par_iter().position_first(|c| {
+        !(0..=MAX_LEVEL).contains(&c[3]) || {
+            let w = 1i64 << c[3];
+            (0..3).any(|a| (c[a] as i64).rem_euclid(w) != 0)
+        }
+    });
+    if let Some(i) = bad {
+        let c = cells[i];
         if !(0..=MAX_LEVEL).contains(&c[3]) {
             return Err(AmrError::BadLevel {
                 cell: i,
                 level: c[3],
             });
         }
-        let w = 1i64 << c[3];
-        if (0..3).any(|a| (c[a] as i64).rem_euclid(w) != 0) {
-            return Err(AmrError::Misaligned {
-                cell: i,
-                pos: [c[0], c[1], c[2]],
-                level: c[3],
-            });
-        }
+        return Err(AmrError::Misaligned {
+            cell: i,
+            pos: [c[0], c[1], c[2]],
+            level: c[3],
+        });
     }
+    let (min, max, top) = cells
+        .par_iter()
+        .fold(
+            || ([i64::MAX; 3], [i64::MIN; 3], 0),
+            |(mut lo, mut hi, top), c| {
+                for a in 0..3 {
+                    lo[a] = lo[a].min(c[a] as i64);
+                    hi[a] = hi[a].max(c[a] as i64 + (1i64 << c[3]));
+                }
+                (lo, hi, top.max(c[3]))
+            },
+        )
+        .reduce(
+            || ([i64::MAX; 3], [i64::MIN; 3], 0),
+            |a, b| {
+                let lo = [0, 1, 2].map(|k| a.0[k].min(b.0[k]));
+                let hi = [0, 1, 2].map(|k| a.1[k].max(b.1[k]));
+                (lo, hi, a.2.max(b.2))
+            },
+        );
     // Morton ranges need non-negative coordinates below 2^21.
-    let min = [0, 1, 2].map(|a| cells.iter().map(|c| c[a] as i64).min().unwrap_or(0));
-    let max = [0, 1, 2].map(|a| {
-        cells
-            .iter()
-            .map(|c| c[a] as i64 + (1i64 << c[3]))
-            .max()
-            .unwrap_or(0)
-    });
     // Align the shift to the coarsest width so cells stay aligned after it.
-    let coarsest = 1i64 << cells.iter().map(|c| c[3]).max().unwrap_or(0);
+    let coarsest = 1i64 << top;
     let shift = min.map(|m| m.div_euclid(coarsest) * coarsest);
     if (0..3).any(|a| max[a] - shift[a] > 1 << 21) {
         return Err(AmrError::TooLarge {
             extent: (0..3).map(|a| max[a] - shift[a]).max().unwrap_or(0),
         });
     }
-    let mut ranges: Vec<(u64, u64, u32)> = cells
+    // Each cell's first Morton key, its level and index beside it; sorted
+    // by the key alone (ties are overlaps whatever their order).
+    let mut ranges: Vec<(u64, u32, u32)> = cells
         .par_iter()
         .enumerate()
         .map(|(i, c)| {
             let q = [0, 1, 2].map(|a| (c[a] as i64 - shift[a]) as u32);
-            let start = morton(q);
-            (start, start + (1u64 << (3 * c[3])), i as u32)
+            (morton(q), c[3] as u32, i as u32)
         })
         .collect();
-    ranges.par_sort_unstable();
+    ranges.par_sort_unstable_by_key(|r| r.0);
     let mut end = 0u64;
     let mut owner = 0u32;
-    for (k, r) in ranges.iter().enumerate() {
-        if k > 0 && r.0 < end {
-            let (a, b) = (owner.min(r.2) as usize, owner.max(r.2) as usize);
+    for (k, &(start, level, i)) in ranges.iter().enumerate() {
+        if k > 0 && start < end {
+            let (a, b) = (owner.min(i) as usize, owner.max(i) as usize);
             return Err(AmrError::Overlap { a, b });
         }
-        if r.1 > end {
-            end = r.1;
-            owner = r.2;
+        let stop = start + (1u64 << (3 * level));
+        if stop > end {
+            end = stop;
+            owner = i;
         }
     }
     Ok(())
@@ -161,21 +181,33 @@ pub fn build(cells: &[[i32; 4]], fields: &[Vec<f32>]) -> (Vec<Brick>, Vec<Vec<f3
         offset += b.cell_count() as u32;
         bricks.push(b);
     }
-    // Scatter each field into brick order (x fastest within a brick).
+    // Scatter each field into brick order (x fastest within a brick), each
+    // brick's range on its own core.
     let ordered = fields
-        .par_iter()
+        .iter()
         .map(|values| {
             let mut out = vec![0.0f32; values.len()];
-            for (b, l) in bricks.iter().zip(&leaves) {
-                let w = b.width();
-                for &(start, len) in &l.runs {
-                    for c in &refs[start..start + len] {
-                        let i = [0, 1, 2].map(|a| (c.pos[a] - b.lower[a]) / w);
-                        let local = (i[2] * b.size[1] + i[1]) * b.size[0] + i[0];
-                        out[b.offset as usize + local as usize] = values[c.index as usize];
-                    }
-                }
+            let mut parts = Vec::with_capacity(bricks.len());
+            let mut rest = out.as_mut_slice();
+            for b in &bricks {
+                let (part, tail) = rest.split_at_mut(b.cell_count());
+                parts.push(part);
+                rest = tail;
             }
+            parts
+                .into_par_iter()
+                .zip(&bricks)
+                .zip(&leaves)
+                .for_each(|((part, b), l)| {
+                    let w = b.width();
+                    for &(start, len) in &l.runs {
+                        for c in &refs[start..start + len] {
+                            let i = [0, 1, 2].map(|a| (c.pos[a] - b.lower[a]) / w);
+                            let local = (i[2] * b.size[1] + i[1]) * b.size[0] + i[0];
+                            part[local as usize] = values[c.index as usize];
+                        }
+                    }
+                });
             out
         })
         .collect();

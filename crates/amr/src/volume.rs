@@ -12,6 +12,7 @@ mod nearest;
 mod octant;
 mod recon;
 
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use voxless_bvh::Bvh;
@@ -93,6 +94,22 @@ pub struct AmrVolume {
     grids: Vec<recon::BrickGrid>,
     /// Per field, values in brick order.
     values: Vec<Vec<f32>>,
+    field_ranges: Vec<Range1>,
+    /// The active brick regions and what walks and samples read of them,
+    /// built on first use: an on-axis projection of the nearest cells or
+    /// a brick-wise integral never needs them.
+    index: OnceLock<RegionIndex>,
+    /// Brick boxes, for nearest-cell lookups and exact projections.
+    brick_bvh: Bvh,
+    /// Octant reconstruction's cell location (built for it only).
+    octant: Option<octant::OctantIndex>,
+    bounds: Aabb,
+    stats: BuildStats,
+}
+
+/// The active brick regions of a volume (ExaBricks §3.2) and what walks
+/// and samples read of them.
+struct RegionIndex {
     regions: Regions,
     /// World boxes of the regions.
     region_bounds: Vec<Aabb>,
@@ -107,22 +124,78 @@ pub struct AmrVolume {
     /// Per region, what a lane step reads of it in one load: its slice of
     /// the brick list (`start..end` in `regions.brick_ids`) and its group.
     region_lists: Vec<[u32; 3]>,
-    field_ranges: Vec<Range1>,
     /// The k-d tree the regions were cut by: ray intervals, front to back
     /// (a prepared [`crate::AmrContext`] masks the subtrees it cannot see).
     tree: RegionTree,
     /// All regions, for point location.
     region_bvh: Bvh,
-    /// Brick boxes, for nearest-cell lookups and exact projections.
-    brick_bvh: Bvh,
-    /// Octant reconstruction's cell location (built for it only).
-    octant: Option<octant::OctantIndex>,
-    bounds: Aabb,
+    /// The region columns of [`BuildStats`].
     stats: BuildStats,
 }
 
+impl RegionIndex {
+    fn build(bricks: &[Brick], values: &[Vec<f32>], origin: Vec3, h: f32) -> RegionIndex {
+        let mut stats = BuildStats::default();
+        let t = Instant::now();
+        let regions = regions::build(bricks);
+        // Octant samples too are convex combinations of the values whose
+        // tents reach in (see `volume/octant.rs`): one range serves all.
+        let (region_ranges, region_finest) = regions::metadata(&regions, bricks, values);
+        let region_group = regions::groups(&regions);
+        stats.region_build = t.elapsed();
+        let to_world = |lo: [f64; 3], hi: [f64; 3]| {
+            Aabb::new(
+                origin + Vec3::new(lo[0] as f32, lo[1] as f32, lo[2] as f32) * h,
+                origin + Vec3::new(hi[0] as f32, hi[1] as f32, hi[2] as f32) * h,
+            )
+        };
+        let region_bounds: Vec<Aabb> = regions
+            .regions
+            .iter()
+            .map(|r| to_world(r.lo.map(|v| v as f64 * 0.5), r.hi.map(|v| v as f64 * 0.5)))
+            .collect();
+        stats.regions = regions.regions.len();
+        let total = regions.brick_ids.len();
+        stats.bricks_per_region = total as f64 / stats.regions.max(1) as f64;
+        let vol = |r: &Region| (0..3).map(|a| (r.hi[a] - r.lo[a]) as f64).product::<f64>();
+        let vsum: f64 = regions.regions.iter().map(vol).sum();
+        stats.bricks_per_region_by_volume = regions
+            .regions
+            .iter()
+            .map(|r| vol(r) * r.bricks.len() as f64)
+            .sum::<f64>()
+            / vsum.max(1.0);
+        let t = Instant::now();
+        // Regions come out of the k-d subdivision depth first: already coherent.
+        let region_bvh = Bvh::build_in_order(&region_bounds);
+        // Cut planes through the same mapping as the region boxes, so the
+        // walk's intervals are the boxes' to the bit.
+        let tree = RegionTree::new(&regions.tree, &region_bounds, |axis, at| {
+            let mut v = [0.0f64; 3];
+            v[axis] = at as f64 * 0.5;
+            to_world(v, v).min[axis]
+        });
+        stats.bvh_build = t.elapsed();
+        let region_lists = (regions.regions.iter().zip(&region_group))
+            .map(|(r, &g)| [r.bricks.start, r.bricks.end, g])
+            .collect();
+        RegionIndex {
+            regions,
+            region_bounds,
+            region_ranges,
+            region_finest,
+            region_group,
+            region_lists,
+            tree,
+            region_bvh,
+            stats,
+        }
+    }
+}
+
 impl AmrVolume {
-    /// Validates the cells, builds bricks, regions and BVHs.
+    /// Validates the cells, builds bricks and their BVH; the regions follow
+    /// on first use.
     pub fn new(input: AmrCells, settings: AmrSettings) -> Result<AmrVolume, AmrError> {
         let n = input.cells.len();
         if input.fields.is_empty() {
@@ -189,14 +262,6 @@ impl AmrVolume {
         drop(fields);
         stats.brick_build = t.elapsed();
 
-        let t = Instant::now();
-        let regions = regions::build(&bricks);
-        // Octant samples too are convex combinations of the values whose
-        // tents reach in (see `volume/octant.rs`): one range serves all.
-        let (region_ranges, region_finest) = regions::metadata(&regions, &bricks, &values);
-        let region_group = regions::groups(&regions);
-        stats.region_build = t.elapsed();
-
         let (origin, h) = (input.origin, input.cell_size);
         let to_world = |lo: [f64; 3], hi: [f64; 3]| {
             Aabb::new(
@@ -204,11 +269,6 @@ impl AmrVolume {
                 origin + Vec3::new(hi[0] as f32, hi[1] as f32, hi[2] as f32) * h,
             )
         };
-        let region_bounds: Vec<Aabb> = regions
-            .regions
-            .iter()
-            .map(|r| to_world(r.lo.map(|v| v as f64 * 0.5), r.hi.map(|v| v as f64 * 0.5)))
-            .collect();
         let brick_bounds: Vec<Aabb> = bricks
             .iter()
             .map(|b| to_world(b.lower.map(|v| v as f64), b.upper().map(|v| v as f64)))
@@ -223,39 +283,15 @@ impl AmrVolume {
             })
             .collect();
         stats.bricks = bricks.len();
-        stats.regions = regions.regions.len();
-        let total = regions.brick_ids.len();
-        stats.bricks_per_region = total as f64 / stats.regions.max(1) as f64;
-        let vol = |r: &Region| (0..3).map(|a| (r.hi[a] - r.lo[a]) as f64).product::<f64>();
-        let vsum: f64 = regions.regions.iter().map(vol).sum();
-        stats.bricks_per_region_by_volume = regions
-            .regions
-            .iter()
-            .map(|r| vol(r) * r.bricks.len() as f64)
-            .sum::<f64>()
-            / vsum.max(1.0);
-
         let t = Instant::now();
-        // Regions come out of the k-d subdivision depth first: already coherent.
-        let region_bvh = Bvh::build_in_order(&region_bounds);
         let brick_bvh = Bvh::build(&brick_bounds);
         let octant = (settings.reconstruction == Reconstruction::Octant)
             .then(|| octant::OctantIndex::new(&bricks));
-        // Cut planes through the same mapping as the region boxes, so the
-        // walk's intervals are the boxes' to the bit.
-        let tree = RegionTree::new(&regions.tree, &region_bounds, |axis, at| {
-            let mut v = [0.0f64; 3];
-            v[axis] = at as f64 * 0.5;
-            to_world(v, v).min[axis]
-        });
         stats.bvh_build = t.elapsed();
         // The data's domain is the cells, not the tents' half-cell margin
         // around them: bounds, intervals and samples stop at the cells.
         let bounds = brick_bounds.iter().fold(Aabb::EMPTY, |b, &x| b.union(x));
         let grids = bricks.iter().map(recon::BrickGrid::new).collect();
-        let region_lists = (regions.regions.iter().zip(&region_group))
-            .map(|(r, &g)| [r.bricks.start, r.bricks.end, g])
-            .collect();
         Ok(AmrVolume {
             names,
             origin,
@@ -264,15 +300,8 @@ impl AmrVolume {
             bricks,
             grids,
             values,
-            regions,
-            region_bounds,
-            region_ranges,
-            region_finest,
-            region_group,
-            region_lists,
             field_ranges,
-            tree,
-            region_bvh,
+            index: OnceLock::new(),
             brick_bvh,
             octant,
             bounds,
@@ -280,8 +309,25 @@ impl AmrVolume {
         })
     }
 
-    pub fn stats(&self) -> &BuildStats {
-        &self.stats
+    /// The build's counts and timings, the regions' included (which
+    /// builds them if nothing has yet).
+    pub fn stats(&self) -> BuildStats {
+        let r = &self.ix().stats;
+        BuildStats {
+            regions: r.regions,
+            bricks_per_region: r.bricks_per_region,
+            bricks_per_region_by_volume: r.bricks_per_region_by_volume,
+            region_build: r.region_build,
+            bvh_build: self.stats.bvh_build + r.bvh_build,
+            ..self.stats.clone()
+        }
+    }
+
+    /// The region index, built on first use.
+    #[inline]
+    fn ix(&self) -> &RegionIndex {
+        self.index
+            .get_or_init(|| RegionIndex::build(&self.bricks, &self.values, self.origin, self.h))
     }
     pub fn field_names(&self) -> &[String] {
         &self.names
@@ -290,27 +336,27 @@ impl AmrVolume {
         &self.bricks
     }
     pub fn regions(&self) -> &[Region] {
-        &self.regions.regions
+        &self.ix().regions.regions
     }
     /// The regions with their brick lists and the k-d tree that cut them.
     pub fn region_set(&self) -> &Regions {
-        &self.regions
+        &self.ix().regions
     }
     /// The bricks active in region `r`.
     pub fn region_bricks(&self, r: usize) -> &[u32] {
-        self.regions.bricks_of(r)
+        self.ix().regions.bricks_of(r)
     }
     pub fn settings(&self) -> &AmrSettings {
         &self.settings
     }
     /// World box of region `r`.
     pub fn region_bounds(&self, r: usize) -> Aabb {
-        self.region_bounds[r]
+        self.ix().region_bounds[r]
     }
     /// Value range of `field` in region `r`.
     #[inline]
     pub fn region_range(&self, r: usize, field: usize) -> Range1 {
-        self.region_ranges[r * self.values.len() + field]
+        self.ix().region_ranges[r * self.values.len() + field]
     }
     /// Range of `field` over all cells.
     pub fn field_range(&self, field: usize) -> Range1 {
@@ -339,7 +385,7 @@ impl AmrVolume {
         // Where the walk stopped short of a region that would have opened
         // interval `max + 1`: the next call starts there.
         let mut refused = None;
-        let rest = self.tree.walk(ray, t, mask, |r, hit| {
+        let rest = self.ix().tree.walk(ray, t, mask, |r, hit| {
             let r = r as usize;
             let range = self.region_range(r, self.settings.field);
             if !keep(range) || self.extend_last(&mut out[start..], r, hit, range) {
@@ -407,7 +453,8 @@ impl AmrVolume {
                         m += 1;
                     }
                 }
-                self.tree
+                self.ix()
+                    .tree
                     .walk_packet(simd, &sub[..m], &sub_t[..m], mask, |j, r, hit| {
                         let (list, r) = (&mut lists[lanes[j]], r as usize);
                         let range = self.region_range(r, self.settings.field);
@@ -447,7 +494,7 @@ impl AmrVolume {
     /// ExaBricks §4.2), the region as its hint.
     #[inline]
     fn region_interval(&self, r: usize, hit: Range1, range: Range1) -> Interval {
-        let dt = 0.5 * self.region_finest[r] as f32 * self.h;
+        let dt = 0.5 * self.ix().region_finest[r] as f32 * self.h;
         Interval {
             hint: r as u32,
             ..Interval::sampled(hit, range, dt)
@@ -460,7 +507,7 @@ impl AmrVolume {
     /// anyway).
     #[inline]
     fn goes_on(&self, last: &Interval, lo: f32, r: usize) -> bool {
-        last.t.hi == lo && self.region_group[last.hint as usize] == self.region_group[r]
+        last.t.hi == lo && self.ix().region_group[last.hint as usize] == self.ix().region_group[r]
     }
 
     /// The same intervals as [`AmrVolume::region_intervals`] found the
@@ -480,13 +527,17 @@ impl AmrVolume {
         if t.is_empty() {
             return;
         }
-        self.region_bvh.ray_query(ray, t, |r, hit| {
+        self.ix().region_bvh.ray_query(ray, t, |r, hit| {
             let r = r as usize;
-            let range = self.region_ranges[r * nf + self.settings.field];
+            let range = self.ix().region_ranges[r * nf + self.settings.field];
             if hit.hi > hit.lo && (query.is_visible)(range) {
                 out.push(Interval {
                     hint: r as u32,
-                    ..Interval::sampled(hit, range, 0.5 * self.region_finest[r] as f32 * self.h)
+                    ..Interval::sampled(
+                        hit,
+                        range,
+                        0.5 * self.ix().region_finest[r] as f32 * self.h,
+                    )
                 });
             }
         });
@@ -519,11 +570,11 @@ impl AmrVolume {
     ) -> (Option<NodeMask>, usize) {
         let nf = self.values.len();
         let f = self.settings.field;
-        let seen: Vec<bool> = (0..self.regions.regions.len())
-            .map(|r| is_visible(self.region_ranges[r * nf + f]))
+        let seen: Vec<bool> = (0..self.ix().regions.regions.len())
+            .map(|r| is_visible(self.ix().region_ranges[r * nf + f]))
             .collect();
         let count = seen.iter().filter(|&&v| v).count();
-        let mask = (count < seen.len()).then(|| self.tree.mask(|r| seen[r as usize]));
+        let mask = (count < seen.len()).then(|| self.ix().tree.mask(|r| seen[r as usize]));
         (mask, count)
     }
 
@@ -531,19 +582,19 @@ impl AmrVolume {
     pub fn visible_region_count(&self, is_visible: &dyn Fn(Range1) -> bool) -> usize {
         let nf = self.values.len();
         let f = self.settings.field;
-        (0..self.regions.regions.len())
-            .filter(|&r| is_visible(self.region_ranges[r * nf + f]))
+        (0..self.ix().regions.regions.len())
+            .filter(|&r| is_visible(self.ix().region_ranges[r * nf + f]))
             .count()
     }
 
     /// Per region, its brick-list group (see `region_group`).
     #[cfg(test)]
     pub(crate) fn region_groups(&self) -> &[u32] {
-        &self.region_group
+        &self.ix().region_group
     }
 
     pub(crate) fn region_tree(&self) -> &RegionTree {
-        &self.tree
+        &self.ix().tree
     }
 
     /// World position of unit coordinate 0.
@@ -570,7 +621,7 @@ impl AmrVolume {
             return None;
         }
         let mut found = None;
-        self.region_bvh.point_query(p, |i| {
+        self.ix().region_bvh.point_query(p, |i| {
             if found.is_none() {
                 found = Some(i as usize);
             }

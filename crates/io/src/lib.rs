@@ -131,9 +131,9 @@ pub mod vtk;
 pub mod xyz;
 
 pub use amr::{
-    AmrCellData, AmrFormat, amr_field, amr_format, amrclaw_time, exabricks_scalars, read_amr,
-    read_amrclaw, read_amrclaw_from, read_amrex, read_amrex_files, read_exabricks,
-    read_exabricks_bytes, read_exabricks_rows,
+    AmrCellData, AmrFormat, FieldPick, amr_field, amr_format, amrclaw_time, exabricks_scalars,
+    read_amr, read_amr_picked, read_amrclaw, read_amrclaw_from, read_amrclaw_picked, read_amrex,
+    read_amrex_files, read_exabricks, read_exabricks_bytes, read_exabricks_rows,
 };
 pub use atomic::write_atomically;
 pub use csv::{CsvTable, read_csv, read_csv_from};

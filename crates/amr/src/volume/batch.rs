@@ -161,7 +161,7 @@ impl AmrVolume {
         run.len = 0;
         let fields = self.basis_fields(self.settings.field);
         let two_fields = fields.1.is_some();
-        let bricks = self.regions.bricks_of(run.region);
+        let bricks = self.ix().regions.bricks_of(run.region);
         if gradient {
             let mut sums = [BasisSums::default(); RUN];
             let sums = &mut sums[..n];

@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use voxless_core::{Camera, Cancelled, Control, Volume};
 
 use super::AmrVolume;
-use crate::project::{AxisGrid, in_bands, span};
+use crate::project::{AxisPixels, in_bands, span};
 
 /// Rows per task.
 const BAND: usize = 16;
@@ -31,21 +31,14 @@ impl AmrVolume {
         height: u32,
         control: &Control,
     ) -> Option<Result<Vec<f32>, Cancelled>> {
-        let AxisGrid {
-            rays,
-            m,
-            ax,
-            ay,
-            xs,
-            ys,
-            ..
-        } = self.axis_grid(camera, width, height)?;
+        let AxisPixels {
+            m, ax, ay, xs, ys, ..
+        } = self.axis_pixels(camera, width, height)?;
         let bounds = self.bounds();
-        let o = rays[0].origin[m];
+        let o = camera.ray(0.5, 0.5, width, height).origin[m];
         if !(o <= bounds.min[m] || o >= bounds.max[m]) {
             return None;
         }
-        drop(rays);
         let field = &self.values[self.settings.field];
         // Each brick's columns along m, in f64, `ax` fastest.
         let columns: Vec<Vec<f64>> = self

@@ -61,9 +61,9 @@ impl AmrVolume {
             if live >> k & 1 == 0 || (one_region && k > live.trailing_zeros() as usize) {
                 continue;
             }
-            match self.region_lists.get(hints[k] as usize) {
+            match self.ix().region_lists.get(hints[k] as usize) {
                 Some(&[a, b, g]) => {
-                    *list = &self.regions.brick_ids[a as usize..b as usize];
+                    *list = &self.ix().regions.brick_ids[a as usize..b as usize];
                     same = match same {
                         None => Some(Some(g)),
                         Some(s) => Some(s.filter(|&s| s == g)),

@@ -39,13 +39,13 @@ impl AmrVolume {
         match self.settings.reconstruction {
             Reconstruction::Nearest => return self.nearest(pu, region, field, color_field),
             Reconstruction::Octant => {
-                let hint = self.regions.bricks_of(region);
+                let hint = self.ix().regions.bricks_of(region);
                 return self.octant(pu, hint, field, color_field, gradient);
             }
             Reconstruction::Basis => {}
         }
         let fields = self.basis_fields(field);
-        let bricks = self.regions.bricks_of(region).iter();
+        let bricks = self.ix().regions.bricks_of(region).iter();
         let grids = bricks.map(|&b| &self.grids[b as usize]);
         if !gradient {
             let mut sums = ValueSums::default();
@@ -131,7 +131,7 @@ impl AmrVolume {
             // Cells found by position, terms in a fixed order: the same
             // bits whatever the bricks.
             Reconstruction::Octant => {
-                let hint = self.regions.bricks_of(region);
+                let hint = self.ix().regions.bricks_of(region);
                 return self.octant(pu, hint, field, color_field, gradient);
             }
             Reconstruction::Basis => {}
@@ -139,7 +139,7 @@ impl AmrVolume {
         let (v0, v1) = (&self.values[field], &self.values[color_field]);
         let two_fields = color_field != field;
         let mut terms = SortedTerms::default();
-        for &b in self.regions.bricks_of(region) {
+        for &b in self.ix().regions.bricks_of(region) {
             let grid = &self.grids[b as usize];
             let Some(st) = Stencil::new(grid, pu, gradient) else {
                 continue;
@@ -183,7 +183,7 @@ impl AmrVolume {
         field: usize,
         color_field: usize,
     ) -> Option<Recon> {
-        for &b in self.regions.bricks_of(region) {
+        for &b in self.ix().regions.bricks_of(region) {
             if let Some(cell) = self.cell_in_brick(pu, b as usize) {
                 return Some(Recon {
                     value: self.values[field][cell],

@@ -8,7 +8,7 @@
 use std::io::{BufRead, Read, Seek};
 use std::path::{Path, PathBuf};
 
-use super::{AmrCellData, MAX_LEVEL};
+use super::{AmrCellData, FieldPick, MAX_LEVEL};
 use crate::decimal::fast_decimal;
 use crate::{IoError, checked_product, open_with_len, remaining_len};
 
@@ -297,12 +297,29 @@ struct Grid {
 /// Fails with the grid number and line number if a grid holds fewer values
 /// than its header declares, and on any malformed header or number.
 pub fn read_amrclaw(fort_q: &Path) -> Result<AmrCellData, IoError> {
+    read_amrclaw_picked(fort_q, &FieldPick::All)
+}
+
+/// [`read_amrclaw`] parsing only the fields `pick` names (the others'
+/// numbers are skipped unread; see [`FieldPick`]). Rows are then taken one
+/// per line, as AMRClaw writes them: the first row of each grid is checked
+/// to hold `meqn` values, and a malformed number in a field not picked goes
+/// unnoticed.
+pub fn read_amrclaw_picked(fort_q: &Path, pick: &FieldPick) -> Result<AmrCellData, IoError> {
     let header = match fort_t_path(fort_q) {
         Some(t) if t.is_file() => Some(read_fort_t(&t)?),
         _ => None,
     };
     let (file, len) = open_with_len(fort_q)?;
-    read_grids(file, len, fort_q, header)
+    // The file's pages in place (no copy of the text, no fresh memory);
+    // where the file cannot be mapped (a pipe), read it a window at a time.
+    // SAFETY: the map is only read, and dropped before returning; a file
+    // truncated by another process meanwhile is outside what any reader
+    // can guard against (as with output files still being written).
+    match (len > 0).then(|| unsafe { memmap2::Mmap::map(&file) }) {
+        Some(Ok(map)) => read_grids_text(&map, fort_q, header, pick),
+        _ => read_grids(file, len, fort_q, header, pick),
+    }
 }
 
 /// [`read_amrclaw`] from memory: `fort_q` yields the `fort.qNNNN` text
@@ -324,7 +341,7 @@ pub fn read_amrclaw_from<R: Read + Seek>(
         None => None,
     };
     let len = remaining_len(&mut fort_q, name)?;
-    read_grids(fort_q, len, name, header)
+    read_grids(fort_q, len, name, header, &FieldPick::All)
 }
 
 /// Text read at a time: the grids a window holds parse in parallel, and
@@ -347,8 +364,9 @@ fn read_grids(
     file_len: u64,
     fort_q: &Path,
     header: Option<FrameHeader>,
+    pick: &FieldPick,
 ) -> Result<AmrCellData, IoError> {
-    read_grids_in(reader, file_len, fort_q, header, WINDOW)
+    read_grids_in(reader, file_len, fort_q, header, WINDOW, pick)
 }
 
 /// [`read_grids`] a `window` of bytes at a time.
@@ -358,13 +376,10 @@ fn read_grids_in(
     fort_q: &Path,
     header: Option<FrameHeader>,
     window: u64,
+    pick: &FieldPick,
 ) -> Result<AmrCellData, IoError> {
-    use rayon::prelude::*;
-    let mut meqn = header.as_ref().map(|h| h.meqn);
-    let mut grids: Vec<Grid> = Vec::new();
+    let mut scan = Scan::new(fort_q, file_len, &header, pick);
     let mut text: Vec<u8> = Vec::new();
-    // Lines before `text[0]`.
-    let mut line = 0usize;
     loop {
         // Room for the window at once (and no more than the file holds).
         text.reserve(window.min(file_len) as usize);
@@ -373,84 +388,26 @@ fn read_grids_in(
             .read_to_end(&mut text)
             .map_err(|e| IoError::io(fort_q, e))?;
         let end = read == 0;
-        // Whole grids: up to the last header line, or all of it at the end.
-        let mut starts = header_starts(&text);
-        let cut = match (end, starts.last()) {
-            (true, _) => text.len(),
-            (false, Some(&c)) if c > 0 => c,
-            (false, _) => continue,
-        };
-        starts.retain(|&s| s < cut);
-        if starts.first() != Some(&0) {
-            starts.insert(0, 0);
+        if let Some(cut) = scan.grids_of(&text, end)? {
+            text.drain(..cut);
         }
-        starts.push(cut);
-        let pieces: Vec<(&[u8], bool)> = starts
-            .windows(2)
-            .map(|w| (&text[w[0]..w[1]], w[1] < text.len()))
-            .collect();
-        let mut firsts = Vec::with_capacity(pieces.len());
-        for p in &pieces {
-            firsts.push(line);
-            line += memchr::memchr_iter(b'\n', p.0).count();
-        }
-        // Without fort.t the first data row gives meqn: the pieces up to
-        // the first grid parse alone.
-        let mut k = 0;
-        while meqn.is_none() && k < pieces.len() {
-            grids.extend(read_piece(
-                pieces[k], firsts[k], fort_q, &mut meqn, file_len,
-            )?);
-            k += 1;
-        }
-        let parsed: Vec<Result<Vec<Grid>, IoError>> = pieces[k..]
-            .par_iter()
-            .zip(&firsts[k..])
-            .map(|(&p, &first)| read_piece(p, first, fort_q, &mut meqn.clone(), file_len))
-            .collect();
-        for piece in parsed {
-            grids.extend(piece?);
-        }
-        text.drain(..cut);
         if end {
             break;
         }
     }
-    if let Some(h) = &header {
-        if let Some(extra) = grids.get(h.ngrids) {
-            return Err(IoError::format(
-                fort_q,
-                format!(
-                    "line {}: unexpected grid {} after the last of the {} grids fort.t declares",
-                    extra.line, extra.number, h.ngrids
-                ),
-            ));
-        }
-        if grids.len() < h.ngrids {
-            return Err(IoError::format(
-                fort_q,
-                format!(
-                    "file ends at line {line} after {} grids, but fort.t declares {}",
-                    grids.len(),
-                    h.ngrids
-                ),
-            ));
-        }
-    }
-    let meqn = meqn.unwrap_or(0);
-    if grids.is_empty() {
-        return Err(IoError::format(fort_q, "no grids in the file"));
-    }
-    let mut data = grids_to_cells(fort_q, grids, meqn)?;
-    data.time = header.map(|h| h.time);
-    Ok(data)
+    scan.finish(header)
 }
 
-/// Where the lines of `text` that name `grid_number` start.
-fn header_starts(text: &[u8]) -> Vec<usize> {
-    memchr::memmem::find_iter(text, GRID_NUMBER)
-        .map(|at| memchr::memrchr(b'\n', &text[..at]).map_or(0, |nl| nl + 1))
-        .collect()
+/// [`read_grids`] over the whole text at once (a mapped file).
+fn read_grids_text(
+    text: &[u8],
+    fort_q: &Path,
+    header: Option<FrameHeader>,
+    pick: &FieldPick,
+) -> Result<AmrCellData, IoError> {
+    let mut scan = Scan::new(fort_q, text.len() as u64, &header, pick);
+    scan.grids_of(text, true)?;
+    scan.finish(header)
 }
 
 /// The grids of one piece of text whose first line is line `first + 1`
@@ -461,6 +418,7 @@ fn read_piece(
     fort_q: &Path,
     meqn: &mut Option<usize>,
     file_len: u64,
+    pick: &FieldPick,
 ) -> Result<Vec<Grid>, IoError> {
     let mut lines = Lines::new(piece, fort_q);
     lines.line = first;
@@ -468,7 +426,7 @@ fn read_piece(
     let mut grids = Vec::new();
     while lines.next_nonblank()?.is_some() {
         lines.unread();
-        grids.push(read_grid(&mut lines, meqn, file_len)?);
+        grids.push(read_grid(&mut lines, meqn, file_len, pick)?);
     }
     Ok(grids)
 }
@@ -484,9 +442,11 @@ fn read_grid(
     lines: &mut Lines<&[u8]>,
     meqn: &mut Option<usize>,
     file_len: u64,
+    pick: &FieldPick,
 ) -> Result<Grid, IoError> {
     let number: i64 = lines.named("grid_number", "a grid header", "an integer", int)?;
     let line = lines.line;
+    let header_line = line;
     let context = format!("the header of grid {number} (line {line})");
     let amr_level: i64 = lines.named("AMR_level", &context, "an integer", int)?;
     let mut size = [0usize; 3];
@@ -543,7 +503,8 @@ fn read_grid(
                 ),
             )
         })?;
-    let mut values = Vec::with_capacity(count);
+    let cols = columns(meqn, pick).1;
+    let mut values = Vec::with_capacity(count / meqn * cols.as_ref().map_or(meqn, Vec::len));
     let fault = |line: usize, problem: String, done: usize| {
         format!(
             "line {line}: {problem}, after {done} of {count} values (mx·my·mz·meqn); the grid is \
@@ -555,6 +516,34 @@ fn read_grid(
     let text: &[u8] = lines.reader;
     let mut at = 0;
     let mut line = lines.line + 1;
+    if let Some(cols) = cols {
+        let cells = count / meqn;
+        let rows = Rows {
+            text,
+            meqn,
+            cols: &cols,
+            ends_at_header: lines.ends_at_header,
+        };
+        return match rows.read(cells, &mut at, &mut line, &mut values) {
+            Ok(()) => {
+                lines.reader = &text[at..];
+                lines.line = line - 1;
+                Ok(Grid {
+                    number,
+                    amr_level,
+                    line: header_line,
+                    size,
+                    low,
+                    d,
+                    values,
+                })
+            }
+            Err(message) => {
+                lines.line = line;
+                Err(grid_error(lines, message))
+            }
+        };
+    }
     while values.len() < count {
         while at < text.len() && text[at].is_ascii_whitespace() {
             line += usize::from(text[at] == b'\n');
@@ -608,7 +597,7 @@ fn read_grid(
     Ok(Grid {
         number,
         amr_level,
-        line,
+        line: header_line,
         size,
         low,
         d,
@@ -616,8 +605,22 @@ fn read_grid(
     })
 }
 
+/// The names of `meqn` components (`q0`, `q1`, …) and the columns `pick`
+/// keeps (`None`: all).
+fn columns(meqn: usize, pick: &FieldPick) -> (Vec<String>, Option<Vec<usize>>) {
+    let names: Vec<String> = (0..meqn).map(|q| format!("q{q}")).collect();
+    let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+    let cols = pick.columns(&refs);
+    (names, cols)
+}
+
 /// Drops covered cells and converts grids to ExaBricks cells.
-fn grids_to_cells(path: &Path, grids: Vec<Grid>, meqn: usize) -> Result<AmrCellData, IoError> {
+fn grids_to_cells(
+    path: &Path,
+    grids: Vec<Grid>,
+    meqn: usize,
+    pick: &FieldPick,
+) -> Result<AmrCellData, IoError> {
     let grid_error = |g: &Grid, message: String| {
         IoError::format(
             path,
@@ -776,9 +779,15 @@ fn grids_to_cells(path: &Path, grids: Vec<Grid>, meqn: usize) -> Result<AmrCellD
         })
         .sum();
     let mut cells = Vec::with_capacity(kept);
-    let mut fields: Vec<(String, Vec<f32>)> = (0..meqn)
-        .map(|q| (format!("q{q}"), Vec::with_capacity(kept)))
-        .collect();
+    let (names, cols) = columns(meqn, pick);
+    let stride = cols.as_ref().map_or(meqn, Vec::len);
+    let mut fields: Vec<(String, Vec<f32>)> = match &cols {
+        Some(cols) => cols.iter().map(|&c| names[c].clone()).collect::<Vec<_>>(),
+        None => names,
+    }
+    .into_iter()
+    .map(|name| (name, Vec::with_capacity(kept)))
+    .collect();
     for (((g, mask), (lo, _)), &level) in grids.iter().zip(&covered).zip(&boxes).zip(&levels) {
         let width = 1i64 << level;
         let [nx, ny, nz] = g.size;
@@ -790,7 +799,7 @@ fn grids_to_cells(path: &Path, grids: Vec<Grid>, meqn: usize) -> Result<AmrCellD
                         // In range: hi was checked against i32::MAX above.
                         let corner = |k: usize, i: usize| (lo[k] + i as i64 * width) as i32;
                         cells.push([corner(0, x), corner(1, y), corner(2, z), level as i32]);
-                        let row = &g.values[index * meqn..(index + 1) * meqn];
+                        let row = &g.values[index * stride..(index + 1) * stride];
                         for ((_, field), &v) in fields.iter_mut().zip(row) {
                             field.push(v);
                         }
@@ -808,6 +817,10 @@ fn grids_to_cells(path: &Path, grids: Vec<Grid>, meqn: usize) -> Result<AmrCellD
         time: None,
     })
 }
+
+#[path = "amrclaw_scan.rs"]
+mod scan;
+use scan::{Rows, Scan};
 
 #[cfg(test)]
 #[path = "amrclaw_tests.rs"]

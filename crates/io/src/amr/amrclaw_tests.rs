@@ -1,6 +1,8 @@
 //! The fort.q reader's fast paths against the slow ones they replace.
 
-use super::{FrameHeader, parse_fortran, read_grids_in};
+use super::scan::header_starts_in;
+use super::{FrameHeader, parse_fortran, read_grids_in, read_grids_text};
+use crate::amr::FieldPick;
 use crate::decimal::fast_decimal;
 use std::path::Path;
 
@@ -53,6 +55,7 @@ fn windows_read_the_grids_the_whole_text_reads() {
             path,
             Some(header),
             window,
+            &FieldPick::All,
         )
     };
     let whole = read(&text, u64::MAX, 10).unwrap();
@@ -168,6 +171,7 @@ fn inconsistent_levels_name_the_grids() {
             path,
             Some(header),
             1 << 20,
+            &FieldPick::All,
         ) {
             Ok(_) => panic!("no error"),
             Err(e) => e.to_string(),
@@ -200,4 +204,95 @@ fn inconsistent_levels_name_the_grids() {
         e.contains("grid 2") && e.contains("inconsistent with grid 1"),
         "{e}"
     );
+}
+
+/// A field picked alone reads the values the whole read gives for it,
+/// through windows and over the whole text (a mapped file) alike, and a
+/// malformed row in a picked read names its line.
+#[test]
+fn picked_fields_read_what_the_whole_read_gives() {
+    let text = grids_text(9);
+    let path = Path::new("fort.q0000");
+    let header = || {
+        Some(FrameHeader {
+            time: 0.0,
+            meqn: 2,
+            ngrids: 10,
+        })
+    };
+    let whole = read_grids_in(
+        text.as_bytes(),
+        text.len() as u64,
+        path,
+        header(),
+        1 << 20,
+        &FieldPick::All,
+    )
+    .unwrap();
+    let pick = |name: &str| FieldPick::Named {
+        names: vec![name.into()],
+        first: false,
+    };
+    for (name, column) in [("q0", 0), ("q1", 1), ("Q1", 1)] {
+        for window in [37, 4096, u64::MAX] {
+            let got = read_grids_in(
+                text.as_bytes(),
+                text.len() as u64,
+                path,
+                header(),
+                window,
+                &pick(name),
+            )
+            .unwrap();
+            assert_eq!(got.cells, whole.cells, "{name}, window {window}");
+            assert_eq!(
+                got.fields,
+                vec![whole.fields[column].clone()],
+                "{name}, window {window}"
+            );
+        }
+        let mapped = read_grids_text(text.as_bytes(), path, header(), &pick(name)).unwrap();
+        assert_eq!(mapped.fields, vec![whole.fields[column].clone()], "{name}");
+    }
+    // Without fort.t (meqn from the first row) and with the first field.
+    let first = FieldPick::Named {
+        names: Vec::new(),
+        first: true,
+    };
+    let got = read_grids_text(text.as_bytes(), path, None, &first).unwrap();
+    assert_eq!(got.fields, vec![whole.fields[0].clone()]);
+    // A name the file lacks reads every field (the error lists them).
+    let got = read_grids_text(text.as_bytes(), path, header(), &pick("density")).unwrap();
+    assert_eq!(got.fields, whole.fields);
+    // A row short of meqn values, and one with an extra value on a grid's
+    // first row: errors naming the line.
+    let row = "-1.5000000000000000E0\n";
+    for to in ["\n", "-1.5000000000000000E0 7\n"] {
+        let broken = text.replacen(row, to, 1);
+        assert_ne!(broken, text, "{to}");
+        let line = text[..text.find(row).unwrap()].matches('\n').count() + 1;
+        let e = read_grids_text(broken.as_bytes(), path, header(), &pick("q0"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("but meqn is 2") && e.contains(&format!("line {line}:")),
+            "line {line}: {e}"
+        );
+    }
+}
+
+/// Header lines found in chunks, on every core, are the ones a single
+/// search finds, whatever the chunk size (markers straddling chunks).
+#[test]
+fn header_search_in_chunks_finds_every_grid() {
+    let text = grids_text(30);
+    let one = header_starts_in(text.as_bytes(), usize::MAX);
+    assert_eq!(one.len(), 31);
+    for chunk in [1, 5, 11, 64, 1000, 4096] {
+        assert_eq!(
+            header_starts_in(text.as_bytes(), chunk),
+            one,
+            "chunk {chunk}"
+        );
+    }
 }

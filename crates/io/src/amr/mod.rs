@@ -41,7 +41,7 @@ mod amrclaw;
 mod amrex;
 mod exabricks;
 
-pub use amrclaw::{amrclaw_time, read_amrclaw, read_amrclaw_from};
+pub use amrclaw::{amrclaw_time, read_amrclaw, read_amrclaw_from, read_amrclaw_picked};
 pub use amrex::{read_amrex, read_amrex_files};
 pub use exabricks::{read_exabricks, read_exabricks_bytes, read_exabricks_rows};
 
@@ -76,6 +76,44 @@ impl AmrCellData {
 
 /// The largest cell level accepted (cells `2^30` finest units wide).
 pub const MAX_LEVEL: i32 = 30;
+
+/// Which fields a reader decodes. Text formats pay for every number they
+/// parse (an AMRClaw frame spends most of its read on them), so a caller
+/// that integrates one field asks for it alone; binary formats read every
+/// field either way.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum FieldPick {
+    /// Every field (what listings, samples and the viewer need).
+    #[default]
+    All,
+    /// The fields [`amr_field`] finds for these names, and the first field
+    /// when `first` (the default opacity field). When a name is not found,
+    /// every field is read, so the error that follows lists them all.
+    Named { names: Vec<String>, first: bool },
+}
+
+impl FieldPick {
+    /// The columns of `names` to read, ascending; `None` for all of them.
+    pub fn columns(&self, names: &[&str]) -> Option<Vec<usize>> {
+        let FieldPick::Named {
+            names: wanted,
+            first,
+        } = self
+        else {
+            return None;
+        };
+        let mut cols = wanted
+            .iter()
+            .map(|w| amr_field(names, w))
+            .collect::<Option<Vec<usize>>>()?;
+        if *first {
+            cols.push(0);
+        }
+        cols.sort_unstable();
+        cols.dedup();
+        (!cols.is_empty() && cols.len() < names.len()).then_some(cols)
+    }
+}
 
 /// Names the codes give the same quantity: a field asked for by one of
 /// them is found under any other when the file has no exact match.
@@ -222,9 +260,15 @@ fn enzo_hierarchy(path: &Path) -> std::path::PathBuf {
 /// Reads the AMR output at `path` in whichever format it is
 /// ([`amr_format`]): leaf cells with every field the file holds.
 pub fn read_amr(path: &Path) -> Result<(AmrCellData, AmrFormat), IoError> {
+    read_amr_picked(path, &FieldPick::All)
+}
+
+/// [`read_amr`] decoding only the fields `pick` names where the format
+/// allows (AMRClaw's text; see [`FieldPick`]).
+pub fn read_amr_picked(path: &Path, pick: &FieldPick) -> Result<(AmrCellData, AmrFormat), IoError> {
     let format = amr_format(path)?;
     let data = match format {
-        AmrFormat::AmrClaw => read_amrclaw(path)?,
+        AmrFormat::AmrClaw => read_amrclaw_picked(path, pick)?,
         AmrFormat::Amrex => read_amrex(path)?,
         AmrFormat::ExaBricks => {
             let scalars = exabricks_scalars(path)?;
