@@ -1,4 +1,5 @@
-//! `read_amrclaw_from` on AMRClaw ASCII output. Byte 0 picks the mode
+//! `read_amrclaw_from` and `read_amrclaw_text` (one field picked) on
+//! AMRClaw ASCII output. Byte 0 picks the mode
 //! (modulo 3), the rest of the input is one of the two texts:
 //!
 //! - 0: the rest is the `fort.q` text, with a small valid `fort.t`
@@ -81,5 +82,19 @@ fuzz_target!(|data: &[u8]| {
         1 => (FORT_Q.as_bytes(), Some(rest)),
         _ => (rest, None),
     };
-    let _ = voxless_io::read_amrclaw_from(Cursor::new(fort_q), Path::new("fort.q0001"), fort_t);
+    let name = Path::new("fort.q0001");
+    let whole = voxless_io::read_amrclaw_from(Cursor::new(fort_q), name, fort_t);
+    // The mapped file's path, with the second field alone: where both
+    // read, it holds the whole read's second field.
+    let pick = voxless_io::FieldPick::Named {
+        names: vec!["q1".into()],
+        first: false,
+    };
+    let picked = voxless_io::read_amrclaw_text(fort_q, name, fort_t, &pick);
+    if let (Ok(w), Ok(p)) = (&whole, &picked)
+        && w.fields.len() == 2
+    {
+        assert_eq!(p.cells, w.cells);
+        assert_eq!(p.fields, w.fields[1..]);
+    }
 });

@@ -48,8 +48,9 @@ pub const MAX_LEVEL: i32 = 20;
 /// Cells per brick axis at most.
 const BRICK_MAX: i32 = 32;
 
-/// Checks alignment and overlap. Errors name the cell indices.
-pub fn validate(cells: &[[i32; 4]]) -> Result<(), AmrError> {
+/// Checks alignment and overlap and returns the cells' extent (lower and
+/// exclusive upper corner, finest units). Errors name the cell indices.
+pub fn validate(cells: &[[i32; 4]]) -> Result<([i64; 3], [i64; 3]), AmrError> {
     if cells.is_empty() {
         return Err(AmrError::Empty);
     }
@@ -128,7 +129,7 @@ pub fn validate(cells: &[[i32; 4]]) -> Result<(), AmrError> {
             owner = i;
         }
     }
-    Ok(())
+    Ok((min, max))
 }
 
 /// A cell during brick construction: position, level, input index.

@@ -344,20 +344,82 @@ mod tests {
         assert_eq!(checked, 60);
     }
 
+    /// Nearest columns of an on-axis view, from the cells (before any
+    /// brick: `fresh`) and from the bricks (`bricked`), against the
+    /// per-pixel DDA.
+    fn check_nearest(fresh: &AmrVolume, bricked: &AmrVolume, cam: &Camera, w: u32, h: u32) {
+        let axis = (0..3).find(|&a| cam.forward[a] != 0.0).unwrap();
+        let cells = fresh
+            .project_image(cam, w, h, &Control::new())
+            .unwrap()
+            .unwrap();
+        assert!(
+            fresh.with_cells(|_| ()).is_some(),
+            "the cell path built bricks"
+        );
+        let bricks = bricked
+            .project_image(cam, w, h, &Control::new())
+            .unwrap()
+            .unwrap();
+        let slow = project_per_pixel(bricked, cam, w, h, &Control::new()).unwrap();
+        // Centres on a cell face (within rounding) may take either side in
+        // the per-pixel DDA: left out.
+        let on_face = |i: usize| {
+            let r = cam.ray(
+                (i % w as usize) as f32 + 0.5,
+                (i / w as usize) as f32 + 0.5,
+                w,
+                h,
+            );
+            (0..3).filter(|&a| a != axis).any(|a| {
+                let u = (r.origin[a] - bricked.origin()[a]) / bricked.cell_size();
+                (u - u.round()).abs() < 1e-3
+            })
+        };
+        for fast in [&cells, &bricks] {
+            let (mut sf, mut ss, mut n) = (0.0f64, 0.0f64, 0);
+            for (i, (a, s)) in fast.iter().zip(&slow).enumerate() {
+                if on_face(i) {
+                    continue;
+                }
+                n += 1;
+                (sf, ss) = (sf + *a as f64, ss + *s as f64);
+                assert!(
+                    (a - s).abs() <= 1e-5 * s.abs().max(1.0),
+                    "axis {axis} {w}×{h} pixel {i}: {a} vs {s}"
+                );
+            }
+            assert!(n * 2 > fast.len(), "{n} pixels off faces");
+            assert!(
+                ((sf - ss) / ss).abs() < 1e-6,
+                "axis {axis} {w}×{h}: Σ {sf} vs {ss}"
+            );
+        }
+        // Off faces the two fast paths differ in their sums' order only.
+        for (i, (a, b)) in cells.iter().zip(&bricks).enumerate() {
+            assert!(
+                on_face(i) || (a - b).abs() <= 1e-6 * b.abs().max(1e-3),
+                "{a} vs {b}"
+            );
+        }
+    }
+
+    fn nearest(cells: &crate::AmrCells) -> AmrVolume {
+        let settings = AmrSettings {
+            reconstruction: crate::Reconstruction::Nearest,
+            ..Default::default()
+        };
+        AmrVolume::new(cells.clone(), settings).unwrap()
+    }
+
     #[test]
     fn nearest_axis_views_equal_the_per_pixel_chord_sums() {
-        use crate::Reconstruction;
         let mut checked = 0;
         for (seed, holes) in [(44, true), (45, false)] {
-            let vol = AmrVolume::new(
-                cells_with(synthetic(seed, holes), smooth),
-                AmrSettings {
-                    reconstruction: Reconstruction::Nearest,
-                    ..Default::default()
-                },
-            )
-            .unwrap();
-            let b = vol.bounds();
+            let cells = cells_with(synthetic(seed, holes), smooth);
+            let bricked = nearest(&cells);
+            let _ = bricked.bricks();
+            let b = bricked.bounds();
             let inner = Aabb::new(b.min + b.extent() * 0.3, b.max - b.extent() * 0.2);
             let outer = Aabb::new(b.min - b.extent() * 0.1, b.max + b.extent() * 0.05);
             for (frame, w, h) in [(b, 47, 52), (b, 50, 37), (inner, 41, 29), (outer, 33, 35)] {
@@ -367,48 +429,54 @@ mod tests {
                     up.forward = -up.forward;
                     up.right = -up.right;
                     for cam in [down, up] {
-                        let fast = vol
-                            .project_image(&cam, w, h, &Control::new())
-                            .unwrap()
-                            .unwrap();
-                        let slow = project_per_pixel(&vol, &cam, w, h, &Control::new()).unwrap();
-                        // Centres on a cell face (within rounding) may take
-                        // either side in the per-pixel DDA: left out.
-                        let on_face = |i: usize| {
-                            let r = cam.ray(
-                                (i % w as usize) as f32 + 0.5,
-                                (i / w as usize) as f32 + 0.5,
-                                w,
-                                h,
-                            );
-                            (0..3).filter(|&a| a != axis).any(|a| {
-                                let u = (r.origin[a] - vol.origin()[a]) / vol.cell_size();
-                                (u - u.round()).abs() < 1e-3
-                            })
-                        };
-                        let (mut sf, mut ss, mut n) = (0.0f64, 0.0f64, 0);
-                        for (i, (a, s)) in fast.iter().zip(&slow).enumerate() {
-                            if on_face(i) {
-                                continue;
-                            }
-                            n += 1;
-                            (sf, ss) = (sf + *a as f64, ss + *s as f64);
-                            assert!(
-                                (a - s).abs() <= 1e-5 * s.abs().max(1.0),
-                                "axis {axis} {w}×{h} pixel {i}: {a} vs {s}"
-                            );
-                        }
-                        assert!(n * 2 > fast.len(), "{n} pixels off faces");
-                        assert!(
-                            ((sf - ss) / ss).abs() < 1e-6,
-                            "axis {axis} {w}×{h}: Σ {sf} vs {ss}"
-                        );
+                        check_nearest(&nearest(&cells), &bricked, &cam, w, h);
                         checked += 1;
                     }
                 }
             }
         }
         assert_eq!(checked, 48);
+    }
+
+    /// Finest cells only in two far corners of a coarse domain: their
+    /// level's lattice would be far larger than its cells and the image,
+    /// so each cell adds its column to its pixels instead.
+    #[test]
+    fn nearest_columns_of_sparse_levels_add_cell_by_cell() {
+        fn split(c: [i32; 4], targets: &[[i32; 3]], out: &mut Vec<[i32; 4]>) {
+            let w = 1 << c[3];
+            let inside = |t: &[i32; 3]| (0..3).all(|a| t[a] >= c[a] && t[a] < c[a] + w);
+            if c[3] == 0 || !targets.iter().any(inside) {
+                out.push(c);
+                return;
+            }
+            let h = w / 2;
+            for k in 0..8 {
+                let d = [k & 1, (k >> 1) & 1, k >> 2].map(|b| b * h);
+                split(
+                    [c[0] + d[0], c[1] + d[1], c[2] + d[2], c[3] - 1],
+                    targets,
+                    out,
+                );
+            }
+        }
+        let mut cells = Vec::new();
+        for k in 0..64 {
+            let c = [k % 4, (k / 4) % 4, k / 16].map(|v| v * 32);
+            split(
+                [c[0], c[1], c[2], 5],
+                &[[1, 2, 3], [126, 125, 127]],
+                &mut cells,
+            );
+        }
+        let cells = cells_with(cells, smooth);
+        let bricked = nearest(&cells);
+        let _ = bricked.bricks();
+        let b = bricked.bounds();
+        for axis in 0..3 {
+            let cam = Camera::axis_projection(&b, axis).unwrap();
+            check_nearest(&nearest(&cells), &bricked, &cam, 37, 45);
+        }
     }
 
     #[test]

@@ -565,3 +565,38 @@ fn colour_field_is_the_basis_reconstruction_of_that_field() {
     }
     assert!(checked > 2000);
 }
+
+/// Bricks and regions built on first use from inside parallel loops (every
+/// worker asking at once, for a render's first samples) finish, and give
+/// what a volume built before the loop gives.
+#[test]
+fn lazy_builds_inside_parallel_loops_finish() {
+    use rayon::prelude::*;
+    // Enough cells that the builds split their work over the pool.
+    let mut cells = synthetic(19, true);
+    let top = cells.iter().map(|c| c[2] + (1 << c[3])).max().unwrap_or(0);
+    cells.extend((0..48 * 48 * 24).map(|i| [i % 48, (i / 48) % 48, top + i / (48 * 48), 0]));
+    let input = cells_with(cells, smooth);
+    let ready = AmrVolume::new(input.clone(), AmrSettings::default()).unwrap();
+    let _ = ready.stats();
+    let mut rng = Lcg(20);
+    let points: Vec<Vec3> = (0..512)
+        .map(|_| random_point(&mut rng, &ready.bounds()))
+        .collect();
+    let want: Vec<_> = points.iter().map(|&p| ready.fields_at(p, true)).collect();
+    for threads in [1, 2, 4] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let lazy = AmrVolume::new(input.clone(), AmrSettings::default()).unwrap();
+        let got: Vec<_> = pool.install(|| {
+            points
+                .par_iter()
+                .with_max_len(1)
+                .map(|&p| lazy.fields_at(p, true))
+                .collect()
+        });
+        assert_eq!(got, want, "{threads} threads");
+    }
+}

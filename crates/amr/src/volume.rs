@@ -12,7 +12,8 @@ mod nearest;
 mod octant;
 mod recon;
 
-use std::sync::OnceLock;
+use rayon::prelude::*;
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
 use voxless_bvh::Bvh;
@@ -89,22 +90,106 @@ pub struct AmrVolume {
     origin: Vec3,
     h: f32,
     settings: AmrSettings,
+    field_ranges: Vec<Range1>,
+    /// The validated cells and their fields in input order, until the
+    /// bricks are built from them (`None` after).
+    cells: Mutex<Option<Arc<InputCells>>>,
+    /// The bricks, built on first use: an on-axis projection of the
+    /// nearest cells sums the cells themselves.
+    bricked: OnceLock<Bricked>,
+    /// The active brick regions and what walks and samples read of them,
+    /// built on first use after the bricks.
+    index: OnceLock<RegionIndex>,
+    /// ∫ opacity field dV of the cells (nearest reconstruction), finest
+    /// units.
+    integral: f64,
+    bounds: Aabb,
+    stats: BuildStats,
+}
+
+/// Cells in input order with, per field, one value each.
+pub(crate) struct InputCells {
+    pub cells: Vec<[i32; 4]>,
+    pub fields: Vec<Vec<f32>>,
+}
+
+/// The bricks of a volume and what reads them.
+struct Bricked {
     bricks: Vec<Brick>,
     /// What the reconstruction reads of each brick, derived once.
     grids: Vec<recon::BrickGrid>,
     /// Per field, values in brick order.
     values: Vec<Vec<f32>>,
-    field_ranges: Vec<Range1>,
-    /// The active brick regions and what walks and samples read of them,
-    /// built on first use: an on-axis projection of the nearest cells or
-    /// a brick-wise integral never needs them.
-    index: OnceLock<RegionIndex>,
     /// Brick boxes, for nearest-cell lookups and exact projections.
     brick_bvh: Bvh,
     /// Octant reconstruction's cell location (built for it only).
     octant: Option<octant::OctantIndex>,
-    bounds: Aabb,
+    /// The brick columns of [`BuildStats`].
     stats: BuildStats,
+}
+
+impl Bricked {
+    fn build(input: Arc<InputCells>, origin: Vec3, h: f32, octant: bool) -> Bricked {
+        let mut stats = BuildStats::default();
+        let t = Instant::now();
+        let (bricks, values) = bricks::build(&input.cells, &input.fields);
+        // Freed here, or when a projection still reading them is done.
+        drop(input);
+        stats.brick_build = t.elapsed();
+        stats.bricks = bricks.len();
+        let t = Instant::now();
+        let brick_bounds: Vec<Aabb> = bricks
+            .iter()
+            .map(|b| to_world(origin, h, b.lower.map(i64::from), b.upper().map(i64::from)))
+            .collect();
+        let brick_bvh = Bvh::build(&brick_bounds);
+        let octant = octant.then(|| octant::OctantIndex::new(&bricks));
+        stats.bvh_build = t.elapsed();
+        let grids = bricks.iter().map(recon::BrickGrid::new).collect();
+        Bricked {
+            bricks,
+            grids,
+            values,
+            brick_bvh,
+            octant,
+            stats,
+        }
+    }
+}
+
+/// Runs a lazy build `f` (which works on every core) from a thread and on
+/// a thread pool of its own, and waits for it.
+///
+/// **Why.** A build started on first use may start inside a parallel loop
+/// of the global pool. Waiting there for its own parallel work would let
+/// the thread steal another iteration of that loop, which asks for the
+/// same build again on the same thread (a deadlock in `OnceLock`); and
+/// every worker may be blocked on the build, leaving none to run its work.
+/// A thread of its own waits without stealing, and its pool has free
+/// workers (as many as the global pool).
+fn build_apart<T: Send>(f: impl FnOnce() -> T + Send) -> T {
+    std::thread::scope(|s| {
+        let job = s.spawn(|| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(rayon::current_num_threads())
+                .build();
+            match pool {
+                Ok(pool) => pool.install(f),
+                // No thread to be had for a pool: the global pool's
+                // workers, the best left.
+                Err(_) => f(),
+            }
+        });
+        job.join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+    })
+}
+
+/// The world box of finest-unit corners `lo`, `hi` (what bricks, regions
+/// and the bounds all map through, so their faces agree to the bit).
+fn to_world(origin: Vec3, h: f32, lo: [i64; 3], hi: [i64; 3]) -> Aabb {
+    let f = |v: [i64; 3]| Vec3::new(v[0] as f64 as f32, v[1] as f64 as f32, v[2] as f64 as f32);
+    Aabb::new(origin + f(lo) * h, origin + f(hi) * h)
 }
 
 /// The active brick regions of a volume (ExaBricks §3.2) and what walks
@@ -253,28 +338,11 @@ impl AmrVolume {
             ..Default::default()
         };
         let t = Instant::now();
-        bricks::validate(&input.cells)?;
+        let (lo, hi) = bricks::validate(&input.cells)?;
         stats.validate = t.elapsed();
-
-        let t = Instant::now();
         let (names, fields): (Vec<String>, Vec<Vec<f32>>) = input.fields.into_iter().unzip();
-        let (bricks, values) = bricks::build(&input.cells, &fields);
-        drop(fields);
-        stats.brick_build = t.elapsed();
-
-        let (origin, h) = (input.origin, input.cell_size);
-        let to_world = |lo: [f64; 3], hi: [f64; 3]| {
-            Aabb::new(
-                origin + Vec3::new(lo[0] as f32, lo[1] as f32, lo[2] as f32) * h,
-                origin + Vec3::new(hi[0] as f32, hi[1] as f32, hi[2] as f32) * h,
-            )
-        };
-        let brick_bounds: Vec<Aabb> = bricks
-            .iter()
-            .map(|b| to_world(b.lower.map(|v| v as f64), b.upper().map(|v| v as f64)))
-            .collect();
-        let field_ranges = values
-            .iter()
+        let field_ranges = fields
+            .par_iter()
             .map(|v| {
                 v.iter().fold(Range1::EMPTY, |mut r, &x| {
                     r.extend(x);
@@ -282,43 +350,77 @@ impl AmrVolume {
                 })
             })
             .collect();
-        stats.bricks = bricks.len();
-        let t = Instant::now();
-        let brick_bvh = Bvh::build(&brick_bounds);
-        let octant = (settings.reconstruction == Reconstruction::Octant)
-            .then(|| octant::OctantIndex::new(&bricks));
-        stats.bvh_build = t.elapsed();
+        // ∫ field dV of the cells, in a fixed order (cell order, then the
+        // parts' sums): the same bits however the volume is used first.
+        let integral = input
+            .cells
+            .par_chunks(1 << 14)
+            .zip(fields[settings.field].par_chunks(1 << 14))
+            .map(|(c, v)| {
+                c.iter()
+                    .zip(v)
+                    .map(|(c, &v)| v as f64 * (1u64 << (3 * c[3])) as f64)
+                    .sum::<f64>()
+            })
+            .collect::<Vec<f64>>()
+            .into_iter()
+            .sum();
         // The data's domain is the cells, not the tents' half-cell margin
         // around them: bounds, intervals and samples stop at the cells.
-        let bounds = brick_bounds.iter().fold(Aabb::EMPTY, |b, &x| b.union(x));
-        let grids = bricks.iter().map(recon::BrickGrid::new).collect();
+        let bounds = to_world(input.origin, input.cell_size, lo, hi);
         Ok(AmrVolume {
             names,
-            origin,
-            h,
+            origin: input.origin,
+            h: input.cell_size,
             settings,
-            bricks,
-            grids,
-            values,
             field_ranges,
+            cells: Mutex::new(Some(Arc::new(InputCells {
+                cells: input.cells,
+                fields,
+            }))),
+            bricked: OnceLock::new(),
             index: OnceLock::new(),
-            brick_bvh,
-            octant,
+            integral,
             bounds,
             stats,
         })
     }
 
+    /// The bricks, built on first use (see [`build_apart`]).
+    #[inline]
+    fn bx(&self) -> &Bricked {
+        self.bricked.get_or_init(|| {
+            let input = self
+                .take_cells()
+                .expect("the cells stay until the bricks take them");
+            let octant = self.settings.reconstruction == Reconstruction::Octant;
+            build_apart(|| Bricked::build(input, self.origin, self.h, octant))
+        })
+    }
+
+    fn take_cells(&self) -> Option<Arc<InputCells>> {
+        self.cells.lock().unwrap_or_else(|e| e.into_inner()).take()
+    }
+
+    /// Runs `f` on the cells in input order while no bricks hold them;
+    /// `None` once they do. The lock is held only to share them.
+    pub(crate) fn with_cells<T>(&self, f: impl FnOnce(&InputCells) -> T) -> Option<T> {
+        let cells = self.cells.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        cells.as_deref().map(f)
+    }
+
     /// The build's counts and timings, the regions' included (which
     /// builds them if nothing has yet).
     pub fn stats(&self) -> BuildStats {
-        let r = &self.ix().stats;
+        let (r, b) = (&self.ix().stats, &self.bx().stats);
         BuildStats {
+            bricks: b.bricks,
+            brick_build: b.brick_build,
             regions: r.regions,
             bricks_per_region: r.bricks_per_region,
             bricks_per_region_by_volume: r.bricks_per_region_by_volume,
             region_build: r.region_build,
-            bvh_build: self.stats.bvh_build + r.bvh_build,
+            bvh_build: b.bvh_build + r.bvh_build,
             ..self.stats.clone()
         }
     }
@@ -326,14 +428,16 @@ impl AmrVolume {
     /// The region index, built on first use.
     #[inline]
     fn ix(&self) -> &RegionIndex {
-        self.index
-            .get_or_init(|| RegionIndex::build(&self.bricks, &self.values, self.origin, self.h))
+        self.index.get_or_init(|| {
+            let b = self.bx();
+            build_apart(|| RegionIndex::build(&b.bricks, &b.values, self.origin, self.h))
+        })
     }
     pub fn field_names(&self) -> &[String] {
         &self.names
     }
     pub fn bricks(&self) -> &[Brick] {
-        &self.bricks
+        &self.bx().bricks
     }
     pub fn regions(&self) -> &[Region] {
         &self.ix().regions.regions
@@ -356,7 +460,7 @@ impl AmrVolume {
     /// Value range of `field` in region `r`.
     #[inline]
     pub fn region_range(&self, r: usize, field: usize) -> Range1 {
-        self.ix().region_ranges[r * self.values.len() + field]
+        self.ix().region_ranges[r * self.names.len() + field]
     }
     /// Range of `field` over all cells.
     pub fn field_range(&self, field: usize) -> Range1 {
@@ -522,7 +626,7 @@ impl AmrVolume {
         out: &mut Vec<Interval>,
     ) {
         let start = out.len();
-        let nf = self.values.len();
+        let nf = self.names.len();
         let t = self.bounds.clip_ray(ray, t);
         if t.is_empty() {
             return;
@@ -568,7 +672,7 @@ impl AmrVolume {
         &self,
         is_visible: &dyn Fn(Range1) -> bool,
     ) -> (Option<NodeMask>, usize) {
-        let nf = self.values.len();
+        let nf = self.names.len();
         let f = self.settings.field;
         let seen: Vec<bool> = (0..self.ix().regions.regions.len())
             .map(|r| is_visible(self.ix().region_ranges[r * nf + f]))
@@ -580,7 +684,7 @@ impl AmrVolume {
 
     /// How many regions a transfer function accepting `is_visible` sees.
     pub fn visible_region_count(&self, is_visible: &dyn Fn(Range1) -> bool) -> usize {
-        let nf = self.values.len();
+        let nf = self.names.len();
         let f = self.settings.field;
         (0..self.ix().regions.regions.len())
             .filter(|&r| is_visible(self.ix().region_ranges[r * nf + f]))
@@ -608,7 +712,7 @@ impl AmrVolume {
 
     /// Values of `field`, in brick order.
     pub(crate) fn field_values(&self, field: usize) -> &[f32] {
-        &self.values[field]
+        &self.bx().values[field]
     }
 
     fn to_units(&self, p: Vec3) -> Vec3 {
@@ -636,7 +740,7 @@ impl AmrVolume {
     /// whole volume and a part of it holding every cell that reaches `p`).
     pub fn fields_at(&self, p: Vec3, gradient: bool) -> Option<Vec<(f32, Vec3)>> {
         let r = self.locate(p)?;
-        (0..self.values.len())
+        (0..self.names.len())
             .map(|f| {
                 self.reconstruct_exact(p, r, f, gradient)
                     .map(|x| (x.value, x.gradient))

@@ -100,6 +100,9 @@
 //! - text (CSV, XYZ, LAMMPS, AMRClaw, legacy VTK): at most 16 bytes held per
 //!   byte read (a one-digit value and its separator become a float64), and
 //!   each reader is linear in its input (wide headers, many attributes);
+//!   AMRClaw's `fort.q` is mapped rather than read (its text stays in the
+//!   page cache, not on the heap) and only the fields asked for are parsed
+//!   ([`FieldPick`]);
 //! - compressed blocks (VTK zlib, HDF5 filters, PNG colormaps): at most
 //!   1100× the compressed size (zlib's own limit is 1032×), checked against
 //!   the sizes the block declares before inflating;
@@ -132,8 +135,9 @@ pub mod xyz;
 
 pub use amr::{
     AmrCellData, AmrFormat, FieldPick, amr_field, amr_format, amrclaw_time, exabricks_scalars,
-    read_amr, read_amr_picked, read_amrclaw, read_amrclaw_from, read_amrclaw_picked, read_amrex,
-    read_amrex_files, read_exabricks, read_exabricks_bytes, read_exabricks_rows,
+    read_amr, read_amr_picked, read_amrclaw, read_amrclaw_from, read_amrclaw_picked,
+    read_amrclaw_text, read_amrex, read_amrex_files, read_exabricks, read_exabricks_bytes,
+    read_exabricks_rows,
 };
 pub use atomic::write_atomically;
 pub use csv::{CsvTable, read_csv, read_csv_from};

@@ -166,7 +166,7 @@ impl AmrVolume {
             let mut sums = [BasisSums::default(); RUN];
             let sums = &mut sums[..n];
             for &b in bricks {
-                let grid = &self.grids[b as usize];
+                let grid = &self.bx().grids[b as usize];
                 for (k, s) in sums.iter_mut().enumerate() {
                     let pu = Vec3::new(run.x[k], run.y[k], run.z[k]);
                     brick_sums(grid, pu, fields, s);
@@ -181,7 +181,7 @@ impl AmrVolume {
         // per run; every sample still adds its bricks in the region's order.
         let mut acc = [ValueLanes::zero(); RUN / LANES];
         for &b in bricks {
-            let grid = &self.grids[b as usize];
+            let grid = &self.bx().grids[b as usize];
             for (acc, at) in acc.iter_mut().zip((0..n).step_by(LANES)) {
                 let p = [
                     L::load(&run.x, at),

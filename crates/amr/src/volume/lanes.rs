@@ -88,7 +88,7 @@ impl AmrVolume {
             let mask = L::from_bits(bits);
             let first = (live & !located).trailing_zeros() as usize;
             for &b in lists[first] {
-                brick_value_lanes(&self.grids[b as usize], pu, mask, fields, &mut acc);
+                brick_value_lanes(&self.bx().grids[b as usize], pu, mask, fields, &mut acc);
             }
         } else {
             loop {
@@ -104,7 +104,7 @@ impl AmrVolume {
                     }
                 }
                 let mask = L::from_bits(bits);
-                brick_value_lanes(&self.grids[b as usize], pu, mask, fields, &mut acc);
+                brick_value_lanes(&self.bx().grids[b as usize], pu, mask, fields, &mut acc);
             }
         }
         // `B = Σ Ĥ v / Σ Ĥ`, NaN where no tent reaches (the lanes without a

@@ -9,10 +9,10 @@ impl AmrVolume {
     /// Exact `∫ value dt` with nearest reconstruction: every cell's value times
     /// the length of the ray inside it (3D DDA through each brick the ray hits).
     pub(super) fn nearest_line_integral(&self, ray: &Ray, t: Range1) -> f64 {
-        let field = &self.values[self.settings.field];
+        let field = &self.bx().values[self.settings.field];
         let mut sum = 0.0f64;
-        self.brick_bvh.ray_query(ray, t, |bi, hit| {
-            let b = &self.bricks[bi as usize];
+        self.bx().brick_bvh.ray_query(ray, t, |bi, hit| {
+            let b = &self.bx().bricks[bi as usize];
             let w = b.width() as f64 * self.h as f64;
             let lower =
                 [0, 1, 2].map(|a| self.origin[a] as f64 + b.lower[a] as f64 * self.h as f64);
@@ -74,21 +74,6 @@ impl AmrVolume {
         if self.settings.reconstruction != Reconstruction::Nearest {
             return None;
         }
-        let field = &self.values[self.settings.field];
-        let h3 = (self.h as f64).powi(3);
-        Some(
-            self.bricks
-                .iter()
-                .map(|b| {
-                    let w3 = (b.width() as f64).powi(3) * h3;
-                    let start = b.offset as usize;
-                    field[start..start + b.cell_count()]
-                        .iter()
-                        .map(|&v| v as f64)
-                        .sum::<f64>()
-                        * w3
-                })
-                .sum(),
-        )
+        Some(self.integral * (self.h as f64).powi(3))
     }
 }

@@ -238,13 +238,13 @@ impl AmrVolume {
     ) -> Option<Recon> {
         // Into the data's box: rounding from world to finest units can put
         // a point of the bounds (an interval's end) just outside.
-        let ix = self.octant.as_ref()?;
+        let ix = self.bx().octant.as_ref()?;
         let p = [pu.x, pu.y, pu.z].map(|v| v as f64);
         let p = [0, 1, 2].map(|a| p[a].clamp(ix.lo[a], ix.hi[a]));
         let cell = self.leaf_at(p, hint).or_else(|| self.leaf_touching(p))?;
         let fields = Fields {
-            value: &self.values[field],
-            color: (color_field != field).then(|| self.values[color_field].as_slice()),
+            value: &self.bx().values[field],
+            color: (color_field != field).then(|| self.bx().values[color_field].as_slice()),
         };
         let b = self.octant_box(&cell, p, fields);
         let ([value, color], d) = b.lerp(p, gradient);
@@ -275,7 +275,7 @@ impl AmrVolume {
         let mut values = [[0.0; 2]; 8];
         let mut leaves = [None; 8];
         values[0] = fields.at(cell.index);
-        let brick = &self.bricks[cell.brick as usize];
+        let brick = &self.bx().bricks[cell.brick as usize];
         let step = sign.map(|s| s as i32);
         for m in 1..8 {
             // Inside the cell's brick, by index: a leaf of width w.
@@ -360,7 +360,7 @@ impl AmrVolume {
         let step = [0, 1, 2].map(|a| ((m >> a) & 1) as f64 * sign[a]);
         // Among the bricks beside the cell's (or nowhere).
         let y = [0, 1, 2].map(|a| cell.lower[a] + (step[a] + 0.5) * cell.width);
-        let ix = self.octant.as_ref()?;
+        let ix = self.bx().octant.as_ref()?;
         let (from, to) = (
             ix.starts[cell.brick as usize],
             ix.starts[cell.brick as usize + 1],
@@ -374,7 +374,7 @@ impl AmrVolume {
     /// The leaf whose half-open box holds `y` (finest units): first among
     /// the bricks `hint`, then any.
     fn leaf_at(&self, y: [f64; 3], hint: &[u32]) -> Option<Leaf> {
-        let ix = self.octant.as_ref()?;
+        let ix = self.bx().octant.as_ref()?;
         if (0..3).any(|a| !(y[a] >= ix.lo[a] && y[a] < ix.hi[a])) {
             return None;
         }
@@ -394,11 +394,11 @@ impl AmrVolume {
     /// A leaf whose closed box holds `y` (the data's upper faces, which no
     /// half-open box holds): the one of the lowest brick number.
     fn leaf_touching(&self, y: [f64; 3]) -> Option<Leaf> {
-        let ix = self.octant.as_ref()?;
+        let ix = self.bx().octant.as_ref()?;
         let mut found: Option<u32> = None;
         let at = Vec3::new(y[0] as f32, y[1] as f32, y[2] as f32);
         ix.bvh.point_query(at, |b| {
-            let brick = &self.bricks[b as usize];
+            let brick = &self.bx().bricks[b as usize];
             let (lo, hi) = (brick.lower, brick.upper());
             let inside = (0..3).all(|a| y[a] >= lo[a] as f64 && y[a] <= hi[a] as f64);
             if inside && found.is_none_or(|f| b < f) {
@@ -406,7 +406,7 @@ impl AmrVolume {
             }
         });
         let b = found?;
-        let brick = &self.bricks[b as usize];
+        let brick = &self.bx().bricks[b as usize];
         let w = brick.width() as f64;
         let cell = [0, 1, 2].map(|a| {
             (((y[a] - brick.lower[a] as f64) / w).floor() as i32).clamp(0, brick.size[a] - 1)
@@ -417,13 +417,13 @@ impl AmrVolume {
     /// The leaf of brick `b` whose half-open box holds `y`, if any.
     #[inline]
     fn leaf_in(&self, b: u32, y: [f64; 3]) -> Option<Leaf> {
-        let [lo, hi] = self.octant.as_ref()?.boxes[b as usize];
+        let [lo, hi] = self.bx().octant.as_ref()?.boxes[b as usize];
         if !(0..3).all(|a| y[a] >= lo[a] && y[a] < hi[a]) {
             return None;
         }
-        let brick = &self.bricks[b as usize];
+        let brick = &self.bx().bricks[b as usize];
         // Widths are powers of two: multiplying by the inverse is exact.
-        let inv_w = self.grids[b as usize].inv_w as f64;
+        let inv_w = self.bx().grids[b as usize].inv_w as f64;
         let mut cell = [0i32; 3];
         for a in 0..3 {
             // Inside the box: `x ≥ 0`, truncation is the floor (and the

@@ -46,7 +46,7 @@ impl AmrVolume {
         }
         let fields = self.basis_fields(field);
         let bricks = self.ix().regions.bricks_of(region).iter();
-        let grids = bricks.map(|&b| &self.grids[b as usize]);
+        let grids = bricks.map(|&b| &self.bx().grids[b as usize]);
         if !gradient {
             let mut sums = ValueSums::default();
             grids.for_each(|grid| brick_value_sums(grid, pu, fields, &mut sums));
@@ -63,8 +63,8 @@ impl AmrVolume {
     pub(super) fn basis_fields(&self, field: usize) -> (&[f32], Option<&[f32]>) {
         let color_field = self.settings.color_field.unwrap_or(field);
         // Without a separate colour field its sum is the value's: skip it.
-        let color = (color_field != field).then(|| self.values[color_field].as_slice());
-        (&self.values[field], color)
+        let color = (color_field != field).then(|| self.bx().values[color_field].as_slice());
+        (&self.bx().values[field], color)
     }
 
     /// `B = Σ Ĥ v / Σ Ĥ` (and the colour's, and the gradient by the
@@ -136,11 +136,11 @@ impl AmrVolume {
             }
             Reconstruction::Basis => {}
         }
-        let (v0, v1) = (&self.values[field], &self.values[color_field]);
+        let (v0, v1) = (&self.bx().values[field], &self.bx().values[color_field]);
         let two_fields = color_field != field;
         let mut terms = SortedTerms::default();
         for &b in self.ix().regions.bricks_of(region) {
-            let grid = &self.grids[b as usize];
+            let grid = &self.bx().grids[b as usize];
             let Some(st) = Stencil::new(grid, pu, gradient) else {
                 continue;
             };
@@ -186,8 +186,8 @@ impl AmrVolume {
         for &b in self.ix().regions.bricks_of(region) {
             if let Some(cell) = self.cell_in_brick(pu, b as usize) {
                 return Some(Recon {
-                    value: self.values[field][cell],
-                    color: self.values[color_field][cell],
+                    value: self.bx().values[field][cell],
+                    color: self.bx().values[color_field][cell],
                     gradient: Vec3::ZERO,
                 });
             }
@@ -198,7 +198,7 @@ impl AmrVolume {
     /// Index (into the brick-ordered values) of the cell of brick `b`
     /// containing unit-space point `pu`.
     pub(super) fn cell_in_brick(&self, pu: Vec3, b: usize) -> Option<usize> {
-        let b = &self.bricks[b];
+        let b = &self.bx().bricks[b];
         let w = b.width() as f32;
         let mut i = [0i32; 3];
         for a in 0..3 {

@@ -344,6 +344,22 @@ pub fn read_amrclaw_from<R: Read + Seek>(
     read_grids(fort_q, len, name, header, &FieldPick::All)
 }
 
+/// [`read_amrclaw_from`] over text in memory (`fort_q` whole), decoding
+/// only the fields `pick` names as [`read_amrclaw_picked`] does: the path
+/// a mapped `fort.q` takes.
+pub fn read_amrclaw_text(
+    fort_q: &[u8],
+    name: &Path,
+    fort_t: Option<&[u8]>,
+    pick: &FieldPick,
+) -> Result<AmrCellData, IoError> {
+    let header = match fort_t {
+        Some(bytes) => Some(parse_fort_t(bytes, &fort_t_label(name))?),
+        None => None,
+    };
+    read_grids_text(fort_q, name, header, pick)
+}
+
 /// Text read at a time: the grids a window holds parse in parallel, and
 /// memory stays a window of text beside the values (a grid longer than a
 /// window widens it to that grid).

@@ -41,7 +41,9 @@ mod amrclaw;
 mod amrex;
 mod exabricks;
 
-pub use amrclaw::{amrclaw_time, read_amrclaw, read_amrclaw_from, read_amrclaw_picked};
+pub use amrclaw::{
+    amrclaw_time, read_amrclaw, read_amrclaw_from, read_amrclaw_picked, read_amrclaw_text,
+};
 pub use amrex::{read_amrex, read_amrex_files};
 pub use exabricks::{read_exabricks, read_exabricks_bytes, read_exabricks_rows};
 

@@ -19,7 +19,7 @@ impl AmrVolume {
     /// `ray` over `t`, exact up to rounding.
     pub(in crate::volume) fn octant_line_integral(&self, ray: &Ray, t: Range1) -> f64 {
         let fields = Fields {
-            value: &self.values[self.settings.field],
+            value: &self.bx().values[self.settings.field],
             color: None,
         };
         let h = self.h as f64;
@@ -33,8 +33,8 @@ impl AmrVolume {
         let (lo, hi) = (t.lo as f64, t.hi as f64);
         let mut cuts: Vec<f64> = Vec::new();
         let mut sum = 0.0f64;
-        self.brick_bvh.ray_query(ray, t, |bi, _| {
-            let b = &self.bricks[bi as usize];
+        self.bx().brick_bvh.ray_query(ray, t, |bi, _| {
+            let b = &self.bx().bricks[bi as usize];
             let (lower, upper) = (b.lower, b.upper());
             // The brick's half-open chord.
             let (mut t0, mut t1) = (lo, hi);
