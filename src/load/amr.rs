@@ -181,13 +181,24 @@ pub(crate) fn build_amr(
 /// the frame's scale follows; a decomposed volume takes the maximum over
 /// its parts).
 pub(crate) fn cells_reach(cells: &[[i32; 4]]) -> f64 {
+    use rayon::prelude::*;
     cells
-        .iter()
+        .par_iter()
         .map(|c| {
-            let w = 2f64.powi(c[3].clamp(0, 62));
-            [c[0], c[1], c[2]].map(|v| (v as f64 + w).abs().max((v as f64).abs()))
+            let w = 1i64 << c[3].clamp(0, 62);
+            [c[0], c[1], c[2]]
+                .map(|v| {
+                    (v as i64)
+                        .saturating_add(w)
+                        .unsigned_abs()
+                        .max((v as i64).unsigned_abs())
+                })
+                .into_iter()
+                .max()
+                .unwrap_or(0)
         })
-        .fold(0.0f64, |m, c| m.max(c[0]).max(c[1]).max(c[2]))
+        .max()
+        .unwrap_or(0) as f64
 }
 
 /// The AMR settings `a` describes for cells with fields `names` (the

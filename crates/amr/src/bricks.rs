@@ -54,48 +54,56 @@ pub fn validate(cells: &[[i32; 4]]) -> Result<([i64; 3], [i64; 3]), AmrError> {
     if cells.is_empty() {
         return Err(AmrError::Empty);
     }
-    // Levels and alignment, and the extent with the coarsest width, in one
-    // pass on every core; the first bad cell in input order is reported.
-    let bad = cells.par_iter().position_first(|c| {
-        !(0..=MAX_LEVEL).contains(&c[3]) || {
-            let w = 1i64 << c[3];
-            (0..3).any(|a| (c[a] as i64).rem_euclid(w) != 0)
+    // Levels and alignment (a power-of-two width divides a coordinate iff
+    // its low bits are 0, in two's complement too), and the extent with the
+    // coarsest width, in one pass on every core; the first bad cell in
+    // input order is reported.
+    let aligned = |c: &[i32; 4]| {
+        (0..=MAX_LEVEL).contains(&c[3]) && {
+            let low = (1i32 << c[3]) - 1;
+            (c[0] | c[1] | c[2]) & low == 0
         }
-    });
-    if let Some(i) = bad {
-        let c = cells[i];
-        if !(0..=MAX_LEVEL).contains(&c[3]) {
-            return Err(AmrError::BadLevel {
-                cell: i,
-                level: c[3],
-            });
-        }
-        return Err(AmrError::Misaligned {
-            cell: i,
-            pos: [c[0], c[1], c[2]],
-            level: c[3],
-        });
-    }
-    let (min, max, top) = cells
+    };
+    type Extent = ([i64; 3], [i64; 3], i32, usize);
+    let none: Extent = ([i64::MAX; 3], [i64::MIN; 3], 0, usize::MAX);
+    let (min, max, top, bad) = cells
         .par_iter()
+        .enumerate()
         .fold(
-            || ([i64::MAX; 3], [i64::MIN; 3], 0),
-            |(mut lo, mut hi, top), c| {
+            || none,
+            |(mut lo, mut hi, top, bad), (i, c)| {
+                if !aligned(c) {
+                    return (lo, hi, top, bad.min(i));
+                }
                 for a in 0..3 {
                     lo[a] = lo[a].min(c[a] as i64);
                     hi[a] = hi[a].max(c[a] as i64 + (1i64 << c[3]));
                 }
-                (lo, hi, top.max(c[3]))
+                (lo, hi, top.max(c[3]), bad)
             },
         )
         .reduce(
-            || ([i64::MAX; 3], [i64::MIN; 3], 0),
+            || none,
             |a, b| {
                 let lo = [0, 1, 2].map(|k| a.0[k].min(b.0[k]));
                 let hi = [0, 1, 2].map(|k| a.1[k].max(b.1[k]));
-                (lo, hi, a.2.max(b.2))
+                (lo, hi, a.2.max(b.2), a.3.min(b.3))
             },
         );
+    if bad != usize::MAX {
+        let c = cells[bad];
+        if !(0..=MAX_LEVEL).contains(&c[3]) {
+            return Err(AmrError::BadLevel {
+                cell: bad,
+                level: c[3],
+            });
+        }
+        return Err(AmrError::Misaligned {
+            cell: bad,
+            pos: [c[0], c[1], c[2]],
+            level: c[3],
+        });
+    }
     // Morton ranges need non-negative coordinates below 2^21.
     // Align the shift to the coarsest width so cells stay aligned after it.
     let coarsest = 1i64 << top;
@@ -105,15 +113,56 @@ pub fn validate(cells: &[[i32; 4]]) -> Result<([i64; 3], [i64; 3]), AmrError> {
             extent: (0..3).map(|a| max[a] - shift[a]).max().unwrap_or(0),
         });
     }
-    // Each cell's first Morton key, its level and index beside it; sorted
-    // by the key alone (ties are overlaps whatever their order).
+    // Levels compact enough for a bitmap each answer at memory speed;
+    // an overlap found there is named by the sorted check below.
+    if no_overlap_in_bitmaps(cells) == Some(true) {
+        return Ok((min, max));
+    }
+    let key = |c: &[i32; 4]| morton([0, 1, 2].map(|a| (c[a] as i64 - shift[a]) as u32));
+    // Overlap of two cells given by key and level (a cell and the cell
+    // reaching furthest before it), named by their input indices.
+    let overlap = |first: (u64, i32), second: (u64, i32)| {
+        let find = |(k, l): (u64, i32), not: Option<usize>| {
+            (0..cells.len())
+                .find(|&i| Some(i) != not && cells[i][3] == l && key(&cells[i]) == k)
+                .unwrap_or(0)
+        };
+        let a = find(first, None);
+        let b = find(second, Some(a));
+        AmrError::Overlap {
+            a: a.min(b),
+            b: a.max(b),
+        }
+    };
+    // Sorted by each cell's first Morton key, a cell overlaps another iff
+    // its key falls inside the range of a cell before it. Within 2^19 per
+    // axis (57 bits of key) the level rides in the low bits of one u64,
+    // which sorts fastest; the indices are found again for an error only.
+    if (0..3).all(|a| max[a] - shift[a] <= 1 << 19) {
+        let mut keys: Vec<u64> = cells
+            .par_iter()
+            .map(|c| key(c) << 5 | c[3] as u64)
+            .collect();
+        keys.par_sort_unstable();
+        let mut end = 0u64;
+        let mut owner = (0u64, 0i32);
+        for (k, &packed) in keys.iter().enumerate() {
+            let (start, level) = (packed >> 5, (packed & 31) as i32);
+            if k > 0 && start < end {
+                return Err(overlap(owner, (start, level)));
+            }
+            let stop = start + (1u64 << (3 * level));
+            if stop > end {
+                end = stop;
+                owner = (start, level);
+            }
+        }
+        return Ok((min, max));
+    }
     let mut ranges: Vec<(u64, u32, u32)> = cells
         .par_iter()
         .enumerate()
-        .map(|(i, c)| {
-            let q = [0, 1, 2].map(|a| (c[a] as i64 - shift[a]) as u32);
-            (morton(q), c[3] as u32, i as u32)
-        })
+        .map(|(i, c)| (key(c), c[3] as u32, i as u32))
         .collect();
     ranges.par_sort_unstable_by_key(|r| r.0);
     let mut end = 0u64;
@@ -130,6 +179,86 @@ pub fn validate(cells: &[[i32; 4]]) -> Result<([i64; 3], [i64; 3]), AmrError> {
         }
     }
     Ok((min, max))
+}
+
+/// Whether no two (aligned) cells overlap, from one bitmap per level over
+/// that level's cells' box (in its own cell units): a cell overlaps
+/// another of its level iff it is marked twice, and a coarser cell iff its
+/// ancestor there is marked (aligned cubes nest or miss). `None` when the
+/// boxes hold far more room than cells (sparse levels: the sort decides).
+pub(crate) fn no_overlap_in_bitmaps(cells: &[[i32; 4]]) -> Option<bool> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    const LEVELS: usize = MAX_LEVEL as usize + 1;
+    // Per level: box lower and upper corner (level units) and cell count.
+    type Boxes = Vec<([i64; 3], [i64; 3], usize)>;
+    let empty = || vec![([i64::MAX; 3], [i64::MIN; 3], 0usize); LEVELS];
+    let boxes: Boxes = cells
+        .par_iter()
+        .fold(empty, |mut b, c| {
+            let l = c[3] as usize;
+            let p = [0, 1, 2].map(|a| (c[a] >> c[3]) as i64);
+            let (lo, hi, n) = &mut b[l];
+            *lo = [0, 1, 2].map(|a| lo[a].min(p[a]));
+            *hi = [0, 1, 2].map(|a| hi[a].max(p[a] + 1));
+            *n += 1;
+            b
+        })
+        .reduce(empty, |mut a, b| {
+            for (x, y) in a.iter_mut().zip(b) {
+                x.0 = [0, 1, 2].map(|k| x.0[k].min(y.0[k]));
+                x.1 = [0, 1, 2].map(|k| x.1[k].max(y.1[k]));
+                x.2 += y.2;
+            }
+            a
+        });
+    let room = |b: &([i64; 3], [i64; 3], usize)| {
+        (0..3)
+            .map(|a| (b.1[a] - b.0[a]).max(0) as u64)
+            .product::<u64>()
+    };
+    let bits: u64 = boxes.iter().filter(|b| b.2 > 0).map(room).sum();
+    if bits > 64 * cells.len() as u64 + (1 << 22) {
+        return None;
+    }
+    let maps: Vec<Vec<AtomicU64>> = boxes
+        .iter()
+        .map(|b| match b.2 {
+            0 => Vec::new(),
+            _ => (0..room(b).div_ceil(64))
+                .map(|_| AtomicU64::new(0))
+                .collect(),
+        })
+        .collect();
+    // The bit of the level-`l` cell holding finest point `c`, if the level's
+    // box holds it.
+    let bit = |c: &[i32; 4], l: usize| {
+        let (lo, hi, _) = &boxes[l];
+        let p = [0, 1, 2].map(|a| (c[a] >> l) as i64);
+        if (0..3).any(|a| p[a] < lo[a] || p[a] >= hi[a]) {
+            return None;
+        }
+        let n = [0, 1, 2].map(|a| hi[a] - lo[a]);
+        Some((((p[2] - lo[2]) * n[1] + (p[1] - lo[1])) * n[0] + (p[0] - lo[0])) as u64)
+    };
+    let twice = cells.par_iter().any(|c| {
+        let l = c[3] as usize;
+        let i = bit(c, l).unwrap_or(0);
+        let mask = 1u64 << (i % 64);
+        maps[l][(i / 64) as usize].fetch_or(mask, Ordering::Relaxed) & mask != 0
+    });
+    if twice {
+        return Some(false);
+    }
+    let present: Vec<usize> = (0..LEVELS).filter(|&l| boxes[l].2 > 0).collect();
+    let nested = cells.par_iter().any(|c| {
+        let l = c[3] as usize;
+        present.iter().filter(|&&up| up > l).any(|&up| {
+            bit(c, up).is_some_and(|i| {
+                maps[up][(i / 64) as usize].load(Ordering::Relaxed) & (1u64 << (i % 64)) != 0
+            })
+        })
+    });
+    Some(!nested)
 }
 
 /// A cell during brick construction: position, level, input index.

@@ -109,7 +109,13 @@ impl AmrVolume {
     ) -> Option<AxisPixels> {
         use rayon::prelude::*;
         let (w, h) = (width as usize, height as usize);
-        let ray = |x: usize, y: usize| camera.ray(x as f32 + 0.5, y as f32 + 0.5, width, height);
+        // An orthographic camera's rays from their column and row parts:
+        // the bits of `Camera::ray`, without its divisions per pixel.
+        let parts = camera.ortho_parts(width, height);
+        let ray = |x: usize, y: usize| match &parts {
+            Some((across, down)) => Ray::new(across[x] + down[y], camera.forward),
+            None => camera.ray(x as f32 + 0.5, y as f32 + 0.5, width, height),
+        };
         let all = Range1::new(f32::NEG_INFINITY, f32::INFINITY);
         let clip = |r: &Ray| self.bounds().clip_ray(r, all);
         let row0: Vec<Ray> = (0..w).map(|x| ray(x, 0)).collect();

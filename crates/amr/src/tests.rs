@@ -398,6 +398,21 @@ fn bad_cells_are_clear_errors() {
         ok(vec![[2, 2, 2, 0], [2, 2, 2, 0]]),
         Err(AmrError::Overlap { .. })
     ));
+    // The same with a cell 2^20 units away: keys too wide to carry the
+    // level beside them (the other sort), the same errors.
+    let far = [1 << 20, 0, 0, 0];
+    assert!(matches!(
+        ok(vec![[0, 0, 0, 1], [4, 4, 4, 0], [1, 1, 1, 0], far]),
+        Err(AmrError::Overlap { a: 0, b: 2 })
+    ));
+    assert!(matches!(
+        ok(vec![far, [2, 2, 2, 0], [2, 2, 2, 0]]),
+        Err(AmrError::Overlap { a: 1, b: 2 })
+    ));
+    assert!(matches!(
+        ok(vec![[2, 2, 2, 0], [6, 2, 2, 1], [2, 2, 2, 0]]),
+        Err(AmrError::Overlap { a: 0, b: 2 })
+    ));
     // Negative coordinates are fine.
     ok(vec![[-2, -2, -2, 1], [0, 0, 0, 0]]).unwrap();
     let e = AmrVolume::new(
@@ -599,4 +614,62 @@ fn lazy_builds_inside_parallel_loops_finish() {
         });
         assert_eq!(got, want, "{threads} threads");
     }
+}
+
+/// The bitmap overlap check says what the sorted one says: random
+/// hierarchies, each with a duplicate, a fine cell under a coarse one or
+/// nothing added, and a sparse one the bitmaps leave to the sort.
+#[test]
+fn overlap_bitmaps_agree_with_the_sorted_check() {
+    let run = |cells: &[[i32; 4]]| {
+        let n = cells.len();
+        AmrVolume::new(
+            AmrCells {
+                cells: cells.to_vec(),
+                fields: vec![("f".into(), vec![1.0; n])],
+                origin: Vec3::ZERO,
+                cell_size: 1.0,
+            },
+            AmrSettings::default(),
+        )
+        .err()
+    };
+    let mut rng = Lcg(31);
+    let mut overlaps = 0;
+    for seed in 0..40 {
+        let mut cells = synthetic(seed, seed % 2 == 0);
+        let want = match seed % 3 {
+            0 => false,
+            1 => {
+                let c = cells[(rng.f() * cells.len() as f32) as usize % cells.len()];
+                cells.push(c);
+                true
+            }
+            _ => match cells.iter().find(|c| c[3] > 0).copied() {
+                Some(c) => {
+                    cells.push([c[0], c[1], c[2], 0]);
+                    true
+                }
+                None => false,
+            },
+        };
+        assert_eq!(
+            crate::bricks::no_overlap_in_bitmaps(&cells),
+            Some(!want),
+            "seed {seed}"
+        );
+        match run(&cells) {
+            None => assert!(!want, "seed {seed}: no error"),
+            Some(AmrError::Overlap { a, b }) => {
+                assert!(want && a < b, "seed {seed}");
+                overlaps += 1;
+            }
+            Some(e) => panic!("seed {seed}: {e}"),
+        }
+    }
+    assert!(overlaps >= 20, "{overlaps}");
+    // Two finest cells 2^18 apart: the bitmaps would hold 2^54 bits.
+    let sparse = [[0, 0, 0, 0], [1 << 18, 1 << 18, 1 << 18, 0]];
+    assert_eq!(crate::bricks::no_overlap_in_bitmaps(&sparse), None);
+    assert!(run(&sparse).is_none());
 }

@@ -9,7 +9,7 @@ use std::io::{BufRead, Read, Seek};
 use std::path::{Path, PathBuf};
 
 use super::{AmrCellData, FieldPick, MAX_LEVEL};
-use crate::decimal::fast_decimal;
+use crate::decimal::fast_decimal_prefix;
 use crate::{IoError, checked_product, open_with_len, remaining_len};
 
 /// The longest `fort.t` accepted: a header is a few short lines.
@@ -313,11 +313,19 @@ pub fn read_amrclaw_picked(fort_q: &Path, pick: &FieldPick) -> Result<AmrCellDat
     let (file, len) = open_with_len(fort_q)?;
     // The file's pages in place (no copy of the text, no fresh memory);
     // where the file cannot be mapped (a pipe), read it a window at a time.
-    // SAFETY: the map is only read, and dropped before returning; a file
-    // truncated by another process meanwhile is outside what any reader
-    // can guard against (as with output files still being written).
+    // SAFETY: the map is only read; a file truncated by another process
+    // meanwhile is outside what any reader can guard against (as with
+    // output files still being written).
     match (len > 0).then(|| unsafe { memmap2::Mmap::map(&file) }) {
-        Some(Ok(map)) => read_grids_text(&map, fort_q, header, pick),
+        Some(Ok(map)) => {
+            let data = read_grids_text(&map, fort_q, header, pick);
+            // Unmapping a large file's pages takes milliseconds (2 for 32
+            // MB): done on a thread of its own while the caller goes on.
+            if len > 1 << 24 {
+                std::thread::spawn(move || drop(map));
+            }
+            data
+        }
         _ => read_grids(file, len, fort_q, header, pick),
     }
 }
@@ -584,12 +592,17 @@ fn read_grid(
             return Err(grid_error(lines, message));
         }
         let start = at;
+        // One pass over the number where the fast path takes it.
+        if let Some((v, n)) = fast_decimal_prefix(&text[start..]) {
+            values.push(v as f32);
+            at += n;
+            continue;
+        }
         while at < text.len() && !text[at].is_ascii_whitespace() {
             at += 1;
         }
         let token = &text[start..at];
-        let value =
-            fast_decimal(token).or_else(|| std::str::from_utf8(token).ok().and_then(parse_fortran));
+        let value = std::str::from_utf8(token).ok().and_then(parse_fortran);
         match value {
             Some(v) => values.push(v as f32),
             None => {
@@ -786,45 +799,70 @@ fn grids_to_cells(
         }
     }
 
-    let kept: usize = grids
+    // Each grid's leaf cells written on every core into its own run of the
+    // output (the runs in grid order, cells x fastest as in the file).
+    let counts: Vec<usize> = grids
         .iter()
         .zip(&covered)
         .map(|(g, mask)| {
             let total = g.size[0] * g.size[1] * g.size[2];
             total - mask.iter().filter(|&&c| c).count()
         })
-        .sum();
-    let mut cells = Vec::with_capacity(kept);
+        .collect();
+    let kept: usize = counts.iter().sum();
     let (names, cols) = columns(meqn, pick);
     let stride = cols.as_ref().map_or(meqn, Vec::len);
-    let mut fields: Vec<(String, Vec<f32>)> = match &cols {
-        Some(cols) => cols.iter().map(|&c| names[c].clone()).collect::<Vec<_>>(),
+    let names: Vec<String> = match &cols {
+        Some(cols) => cols.iter().map(|&c| names[c].clone()).collect(),
         None => names,
+    };
+    let mut cells = vec![[0i32; 4]; kept];
+    let mut values = vec![vec![0.0f32; kept]; stride];
+    let mut runs = Vec::with_capacity(grids.len());
+    let mut cell_rest = cells.as_mut_slice();
+    let mut value_rest: Vec<&mut [f32]> = values.iter_mut().map(Vec::as_mut_slice).collect();
+    for &n in &counts {
+        let (run, tail) = std::mem::take(&mut cell_rest).split_at_mut(n);
+        cell_rest = tail;
+        let mut field_runs = Vec::with_capacity(stride);
+        for rest in &mut value_rest {
+            let (run, tail) = std::mem::take(rest).split_at_mut(n);
+            *rest = tail;
+            field_runs.push(run);
+        }
+        runs.push((run, field_runs));
     }
-    .into_iter()
-    .map(|name| (name, Vec::with_capacity(kept)))
-    .collect();
-    for (((g, mask), (lo, _)), &level) in grids.iter().zip(&covered).zip(&boxes).zip(&levels) {
-        let width = 1i64 << level;
-        let [nx, ny, nz] = g.size;
-        let mut index = 0;
-        for z in 0..nz {
-            for y in 0..ny {
-                for x in 0..nx {
-                    if mask.is_empty() || !mask[index] {
-                        // In range: hi was checked against i32::MAX above.
-                        let corner = |k: usize, i: usize| (lo[k] + i as i64 * width) as i32;
-                        cells.push([corner(0, x), corner(1, y), corner(2, z), level as i32]);
-                        let row = &g.values[index * stride..(index + 1) * stride];
-                        for ((_, field), &v) in fields.iter_mut().zip(row) {
-                            field.push(v);
+    {
+        use rayon::prelude::*;
+        runs.into_par_iter()
+            .zip(&grids)
+            .zip(&covered)
+            .zip(&boxes)
+            .zip(&levels)
+            .for_each(|(((((out, mut field_out), g), mask), (lo, _)), &level)| {
+                let width = 1i64 << level;
+                let [nx, ny, nz] = g.size;
+                let (mut index, mut k) = (0, 0);
+                for z in 0..nz {
+                    for y in 0..ny {
+                        for x in 0..nx {
+                            if mask.is_empty() || !mask[index] {
+                                // In range: hi was checked against i32::MAX above.
+                                let corner = |a: usize, i: usize| (lo[a] + i as i64 * width) as i32;
+                                out[k] = [corner(0, x), corner(1, y), corner(2, z), level as i32];
+                                let row = &g.values[index * stride..(index + 1) * stride];
+                                for (field, &v) in field_out.iter_mut().zip(row) {
+                                    field[k] = v;
+                                }
+                                k += 1;
+                            }
+                            index += 1;
                         }
                     }
-                    index += 1;
                 }
-            }
-        }
+            });
     }
+    let fields: Vec<(String, Vec<f32>)> = names.into_iter().zip(values).collect();
     Ok(AmrCellData {
         cells,
         fields,

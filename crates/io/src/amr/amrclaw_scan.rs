@@ -5,10 +5,11 @@
 use std::path::Path;
 
 use super::{
-    AmrCellData, FieldPick, FrameHeader, GRID_NUMBER, Grid, fast_decimal, grids_to_cells,
-    not_a_number, parse_fortran, read_piece,
+    AmrCellData, FieldPick, FrameHeader, GRID_NUMBER, Grid, grids_to_cells, not_a_number,
+    parse_fortran, read_piece,
 };
 use crate::IoError;
+use crate::decimal::fast_decimal_prefix;
 
 /// A grid's rows read for some of their columns: one row per line, the
 /// columns after the last picked one skipped to the line's end unparsed.
@@ -75,18 +76,26 @@ impl Rows<'_> {
                     }
                 }
                 let start = *at;
+                let picked = self.cols.get(next) == Some(&col);
+                if picked {
+                    next += 1;
+                    // One pass over the number where the fast path takes it.
+                    if let Some((v, n)) = fast_decimal_prefix(&text[start..]) {
+                        values.push(v as f32);
+                        *at += n;
+                        continue;
+                    }
+                }
                 while *at < text.len() && !text[*at].is_ascii_whitespace() {
                     *at += 1;
                 }
-                if col == self.cols[next] {
+                if picked {
                     let token = &text[start..*at];
-                    let value = fast_decimal(token)
-                        .or_else(|| std::str::from_utf8(token).ok().and_then(parse_fortran));
+                    let value = std::str::from_utf8(token).ok().and_then(parse_fortran);
                     let Some(v) = value else {
                         return Err(fault(*line, not_a_number(token), cell * meqn + col));
                     };
                     values.push(v as f32);
-                    next += 1;
                 }
             }
             let end = memchr::memchr(b'\n', &text[*at..]).map_or(text.len(), |i| *at + i);

@@ -3,7 +3,7 @@
 use super::scan::header_starts_in;
 use super::{FrameHeader, parse_fortran, read_grids_in, read_grids_text};
 use crate::amr::FieldPick;
-use crate::decimal::fast_decimal;
+use crate::decimal::{fast_decimal, fast_decimal_prefix};
 use std::path::Path;
 
 /// `n` coarse grids side by side along x and a fine one in the first,
@@ -86,6 +86,25 @@ fn windows_read_the_grids_the_whole_text_reads() {
     assert!(e.contains("grid 10 after the last of the 9 grids"), "{e}");
     let e = error(&text, 100, 11);
     assert!(e.contains("after 10 grids, but fort.t declares 11"), "{e}");
+    // The whole text at once (a mapped file) says the same.
+    let whole = |text: &str, ngrids: usize| {
+        let header = FrameHeader {
+            time: 0.0,
+            meqn: 2,
+            ngrids,
+        };
+        match read_grids_text(text.as_bytes(), path, Some(header), &FieldPick::All) {
+            Ok(_) => panic!("no error"),
+            Err(e) => e.to_string(),
+        }
+    };
+    assert_eq!(whole(&broken, 10), error(&broken, 1, 10));
+    for ngrids in [9, 11] {
+        assert_eq!(whole(&text, ngrids), error(&text, 100, ngrids));
+    }
+    let late = text.replacen("2.5060000000000002E0", "y", 1);
+    assert_ne!(late, text);
+    assert_eq!(whole(&late, 10), error(&late, 37, 10));
 }
 
 /// The fast path gives the bits the general parser (`str::parse`, with
@@ -123,6 +142,18 @@ fn fast_decimals_equal_the_general_parser() {
         "nan",
         "1e00001",
         "00000000000000000000001",
+        "12345678",
+        "0.12345678",
+        "00000000.00000001",
+        "1234567812345678",
+        "12345678123456789",
+        "0.00000000",
+        "1234567.8",
+        "12345678e1",
+        "1.2345678x",
+        "9999999999999999.E+6",
+        "-0.000000001234567812345678",
+        "1.5E+0001",
     ]
     .map(String::from)
     .to_vec();
@@ -143,7 +174,20 @@ fn fast_decimals_equal_the_general_parser() {
     }
     for t in &tokens {
         let general = parse_fortran(t);
-        if let Some(v) = fast_decimal(t.as_bytes()) {
+        // The one-pass reader takes the token wherever it ends (whitespace
+        // or the text's end) with the same bits, or leaves it.
+        let one = fast_decimal(t.as_bytes());
+        for end in ["", " ", "\n", "\t0.5"] {
+            let text = format!("{t}{end}");
+            let got = fast_decimal_prefix(text.as_bytes());
+            assert_eq!(
+                got.map(|(v, _)| v.to_bits()),
+                one.map(f64::to_bits),
+                "`{t}`"
+            );
+            assert!(got.is_none_or(|(_, n)| n == t.len()), "`{t}`: {got:?}");
+        }
+        if let Some(v) = one {
             fast += 1;
             let g = general.unwrap_or_else(|| panic!("`{t}`: fast {v}, general none"));
             assert_eq!(v.to_bits(), g.to_bits(), "`{t}`");
