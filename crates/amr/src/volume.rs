@@ -286,6 +286,9 @@ impl AmrVolume {
         if input.fields.is_empty() {
             return Err(AmrError::NoFields);
         }
+        // Each field's range, and its first value that is not finite, in
+        // chunks on every core.
+        let mut field_ranges = Vec::with_capacity(input.fields.len());
         for (name, v) in &input.fields {
             if v.len() != n {
                 return Err(AmrError::FieldLength {
@@ -294,13 +297,26 @@ impl AmrVolume {
                     got: v.len(),
                 });
             }
-            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+            let parts: Vec<(Range1, Option<usize>)> = v
+                .par_chunks(1 << 14)
+                .enumerate()
+                .map(|(k, chunk)| {
+                    let bad = chunk.iter().position(|x| !x.is_finite());
+                    let range = chunk.iter().fold(Range1::EMPTY, |mut r, &x| {
+                        r.extend(x);
+                        r
+                    });
+                    (range, bad.map(|i| (k << 14) + i))
+                })
+                .collect();
+            if let Some(i) = parts.iter().find_map(|p| p.1) {
                 return Err(AmrError::NonFinite {
                     name: name.clone(),
                     cell: i,
                     value: v[i],
                 });
             }
+            field_ranges.push(parts.iter().fold(Range1::EMPTY, |r, p| r.union(p.0)));
         }
         if !input.origin.is_finite() {
             return Err(AmrError::BadGeometry {
@@ -341,15 +357,6 @@ impl AmrVolume {
         let (lo, hi) = bricks::validate(&input.cells)?;
         stats.validate = t.elapsed();
         let (names, fields): (Vec<String>, Vec<Vec<f32>>) = input.fields.into_iter().unzip();
-        let field_ranges = fields
-            .par_iter()
-            .map(|v| {
-                v.iter().fold(Range1::EMPTY, |mut r, &x| {
-                    r.extend(x);
-                    r
-                })
-            })
-            .collect();
         // ∫ field dV of the cells, in a fixed order (cell order, then the
         // parts' sums): the same bits however the volume is used first.
         let integral = input

@@ -5,6 +5,7 @@
 //! files; [`read_amrclaw_from`] takes the `fort.q` text from a reader and
 //! the `fort.t` text as bytes. Both parse with the same code.
 
+use rayon::prelude::*;
 use std::io::{BufRead, Read, Seek};
 use std::path::{Path, PathBuf};
 
@@ -758,7 +759,8 @@ fn grids_to_cells(
     // Mark cells that a grid of a finer AMR level contains. Grids sorted by
     // their lower x: the grids that may overlap one lie in a window of that
     // order (lower x within the widest grid's width of it), found by binary
-    // search, so many grids cost far less than every pair.
+    // search, so many grids cost far less than every pair. Each grid's
+    // mask on every core.
     let mut by_x: Vec<usize> = (0..grids.len()).collect();
     by_x.sort_unstable_by_key(|&b| boxes[b].0[0]);
     let widest = boxes
@@ -766,38 +768,44 @@ fn grids_to_cells(
         .map(|(lo, hi)| hi[0] - lo[0])
         .max()
         .unwrap_or(0);
-    let mut covered: Vec<Vec<bool>> = vec![Vec::new(); grids.len()];
-    for (a, ga) in grids.iter().enumerate() {
-        let (lo, hi) = boxes[a];
-        let width = 1i64 << levels[a];
-        let start = by_x.partition_point(|&b| boxes[b].0[0] <= lo[0] - widest);
-        let end = by_x.partition_point(|&b| boxes[b].0[0] < hi[0]);
-        for &b in &by_x[start..end] {
-            let gb = &grids[b];
-            let (flo, fhi) = boxes[b];
-            if gb.amr_level <= ga.amr_level || (0..3).any(|k| fhi[k] <= lo[k] || flo[k] >= hi[k]) {
-                continue;
-            }
-            // Cells i with [lo + i·w, lo + (i+1)·w) inside [flo, fhi).
-            let mut range = [(0usize, 0usize); 3];
-            for k in 0..3 {
-                let first = (flo[k] - lo[k] + width - 1).div_euclid(width).max(0);
-                let end = (fhi[k] - lo[k]).div_euclid(width).min(ga.size[k] as i64);
-                range[k] = (first as usize, end.max(first) as usize);
-            }
-            let mask = &mut covered[a];
-            if mask.is_empty() {
-                mask.resize(ga.size[0] * ga.size[1] * ga.size[2], false);
-            }
-            let [nx, ny, _] = ga.size;
-            for z in range[2].0..range[2].1 {
-                for y in range[1].0..range[1].1 {
-                    let row = (z * ny + y) * nx;
-                    mask[row + range[0].0..row + range[0].1].fill(true);
+    let covered: Vec<Vec<bool>> = (0..grids.len())
+        .into_par_iter()
+        .map(|a| {
+            let ga = &grids[a];
+            let mut mask: Vec<bool> = Vec::new();
+            let (lo, hi) = boxes[a];
+            let width = 1i64 << levels[a];
+            let start = by_x.partition_point(|&b| boxes[b].0[0] <= lo[0] - widest);
+            let end = by_x.partition_point(|&b| boxes[b].0[0] < hi[0]);
+            for &b in &by_x[start..end] {
+                let gb = &grids[b];
+                let (flo, fhi) = boxes[b];
+                if gb.amr_level <= ga.amr_level
+                    || (0..3).any(|k| fhi[k] <= lo[k] || flo[k] >= hi[k])
+                {
+                    continue;
+                }
+                // Cells i with [lo + i·w, lo + (i+1)·w) inside [flo, fhi).
+                let mut range = [(0usize, 0usize); 3];
+                for k in 0..3 {
+                    let first = (flo[k] - lo[k] + width - 1).div_euclid(width).max(0);
+                    let end = (fhi[k] - lo[k]).div_euclid(width).min(ga.size[k] as i64);
+                    range[k] = (first as usize, end.max(first) as usize);
+                }
+                if mask.is_empty() {
+                    mask.resize(ga.size[0] * ga.size[1] * ga.size[2], false);
+                }
+                let [nx, ny, _] = ga.size;
+                for z in range[2].0..range[2].1 {
+                    for y in range[1].0..range[1].1 {
+                        let row = (z * ny + y) * nx;
+                        mask[row + range[0].0..row + range[0].1].fill(true);
+                    }
                 }
             }
-        }
-    }
+            mask
+        })
+        .collect();
 
     // Each grid's leaf cells written on every core into its own run of the
     // output (the runs in grid order, cells x fastest as in the file).
@@ -833,7 +841,6 @@ fn grids_to_cells(
         runs.push((run, field_runs));
     }
     {
-        use rayon::prelude::*;
         runs.into_par_iter()
             .zip(&grids)
             .zip(&covered)
