@@ -307,6 +307,17 @@ pub fn read_amrclaw(fort_q: &Path) -> Result<AmrCellData, IoError> {
 /// to hold `meqn` values, and a malformed number in a field not picked goes
 /// unnoticed.
 pub fn read_amrclaw_picked(fort_q: &Path, pick: &FieldPick) -> Result<AmrCellData, IoError> {
+    // A device, FIFO or socket (a pipe, /dev/stdin) has no length to check
+    // sizes against and no fort.t beside it.
+    if let Ok(meta) = std::fs::metadata(fort_q)
+        && !meta.is_file()
+    {
+        return Err(IoError::format(
+            fort_q,
+            "not a regular file (a device, FIFO or socket): AMRClaw output is read from its \
+             fort.qNNNN file (with fort.tNNNN beside it)",
+        ));
+    }
     let header = match fort_t_path(fort_q) {
         Some(t) if t.is_file() => Some(read_fort_t(&t)?),
         _ => None,

@@ -340,3 +340,19 @@ fn header_search_in_chunks_finds_every_grid() {
         );
     }
 }
+
+/// A device or pipe given as a fort.q is refused by name, not read as an
+/// empty file.
+#[test]
+fn special_files_are_refused() {
+    #[cfg(unix)]
+    {
+        let e = super::read_amrclaw(Path::new("/dev/null"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("/dev/null") && e.contains("not a regular file"),
+            "{e}"
+        );
+    }
+}
