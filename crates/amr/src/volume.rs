@@ -1,8 +1,9 @@
 //! [`AmrVolume`]: construction, intervals and the `Volume` impl; the
 //! reconstruction ([`recon`]), its packet form ([`batch`], eight samples
 //! at a time in [`lanes`]), the octant reconstruction ([`octant`]), the
-//! exact nearest-reconstruction answers ([`nearest`]) and the
-//! cell-location baseline ([`locator`]) live beside it.
+//! exact nearest-reconstruction answers ([`nearest`]), the parts built on
+//! first use ([`parts`]) and the cell-location baseline ([`locator`]) live
+//! beside it.
 
 mod batch;
 mod columns;
@@ -111,8 +112,10 @@ pub struct AmrVolume {
 }
 
 impl AmrVolume {
-    /// Validates the cells, builds bricks and their BVH; the regions follow
-    /// on first use.
+    /// Validates the cells and keeps them, with each field's range, the
+    /// bounds and the exact integral; the bricks, their BVH and the regions
+    /// are built on first use (`volume/parts.rs`), so a nearest projection down an
+    /// axis never builds them.
     pub fn new(input: AmrCells, settings: AmrSettings) -> Result<AmrVolume, AmrError> {
         let n = input.cells.len();
         if input.fields.is_empty() {

@@ -1,7 +1,11 @@
-//! Nearest column densities down an axis by summing cell columns: each
-//! brick's cells are summed along the view axis once, and each pixel adds
-//! the column its centre falls in — O(cells + pixels × bricks deep)
-//! instead of a ray walked through the bricks per pixel.
+//! Nearest column densities down an axis by summing cell columns, instead
+//! of a ray walked through the bricks per pixel. Before any brick is built
+//! (a projection right after loading), each level's cells are summed on a
+//! lattice of that level's cells across the view and each pixel adds its
+//! lattice cell per level — O(cells + levels × pixels), no bricks needed.
+//! Once bricks exist, each brick's cells are summed along the view axis
+//! and each pixel adds the column its centre falls in — O(cells + pixels ×
+//! bricks deep).
 //!
 //! **Exactness.** Nearest reconstruction is constant per cell, and a ray
 //! down axis `m` through a cell's footprint crosses the whole cell: its
