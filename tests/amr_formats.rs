@@ -13,7 +13,6 @@
 mod common;
 use common::*;
 
-use std::fmt::Write as _;
 use std::path::Path;
 use std::process::Command;
 
@@ -31,35 +30,10 @@ fn write_amrclaw(dir: &Path) -> std::path::PathBuf {
         (2, [6, 4, 8], [0.25, 0.5, 0.25], 0.0625),
         (2, [4, 4, 4], [0.75, 0.0, 0.75], 0.0625),
     ];
-    let mut q = String::new();
-    for (g, (level, n, lo, dx)) in grids.iter().enumerate() {
-        writeln!(q, "{:6}                 grid_number", g + 1).unwrap();
-        writeln!(q, "{level:6}                 AMR_level").unwrap();
-        for (v, name) in n.iter().zip(["mx", "my", "mz"]) {
-            writeln!(q, "{v:6}                 {name}").unwrap();
-        }
-        for (v, name) in lo.iter().zip(["xlow", "ylow", "zlow"]) {
-            writeln!(q, "{v:26.16E}    {name}").unwrap();
-        }
-        for name in ["dx", "dy", "dz"] {
-            writeln!(q, "{dx:26.16E}    {name}").unwrap();
-        }
-        writeln!(q).unwrap();
-        for k in 0..n[2] {
-            for j in 0..n[1] {
-                for i in 0..n[0] {
-                    let c = [i, j, k].map(|a| a as f64 + 0.5);
-                    let p = [0, 1, 2].map(|a| lo[a] + c[a] * dx);
-                    let rho = 1.0 + p[0] + 2.0 * p[1] * p[1] + 0.5 * (7.0 * p[2]).sin();
-                    let row = [rho, p[0] - 0.5, p[1] * p[2], -p[2], 2.0 + rho * 0.25];
-                    for v in row {
-                        write!(q, "{v:26.16E}").unwrap();
-                    }
-                    writeln!(q).unwrap();
-                }
-            }
-        }
-    }
+    let q = amrclaw_text(&grids, |_, _, p| {
+        let rho = 1.0 + p[0] + 2.0 * p[1] * p[1] + 0.5 * (7.0 * p[2]).sin();
+        vec![rho, p[0] - 0.5, p[1] * p[2], -p[2], 2.0 + rho * 0.25]
+    });
     let path = dir.join("fort.q0004");
     std::fs::write(&path, q).unwrap();
     std::fs::write(

@@ -517,32 +517,15 @@ fn projections_do_not_depend_on_the_units() {
 /// colour field the description names is read too.
 #[test]
 fn amr_projection_loads_read_only_the_projected_field() {
-    use std::fmt::Write as _;
     let dir = common::Scratch::new("amr-picked-projection");
-    let mut q = String::new();
     let grids = [
         (1, [4, 4, 4], [0.0; 3], 0.25),
         (2, [4, 2, 4], [0.25, 0.5, 0.25], 0.125),
     ];
-    for (g, (level, n, lo, dx)) in grids.iter().enumerate() {
-        writeln!(q, "{:6}                 grid_number", g + 1).unwrap();
-        writeln!(q, "{level:6}                 AMR_level").unwrap();
-        for (v, name) in n.iter().zip(["mx", "my", "mz"]) {
-            writeln!(q, "{v:6}                 {name}").unwrap();
-        }
-        for (v, name) in lo.iter().zip(["xlow", "ylow", "zlow"]) {
-            writeln!(q, "{v:26.16E}    {name}").unwrap();
-        }
-        for name in ["dx", "dy", "dz"] {
-            writeln!(q, "{dx:26.16E}    {name}").unwrap();
-        }
-        writeln!(q).unwrap();
-        for c in 0..n[0] * n[1] * n[2] {
-            let v = 1.0 + (c * 7 + g * 3) as f64 * 0.013;
-            writeln!(q, "{v:26.16E}{:26.16E}{:26.16E}", -v, v * v).unwrap();
-        }
-        writeln!(q).unwrap();
-    }
+    let q = common::amrclaw_text(&grids, |g, c, _| {
+        let v = 1.0 + (c * 7 + g * 3) as f64 * 0.013;
+        vec![v, -v, v * v]
+    });
     let path = dir.path("fort.q0001");
     std::fs::write(&path, q).unwrap();
     let view = ProjectionDesc {

@@ -149,3 +149,38 @@ pub fn write_f64(path: &Path, p: &[[f64; 3]]) {
     }
     std::fs::write(path, bytes).unwrap();
 }
+
+/// AMRClaw `fort.q` text: for each grid `(AMR level, [mx, my, mz], lower
+/// corner, dx)` its header and one row per cell (x fastest) of the values
+/// `row(grid, cell index, cell centre)`, as AMRClaw writes them.
+pub fn amrclaw_text(
+    grids: &[(usize, [usize; 3], [f64; 3], f64)],
+    row: impl Fn(usize, usize, [f64; 3]) -> Vec<f64>,
+) -> String {
+    use std::fmt::Write as _;
+    let mut q = String::new();
+    for (g, (level, n, lo, dx)) in grids.iter().enumerate() {
+        writeln!(q, "{:6}                 grid_number", g + 1).unwrap();
+        writeln!(q, "{level:6}                 AMR_level").unwrap();
+        for (v, name) in n.iter().zip(["mx", "my", "mz"]) {
+            writeln!(q, "{v:6}                 {name}").unwrap();
+        }
+        for (v, name) in lo.iter().zip(["xlow", "ylow", "zlow"]) {
+            writeln!(q, "{v:26.16E}    {name}").unwrap();
+        }
+        for name in ["dx", "dy", "dz"] {
+            writeln!(q, "{dx:26.16E}    {name}").unwrap();
+        }
+        writeln!(q).unwrap();
+        for c in 0..n[0] * n[1] * n[2] {
+            let i = [c % n[0], (c / n[0]) % n[1], c / (n[0] * n[1])];
+            let centre = [0, 1, 2].map(|a| lo[a] + (i[a] as f64 + 0.5) * dx);
+            for v in row(g, c, centre) {
+                write!(q, "{v:26.16E}").unwrap();
+            }
+            writeln!(q).unwrap();
+        }
+        writeln!(q).unwrap();
+    }
+    q
+}

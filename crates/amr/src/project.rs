@@ -82,19 +82,6 @@ pub(crate) struct AxisPixels {
     pub ys: Vec<f32>,
 }
 
-/// [`AxisPixels`] with every pixel's ray (row-major) and its range inside
-/// the bounds.
-pub(crate) struct AxisGrid {
-    pub rays: Vec<Ray>,
-    pub ts: Vec<Range1>,
-    pub m: usize,
-    pub t: Range1,
-    pub ax: usize,
-    pub ay: usize,
-    pub xs: Vec<f32>,
-    pub ys: Vec<f32>,
-}
-
 impl AmrVolume {
     /// The view's [`AxisPixels`]; `None` unless every ray runs down one
     /// axis with the same direction and range along it, and each pixel's
@@ -165,18 +152,16 @@ impl AmrVolume {
         })
     }
 
-    /// The view's [`AxisGrid`]: its [`AxisPixels`] with every pixel's ray
-    /// and range.
-    pub(crate) fn axis_grid(&self, camera: &Camera, width: u32, height: u32) -> Option<AxisGrid> {
+    /// The view's [`AxisPixels`] with every pixel's ray (row-major) and its
+    /// range inside the bounds.
+    pub(crate) fn axis_grid(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Option<(AxisPixels, Vec<Ray>, Vec<Range1>)> {
         use rayon::prelude::*;
-        let AxisPixels {
-            m,
-            t,
-            ax,
-            ay,
-            xs,
-            ys,
-        } = self.axis_pixels(camera, width, height)?;
+        let pixels = self.axis_pixels(camera, width, height)?;
         let w = width as usize;
         let all = Range1::new(f32::NEG_INFINITY, f32::INFINITY);
         let rays: Vec<Ray> = (0..w * height as usize)
@@ -187,16 +172,7 @@ impl AmrVolume {
             .par_iter()
             .map(|r| self.bounds().clip_ray(r, all))
             .collect();
-        Some(AxisGrid {
-            rays,
-            ts,
-            m,
-            t,
-            ax,
-            ay,
-            xs,
-            ys,
-        })
+        Some((pixels, rays, ts))
     }
 
     /// The basis column densities through every pixel centre of a view
@@ -208,16 +184,18 @@ impl AmrVolume {
         height: u32,
         control: &Control,
     ) -> Option<Result<Vec<f32>, Cancelled>> {
-        let AxisGrid {
+        let (
+            AxisPixels {
+                m,
+                t,
+                ax,
+                ay,
+                xs,
+                ys,
+            },
             rays,
             ts,
-            m,
-            t,
-            ax,
-            ay,
-            xs,
-            ys,
-        } = self.axis_grid(camera, width, height)?;
+        ) = self.axis_grid(camera, width, height)?;
         let w = width as usize;
         Some(in_bands(height as usize, BAND as usize, control, |rows| {
             self.project_band(

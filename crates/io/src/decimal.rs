@@ -76,14 +76,20 @@ pub(crate) fn fast_decimal(t: &[u8]) -> Option<f64> {
         }
         scale += sign * e;
     }
-    if mantissa >= 1 << 53 || scale.unsigned_abs() > 22 {
-        return (mantissa == 0).then_some(if negative { -0.0 } else { 0.0 });
-    }
-    let m = mantissa as f64;
-    let v = if scale >= 0 {
-        m * EXACT_POWERS[scale as usize]
+    exact(negative, mantissa, scale)
+}
+
+/// `±mantissa × 10^scale` when it is one correctly rounded operation
+/// (digits below 2⁵³, a power of ten within ±22; zero at any scale).
+fn exact(negative: bool, mantissa: u64, scale: i32) -> Option<f64> {
+    let v = if mantissa == 0 {
+        0.0
+    } else if mantissa >= 1 << 53 || scale.unsigned_abs() > 22 {
+        return None;
+    } else if scale >= 0 {
+        mantissa as f64 * EXACT_POWERS[scale as usize]
     } else {
-        m / EXACT_POWERS[(-scale) as usize]
+        mantissa as f64 / EXACT_POWERS[(-scale) as usize]
     };
     Some(if negative { -v } else { v })
 }
@@ -195,14 +201,5 @@ pub(crate) fn fast_decimal_prefix(t: &[u8]) -> Option<(f64, usize)> {
         }
         scale += sign * e;
     }
-    if mantissa >= 1 << 53 || scale.unsigned_abs() > 22 {
-        return (mantissa == 0).then_some((if negative { -0.0 } else { 0.0 }, i));
-    }
-    let m = mantissa as f64;
-    let v = if scale >= 0 {
-        m * EXACT_POWERS[scale as usize]
-    } else {
-        m / EXACT_POWERS[(-scale) as usize]
-    };
-    Some((if negative { -v } else { v }, i))
+    exact(negative, mantissa, scale).map(|v| (v, i))
 }

@@ -540,97 +540,64 @@ fn read_grid(
         })?;
     let cols = columns(meqn, pick).1;
     let mut values = Vec::with_capacity(count / meqn * cols.as_ref().map_or(meqn, Vec::len));
-    let fault = |line: usize, problem: String, done: usize| {
-        format!(
-            "line {line}: {problem}, after {done} of {count} values (mx·my·mz·meqn); the grid is \
-             truncated, or its header or meqn is wrong"
-        )
-    };
+    let fault = |line: usize, problem: &str, done: usize| value_fault(line, problem, done, count);
     // Values straight from the text: tokens between whitespace, lines
     // counted as they pass (no copy of each line).
     let text: &[u8] = lines.reader;
     let mut at = 0;
     let mut line = lines.line + 1;
     if let Some(cols) = cols {
-        let cells = count / meqn;
         let rows = Rows {
             text,
             meqn,
             cols: &cols,
             ends_at_header: lines.ends_at_header,
         };
-        return match rows.read(cells, &mut at, &mut line, &mut values) {
-            Ok(()) => {
-                lines.reader = &text[at..];
-                lines.line = line - 1;
-                Ok(Grid {
-                    number,
-                    amr_level,
-                    line: header_line,
-                    size,
-                    low,
-                    d,
-                    values,
-                })
-            }
-            Err(message) => {
-                lines.line = line;
-                Err(grid_error(lines, message))
-            }
-        };
-    }
-    while values.len() < count {
-        while at < text.len() && text[at].is_ascii_whitespace() {
-            line += usize::from(text[at] == b'\n');
-            at += 1;
-        }
-        if at == text.len() {
-            lines.line = line - 1;
-            let message = match lines.ends_at_header {
-                true => format!(
-                    "line {line}: the next grid's header (`grid_number`) comes after {} of its \
-                     {count} values (mx·my·mz·meqn); the grid is truncated, or its header or \
-                     meqn is wrong",
-                    values.len()
-                ),
-                false => format!(
-                    "file ends at line {} after {} of its {count} values (mx·my·mz·meqn); \
-                     the file is truncated",
-                    line - 1,
-                    values.len()
-                ),
-            };
+        if let Err(message) = rows.read(count / meqn, &mut at, &mut line, &mut values) {
+            lines.line = line;
             return Err(grid_error(lines, message));
         }
-        let start = at;
-        // One pass over the number where the fast path takes it.
-        if let Some((v, n)) = fast_decimal_prefix(&text[start..]) {
-            values.push(v as f32);
-            at += n;
-            continue;
-        }
-        while at < text.len() && !text[at].is_ascii_whitespace() {
-            at += 1;
-        }
-        let token = &text[start..at];
-        let value = std::str::from_utf8(token).ok().and_then(parse_fortran);
-        match value {
-            Some(v) => values.push(v as f32),
-            None => {
-                lines.line = line;
-                let problem = not_a_number(token);
-                return Err(grid_error(lines, fault(line, problem, values.len())));
+    } else {
+        while values.len() < count {
+            while at < text.len() && text[at].is_ascii_whitespace() {
+                line += usize::from(text[at] == b'\n');
+                at += 1;
+            }
+            if at == text.len() {
+                lines.line = line - 1;
+                let message = values_end(lines.ends_at_header, line, values.len(), count);
+                return Err(grid_error(lines, message));
+            }
+            let start = at;
+            // One pass over the number where the fast path takes it.
+            if let Some((v, n)) = fast_decimal_prefix(&text[start..]) {
+                values.push(v as f32);
+                at += n;
+                continue;
+            }
+            while at < text.len() && !text[at].is_ascii_whitespace() {
+                at += 1;
+            }
+            let token = &text[start..at];
+            let value = std::str::from_utf8(token).ok().and_then(parse_fortran);
+            match value {
+                Some(v) => values.push(v as f32),
+                None => {
+                    lines.line = line;
+                    let problem = not_a_number(token);
+                    return Err(grid_error(lines, fault(line, &problem, values.len())));
+                }
             }
         }
-    }
-    // The last value's row must end with it.
-    while at < text.len() && text[at] != b'\n' {
-        if !text[at].is_ascii_whitespace() {
-            lines.line = line;
-            let problem = "a row runs past the grid's last value".to_string();
-            return Err(grid_error(lines, fault(line, problem, count)));
+        // The last value's row must end with it.
+        while at < text.len() && text[at] != b'\n' {
+            if !text[at].is_ascii_whitespace() {
+                lines.line = line;
+                let problem = "a row runs past the grid's last value";
+                return Err(grid_error(lines, fault(line, problem, count)));
+            }
+            at += 1;
         }
-        at += 1;
     }
     lines.reader = &text[at..];
     lines.line = line - 1;
@@ -643,6 +610,32 @@ fn read_grid(
         d,
         values,
     })
+}
+
+/// A fault at line `line` inside a grid's `count` values, after `done`.
+fn value_fault(line: usize, problem: &str, done: usize, count: usize) -> String {
+    format!(
+        "line {line}: {problem}, after {done} of {count} values (mx·my·mz·meqn); the grid is \
+         truncated, or its header or meqn is wrong"
+    )
+}
+
+/// A grid's values that end (at the next grid's header when
+/// `ends_at_header`, else at the file's end) before line `line`, after
+/// `done` of `count`.
+fn values_end(ends_at_header: bool, line: usize, done: usize, count: usize) -> String {
+    match ends_at_header {
+        true => format!(
+            "line {line}: the next grid's header (`grid_number`) comes after {done} of its \
+             {count} values (mx·my·mz·meqn); the grid is truncated, or its header or meqn is \
+             wrong"
+        ),
+        false => format!(
+            "file ends at line {} after {done} of its {count} values (mx·my·mz·meqn); the file \
+             is truncated",
+            line - 1
+        ),
+    }
 }
 
 /// The names of `meqn` components (`q0`, `q1`, …) and the columns `pick`

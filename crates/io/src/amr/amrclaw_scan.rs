@@ -6,7 +6,7 @@ use std::path::Path;
 
 use super::{
     AmrCellData, FieldPick, FrameHeader, GRID_NUMBER, Grid, grids_to_cells, not_a_number,
-    parse_fortran, read_piece,
+    parse_fortran, read_piece, value_fault, values_end,
 };
 use crate::IoError;
 use crate::decimal::fast_decimal_prefix;
@@ -35,12 +35,8 @@ impl Rows<'_> {
         let text = self.text;
         let (meqn, count) = (self.meqn, cells * self.meqn);
         let last = self.cols.last().copied().unwrap_or(0);
-        let fault = |line: usize, problem: String, done: usize| {
-            format!(
-                "line {line}: {problem}, after {done} of {count} values (mx·my·mz·meqn); the \
-                 grid is truncated, or its header or meqn is wrong"
-            )
-        };
+        let fault =
+            |line: usize, problem: &str, done: usize| value_fault(line, problem, done, count);
         let inline = |c: u8| c == b' ' || c == b'\t' || c == b'\r';
         for cell in 0..cells {
             while *at < text.len() && text[*at].is_ascii_whitespace() {
@@ -48,21 +44,9 @@ impl Rows<'_> {
                 *at += 1;
             }
             if *at == text.len() {
+                let message = values_end(self.ends_at_header, *line, cell * meqn, count);
                 *line -= 1;
-                let done = cell * meqn;
-                return Err(match self.ends_at_header {
-                    true => format!(
-                        "line {}: the next grid's header (`grid_number`) comes after {done} of \
-                         its {count} values (mx·my·mz·meqn); the grid is truncated, or its \
-                         header or meqn is wrong",
-                        *line + 1
-                    ),
-                    false => format!(
-                        "file ends at line {} after {done} of its {count} values \
-                         (mx·my·mz·meqn); the file is truncated",
-                        *line
-                    ),
-                });
+                return Err(message);
             }
             let mut next = 0;
             for col in 0..=last {
@@ -72,7 +56,7 @@ impl Rows<'_> {
                     }
                     if *at == text.len() || text[*at] == b'\n' {
                         let problem = format!("a row holds {col} values, but meqn is {meqn}");
-                        return Err(fault(*line, problem, cell * meqn + col));
+                        return Err(fault(*line, &problem, cell * meqn + col));
                     }
                 }
                 let start = *at;
@@ -93,7 +77,7 @@ impl Rows<'_> {
                     let token = &text[start..*at];
                     let value = std::str::from_utf8(token).ok().and_then(parse_fortran);
                     let Some(v) = value else {
-                        return Err(fault(*line, not_a_number(token), cell * meqn + col));
+                        return Err(fault(*line, &not_a_number(token), cell * meqn + col));
                     };
                     values.push(v as f32);
                 }
@@ -108,7 +92,7 @@ impl Rows<'_> {
                 if last + 1 + more != meqn {
                     let problem =
                         format!("a row holds {} values, but meqn is {meqn}", last + 1 + more);
-                    return Err(fault(*line, problem, (last + 1 + more).min(meqn)));
+                    return Err(fault(*line, &problem, (last + 1 + more).min(meqn)));
                 }
             }
             *at = end;
