@@ -22,6 +22,13 @@ SPH_HDF5 = "sph-dam-break/dam_break_3d_01000.hdf5"
 # AMRClaw frame and camera for the AMR rows: `amr_sweep.sh` runs them all,
 # so the ratio reported is the worst over frames and views, not the tuned one.
 AMRCLAW = "amr-euler3d/fort.q%04d" % int(os.environ.get("PEERS_AMR_FRAME", "3"))
+# `PEERS_AMR_FORMAT` (amrclaw, amrex or flash) gives every AMR row the frame
+# rewritten by `tools/amr_formats.py` (the same cells in an AMReX plotfile;
+# the same values on FLASH's 4³-block octree): voxless reads it with `--amr`,
+# the peers through `amr_grids`.
+AMR_FORMAT = os.environ.get("PEERS_AMR_FORMAT", "amrclaw")
+AMR_FRAME_NAME = (f"AMRClaw frame {int(AMRCLAW[-4:])}" if AMR_FORMAT == "amrclaw"
+                  else f"{AMR_FORMAT} of AMRClaw frame {int(AMRCLAW[-4:])}")
 AMR_VIEWS = [
     dict(eye=(4.6, -3.2, 3.4), look_at=(1.0, 1.0, 1.0), up=(0, 0, 1), fov=30.0),
     dict(eye=(2.2, 1.9, 1.8), look_at=(0.3, 0.3, 0.3), up=(0, 0, 1), fov=40.0),
@@ -136,6 +143,67 @@ def read_amrclaw(path, field=0):
         q = vals[: n * 5].reshape(mz, my, mx, 5)  # x fastest, then y, then z
         grids.append(dict(level=level, dx=dx, lower=lo, shape=(mx, my, mz),
                           data=np.ascontiguousarray(q[..., field], np.float32)))
+    return grids
+
+
+def amr_converted(data):
+    """The path of the frame in `AMR_FORMAT` (written under out/amr-formats
+    by the project's generator the first time) and its density's name."""
+    if AMR_FORMAT not in ("amrex", "flash"):
+        raise SystemExit(f"PEERS_AMR_FORMAT={AMR_FORMAT}: amrclaw, amrex or flash")
+    out = os.path.join(HERE, "out", "amr-formats", os.path.basename(AMRCLAW))
+    manifest = os.path.join(out, "manifest.json")
+    if not os.path.exists(manifest):
+        subprocess.run([sys.executable, os.path.join(REPO, "tools", "amr_formats.py"),
+                        os.path.join(data, AMRCLAW), out, "--formats", "amrex,flash"],
+                       check=True, stdout=subprocess.DEVNULL)
+    with open(manifest) as f:
+        path = os.path.join(out, json.load(f)[AMR_FORMAT])
+    return path, {"amrex": "density", "flash": "dens"}[AMR_FORMAT]
+
+
+def amr_voxless_input(data):
+    """voxless's arguments for the AMR rows' frame in `AMR_FORMAT`."""
+    if AMR_FORMAT == "amrclaw":
+        return ["--amrclaw", os.path.join(data, AMRCLAW)]
+    path, field = amr_converted(data)
+    return ["--amr", path, "--field", field]
+
+
+def amr_grids(data):
+    """The AMR rows' frame as `read_amrclaw` gives it, in `AMR_FORMAT`: the
+    AMReX plotfile through yt (its boxes), FLASH's blocks through h5py
+    (every block, as AMRClaw's coarse grids keep their covered cells: the
+    finest block over a point holds it, and Open VKL wants a root level)."""
+    if AMR_FORMAT == "amrclaw":
+        return read_amrclaw(os.path.join(data, AMRCLAW))
+    path, field = amr_converted(data)
+    grids = []
+    if AMR_FORMAT == "amrex":
+        import yt
+
+        yt.set_log_level(50)
+        ds = yt.load(path)
+        lo0 = ds.domain_left_edge.d
+        for g in ds.index.grids:
+            d = np.asarray(g[("boxlib", field)].d, np.float32)  # (nx, ny, nz)
+            grids.append(dict(level=int(g.Level), dx=float(g.dds.d[0]),
+                              lower=tuple(float(x) for x in g.LeftEdge.d - lo0),
+                              shape=tuple(int(n) for n in g.ActiveDimensions),
+                              data=np.ascontiguousarray(d.transpose(2, 1, 0))))
+        return grids
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        box = np.asarray(f["bounding box"])  # (n, 3, 2)
+        lev = np.asarray(f["refine level"]) - 1
+        vals = np.asarray(f[field])  # (n, nz, ny, nx)
+    lo0 = box[:, :, 0].min(0)
+    for b, l, d in zip(box, lev, vals):
+        n = d.shape[::-1]
+        grids.append(dict(level=int(l), dx=float((b[0, 1] - b[0, 0]) / n[0]),
+                          lower=tuple(b[:, 0] - lo0), shape=n,
+                          data=np.ascontiguousarray(d, np.float32)))
     return grids
 
 

@@ -240,13 +240,15 @@ def particle_volume(osp, positions, radius, weights, support_factor=3.0):
     return vol
 
 
-def amr_volume(osp, grids, origin, finest_dx, method=OSP_AMR_OCTANT):
+def amr_volume(osp, grids, origin, finest_dx, method=OSP_AMR_OCTANT, widths=None):
     """Open VKL `amr` volume from AMR grids (dicts with level (0 = coarsest),
     lo (cell index of the lower corner in that level's index space) and data
     (nz, ny, nx)). box3i upper bounds are inclusive; cellWidth is per level
-    in units of gridSpacing (the finest cell)."""
+    in units of gridSpacing (the finest cell): `widths`, or ratio 2 a level."""
     nlev = max(g["level"] for g in grids) + 1
-    widths = np.array([2.0 ** (nlev - 1 - l) for l in range(nlev)], np.float32)
+    if widths is None:
+        widths = [2.0 ** (nlev - 1 - l) for l in range(nlev)]
+    widths = np.array(widths, np.float32)
     bounds = np.array([[*g["lo"], *(np.add(g["lo"], g["data"].shape[::-1]) - 1)]
                        for g in grids], np.int32)
     levels = np.array([g["level"] for g in grids], np.int32)

@@ -26,14 +26,19 @@ def particles(osp, data):
 
 def amr(osp, data):
     s = C.AMR_RENDER
-    grids = C.read_amrclaw(os.path.join(data, C.AMRCLAW))
+    grids = C.amr_grids(data)
     finest = min(g["dx"] for g in grids)
     blocks = [dict(level=g["level"],
                    lo=tuple(int(round(x / g["dx"])) for x in g["lower"]),
                    data=g["data"]) for g in grids]
     # Octant: Open VKL's smooth reconstruction across levels, the nearest
     # counterpart of voxless's basis (tent) reconstruction.
-    vol = O.amr_volume(osp, blocks, (0.0, 0.0, 0.0), finest, O.OSP_AMR_OCTANT)
+    # Each level's cell in finest cells; a level with no blocks (FLASH's
+    # covered root) gets ratio 2 from the one below it.
+    widths = {g["level"]: g["dx"] / finest for g in grids}
+    top = max(widths)
+    vol = O.amr_volume(osp, blocks, (0.0, 0.0, 0.0), finest, O.OSP_AMR_OCTANT,
+                       [widths.get(l, 2.0 ** (top - l)) for l in range(top + 1)])
     return vol, s
 
 

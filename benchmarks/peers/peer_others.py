@@ -30,7 +30,7 @@ def vtk_amr(a):
     from vtk.util import numpy_support as ns
 
     s = C.AMR_RENDER
-    grid, lo, dx = C.amr_to_uniform(C.read_amrclaw(os.path.join(a.data, C.AMRCLAW)))
+    grid, lo, dx = C.amr_to_uniform(C.amr_grids(a.data))
     img = vtk.vtkImageData()
     img.SetDimensions(*grid.shape[::-1])
     img.SetSpacing(dx, dx, dx)

@@ -54,7 +54,11 @@ def amr_dataset(data):
     from np.linspace), so the edges are snapped to those values."""
     import yt
 
-    grids = C.read_amrclaw(os.path.join(data, C.AMRCLAW))
+    if C.AMR_FORMAT != "amrclaw":
+        # FLASH's octree has no level-0 block covering the domain; yt reads
+        # those files itself (amr.sh), and the format sweep runs OSPRay alone.
+        raise SystemExit(f"peer_yt's AMR rows read AMRClaw grids, not {C.AMR_FORMAT}")
+    grids = C.amr_grids(data)
     coarse = min(grids, key=lambda g: g["level"])
     dom_n = np.array(coarse["shape"])  # the level-0 grid covers the domain here
     dom_lo = np.array(coarse["lower"])

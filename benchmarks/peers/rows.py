@@ -53,7 +53,7 @@ def _sph_project(d):
 
 def _amr_render(d):
     s = C.AMR_RENDER
-    return (["render", "--amrclaw", os.path.join(d, C.AMRCLAW), "--spp", "1"]
+    return (["render", *C.amr_voxless_input(d), "--spp", "1"]
             + _size(s) + _cam(s["camera"]) + _tf(s))
 
 
@@ -65,7 +65,7 @@ def _amr_render_one_per_cell(d):
 def _amr_project(recon):
     def f(d):
         s = C.AMR_PROJECT
-        return ["project", "--amrclaw", os.path.join(d, C.AMRCLAW), "--axis", s["axis"],
+        return ["project", *C.amr_voxless_input(d), "--axis", s["axis"],
                 "--reconstruction", recon] + _size(s)
     return f
 
@@ -87,13 +87,13 @@ ROWS = [
          programs=[("voxless", voxless(_sph_project)),
                    ("yt", worker("peer_yt.py", "sph_project")),
                    ("sarracen", worker("peer_others.py", "sarracen_project"))]),
-    dict(id=3, title="AMR volume render 512², 1 spp (AMRClaw frame 3)",
+    dict(id=3, title=f"AMR volume render 512², 1 spp ({C.AMR_FRAME_NAME})",
          needs=[C.AMRCLAW], output="png",
          programs=[("voxless", voxless(_amr_render)),
                    ("OSPRay amr", worker("peer_ospray.py", "amr")),
                    ("VTK", worker("peer_others.py", "vtk_amr")),
                    ("yt", worker("peer_yt.py", "amr_render"))]),
-    dict(id=4, title="AMR column density 512² down z (AMRClaw frame 3)",
+    dict(id=4, title=f"AMR column density 512² down z ({C.AMR_FRAME_NAME})",
          needs=[C.AMRCLAW], output="npy", pixel_area=(2.0 / 512) ** 2,
          programs=[("voxless basis", voxless(_amr_project("basis"))),
                    ("voxless nearest", voxless(_amr_project("nearest"))),

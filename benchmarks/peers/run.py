@@ -39,6 +39,8 @@ def parse_args():
     ap.add_argument("--threads", type=int, default=os.cpu_count(),
                     help="threads for every program (default: all cores)")
     ap.add_argument("--rows", default="1,2,3,4,5,6", help="comma-separated row numbers")
+    ap.add_argument("--peers", help="comma-separated peer names to run beside voxless "
+                    "(default: every peer of each row)")
     ap.add_argument("--python", default=sys.executable,
                     help="interpreter with the peers installed (default: this one)")
     return ap.parse_args()
@@ -182,6 +184,10 @@ def main():
             print(f"row {row['id']} skipped: missing {', '.join(missing)} under {a.data}")
             continue
         print(f"row {row['id']}: {row['title']}")
+        if a.peers:
+            keep = {p.strip() for p in a.peers.split(",")}
+            row = dict(row, programs=[p for i, p in enumerate(row["programs"])
+                                      if i == 0 or p[0] in keep])
         recs = {name: [] for name, _ in row["programs"]}
         for rep in range(1, a.reps + 1):
             print(f"  rep {rep}")
