@@ -343,3 +343,27 @@ fn shadows_darken_a_tessellation_and_are_deterministic() {
     let sum = |img: &[[f32; 4]]| img.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>();
     assert!(sum(&lit) > sum(&shadowed) * 1.5 && sum(&lit) > 0.0);
 }
+
+/// The work estimate through the tile view (no point index built) against
+/// the per-ray estimate: on a square image both trace the same 16² pixel
+/// centres, so the mean pieces per ray agree (to a ray whose f32 direction
+/// differs in the last bit); on a wide image the tile view's grid has the
+/// image's shape (21 × 12 rays, not 16 × 16): other rays, so the means of
+/// this small folded mesh differ by ~10 %.
+#[test]
+fn work_estimates_through_the_tile_view_match_per_ray_ones() {
+    let grid = folded_sheet(16, 5);
+    let v = TetVolume::new(&grid, &TetSettings::default(), 0).unwrap();
+    let tf = log_tf();
+    let cam = perspective(Vec3::new(0.5, 0.4, 2.4), Vec3::splat(0.5), 35.0);
+    for (w, h, tol) in [(96, 96, 0.01), (160, 90, 0.25)] {
+        let s = settings_for(&v, w, h);
+        let fresh = TetVolume::new(&grid, &TetSettings::default(), 0).unwrap();
+        let tiled = voxless_render::estimate_work(&fresh, &cam, &tf, &s);
+        assert!(!fresh.has_index(), "the tile view builds no point index");
+        let per_ray = voxless_render::estimate_work(&PerRay(&v), &cam, &tf, &s);
+        assert!(per_ray.per_ray > 10.0, "{per_ray:?}");
+        let rel = (tiled.per_ray - per_ray.per_ray).abs() / per_ray.per_ray;
+        assert!(rel <= tol, "{w}×{h}: {tiled:?} vs {per_ray:?}");
+    }
+}

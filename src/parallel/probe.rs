@@ -8,7 +8,7 @@ use voxless_parallel::Comm;
 
 use super::{ParallelError, Part};
 use crate::VolumeKind;
-use crate::autorange::{Probe, value_at};
+use crate::autorange::{Probe, values_where};
 
 /// The probe of `part`'s volume within the whole data's bounds (and `clip`,
 /// local): every point evaluated by the rank whose box holds it, the
@@ -29,14 +29,9 @@ pub(crate) fn probe(
     let points = Probe::points(&b);
     let owners: Vec<usize> = points.par_iter().map(|&q| decomposition.owner(q)).collect();
     let me = comm.rank();
-    let mine: Vec<u8> = points
-        .par_iter()
-        .zip(&owners)
-        .map(|(&q, &o)| match (o == me, part_volume) {
-            (true, Some(v)) => value_at(v, q).filter(|v| v.is_finite()).unwrap_or(f32::NAN),
-            _ => f32::NAN,
-        })
-        .flat_map_iter(|v| v.to_le_bytes())
+    let mine: Vec<u8> = values_where(part_volume, &points, |i| owners[i] == me)
+        .into_iter()
+        .flat_map(|v| v.to_le_bytes())
         .collect();
     let all = comm.all_gather(&mine)?;
     let values: Vec<f32> = owners

@@ -174,6 +174,10 @@ impl Lattice {
                     // only image (no shift brings them back in or out).
                     let (clo, chi) = extent(&corners);
                     let inside = (0..3).all(|a| clo[a] > 0.0 && chi[a] < self.l);
+                    if inside && self.scan_inside(&corners, (clo, chi), &mut groups) {
+                        tets += 6;
+                        continue;
+                    }
                     for t in KUHN {
                         let v = t.map(|c| corners[c]);
                         let vol = Tet::signed_volume(&v).abs();
@@ -223,6 +227,37 @@ impl Lattice {
             complete,
             reach,
         }
+    }
+
+    /// [`Lattice::scan`] of a cell strictly inside the box whose six tets
+    /// are all non-degenerate: they join the group of shift 0 with the
+    /// cell's extent (the union of theirs: every corner is some tet's
+    /// vertex). `false`, with nothing added, when a tet is degenerate.
+    #[inline(always)]
+    fn scan_inside(
+        &self,
+        corners: &[Vec3; 8],
+        (lo, hi): ([f32; 3], [f32; 3]),
+        groups: &mut Vec<([i8; 3], u64, Aabb)>,
+    ) -> bool {
+        for t in KUHN {
+            let v = t.map(|c| corners[c]);
+            if Tet::signed_volume(&v).abs() < self.floor {
+                return false;
+            }
+        }
+        let bounds = Aabb::new(
+            Vec3::new(lo[0], lo[1], lo[2]),
+            Vec3::new(hi[0], hi[1], hi[2]),
+        );
+        match groups.iter_mut().find(|g| g.0 == [0; 3]) {
+            Some(g) => {
+                g.1 += 6;
+                g.2 = g.2.union(bounds);
+            }
+            None => groups.push(([0; 3], 6, bounds)),
+        }
+        true
     }
 
     /// Appends the tets of block `b` at image `shift`, in mesh order, of the
@@ -303,6 +338,33 @@ impl Lattice {
                 },
             ));
         }
+    }
+
+    /// Tet `idx`, in mesh order, of block `b` at image `shift` when that
+    /// group holds all of the block's tets and they number `count` = six a
+    /// cell (none degenerate): then tet `idx` is tet `idx % 6` of the
+    /// `idx / 6`-th cell, derived alone. `None` for any other block.
+    pub fn nth_tet(&self, b: u32, shift: [i8; 3], count: u64, idx: u64) -> Option<Tet> {
+        let [ri, rj, rk] = self.cells(b);
+        let (nj, nk) = (rj.len(), rk.len());
+        if count != 6 * (ri.len() * nj * nk) as u64 || idx >= count {
+            return None;
+        }
+        let c = (idx / 6) as usize;
+        let (i, j, k) = (
+            ri.start + c / (nj * nk),
+            rj.start + (c / nk) % nj,
+            rk.start + c % nk,
+        );
+        let corners = self.cell_corners(i, j, k);
+        let target = (idx % 6) as usize;
+        let mut found = None;
+        self.cell_tets::<false>(&corners, shift, offset(shift, self.l), &mut |(index, t)| {
+            if index == target {
+                found = Some(t);
+            }
+        });
+        found
     }
 
     /// Level of detail `r`: every 2^r-th particle per axis, each carrying

@@ -16,7 +16,9 @@
 //! an explicit construction, so every image is the same bit for bit
 //! (`crate::lattice`). Acceleration structures are built by the operations
 //! that need them, on first use: the point/ray index (a BVH over cells) by
-//! point samples, shadow rays and per-ray integrals; the coarser levels of
+//! single point samples, shadow rays and per-ray integrals (many points at
+//! once — a transfer-function probe — take one sweep over the cells
+//! instead, with the same values: `TetVolume::densities_and_streams`); the coarser levels of
 //! detail by renders with a threshold; the default density range by renders.
 //! Projections build none of them. Meshes assembled tet by tet (a part of a
 //! decomposed run, [`TetMeshBuilder`]) hold their tets and work the same way.
@@ -54,6 +56,7 @@ mod index;
 mod lattice;
 pub mod mesh;
 mod ortho;
+mod points;
 pub mod raster;
 pub mod render;
 #[cfg(any(test, feature = "testing"))]

@@ -433,6 +433,20 @@ impl TetMesh {
         }
     }
 
+    /// Tet `idx` (in mesh order) of block `b`, derived alone, when `b` is a
+    /// lean mesh's block whose one group holds six tets a cell (see
+    /// `Lattice::nth_tet`); `None` otherwise (derive the block).
+    pub(crate) fn complete_block_tet(&self, b: usize, idx: u64) -> Option<Tet> {
+        let block = &self.blocks[b];
+        match &self.source {
+            Source::Lattice(lattice) if block.complete => {
+                let count = block.tets.end - block.tets.start;
+                lattice.nth_tet(block.lagrangian, block.shift, count, idx)
+            }
+            _ => None,
+        }
+    }
+
     /// A lean mesh's [`TetMesh::block_tets_where`] cell by cell: `f` gets
     /// each accepted cell (its corners at the block's image, its tets on
     /// request). `false` for explicit meshes (nothing visited).

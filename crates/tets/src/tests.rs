@@ -96,6 +96,47 @@ fn projection_of_the_box_conserves_mass() {
 }
 
 #[test]
+fn sampled_densities_equal_the_derived_blocks() {
+    // Every tet's density in mesh order, block by block: the reference the
+    // sample picks every stride-th of.
+    let reference = |mesh: &TetMesh| {
+        let mut buf = Vec::new();
+        let all: Vec<f32> = (0..mesh.blocks().len())
+            .flat_map(|b| {
+                mesh.block_tets(b, &mut buf)
+                    .iter()
+                    .map(|t| t.density)
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        let stride = density_stride(mesh.tet_count());
+        all.into_iter().step_by(stride).collect::<Vec<f32>>()
+    };
+    // 40³: stride 3, blocks cut by the box's faces (several images), a
+    // folded sheet, and cells squashed flat (degenerate tets).
+    let mut g = folded_sheet(40, 4);
+    for i in (0..g.positions.len() - 1).step_by(997) {
+        g.positions[i + 1] = g.positions[i];
+    }
+    for g in [g, grid(32, 1.0, jitter(3, 0.2))] {
+        let mesh = TetMesh::new(&g, &TetSettings::default()).unwrap();
+        let mut lagrangian: Vec<u32> = mesh.blocks().iter().map(|b| b.lagrangian).collect();
+        lagrangian.dedup();
+        assert!(
+            lagrangian.len() < mesh.blocks().len(),
+            "blocks at several images"
+        );
+        let fast = sampled_densities(&mesh);
+        assert_eq!(fast.len(), reference(&mesh).len());
+        assert!(
+            fast.iter()
+                .zip(reference(&mesh))
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
+    }
+}
+
+#[test]
 fn sampled_density_integrates_to_the_total_mass() {
     let g = grid(6, 1.0, jitter(5, 0.05));
     let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();

@@ -322,12 +322,22 @@ pub fn sampled_densities(mesh: &TetMesh) -> Vec<f32> {
             if first >= range.end {
                 return Vec::new();
             }
-            let mut buf = Vec::new();
-            let tets = mesh.block_tets(b, &mut buf);
-            (first..range.end)
-                .step_by(stride as usize)
-                .map(|i| tets[(i - range.start) as usize].density)
-                .collect()
+            let picked = (first..range.end).step_by(stride as usize);
+            // Most blocks hold six tets a cell: each picked tet alone.
+            let alone: Option<Vec<f32>> = picked
+                .clone()
+                .map(|i| {
+                    mesh.complete_block_tet(b, i - range.start)
+                        .map(|t| t.density)
+                })
+                .collect();
+            alone.unwrap_or_else(|| {
+                let mut buf = Vec::new();
+                let tets = mesh.block_tets(b, &mut buf);
+                picked
+                    .map(|i| tets[(i - range.start) as usize].density)
+                    .collect()
+            })
         })
         .collect();
     per_block.concat()
