@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use voxless_bvh::Bvh;
 use voxless_core::{Aabb, Range1, Ray, Vec3};
 
-use crate::lattice::{images, offset};
+use crate::lattice::offset;
 use crate::mesh::{Tet, TetMesh};
 
 /// A cell at one image shift: the cell's index `(i·N + j)·N + k` and the
@@ -51,32 +51,16 @@ impl TetIndex {
         let Some(lattice) = mesh.lattice() else {
             unreachable!("a mesh is lean or explicit")
         };
-        // The Lagrangian blocks the mesh covers (a slab covers some), each
-        // block's cells with the images their corners reach.
-        let mut lagrangian: Vec<u32> = mesh.blocks().iter().map(|b| b.lagrangian).collect();
-        lagrangian.dedup();
-        let n = lattice.n;
-        let per_block: Vec<Vec<(CellImage, Aabb)>> = lagrangian
+        // The Lagrangian blocks the mesh covers, each block's cells with the
+        // images their corners reach.
+        let per_block: Vec<Vec<(CellImage, Aabb)>> = mesh
+            .lagrangian_blocks()
             .par_iter()
             .map(|&b| {
                 let mut out = Vec::new();
-                let [ri, rj, rk] = lattice.cells(b);
-                for i in ri {
-                    for j in rj.clone() {
-                        for k in rk.clone() {
-                            let corners = lattice.cell_corners(i, j, k);
-                            let (shifts, count) = images(&corners, lattice.l);
-                            for &shift in &shifts[..count] {
-                                let off = offset(shift, lattice.l);
-                                let mut bounds = Aabb::EMPTY;
-                                for p in corners {
-                                    bounds.grow(p + off);
-                                }
-                                out.push((pack((i * n + j) * n + k, shift), bounds));
-                            }
-                        }
-                    }
-                }
+                lattice.cell_images(b, |cell, shift, _, _, bounds| {
+                    out.push((pack(cell, shift), bounds));
+                });
                 out
             })
             .collect();

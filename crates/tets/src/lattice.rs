@@ -340,6 +340,33 @@ impl Lattice {
         }
     }
 
+    /// Every cell of block `b` at each image its corners reach the box at
+    /// (the point index's primitives; a cell's hull holds its six tets and
+    /// their images are among the cell's): `f(cell, shift, offset, corners,
+    /// bounds)`, the cell's index `(i·N + j)·N + k`, its corners unmoved and
+    /// their bounds at the image.
+    #[inline]
+    pub fn cell_images(&self, b: u32, mut f: impl FnMut(usize, [i8; 3], Vec3, &[Vec3; 8], Aabb)) {
+        let n = self.n;
+        let [ri, rj, rk] = self.cells(b);
+        for i in ri {
+            for j in rj.clone() {
+                for k in rk.clone() {
+                    let corners = self.cell_corners(i, j, k);
+                    let (shifts, count) = images(&corners, self.l);
+                    for &shift in &shifts[..count] {
+                        let off = offset(shift, self.l);
+                        let mut bounds = Aabb::EMPTY;
+                        for p in corners {
+                            bounds.grow(p + off);
+                        }
+                        f((i * n + j) * n + k, shift, off, &corners, bounds);
+                    }
+                }
+            }
+        }
+    }
+
     /// Tet `idx`, in mesh order, of block `b` at image `shift` when that
     /// group holds all of the block's tets and they number `count` = six a
     /// cell (none degenerate): then tet `idx` is tet `idx % 6` of the

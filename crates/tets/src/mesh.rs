@@ -433,6 +433,14 @@ impl TetMesh {
         }
     }
 
+    /// The Lagrangian blocks the mesh covers, in order (a slab covers some;
+    /// a block's image groups are consecutive).
+    pub(crate) fn lagrangian_blocks(&self) -> Vec<u32> {
+        let mut lagrangian: Vec<u32> = self.blocks.iter().map(|b| b.lagrangian).collect();
+        lagrangian.dedup();
+        lagrangian
+    }
+
     /// Tet `idx` (in mesh order) of block `b`, derived alone, when `b` is a
     /// lean mesh's block whose one group holds six tets a cell (see
     /// `Lattice::nth_tet`); `None` otherwise (derive the block).

@@ -14,7 +14,6 @@
 use rayon::prelude::*;
 use voxless_core::{Aabb, Sample, Vec3};
 
-use crate::lattice::{images, offset};
 use crate::mesh::{Tet, TetMesh};
 use crate::volume::TetVolume;
 
@@ -157,39 +156,23 @@ fn hits(mesh: &TetMesh, bins: &Bins, q: &[Vec3]) -> Vec<(u32, f32)> {
         unreachable!("a mesh is lean or explicit")
     };
     // The cell images the point index holds (`crate::index`), block by block.
-    let mut lagrangian: Vec<u32> = mesh.blocks().iter().map(|b| b.lagrangian).collect();
-    lagrangian.dedup();
-    lagrangian
+    mesh.lagrangian_blocks()
         .par_iter()
         .flat_map_iter(|&b| {
             let mut out = Vec::new();
             let mut found: Vec<(u32, Vec3)> = Vec::new();
-            let [ri, rj, rk] = lattice.cells(b);
-            for i in ri {
-                for j in rj.clone() {
-                    for k in rk.clone() {
-                        let corners = lattice.cell_corners(i, j, k);
-                        let (shifts, count) = images(&corners, lattice.l);
-                        for &shift in &shifts[..count] {
-                            let off = offset(shift, lattice.l);
-                            let mut bounds = Aabb::EMPTY;
-                            for p in corners {
-                                bounds.grow(p + off);
-                            }
-                            found.clear();
-                            bins.in_box(q, &bounds, |i, p| found.push((i, p)));
-                            if found.is_empty() {
-                                continue;
-                            }
-                            lattice.cell_tets::<true>(&corners, shift, off, &mut |(_, t)| {
-                                for &(i, p) in &found {
-                                    test(&t, i, p, &mut out);
-                                }
-                            });
-                        }
-                    }
+            lattice.cell_images(b, |_, shift, off, corners, bounds| {
+                found.clear();
+                bins.in_box(q, &bounds, |i, p| found.push((i, p)));
+                if found.is_empty() {
+                    return;
                 }
-            }
+                lattice.cell_tets::<true>(corners, shift, off, &mut |(_, t)| {
+                    for &(i, p) in &found {
+                        test(&t, i, p, &mut out);
+                    }
+                });
+            });
             out
         })
         .collect()
