@@ -61,67 +61,69 @@ pub fn field_histogram(
         return out;
     }
     let cell = region.extent() * (1.0 / n as f32);
-    // One slab of the lattice per task: each returns its own counts, added
-    // after (no shared counters in the loop).
-    let slabs: Vec<(Vec<u32>, u32, u32, Range1)> = (0..n)
-        .into_par_iter()
-        .map(|k| {
-            let mut counts = vec![0u32; bins];
-            let (mut below, mut above, mut seen) = (0, 0, Range1::EMPTY);
-            for j in 0..n {
-                for i in 0..n {
-                    let p = region.min
-                        + Vec3::new(
-                            (i as f32 + 0.5) * cell.x,
-                            (j as f32 + 0.5) * cell.y,
-                            (k as f32 + 0.5) * cell.z,
-                        );
-                    let Some(v) = value_at(volume, p) else {
-                        continue;
-                    };
-                    // Zero is empty space (and has no logarithm).
-                    if !(v.is_finite() && v != 0.0) || (settings.log_scale && v < 0.0) {
-                        continue;
-                    }
-                    let x = if settings.log_scale { v.log10() } else { v };
-                    seen.extend(x);
-                    if x < range.lo {
-                        below += 1;
-                    } else if x > range.hi {
-                        above += 1;
-                    } else {
-                        let f = if range.span() > 0.0 {
-                            (x - range.lo) / range.span()
-                        } else {
-                            0.0
-                        };
-                        counts[((f * bins as f32) as usize).min(bins - 1)] += 1;
-                    }
-                }
-            }
-            (counts, below, above, seen)
-        })
-        .collect();
     let mut seen = Range1::EMPTY;
-    for (counts, below, above, s) in slabs {
-        for (o, c) in out.counts.iter_mut().zip(counts) {
-            *o += c;
+    // Slabs of the lattice a few million points at a time, each chunk's
+    // values in one call (a tessellation sweeps its cells once a chunk
+    // instead of building its point index).
+    let per_chunk = (CHUNK_POINTS / (n * n)).max(1);
+    for slabs in (0..n).collect::<Vec<_>>().chunks(per_chunk) {
+        let points: Vec<Vec3> = slabs
+            .iter()
+            .flat_map(|&k| (0..n * n).map(move |ij| (ij % n, ij / n, k)))
+            .map(|(i, j, k)| {
+                region.min
+                    + Vec3::new(
+                        (i as f32 + 0.5) * cell.x,
+                        (j as f32 + 0.5) * cell.y,
+                        (k as f32 + 0.5) * cell.z,
+                    )
+            })
+            .collect();
+        for v in values_at(volume, &points).into_iter().flatten() {
+            // Zero is empty space (and has no logarithm).
+            if !(v.is_finite() && v != 0.0) || (settings.log_scale && v < 0.0) {
+                continue;
+            }
+            let x = if settings.log_scale { v.log10() } else { v };
+            seen.extend(x);
+            if x < range.lo {
+                out.below += 1;
+            } else if x > range.hi {
+                out.above += 1;
+            } else {
+                let f = if range.span() > 0.0 {
+                    (x - range.lo) / range.span()
+                } else {
+                    0.0
+                };
+                out.counts[((f * bins as f32) as usize).min(bins - 1)] += 1;
+            }
         }
-        out.below += below;
-        out.above += above;
-        seen = seen.union(s);
     }
     out.seen = (!seen.is_empty()).then_some([seen.lo, seen.hi]);
     out
 }
 
-/// The classified field at `p`, through the kind's own `Volume::sample`.
-fn value_at(volume: &AnyVolume, p: Vec3) -> Option<f32> {
-    let s = match volume {
-        AnyVolume::Particles(v) => v.sample(p),
-        AnyVolume::Amr(v) => v.sample(p),
-        AnyVolume::Tets(v) => v.sample(p),
-        AnyVolume::Materials(v) => v.sample(p),
-    };
-    s.map(|s| s.value)
+/// Lattice points sampled per call.
+const CHUNK_POINTS: usize = 1 << 22;
+
+/// The classified field at each of `points`, through the kind's own
+/// `Volume::sample` (a tessellation's [`voxless_tets::TetVolume::samples`]:
+/// the same values in one sweep over its cells).
+fn values_at(volume: &AnyVolume, points: &[Vec3]) -> Vec<Option<f32>> {
+    let value = |s: Option<voxless_core::Sample>| s.map(|s| s.value);
+    match volume {
+        AnyVolume::Tets(v) => v.samples(points).into_iter().map(value).collect(),
+        _ => points
+            .par_iter()
+            .map(|&p| {
+                value(match volume {
+                    AnyVolume::Particles(v) => v.sample(p),
+                    AnyVolume::Amr(v) => v.sample(p),
+                    AnyVolume::Tets(v) => v.sample(p),
+                    AnyVolume::Materials(v) => v.sample(p),
+                })
+            })
+            .collect(),
+    }
 }

@@ -276,3 +276,28 @@ fn coarse_images_of_tessellations_draw_from_their_levels_of_detail() {
     };
     assert_eq!(render(&own, &own_settings), lod);
 }
+
+#[test]
+fn tessellation_histograms_sweep_the_cells_and_equal_the_indexed_ones() {
+    use voxless_tets::{TetSettings, TetVolume, testing::folded_sheet};
+    let tets = || {
+        let v = TetVolume::new(&folded_sheet(12, 2), &TetSettings::default(), 0).unwrap();
+        AnyVolume::Tets(Box::new(v))
+    };
+    let (swept, indexed) = (tets(), tets());
+    let mut desc = SceneDesc::default();
+    small(&mut desc);
+    let st = resolve(&indexed, &desc, Path::new(".")).unwrap().settings;
+    let AnyVolume::Tets(v) = &indexed else {
+        unreachable!()
+    };
+    v.density_and_streams(Vec3::splat(0.5));
+    assert!(v.has_index());
+    let a = field_histogram(&swept, &st, 32, 24);
+    let AnyVolume::Tets(v) = &swept else {
+        unreachable!()
+    };
+    assert!(!v.has_index(), "a histogram builds no point index");
+    assert!(a.counts.iter().sum::<u32>() > 1000, "{a:?}");
+    assert_eq!(a, field_histogram(&indexed, &st, 32, 24));
+}
