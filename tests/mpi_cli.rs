@@ -36,15 +36,26 @@ fn one(args: &[&str]) {
     );
 }
 
-/// `mpirun -n ranks voxless args`; its stderr.
+/// `mpirun -n ranks voxless args`; its stderr. Each launch gets a session
+/// directory of its own: the tests run in parallel, and Open MPI launchers
+/// starting at once under one user race to create the shared one ("A call
+/// to mkdir was unable to create the desired directory … File exists").
 fn mpi(ranks: usize, args: &[&str]) -> (bool, String) {
+    static LAUNCH: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = LAUNCH.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let session = std::env::temp_dir().join(format!("voxless-ompi-{}-{n}", std::process::id()));
+    std::fs::create_dir_all(&session).unwrap();
     let out = Command::new("mpirun")
         .args(["--allow-run-as-root", "--oversubscribe", "-n"])
         .arg(ranks.to_string())
         .arg(common::bin())
         .args(args)
+        // Open MPI 4 (ORTE) and 5 (PRRTE) name the setting differently.
+        .env("OMPI_MCA_orte_tmpdir_base", &session)
+        .env("PRTE_MCA_prte_tmpdir_base", &session)
         .output()
         .unwrap();
+    let _ = std::fs::remove_dir_all(&session);
     (
         out.status.success(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
