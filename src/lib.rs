@@ -67,6 +67,7 @@ pub mod camera_path;
 mod checks;
 mod columns;
 pub mod demo;
+pub mod device;
 mod error;
 mod fields;
 pub mod flags;
@@ -119,7 +120,7 @@ pub use columns::particle_columns;
 pub use histogram::{Histogram, field_histogram};
 pub use label::frame_label;
 pub use pose::Pose;
-pub use progressive::{CoarseBudget, Stage, render_progressive};
+pub use progressive::{CoarseBudget, Stage, render_progressive, render_progressive_on};
 pub use save::{scene_toml, with_absolute_paths};
 
 /// File formats: which reader a path needs and one frame of any of them.

@@ -10,6 +10,8 @@
 use std::path::Path;
 
 use voxless_core::{Control, Image};
+
+use crate::device::Device;
 use voxless_parallel::{Comm, CommExt};
 use voxless_render::RayStats;
 use voxless_render::colorbar::ColorbarSpec;
@@ -353,10 +355,30 @@ impl<'c> Placed<'c> {
         control: &Control,
         timings: &mut Timings,
     ) -> Result<Option<Rendered>, ParallelError> {
+        self.render_on(&Device::cpu(), control, timings, &mut Vec::new())
+    }
+
+    /// [`Placed::render`] on `device` (one process; ranks render on their
+    /// CPUs and refuse a GPU), with what a front-end should say about the
+    /// device added to `notes`.
+    pub fn render_on(
+        &self,
+        device: &Device,
+        control: &Control,
+        timings: &mut Timings,
+        notes: &mut Vec<String>,
+    ) -> Result<Option<Rendered>, ParallelError> {
+        if device.is_gpu() && matches!(self, Placed::Ranks(..)) {
+            return Err(SceneError::setting(
+                "device",
+                "a render under mpirun runs on the ranks' CPUs: use --device cpu",
+            )
+            .into());
+        }
         match self {
             Placed::Process(s) => {
                 let t = std::time::Instant::now();
-                let film = s.render_film(control)?;
+                let film = device.render_film(&s.volume, &s.view, control, notes)?;
                 timings.render += t.elapsed().as_secs_f64();
                 Ok(Some(Rendered {
                     image: film.resolve(),
@@ -566,11 +588,40 @@ impl PlacedData<'_> {
         height: u32,
         control: &Control,
     ) -> Result<(ProjectionView, Option<Vec<f32>>), ParallelError> {
+        self.project_on(
+            &Device::cpu(),
+            projection,
+            width,
+            height,
+            control,
+            &mut Vec::new(),
+        )
+    }
+
+    /// [`PlacedData::project`] with particle splats summed on `device`
+    /// (one process), with what a front-end should say added to `notes`.
+    pub fn project_on(
+        &self,
+        device: &Device,
+        projection: &ProjectionDesc,
+        width: u32,
+        height: u32,
+        control: &Control,
+        notes: &mut Vec<String>,
+    ) -> Result<(ProjectionView, Option<Vec<f32>>), ParallelError> {
+        if device.is_gpu() && matches!(self, PlacedData::Ranks(..)) {
+            return Err(SceneError::setting(
+                "device",
+                "a projection under mpirun runs on the ranks' CPUs: use --device cpu",
+            )
+            .into());
+        }
         match self {
             PlacedData::Process(l) => {
                 let view = ProjectionView::new(projection, &l.volume.bounds(), &l.frame)?;
                 view.check(&l.volume)?;
-                let column = view.project(&l.volume, width, height, control)?;
+                let column =
+                    view.project_on(&l.volume, width, height, None, device, control, notes)?;
                 Ok((view, Some(column)))
             }
             PlacedData::Ranks(c, p) => {

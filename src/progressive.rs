@@ -27,7 +27,8 @@ use voxless_core::{Camera, Cancelled, Control};
 use voxless_render::{Film, RenderSettings};
 use voxless_transfer::TransferFunction;
 
-use crate::AnyVolume;
+use crate::device::Device;
+use crate::{AnyVolume, SceneError};
 
 /// Which image a progressive render hands out.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -139,6 +140,36 @@ pub fn render_progressive(
     control: &Control,
     on_image: &mut dyn FnMut(Stage, &Film, &RenderSettings) -> bool,
 ) -> Result<Film, Cancelled> {
+    let cpu = Device::cpu();
+    let view = (camera, tf, settings);
+    let stages = (coarse_pixels, budget);
+    // The CPU has no device errors.
+    render_progressive_on(
+        &cpu,
+        volume,
+        view,
+        stages,
+        control,
+        &mut Vec::new(),
+        on_image,
+    )
+    .unwrap_or(Err(Cancelled))
+}
+
+/// [`render_progressive`] with the full-resolution passes on `device` (the
+/// coarse stage stays on the CPU: it draws the particles' merged preview,
+/// which is fast there); `notes` gets what a front-end should say about
+/// the device. The outer error is the device's, the inner a cancelled
+/// render.
+pub fn render_progressive_on(
+    device: &Device,
+    volume: &AnyVolume,
+    (camera, tf, settings): (&Camera, &TransferFunction, &RenderSettings),
+    (coarse_pixels, budget): (Option<u64>, Option<&mut CoarseBudget>),
+    control: &Control,
+    notes: &mut Vec<String>,
+    on_image: &mut dyn FnMut(Stage, &Film, &RenderSettings) -> bool,
+) -> Result<Result<Film, Cancelled>, SceneError> {
     let full = settings.width as u64 * settings.height as u64;
     if let Some(max) = coarse_pixels.filter(|&m| m < full) {
         let coarse = coarse_settings(settings, max);
@@ -150,8 +181,11 @@ pub fn render_progressive(
             _ => None,
         };
         let film = match preview {
-            Some(p) => voxless_render::render_film(p, camera, tf, &coarse, control, &mut |_| true)?,
-            None => volume.render_passes(camera, tf, &coarse, control, &mut |_| true)?,
+            Some(p) => voxless_render::render_film(p, camera, tf, &coarse, control, &mut |_| true),
+            None => volume.render_passes(camera, tf, &coarse, control, &mut |_| true),
+        };
+        let Ok(film) = film else {
+            return Ok(Err(Cancelled));
         };
         if let Some(b) = budget {
             b.record(
@@ -160,11 +194,13 @@ pub fn render_progressive(
             );
         }
         if !on_image(Stage::Coarse, &film, &coarse) {
-            return Ok(Film::new(settings.width, settings.height));
+            return Ok(Ok(Film::new(settings.width, settings.height)));
         }
     }
-    control.check()?;
-    volume.render_passes(camera, tf, settings, control, &mut |film| {
+    if control.check().is_err() {
+        return Ok(Err(Cancelled));
+    }
+    device.render_passes(volume, camera, tf, settings, control, notes, &mut |film| {
         let stage = Stage::Pass {
             done: film.passes(),
             of: settings.spp,

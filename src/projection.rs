@@ -479,14 +479,56 @@ impl ProjectionView {
             (Some(t), _) => volume.project_in(&self.camera, w, h, t, control)?,
         };
         // ∫ field dt with dt in the frame's units: in world units.
-        Ok(if self.scale == 1.0 {
+        Ok(self.in_world_units(local))
+    }
+
+    /// [`ProjectionView::project_pixels`] with particle splats summed on
+    /// `device` where it can (see [`crate::device::Device::check_projection`]);
+    /// what a front-end should say goes to `notes`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn project_on(
+        &self,
+        volume: &AnyVolume,
+        w: u32,
+        h: u32,
+        pixels: Option<voxless_core::PixelIntegral>,
+        device: &crate::device::Device,
+        control: &Control,
+        notes: &mut Vec<String>,
+    ) -> Result<Vec<f32>, SceneError> {
+        let orthographic = matches!(
+            self.camera.projection,
+            voxless_core::Projection::Orthographic { .. }
+        );
+        // A slab is one line integral per pixel, on the CPU.
+        let whole = self.t_range.is_none() && orthographic;
+        device.check_projection(volume, whole, notes)?;
+        if whole
+            && let Some(r) = crate::device::project_particles(
+                volume,
+                &self.camera,
+                (w, h),
+                pixels,
+                device,
+                control,
+            )
+        {
+            return Ok(self.in_world_units(r?));
+        }
+        self.project_pixels(volume, w, h, pixels, control)
+            .map_err(|_| SceneError::setting("project", "cancelled"))
+    }
+
+    /// Local column densities in world units (× the frame's scale).
+    fn in_world_units(&self, local: Vec<f32>) -> Vec<f32> {
+        if self.scale == 1.0 {
             local
         } else {
             local
                 .iter()
                 .map(|&c| (c as f64 * self.scale) as f32)
                 .collect()
-        })
+        }
     }
 
     /// Refuses what this view cannot do for `volume`: a slab through a

@@ -26,6 +26,8 @@ use std::path::Path;
 use voxless_core::{Aabb, Control};
 use voxless_particles::check_data;
 use voxless_particles::splat::{CHUNK, SplatParticle, Splatter};
+
+use crate::device::Device;
 use voxless_scene::{ParticlesDesc, SceneDesc};
 
 use crate::SceneError;
@@ -56,6 +58,28 @@ pub fn project(
     frame: usize,
     projection: &ProjectionDesc,
     (w, h): (u32, u32),
+    control: &Control,
+) -> Result<Option<Streamed>, SceneError> {
+    project_on(
+        desc,
+        base,
+        frame,
+        projection,
+        (w, h),
+        &Device::cpu(),
+        control,
+    )
+}
+
+/// [`project`] with the splats summed on `device` (see
+/// [`voxless_particles::splat::SplatDevice`]).
+pub fn project_on(
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+    projection: &ProjectionDesc,
+    (w, h): (u32, u32),
+    device: &Device,
     control: &Control,
 ) -> Result<Option<Streamed>, SceneError> {
     let Some(p) = streamable(desc, projection) else {
@@ -195,6 +219,11 @@ pub fn project(
         return Ok(None);
     };
     let mut splatter = splatter.with_pixels(crate::projection::pixel_integral(p.pixels));
+    if let Some(d) = device.splat_device() {
+        splatter = splatter
+            .with_device(d)
+            .map_err(|e| SceneError::setting("device", e.to_string()))?;
+    }
 
     // Pass 3: splat chunk by chunk.
     let mut mass = 0.0;
@@ -206,9 +235,13 @@ pub fn project(
             .filter(|q| q.radius > 0.0)
             .map(|q| q.weight as f64 * kernel.integral(q.radius as f64))
             .sum::<f64>();
-        splatter
-            .add(&c.particles, c.offset, control)
-            .map_err(|e| SceneError::setting("particles.radius", e.to_string()))?;
+        splatter.add(&c.particles, c.offset, control).map_err(|e| {
+            let field = match e {
+                voxless_particles::ParticleError::Device(_) => "device",
+                _ => "particles.radius",
+            };
+            SceneError::setting(field, e.to_string())
+        })?;
         if control.is_cancelled() {
             return Err(SceneError::setting("project", "cancelled"));
         }
@@ -216,7 +249,11 @@ pub fn project(
     }
     Ok(Some(Streamed {
         view,
-        column: world.columns_to_world(splatter.finish()),
+        column: world.columns_to_world(
+            splatter
+                .finish()
+                .map_err(|e| SceneError::setting("device", e.to_string()))?,
+        ),
         mass: mass * world.scale.powi(3),
         particles: total,
         chunks,

@@ -129,3 +129,27 @@ pub enum Axis {
     #[value(alias = "Z")]
     Z,
 }
+
+/// Where a render or projection runs.
+#[derive(Args, Debug, Default, Clone)]
+pub struct DeviceArgs {
+    /// cpu (default); gpu: the GPU backend (a build with `--features gpu`
+    /// and a Vulkan, Metal or DirectX 12 driver — Mesa's software Vulkan
+    /// will do), an error when it is missing or cannot do the work; auto:
+    /// the GPU when there is one and it does the work, else the CPU, with a
+    /// note saying why.
+    #[arg(long, default_value = "cpu", value_name = "cpu|gpu|auto")]
+    pub device: voxless::device::DeviceChoice,
+}
+
+impl DeviceArgs {
+    /// Opens the device, printing the note when `auto` falls back (on
+    /// `root`).
+    pub fn open(&self, root: bool) -> anyhow::Result<voxless::device::Device> {
+        let (device, note) = voxless::device::Device::open(self.device)?;
+        if let (Some(n), true) = (note, root) {
+            eprintln!("note: {n}");
+        }
+        Ok(device)
+    }
+}

@@ -18,7 +18,11 @@ const LISTED_FRAMES: usize = 32;
 pub struct InfoArgs {
     /// The file: any particle format, .npy, ExaBricks .cells, AMRClaw
     /// fort.qNNNN, .vtu mesh or HDF5; or a frame pattern / directory.
-    pub file: PathBuf,
+    #[arg(required_unless_present = "devices")]
+    pub file: Option<PathBuf>,
+    /// List the GPU adapters `--device gpu` can use (instead of a file).
+    #[arg(long, conflicts_with = "file")]
+    pub devices: bool,
     /// The frame whose particles and columns are shown.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub frame: usize,
@@ -42,13 +46,22 @@ fn part_type(s: &str) -> Result<u32, String> {
 }
 
 pub fn run(args: &InfoArgs) -> Result<()> {
+    if args.devices {
+        println!("GPU adapters (for --device gpu|auto):");
+        for a in voxless::device::adapters() {
+            println!("  {a}");
+        }
+        return Ok(());
+    }
     print!("{}", describe(args)?);
     Ok(())
 }
 
 /// The whole report as text.
 fn describe(args: &InfoArgs) -> Result<String> {
-    let path = args.file.as_path();
+    let Some(path) = args.file.as_deref() else {
+        anyhow::bail!("give a file, or --devices");
+    };
     let spec = path.to_string_lossy();
     let mut out = String::new();
     if voxless::frames::is_sequence(&spec, Path::new("")) {
@@ -92,7 +105,8 @@ fn describe(args: &InfoArgs) -> Result<String> {
         };
         writeln!(out)?;
         let one = InfoArgs {
-            file: file.clone(),
+            file: Some(file.clone()),
+            devices: false,
             frame: 0,
             group: args.group.clone(),
             part_type: args.part_type,
@@ -105,7 +119,9 @@ fn describe(args: &InfoArgs) -> Result<String> {
 }
 
 fn describe_file(args: &InfoArgs) -> Result<String> {
-    let path = args.file.as_path();
+    let Some(path) = args.file.as_deref() else {
+        bail!("give a file, or --devices");
+    };
     // A snapshot's stem (snap_033 of snap_033.0, snap_033.1, …) is no file.
     if !path.exists() && voxless::io::snapshot::snapshot_files(path).is_none() {
         bail!("{}: no such file", path.display());

@@ -22,7 +22,7 @@ use voxless::annotate::Marks;
 use voxless::output::OutputKind;
 use voxless::{Control, ParticlesDesc, Placement, ProjectionDesc, Purpose};
 
-use args::{DataArgs, KindArgs, PlaneArgs, SceneArgs, ViewArgs};
+use args::{DataArgs, DeviceArgs, KindArgs, PlaneArgs, SceneArgs, ViewArgs};
 use progress::Progress;
 
 #[derive(Parser)]
@@ -50,6 +50,8 @@ enum Command {
         colorbar: bool,
         #[command(flatten)]
         view: ViewArgs,
+        #[command(flatten)]
+        device: DeviceArgs,
     },
     /// Render a scene (TOML file and/or flags) to an image.
     Render {
@@ -109,6 +111,8 @@ enum Command {
         kind: KindArgs,
         #[command(flatten)]
         view: ViewArgs,
+        #[command(flatten)]
+        device: DeviceArgs,
     },
     /// Evaluate the reconstructed fields at points: writes float32 N×k .npy,
     /// columns Φ, then Θ (with an attribute), then ∂Φ/∂x, ∂Φ/∂y, ∂Φ/∂z (with --gradient).
@@ -155,6 +159,8 @@ enum Command {
         frame: Option<usize>,
         #[command(flatten)]
         data: DataArgs,
+        #[command(flatten)]
+        device: DeviceArgs,
     },
     /// The reconstructed field on a plane: one value per pixel, exactly what
     /// `sample` gives at the pixel centres (row 0 at the top; for --axis z
@@ -221,6 +227,8 @@ enum Command {
         kind: KindArgs,
         #[command(flatten)]
         view: ViewArgs,
+        #[command(flatten)]
+        device: DeviceArgs,
     },
     /// Print what a data file holds: particle count, frames and their times,
     /// columns with ranges and bounds; .npy shape and range; AMR cells per
@@ -243,6 +251,7 @@ enum SlicePixelsArg {
 
 fn main() {
     let cli = Cli::parse();
+    quiet_wayland();
     // Under an MPI launcher, every rank runs the command together.
     #[cfg(feature = "mpi")]
     if voxless::parallel::MpiComm::launched() {
@@ -251,6 +260,18 @@ fn main() {
     if let Err(e) = run(cli, Placement::Process) {
         eprintln!("error: {}", describe(&e));
         std::process::exit(1);
+    }
+}
+
+/// Mesa's Vulkan drivers (lavapipe among them) try to reach a Wayland
+/// display when a Vulkan instance is made, and libwayland prints "error:
+/// XDG_RUNTIME_DIR is invalid or not set" on headless machines — where a
+/// GPU render is most likely to run. Pointing the variable at the temporary
+/// directory (only when it is unset) lets the attempt fail quietly.
+fn quiet_wayland() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        // SAFETY: called first thing in `main`, before any thread starts.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
     }
 }
 
@@ -290,7 +311,9 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             data,
             kind,
             view,
+            device,
         } => {
+            let device = device.open(root)?;
             let radii = data.save_radii.clone();
             let radii = radii.as_deref();
             let placed_camera = view.eye.is_some() || view.look_at.is_some();
@@ -318,7 +341,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             };
             if let Some(frames) = frames {
                 return sequence::render(
-                    placement, &desc, &base, frames, &output, marks, movie, radii,
+                    placement, &desc, &base, frames, &output, marks, movie, radii, &device,
                 );
             }
             if is_movie {
@@ -345,7 +368,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
                 }
             }
             let f = frame.unwrap_or(0);
-            render::render_one(placement, &desc, &base, f, &output, radii, marks)
+            render::render_one(placement, &desc, &base, f, &output, radii, marks, &device)
         }
         Command::Sample {
             points,
@@ -404,7 +427,9 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             pixels,
             frame,
             data,
+            device,
         } => {
+            let device = device.open(root)?;
             let radii = data.save_radii.clone();
             let args = SceneArgs {
                 data,
@@ -438,6 +463,7 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
                 &projection,
                 &output,
                 radii.as_deref(),
+                &device,
             )
         }
         Command::Slice {
@@ -502,7 +528,9 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             output,
             colorbar,
             view,
+            device,
         } => {
+            let device = device.open(true)?;
             let args = SceneArgs {
                 view,
                 ..Default::default()
@@ -530,7 +558,16 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
                 colorbar,
                 ..Default::default()
             };
-            render::render_one(Placement::Process, &desc, &base, 0, &output, None, marks)
+            render::render_one(
+                Placement::Process,
+                &desc,
+                &base,
+                0,
+                &output,
+                None,
+                marks,
+                &device,
+            )
         }
         Command::Serve {
             port,
@@ -538,7 +575,8 @@ fn run(cli: Cli, placement: Placement) -> Result<()> {
             data,
             kind,
             view,
-        } => serve(&SceneArgs { data, kind, view }, port, host),
+            device,
+        } => serve(&SceneArgs { data, kind, view }, port, host, &device),
         Command::Colormaps => {
             for name in voxless::transfer::COLORMAP_NAMES {
                 println!("{name}");
@@ -561,15 +599,22 @@ fn project(
     projection: &ProjectionDesc,
     output: &Path,
     radii: Option<&Path>,
+    device: &voxless::device::Device,
 ) -> Result<()> {
     let t = Instant::now();
+    let on = if device.is_gpu() {
+        format!(" on the {}", device.name())
+    } else {
+        String::new()
+    };
     // One process, nothing else asked of the particles: stream them.
     if matches!(placement, Placement::Process) && radii.is_none() {
         let progress = Progress::new("projecting (streamed)", 1, true);
         let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
         let control = Control::new().with_progress(&report);
-        if let Some(s) = voxless::stream::project(desc, base, frame, projection, (w, h), &control)?
-        {
+        let streamed =
+            voxless::stream::project_on(desc, base, frame, projection, (w, h), device, &control)?;
+        if let Some(s) = streamed {
             progress.finish();
             for n in &s.notes {
                 eprintln!("note: {n}");
@@ -578,7 +623,7 @@ fn project(
             let integral: f64 =
                 s.column.iter().map(|&c| c as f64).sum::<f64>() * s.view.pixel_area(w, h);
             eprintln!(
-                "projected {w}×{h} from {} particles streamed in {} chunk{} in {:.3}s → {} \
+                "projected {w}×{h} from {} particles streamed in {} chunk{}{on} in {:.3}s → {} \
                  (Σ column × pixel area = {integral:.6e}, exact ∫ field dV = {:.6e})",
                 s.particles,
                 s.chunks,
@@ -600,8 +645,15 @@ fn project(
     let progress = Progress::new("projecting", 1, placement.is_root());
     let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
     let t = Instant::now();
-    let (view, column) = data.project(projection, w, h, &Control::new().with_progress(&report))?;
+    let control = Control::new().with_progress(&report);
+    let mut notes = Vec::new();
+    let (view, column) = data.project_on(device, projection, w, h, &control, &mut notes)?;
     progress.finish();
+    if placement.is_root() {
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
+    }
     let written = column.map_or(Ok(()), |column| {
         write_map(output, desc, base, frame, &view, (w, h), &column)?;
         let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * view.pixel_area(w, h);
@@ -610,7 +662,7 @@ fn project(
             .map(|m| format!(", exact ∫ field dV = {m:.6e}"))
             .unwrap_or_default();
         eprintln!(
-            "projected {w}×{h}{} in {:.3}s → {} (Σ column × pixel area = {integral:.6e}{mass})",
+            "projected {w}×{h}{}{on} in {:.3}s → {} (Σ column × pixel area = {integral:.6e}{mass})",
             render::on_ranks(placement),
             t.elapsed().as_secs_f64(),
             output.display()
@@ -655,7 +707,7 @@ fn write_map(
 
 /// `voxless serve`: load the scene (errors before listening), print the URL,
 /// serve until Ctrl-C.
-fn serve(scene: &SceneArgs, port: u16, host: String) -> Result<()> {
+fn serve(scene: &SceneArgs, port: u16, host: String, device: &DeviceArgs) -> Result<()> {
     if scene.data.save_radii.is_some() {
         anyhow::bail!(
             "--save-radii is written by render, project and sample; serve shows the data only"
@@ -674,10 +726,15 @@ fn serve(scene: &SceneArgs, port: u16, host: String) -> Result<()> {
         if prepared.frames == 1 { "" } else { "s" },
         t.elapsed().as_secs_f64()
     );
+    let device = device.open(true)?;
+    if device.is_gpu() {
+        eprintln!("rendering full-resolution passes on the {}", device.name());
+    }
     let options = voxless_serve::Options {
         host,
         port,
         token: None,
+        device,
     };
     voxless_serve::run(prepared, &options, |bound| {
         if bound.token.is_some() {

@@ -149,13 +149,14 @@ pub fn render_one(
     output: &Path,
     radii: Option<&Path>,
     marks: Marks,
+    device: &voxless::device::Device,
 ) -> Result<()> {
     out::check(&[output.to_path_buf()], OutputKind::Image, desc, base, &[])?;
     check_radii_output(radii, desc, base)?;
     let s = open(placement, desc, base, frame)?;
     save_radii(placement, radii, || s.smoothing_lengths())?;
     let a = annotations(&s, desc, base, frame, marks)?;
-    render_to(&s, desc, output, &a, base, frame)
+    render_to(&s, desc, output, &a, base, frame, device)
 }
 
 /// Refuses a radii output that would overwrite an input.
@@ -196,6 +197,7 @@ pub fn render_to(
     a: &Annotations,
     base: &Path,
     frame: usize,
+    device: &voxless::device::Device,
 ) -> Result<()> {
     let placement = s.placement();
     check_work(placement, s, desc)?;
@@ -203,8 +205,15 @@ pub fn render_to(
     let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
     let t = Instant::now();
     let mut timings = Timings::default();
-    let rendered = s.render(&Control::new().with_progress(&report), &mut timings)?;
+    let mut notes = Vec::new();
+    let control = Control::new().with_progress(&report);
+    let rendered = s.render_on(device, &control, &mut timings, &mut notes)?;
     progress.finish();
+    if placement.is_root() {
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
+    }
     let secs = t.elapsed().as_secs_f64();
     say(placement.timings_report(timings)?);
     let written = rendered.map_or(Ok(()), |mut r| {
@@ -217,11 +226,16 @@ pub fn render_to(
     if placement.is_root() {
         let st = &s.view().settings;
         eprintln!(
-            "rendered {}×{} at {} spp{} in {secs:.3}s → {}",
+            "rendered {}×{} at {} spp{}{} in {secs:.3}s → {}",
             st.width,
             st.height,
             st.spp,
             on_ranks(placement),
+            if device.is_gpu() {
+                format!(" on the {}", device.name())
+            } else {
+                String::new()
+            },
             output.display()
         );
     }

@@ -55,8 +55,10 @@ pub fn render(
     marks: Marks,
     movie: MovieArgs,
     radii: Option<&Path>,
+    device: &voxless::device::Device,
 ) -> Result<()> {
     let root = placement.is_root();
+    let mut said = false;
     let seq = match frames {
         Frames::Range(range) => {
             let range = voxless::frames::parse_range(range)?;
@@ -197,7 +199,15 @@ pub fn render(
                     None => f as u32,
                 };
                 let report = |d: u64, total: u64| progress.set_fraction(done as u64, d, total);
-                let r = scene.render(&Control::new().with_progress(&report), &mut timings)?;
+                let mut notes = Vec::new();
+                let control = Control::new().with_progress(&report);
+                let r = scene.render_on(device, &control, &mut timings, &mut notes)?;
+                if !said && root {
+                    for n in &notes {
+                        progress.println(&format!("note: {n}"));
+                    }
+                    said = true;
+                }
                 r.map(|mut r| {
                     if let Err(e) = scene.check_rendered(&r) {
                         progress.println(&format!("note: frame {path_frame}: {e}"));

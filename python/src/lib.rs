@@ -393,20 +393,50 @@ impl Volume {
     }
 }
 
+/// The device `name` names (`None`: the CPU), opened once per process and
+/// kept (a GPU's device and pipelines are reused by later calls); a note
+/// when `auto` stands the CPU in.
+fn device(name: Option<&str>) -> PyResult<(voxless::device::Device, Option<String>)> {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    use voxless::device::{Device, DeviceChoice};
+    type Opened = (Device, Option<String>);
+    static OPEN: OnceLock<Mutex<HashMap<String, Opened>>> = OnceLock::new();
+    let choice: DeviceChoice = match name {
+        None => return Ok((Device::cpu(), None)),
+        Some(n) => n
+            .parse()
+            .map_err(|e: String| PyValueError::new_err(format!("device: {e}")))?,
+    };
+    let mut open = OPEN
+        .get_or_init(Default::default)
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    if let Some(d) = open.get(&choice.to_string()) {
+        return Ok(d.clone());
+    }
+    let d = Device::open(choice).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    open.insert(choice.to_string(), d.clone());
+    Ok(d)
+}
+
 #[pymethods]
 impl Volume {
     /// Renders with the view (scene `tables`, then view `flags`) over the
-    /// volume's description: an H×W×4 float32 array of premultiplied linear
-    /// RGBA, the background colour (linear RGB) and the notes of resolving
-    /// the view.
+    /// volume's description on `device` (`"cpu"`, `"gpu"`, `"auto"`): an
+    /// H×W×4 float32 array of premultiplied linear RGBA, the background
+    /// colour (linear RGB) and the notes of resolving the view.
+    #[pyo3(signature = (tables, flags, cwd, device=None))]
     fn render<'py>(
         &self,
         py: Python<'py>,
         tables: &Bound<'py, PyAny>,
         flags: &Bound<'py, PyAny>,
         cwd: PathBuf,
+        device: Option<&str>,
     ) -> PyResult<Rendered<'py>> {
         let desc = self.view(tables, flags, &cwd, "render")?;
+        let (device, device_note) = self::device(device)?;
         let held = self.held.clone();
         let done = run::cancellable(py, move |control| -> Result<_, Failure> {
             let mut r = held.resolve(&desc)?;
@@ -415,7 +445,10 @@ impl Volume {
             if let Some(note) = r.check_work(held.volume(), held.frame(), &desc)? {
                 r.notes.push(note);
             }
-            let film = r.render_film(held.volume(), control)?;
+            r.notes.extend(device_note);
+            let mut notes = Vec::new();
+            let film = device.render_film(held.volume(), &r, control, &mut notes)?;
+            r.notes.extend(notes);
             let image = film.resolve();
             let bounds = held.frame().box_to_world(held.volume().bounds());
             r.check_image(bounds, film.stats(), &image)?;
@@ -428,7 +461,7 @@ impl Volume {
     /// Column density `∫ field dt` per pixel (H×W float32, row 0 at the top)
     /// along an axis or a normal (see `voxless::projection`), at the view's
     /// image size (`flags` may give `size`), and the projection's geometry.
-    #[pyo3(signature = (flags, axis=None, normal=None, north=None, center=None, width=None, bounds=None, depth=None, pixels=None))]
+    #[pyo3(signature = (flags, axis=None, normal=None, north=None, center=None, width=None, bounds=None, depth=None, pixels=None, device=None))]
     #[allow(clippy::too_many_arguments)]
     fn project<'py>(
         &self,
@@ -442,7 +475,9 @@ impl Volume {
         bounds: Option<[f64; 6]>,
         depth: Option<f64>,
         pixels: Option<&str>,
+        device: Option<&str>,
     ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyDict>)> {
+        let (device, device_note) = self::device(device)?;
         let mut desc = self.held.desc.clone();
         apply_flags(&mut desc, flags, &self.held.base, "project", &[])?;
         let projection = ProjectionDesc {
@@ -482,15 +517,18 @@ impl Volume {
             let (w, h) = voxless::projection::image_size(&desc.image)?;
             let view = ProjectionView::new(&projection, &held.volume().bounds(), held.frame())?;
             view.check(held.volume())?;
-            let column = view.project_pixels(held.volume(), w, h, rule, control)?;
-            Ok((column, view, w, h))
+            let mut notes: Vec<String> = device_note.into_iter().collect();
+            let column =
+                view.project_on(held.volume(), w, h, rule, &device, control, &mut notes)?;
+            Ok((column, view, w, h, notes))
         })?;
-        let (column, view, w, h) = done.map_err(|f| raise(py, f))?;
+        let (column, view, w, h, notes) = done.map_err(|f| raise(py, f))?;
         let image = PyArray1::from_vec(py, column).reshape([h as usize, w as usize])?;
         let geometry = plane_geometry(py, &view)?;
         geometry.set_item("pixel_area", view.pixel_area(w, h))?;
         geometry.set_item("depth", depth)?;
         geometry.set_item("total_mass", self.held.total_mass())?;
+        geometry.set_item("notes", notes)?;
         Ok((image, geometry))
     }
 

@@ -104,7 +104,11 @@ class Projection(np.ndarray):
     @classmethod
     def wrap(cls, column, geometry):
         p = np.asarray(column, dtype=np.float32).view(cls)
+        geometry = dict(geometry)
+        # What the projection said (the device standing in), as Image.notes.
+        notes = tuple(geometry.pop("notes", ()))
         p.geometry = {k: (np.array(v) if isinstance(v, (list, tuple)) else v) for k, v in geometry.items()}
+        p.geometry["notes"] = notes
         return p
 
     def __array_finalize__(self, obj):

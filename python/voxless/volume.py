@@ -174,11 +174,17 @@ class Volume:
         ``background``, ``seed``, ``iso``, ``iso_opacity``, ``iso_only``,
         ``clip``, ``no_packets``; ``shade``, ``light_dir``, ``shadows``,
         ``light_pos``, ``light_intensity``, ``ambient``, ``free_flight``,
-        ``noise``. The GIL is released while it renders; Ctrl-C cancels it
-        (``KeyboardInterrupt``).
+        ``noise``; ``device``: ``"cpu"`` (the default), ``"gpu"`` (the GPU
+        backend: a package built with the ``gpu`` feature; an error naming
+        what is missing otherwise) or ``"auto"`` (the GPU when there is one
+        and it does the render, else the CPU, with a note). The GIL is
+        released while it renders; Ctrl-C cancels it (``KeyboardInterrupt``).
         """
+        device = view.pop("device", None)
         tables, flags = opt.split("render", view)
-        rgba, background, notes = _call(self._native.render, opt.merge(_scene_view(scene), tables), flags)
+        rgba, background, notes = _call(
+            self._native.render, opt.merge(_scene_view(scene), tables), flags, device=device
+        )
         return Image.wrap(rgba, background=tuple(background), notes=notes)
 
     def project(
@@ -192,6 +198,7 @@ class Volume:
         bounds=None,
         depth=None,
         pixels=None,
+        device=None,
     ) -> Projection:
         """Column density ∫ field dt per pixel: a :class:`Projection`, H×W float32, row 0 at the top.
 
@@ -206,7 +213,9 @@ class Volume:
         mass when the image covers the data. ``pixels``: ``"centre"`` (the
         default: the column through each pixel's centre) or, for particles,
         ``"area"`` (the column averaged over each pixel, so kernels smaller
-        than a pixel keep their mass too; not with ``depth``).
+        than a pixel keep their mass too; not with ``depth``). ``device``:
+        ``"cpu"`` (the default), ``"gpu"`` or ``"auto"``, as for
+        :meth:`render` (particle splats are summed on the GPU).
         """
         flags = {} if size is None else opt.split("project", {"size": size})[1]
         if axis is not None and (not isinstance(axis, (str, int)) or axis not in AXES):
@@ -223,6 +232,7 @@ class Volume:
             bounds=None if bounds is None else opt.box("bounds", bounds),
             depth=None if depth is None else opt.number("depth", depth),
             pixels=pixels,
+            device=device,
         )
         return Projection.wrap(column, geometry)
 

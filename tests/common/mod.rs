@@ -69,6 +69,9 @@ pub fn bin() -> &'static Path {
         if cfg!(feature = "mpi") {
             features.push("voxless-cli/mpi");
         }
+        if cfg!(feature = "gpu") {
+            features.push("voxless-cli/gpu");
+        }
         if !features.is_empty() {
             cmd.args(["--features", &features.join(",")]);
         }

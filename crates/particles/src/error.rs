@@ -63,4 +63,10 @@ pub enum ParticleError {
     CoincidentNeighbours { index: usize, others: usize },
     #[error("too many particles ({count}); at most {max} per volume")]
     TooMany { count: usize, max: usize },
+    /// The work was cancelled (through its `Control`).
+    #[error("cancelled")]
+    Cancelled,
+    /// The device summing a projection (the GPU backend) failed.
+    #[error("{0}")]
+    Device(String),
 }

@@ -525,6 +525,16 @@ impl Column {
         self.scale
     }
 
+    /// The Gaussians' standard deviation and amplitude per unit weight
+    /// (their column is a closed form); `None` for the SPH kernels.
+    pub fn gaussian(&self) -> Option<(f64, f64)> {
+        match self.kernel {
+            Kernel::Gaussian3 => Some((self.r / 3.0, 1.0)),
+            Kernel::Gaussian { kappa, .. } => Some((self.r, kappa as f64)),
+            _ => None,
+        }
+    }
+
     /// The squared support radius.
     #[inline]
     pub fn support2(&self) -> f64 {

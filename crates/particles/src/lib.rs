@@ -73,8 +73,9 @@ pub use error::ParticleError;
 pub use kernel::{KERNEL_NAMES, Kernel};
 pub use materials::{Material, MaterialClass, MaterialVolume};
 pub use volume::{
-    Classification, FieldSample, FieldStatistics, MAX_PERIODS, ParticleData, ParticleSettings,
-    ParticleVolume, RANGE_PROBES, check_data, images, median, probe_stride, support_box, wrap,
+    Classification, DeviceParticles, FieldSample, FieldStatistics, MAX_PERIODS, ParticleData,
+    ParticleSettings, ParticleVolume, RANGE_PROBES, check_data, images, median, probe_stride,
+    support_box, wrap,
 };
 
 #[cfg(test)]

@@ -85,6 +85,65 @@ pub struct Splatter {
     simd: Simd,
     /// Pixel areas ([`PixelIntegral::Area`]): the kernel's area table.
     area: Option<Arc<AreaTable>>,
+    /// The device summing the plain splats, and its image.
+    device: Option<Box<dyn DeviceImage>>,
+    /// Reused between chunks: the plain splats for the device.
+    plain: Vec<PlainSplat>,
+}
+
+/// A device that sums a splatter's plain splats (the GPU backend).
+///
+/// The splatter places every particle image on the CPU (periodic images,
+/// the rows and columns each may touch) and keeps summing those that need
+/// more than a column per pixel centre (pixel areas, images clipped to a
+/// periodic box); the device sums the others — all of them in the usual
+/// case — into an image of its own, added to the CPU's at the end.
+pub trait SplatDevice: Send + Sync {
+    /// An empty `width` × `height` image for particles with `kernel`.
+    fn begin(
+        &self,
+        width: u32,
+        height: u32,
+        kernel: Kernel,
+    ) -> Result<Box<dyn DeviceImage>, ParticleError>;
+}
+
+/// An image being summed on a device (see [`SplatDevice`]).
+pub trait DeviceImage: Send {
+    /// Adds `splats` (in order: the order a device sums them in may move
+    /// f32 rounding only).
+    fn add(&mut self, splats: &[PlainSplat]) -> Result<(), ParticleError>;
+    /// The image, row-major, row 0 at the top.
+    fn finish(self: Box<Self>) -> Result<Vec<f32>, ParticleError>;
+}
+
+/// One particle image a device sums: each pixel centre `(x + ½, y + ½)`
+/// of rows `rows` and columns `cols` within the support gets
+/// - SPH kernels: `scale × T(ax·dx² + ay·dy²)`, `T` the kernel's column
+///   table ([`Kernel::sph_table`]) interpolated linearly, 0 from its last
+///   entry on;
+/// - the Gaussians: `scale × exp(−b²·g_exp) × erf(√(support2 − b²)·g_erf)`
+///   with `b² = dx²·pw2 + dy²·ph2` below `support2` (the closed-form
+///   column of the truncated Gaussian),
+///
+/// with `(dx, dy)` the offset of the pixel centre from `(cx, cy)` in
+/// pixels. 64 bytes, laid out as a GPU buffer reads it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct PlainSplat {
+    pub cx: f32,
+    pub cy: f32,
+    pub ax: f32,
+    pub ay: f32,
+    pub scale: f32,
+    pub g_exp: f32,
+    pub g_erf: f32,
+    pub support2: f32,
+    pub pw2: f32,
+    pub ph2: f32,
+    pub rows: [u32; 2],
+    pub cols: [u32; 2],
+    pub _pad: [u32; 2],
 }
 
 impl Splatter {
@@ -128,7 +187,16 @@ impl Splatter {
             found: Vec::new(),
             simd: Simd::Auto,
             area: None,
+            device: None,
+            plain: Vec::new(),
         })
+    }
+
+    /// The same splatter summing its plain splats on `device` (see
+    /// [`SplatDevice`]).
+    pub fn with_device(mut self, device: &dyn SplatDevice) -> Result<Self, ParticleError> {
+        self.device = Some(device.begin(self.width, self.height, self.kernel)?);
+        Ok(self)
     }
 
     /// The same splatter integrating each pixel by `pixels`: with
@@ -157,6 +225,13 @@ impl Splatter {
         control: &Control,
     ) -> Result<(), ParticleError> {
         self.place(particles, offset)?;
+        let on_device = self.device.is_some();
+        if let Some(device) = &mut self.device {
+            self.plain.clear();
+            self.plain
+                .extend(self.splats.iter().filter(|p| !p.clip && !p.area).map(plain));
+            device.add(&self.plain)?;
+        }
         let lists = Bands::bin(&self.splats, self.height);
         let w = self.width as usize;
         let (camera, mode, kernel) = (&self.camera, self.mode, self.kernel);
@@ -179,17 +254,19 @@ impl Splatter {
                 if let Some(table) = area {
                     area_band(splats, members, table, (y0, y0 + rows), w, &mut *out);
                 }
-                dispatch(
-                    simd,
-                    SplatBand {
-                        splats,
-                        members,
-                        y: (y0, y0 + rows),
-                        width: w,
-                        pairs,
-                        out: &mut *out,
-                    },
-                );
+                if !on_device {
+                    dispatch(
+                        simd,
+                        SplatBand {
+                            splats,
+                            members,
+                            y: (y0, y0 + rows),
+                            width: w,
+                            pairs,
+                            out: &mut *out,
+                        },
+                    );
+                }
                 if let Periodic::OffAxis(b) = mode {
                     clipped(splats, members, camera, &b, (width, height), y0, out);
                 }
@@ -199,12 +276,19 @@ impl Splatter {
 
     /// The image: column densities through every pixel centre, or
     /// averaged over every pixel (f32, row-major, row 0 at the top).
-    pub fn finish(self) -> Vec<f32> {
-        let mut image: Vec<f32> = self.sum.iter().map(|&v| v as f32).collect();
+    /// Errors: the device's (see [`Splatter::with_device`]).
+    pub fn finish(mut self) -> Result<Vec<f32>, ParticleError> {
+        let mut sum = std::mem::take(&mut self.sum);
+        if let Some(device) = self.device.take() {
+            for (s, d) in sum.iter_mut().zip(device.finish()?) {
+                *s += d as f64;
+            }
+        }
+        let mut image: Vec<f32> = sum.iter().map(|&v| v as f32).collect();
         if let Periodic::OnAxis(b, axis) = self.mode {
             self.outside_shadow_to_zero(&b, axis, &mut image);
         }
-        image
+        Ok(image)
     }
 
     /// The same splatter on the SIMD lanes `simd` (for tests of each
@@ -337,6 +421,36 @@ impl Splatter {
                 *s = 0.0;
             }
         }
+    }
+}
+
+/// What a device sums of splat `p` (see [`PlainSplat`]).
+fn plain(p: &Splat) -> PlainSplat {
+    let (pw, ph) = p.pixel;
+    let (scale, g_exp, g_erf) = match p.column.gaussian() {
+        // The SPH kernels read the table.
+        None => (p.scale, 0.0, 0.0),
+        // amp·exp(−b²/2s²)·s·√(π/2)·(erf(l/√2s) − erf(−l/√2s)).
+        Some((s, amp)) => (
+            p.weight * amp * s * (2.0 * std::f64::consts::PI).sqrt(),
+            1.0 / (2.0 * s * s),
+            1.0 / (std::f64::consts::SQRT_2 * s),
+        ),
+    };
+    PlainSplat {
+        cx: p.cx as f32,
+        cy: p.cy as f32,
+        ax: p.ax as f32,
+        ay: p.ay as f32,
+        scale: scale as f32,
+        g_exp: g_exp as f32,
+        g_erf: g_erf as f32,
+        support2: p.column.support2() as f32,
+        pw2: (pw * pw) as f32,
+        ph2: (ph * ph) as f32,
+        rows: [p.rows.0, p.rows.1],
+        cols: [p.cols.0, p.cols.1],
+        _pad: [0; 2],
     }
 }
 

@@ -22,7 +22,7 @@ fn image(p: &[SplatParticle], chunk: usize, kernel: Kernel, periodic: Option<Aab
     for (k, c) in p.chunks(chunk).enumerate() {
         s.add(c, k * chunk, &Control::new()).unwrap();
     }
-    s.finish()
+    s.finish().unwrap()
 }
 
 #[test]
@@ -99,7 +99,7 @@ fn pixel_areas_conserve_the_mass_of_kernels_of_any_size() {
                 .unwrap()
                 .with_pixels(PixelIntegral::Area);
             s.add(&p, 0, &Control::new()).unwrap();
-            let got = mass(&s.finish(), w, h);
+            let got = mass(&s.finish().unwrap(), w, h);
             assert!(
                 (got / want - 1.0).abs() < 1e-6,
                 "{kernel:?}, periodic {}: {got} vs {want}",
@@ -113,7 +113,7 @@ fn pixel_areas_conserve_the_mass_of_kernels_of_any_size() {
             .iter()
             .map(|q| q.weight as f64 * kernel.integral(q.radius as f64))
             .sum();
-        assert!((mass(&s.finish(), w, h) / sub - 1.0).abs() > 1e-3);
+        assert!((mass(&s.finish().unwrap(), w, h) / sub - 1.0).abs() > 1e-3);
     }
 }
 
@@ -137,11 +137,11 @@ fn pixel_areas_equal_a_fine_quadrature_of_the_column() {
             .unwrap()
             .with_pixels(PixelIntegral::Area);
         s.add(&[q], 0, &Control::new()).unwrap();
-        let got = s.finish();
+        let got = s.finish().unwrap();
         if support_px as f64 >= table_pixels(kernel) {
             let mut c = Splatter::new(&cam, n, n, kernel, None).unwrap();
             c.add(&[q], 0, &Control::new()).unwrap();
-            assert_eq!(got, c.finish(), "support {support_px} px");
+            assert_eq!(got, c.finish().unwrap(), "support {support_px} px");
             continue;
         }
         let column = kernel.column(q.radius as f64);

@@ -761,7 +761,7 @@ fn splatted_columns_equal_the_pixel_loop_on_every_backend() {
                 splatter
                     .add(&[p], 0, &voxless_core::Control::new())
                     .unwrap();
-                let fast = splatter.finish();
+                let fast = splatter.finish().unwrap();
                 for (k, (x, y)) in fast.iter().zip(&slow).enumerate() {
                     assert!(
                         (*x as f64 - y).abs() <= 1e-6 * w * peak,

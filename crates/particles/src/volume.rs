@@ -11,6 +11,7 @@ use voxless_transfer::{ControlPoints, TransferFunction};
 use crate::error::ParticleError;
 use crate::kernel::{Family, Kernel, with_family};
 
+mod device;
 mod exact;
 mod lod;
 mod packet;
@@ -18,6 +19,7 @@ mod part;
 mod periodic;
 mod splat;
 
+pub use device::DeviceParticles;
 pub use periodic::{MAX_PERIODS, images, wrap};
 
 pub use part::{FieldStatistics, RANGE_PROBES, check_data, median, probe_stride, support_box};

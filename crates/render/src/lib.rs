@@ -46,6 +46,7 @@ pub mod colorbar;
 mod composite;
 mod ctx;
 mod cursor;
+pub mod device;
 pub mod font;
 mod march;
 mod meshes;
@@ -535,6 +536,18 @@ impl Film {
     /// How many passes have been added.
     pub fn passes(&self) -> u32 {
         self.passes
+    }
+
+    /// Adds one pass rendered elsewhere (a device integrator): row-major
+    /// premultiplied RGBA, one per pixel.
+    pub fn add_pass(&mut self, pixels: &[[f32; 4]]) {
+        assert_eq!(pixels.len(), self.sum.len(), "a pass of another size");
+        for (s, p) in self.sum.iter_mut().zip(pixels) {
+            for c in 0..4 {
+                s[c] += p[c];
+            }
+        }
+        self.passes += 1;
     }
 
     /// The average of the passes so far (transparent before the first).

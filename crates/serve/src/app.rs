@@ -153,6 +153,8 @@ const COARSE_LOD_LEVELS: usize = 3;
 pub struct App {
     /// Directory relative paths of the scene are relative to.
     pub base: PathBuf,
+    /// Where full-resolution passes render (see [`crate::Options::device`]).
+    pub device: voxless::device::Device,
     /// The scene the server started with (every tab's first view; the
     /// page's reset goes back to its camera).
     pub initial: SceneDesc,

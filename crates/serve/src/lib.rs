@@ -83,6 +83,9 @@ pub struct Options {
     /// The access token; generated when binding beyond loopback and not
     /// given.
     pub token: Option<String>,
+    /// Where the full-resolution passes render (`--device`; the coarse
+    /// stage stays on the CPU).
+    pub device: voxless::device::Device,
 }
 
 impl Default for Options {
@@ -91,6 +94,7 @@ impl Default for Options {
             host: "127.0.0.1".into(),
             port: 8080,
             token: None,
+            device: voxless::device::Device::cpu(),
         }
     }
 }
@@ -156,6 +160,7 @@ pub fn prepare(mut desc: SceneDesc, base: PathBuf) -> Result<Prepared, ServeErro
         current: Mutex::new((desc.clone(), 0)),
         initial: desc,
         busy: Default::default(),
+        device: voxless::device::Device::cpu(),
     };
     Ok(Prepared {
         app,
@@ -241,6 +246,7 @@ pub async fn bind(prepared: Prepared, options: &Options) -> Result<Bound, ServeE
     let mut app = prepared.app;
     app.token = token.clone();
     app.loopback = loopback;
+    app.device = options.device.clone();
     Ok(Bound {
         listener,
         app: Arc::new(app),

@@ -265,14 +265,14 @@ fn run_job(
     let outline = outline.map(|b| (resolved.camera, b));
     let mut budget = memory.budget.clone();
     let mut failed = false;
-    let result = voxless::render_progressive(
+    let mut device_notes = Vec::new();
+    let result = voxless::render_progressive_on(
+        &app.device,
         &loaded.volume,
-        &resolved.camera,
-        &resolved.tf,
-        settings,
-        coarse,
-        Some(&mut budget),
+        (&resolved.camera, &resolved.tf, settings),
+        (coarse, Some(&mut budget)),
         &control,
+        &mut device_notes,
         &mut |stage, film, at| {
             *stage_name.lock().unwrap_or_else(|e| e.into_inner()) = "full";
             let converged = stage.is_converged();
@@ -306,6 +306,24 @@ fn run_job(
         },
     );
     memory.budget = budget;
+    // Where `--device auto` put the CPU in, said once in the terminal.
+    for n in device_notes {
+        static SAID: Mutex<Vec<String>> = Mutex::new(Vec::new());
+        let mut said = SAID.lock().unwrap_or_else(|e| e.into_inner());
+        if !said.contains(&n) {
+            eprintln!("note: {n}");
+            said.push(n);
+        }
+    }
+    // A device that fails (or a render `--device gpu` cannot do) fails the
+    // view as any error does.
+    let result = match result {
+        Ok(r) => r,
+        Err(e) => {
+            fail(e.to_string());
+            return taken(follow_up);
+        }
+    };
     if result.is_ok() && !failed && outbox.is_current(seq) {
         send_state(memory);
         if !job.drag {
@@ -348,14 +366,13 @@ pub fn coarse_image(
     };
     let control = Control::new().with_cancel(cancel.clone());
     let mut sent = false;
-    let result = voxless::render_progressive(
+    let result = voxless::render_progressive_on(
+        &app.device,
         &loaded.volume,
-        &resolved.camera,
-        &resolved.tf,
-        settings,
-        Some(coarse),
-        Some(&mut *budget),
+        (&resolved.camera, &resolved.tf, settings),
+        (Some(coarse), Some(&mut *budget)),
         &control,
+        &mut Vec::new(),
         &mut |stage, film, at| {
             // The first image only: a view too small for a coarse stage
             // gives its first pass instead.
@@ -365,7 +382,10 @@ pub fn coarse_image(
             false
         },
     );
-    Ok(result.is_ok() && sent)
+    match result {
+        Ok(r) => Ok(r.is_ok() && sent),
+        Err(e) => Err(e.to_string()),
+    }
 }
 
 /// Encodes and offers one image (of a path preview: `shows` the path and
@@ -565,15 +585,10 @@ pub fn frame_png(
     resolved
         .check_work(&loaded.volume, &loaded.frame, &desc)
         .map_err(|e| e.to_string())?;
-    let film = loaded
-        .volume
-        .render_passes(
-            &resolved.camera,
-            &resolved.tf,
-            &resolved.settings,
-            &Control::new().with_cancel(cancel.clone()),
-            &mut |_| true,
-        )
+    let control = Control::new().with_cancel(cancel.clone());
+    let film = app
+        .device
+        .render_film(&loaded.volume, &resolved, &control, &mut Vec::new())
         .map_err(|e| e.to_string())?;
     let image = film.resolve();
     let bounds = loaded.frame.box_to_world(loaded.volume.bounds());

@@ -310,6 +310,16 @@ impl TransferFunction {
         Vec3::new(r[i], g[i], b[i])
     }
 
+    /// The tables every lookup interpolates: `(r, g, b, opacity)` at the
+    /// knots `i / (n − 1)` (a device integrator uploads them and reads them
+    /// as [`TransferFunction::color_and_opacity`] does).
+    pub fn knots(&self) -> Vec<[f32; 4]> {
+        let [r, g, b] = &self.color_lut;
+        (0..LUT)
+            .map(|i| [r[i], g[i], b[i], self.opacity_lut[i]])
+            .collect()
+    }
+
     /// Linear-RGB colour at normalised `x`.
     #[inline]
     pub fn color(&self, x: f32) -> Vec3 {

@@ -6,7 +6,8 @@
 
 use voxless_core::{Camera, Cancelled, Control, PixelIntegral};
 
-use crate::splat::{CHUNK, SplatParticle, Splatter};
+use crate::ParticleError;
+use crate::splat::{CHUNK, SplatDevice, SplatParticle, Splatter};
 
 use super::ParticleVolume;
 
@@ -36,10 +37,26 @@ impl ParticleVolume {
         pixels: PixelIntegral,
         control: &Control,
     ) -> Option<Result<Vec<f32>, Cancelled>> {
+        self.project_on(camera, width, height, pixels, None, control)
+            .map(|r| r.map_err(|_| Cancelled))
+    }
+
+    /// [`Self::project_with_pixels`] with the plain splats summed on
+    /// `device` when given (see [`SplatDevice`]). Errors: the device's, and
+    /// [`ParticleError::Cancelled`].
+    pub fn project_on(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        pixels: PixelIntegral,
+        device: Option<&dyn SplatDevice>,
+        control: &Control,
+    ) -> Option<Result<Vec<f32>, ParticleError>> {
         if self.settings.periodic.is_some() && !self.own_images {
             return None;
         }
-        let mut splatter = Splatter::new(
+        let splatter = Splatter::new(
             camera,
             width,
             height,
@@ -47,6 +64,13 @@ impl ParticleVolume {
             self.settings.periodic,
         )?
         .with_pixels(pixels);
+        let mut splatter = match device {
+            Some(d) => match splatter.with_device(d) {
+                Ok(s) => s,
+                Err(e) => return Some(Err(e)),
+            },
+            None => splatter,
+        };
         // The particles without their ghosts, CHUNK at a time.
         let mut own = (0..self.packed.len())
             .filter(|&i| !self.is_ghost(i))
@@ -67,12 +91,16 @@ impl ParticleVolume {
         for k in 0..chunks {
             chunk.clear();
             chunk.extend(own.by_ref().take(CHUNK));
-            // The volume's particles passed its own checks: images fit the box.
-            if splatter.add(&chunk, 0, control).is_err() || control.is_cancelled() {
-                return Some(Err(Cancelled));
+            // The volume's particles passed its own checks: images fit the
+            // box; what fails is the device.
+            if let Err(e) = splatter.add(&chunk, 0, control) {
+                return Some(Err(e));
+            }
+            if control.is_cancelled() {
+                return Some(Err(ParticleError::Cancelled));
             }
             control.report(k + 1, chunks);
         }
-        Some(Ok(splatter.finish()))
+        Some(splatter.finish())
     }
 }

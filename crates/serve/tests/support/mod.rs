@@ -67,6 +67,7 @@ pub fn serve(desc: SceneDesc, host: &str) -> Running {
             host: host.into(),
             port: 0,
             token: None,
+            ..Default::default()
         },
     )
     .unwrap()
