@@ -13,6 +13,8 @@
 
 use std::fmt;
 use std::str::FromStr;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use voxless_core::{Camera, Cancelled, Control, PixelIntegral};
 use voxless_render::{Film, RenderSettings};
@@ -55,6 +57,8 @@ impl fmt::Display for DeviceChoice {
 #[derive(Clone)]
 pub struct Device {
     choice: DeviceChoice,
+    /// See [`Device::last_on_gpu`].
+    on_gpu: Arc<AtomicBool>,
     #[cfg(feature = "gpu")]
     gpu: Option<voxless_gpu::Gpu>,
 }
@@ -93,6 +97,7 @@ impl Device {
     pub fn cpu() -> Device {
         Device {
             choice: DeviceChoice::Cpu,
+            on_gpu: Default::default(),
             #[cfg(feature = "gpu")]
             gpu: None,
         }
@@ -214,14 +219,33 @@ impl Device {
         notes: &mut Vec<String>,
         on_pass: &mut dyn FnMut(&Film) -> bool,
     ) -> Result<Result<Film, Cancelled>, SceneError> {
+        self.on_gpu.store(false, Ordering::Relaxed);
         #[cfg(feature = "gpu")]
         if let Some((gpu, v)) = self.gpu_for_render(volume, settings, notes)? {
+            self.on_gpu.store(true, Ordering::Relaxed);
             return gpu
                 .render_passes(v, camera, tf, settings, control, on_pass)
                 .map_err(|e| SceneError::setting("device", e.to_string()));
         }
         let _ = notes;
         Ok(volume.render_passes(camera, tf, settings, control, on_pass))
+    }
+
+    /// Whether the last render or projection on this device ran on the
+    /// GPU (`auto` may have put the CPU in; a front-end's report says
+    /// where it ran).
+    pub fn last_on_gpu(&self) -> bool {
+        self.on_gpu.load(Ordering::Relaxed)
+    }
+
+    /// The GPU memory the last render on this device held in buffers
+    /// (particles, BVH, one pass's rays and image); `None` on the CPU.
+    pub fn gpu_bytes(&self) -> Option<u64> {
+        #[cfg(feature = "gpu")]
+        if let Some(g) = &self.gpu {
+            return Some(g.last_render_bytes());
+        }
+        None
     }
 
     /// The device that sums a particle projection's splats, when it is
@@ -235,21 +259,26 @@ impl Device {
     }
 
     /// An error when `gpu` was asked for and a projection of `volume`
-    /// cannot use it (only particle projections through an orthographic
-    /// camera splat); under `auto`, the note saying the CPU stands in.
+    /// cannot use it (particle projections of whole lines splat; `slab`
+    /// names what keeps this one from it); under `auto`, the note saying
+    /// the CPU stands in.
     pub fn check_projection(
         &self,
         volume: &AnyVolume,
-        orthographic: bool,
+        slab: Option<&str>,
         notes: &mut Vec<String>,
     ) -> Result<(), SceneError> {
+        self.on_gpu.store(false, Ordering::Relaxed);
         if !self.is_gpu() {
             return Ok(());
         }
-        let why = match volume {
-            AnyVolume::Particles(_) if orthographic => return Ok(()),
-            AnyVolume::Particles(_) => "perspective projections".to_string(),
-            other => format!(
+        let why = match (volume, slab) {
+            (AnyVolume::Particles(_), None) => {
+                self.on_gpu.store(true, Ordering::Relaxed);
+                return Ok(());
+            }
+            (AnyVolume::Particles(_), Some(what)) => what.to_string(),
+            (other, _) => format!(
                 "{} projections (the GPU backend projects particles)",
                 other.kind()
             ),

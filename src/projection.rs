@@ -501,8 +501,13 @@ impl ProjectionView {
             voxless_core::Projection::Orthographic { .. }
         );
         // A slab is one line integral per pixel, on the CPU.
-        let whole = self.t_range.is_none() && orthographic;
-        device.check_projection(volume, whole, notes)?;
+        let slab = match (self.t_range, orthographic) {
+            (Some(_), _) => Some("projections of a slab (--depth)"),
+            (None, false) => Some("perspective projections"),
+            (None, true) => None,
+        };
+        let whole = slab.is_none();
+        device.check_projection(volume, slab, notes)?;
         if whole
             && let Some(r) = crate::device::project_particles(
                 volume,

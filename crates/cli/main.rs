@@ -602,10 +602,12 @@ fn project(
     device: &voxless::device::Device,
 ) -> Result<()> {
     let t = Instant::now();
-    let on = if device.is_gpu() {
-        format!(" on the {}", device.name())
-    } else {
-        String::new()
+    let on = |gpu: bool| {
+        if gpu {
+            format!(" on the {}", device.name())
+        } else {
+            String::new()
+        }
     };
     // One process, nothing else asked of the particles: stream them.
     if matches!(placement, Placement::Process) && radii.is_none() {
@@ -623,11 +625,13 @@ fn project(
             let integral: f64 =
                 s.column.iter().map(|&c| c as f64).sum::<f64>() * s.view.pixel_area(w, h);
             eprintln!(
-                "projected {w}×{h} from {} particles streamed in {} chunk{}{on} in {:.3}s → {} \
+                "projected {w}×{h} from {} particles streamed in {} chunk{}{} in {:.3}s → {} \
                  (Σ column × pixel area = {integral:.6e}, exact ∫ field dV = {:.6e})",
                 s.particles,
                 s.chunks,
                 if s.chunks == 1 { "" } else { "s" },
+                // A streamed projection splats: on the GPU whenever it is open.
+                on(device.is_gpu()),
                 t.elapsed().as_secs_f64(),
                 output.display(),
                 s.mass
@@ -662,8 +666,9 @@ fn project(
             .map(|m| format!(", exact ∫ field dV = {m:.6e}"))
             .unwrap_or_default();
         eprintln!(
-            "projected {w}×{h}{}{on} in {:.3}s → {} (Σ column × pixel area = {integral:.6e}{mass})",
+            "projected {w}×{h}{}{} in {:.3}s → {} (Σ column × pixel area = {integral:.6e}{mass})",
             render::on_ranks(placement),
+            on(device.last_on_gpu()),
             t.elapsed().as_secs_f64(),
             output.display()
         );

@@ -231,10 +231,13 @@ pub fn render_to(
             st.height,
             st.spp,
             on_ranks(placement),
-            if device.is_gpu() {
-                format!(" on the {}", device.name())
-            } else {
-                String::new()
+            match device.gpu_bytes().filter(|_| device.last_on_gpu()) {
+                Some(b) => format!(
+                    " on the {} ({:.1} MiB of buffers)",
+                    device.name(),
+                    b as f64 / (1u64 << 20) as f64
+                ),
+                None => String::new(),
             },
             output.display()
         );

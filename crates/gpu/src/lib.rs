@@ -59,14 +59,25 @@ pub enum GpuError {
     #[error("the GPU ({adapter}) refused the device: {message}")]
     NoDevice { adapter: String, message: String },
     #[error(
-        "{what} needs {bytes} bytes in one GPU buffer; the adapter ({adapter}) allows \
-         {limit} ({limit_name}): use --device cpu, a smaller image or fewer particles"
+        "{what}: {bytes} bytes in one GPU buffer, beyond the {limit} the adapter \
+         ({adapter}) allows ({limit_name}): use --device cpu, a smaller image or fewer \
+         particles"
     )]
     TooLarge {
         what: &'static str,
         bytes: u64,
         limit: u64,
         limit_name: &'static str,
+        adapter: String,
+    },
+    #[error(
+        "the image needs {groups:?} workgroups, beyond the {limit} a dimension the adapter \
+         ({adapter}) allows (max_compute_workgroups_per_dimension): use a smaller image or \
+         --device cpu"
+    )]
+    TooManyGroups {
+        groups: [u32; 3],
+        limit: u32,
         adapter: String,
     },
     #[error("the GPU ({adapter}) failed: {message}")]
@@ -155,6 +166,9 @@ pub struct Inner {
     lost: std::sync::Arc<Mutex<Option<String>>>,
     /// The render's workgroup shape (see `march.wgsl`).
     march_shape: [u32; 2],
+    /// Bytes of the buffers the last render held (see
+    /// [`Inner::last_render_bytes`]).
+    last_bytes: std::sync::atomic::AtomicU64,
 }
 
 impl Gpu {
@@ -199,6 +213,7 @@ impl Gpu {
                 march: Default::default(),
                 lost,
                 march_shape: if software { [1, 64] } else { [8, 8] },
+                last_bytes: Default::default(),
             }),
         })
     }
@@ -215,6 +230,12 @@ impl Inner {
             adapter: self.info.to_string(),
             message: message.into(),
         }
+    }
+
+    /// The GPU memory the last render's buffers took: particles, attribute,
+    /// BVH, transfer function, one pass's rays and image.
+    pub fn last_render_bytes(&self) -> u64 {
+        self.last_bytes.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// The most bytes one storage buffer binding may hold on this adapter.
@@ -353,11 +374,9 @@ impl Inner {
         let len = out.map_or(0, |o| o.1);
         let max = self.limits.max_compute_workgroups_per_dimension;
         if groups.iter().any(|&g| g > max) {
-            return Err(GpuError::TooLarge {
-                what: "the dispatch",
-                bytes: groups.iter().map(|&g| g as u64).max().unwrap_or(0),
-                limit: max as u64,
-                limit_name: "max_compute_workgroups_per_dimension",
+            return Err(GpuError::TooManyGroups {
+                groups,
+                limit: max,
                 adapter: self.info.to_string(),
             });
         }

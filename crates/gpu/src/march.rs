@@ -99,6 +99,13 @@ impl Gpu {
             return Err(GpuError::Unsupported(what));
         }
         let up = self.upload(volume, tf, settings)?;
+        let pass_bytes = 64 * settings.width as u64 * settings.height as u64;
+        let held = [&up.particles, &up.attr, &up.nodes, &up.lut]
+            .iter()
+            .map(|b| b.size())
+            .sum::<u64>();
+        self.last_bytes
+            .store(held + pass_bytes, std::sync::atomic::Ordering::Relaxed);
         let mut film = Film::new(settings.width, settings.height);
         for sample in 0..settings.spp {
             if control.is_cancelled() {

@@ -58,25 +58,60 @@ fn tp(k: f32, q: f32) -> f32 {
     return max(k - q, 0.0);
 }
 
-// w(q) of the SPH kernels (σ and 1/h³ are in the amplitude). Written
-// without early returns, as the rest of the shader (see `field`).
+// e^x as the CPU's lanes compute it (voxless_core::simd::exp: a degree-6
+// polynomial on the reduced argument, the exponent put in by bits), so
+// Gaussian kernels and opacities get the CPU's bits where the inputs agree.
+fn exp_cpu(x0: f32) -> f32 {
+    let flush = x0 < -87.33654;
+    let x = clamp(x0, -87.33654, 89.0);
+    // The CPU rounds by adding and subtracting 2²³ + 127; a shader compiler
+    // may fold that away, so `round` (to nearest, ties to even: the same).
+    let n = round(x * 1.442695);
+    let r = (x - n * 0.6933594) - n * -0.00021219444;
+    var p = 0.00019875691;
+    p = p * r + 0.0013981999;
+    p = p * r + 0.008333452;
+    p = p * r + 0.041665796;
+    p = p * r + 0.16666666;
+    p = p * r + 0.5;
+    let e = (p * r * r + r) + 1.0;
+    let v = e * bitcast<f32>(u32(i32(n) + 127) << 23u);
+    return select(v, 0.0, flush);
+}
+
+// w(q) of the SPH kernels (σ and 1/h³ are in the amplitude), in the
+// arithmetic of the CPU's lanes (kernel::sph `w_simd`, the cubic spline's
+// `cubic_parts`). Written without early returns, as the rest of the shader.
 fn sph_w(kind: u32, q: f32) -> f32 {
     var w = 0.0;
     if (kind == 1u) {
-        let t = tp(2.0, q);
-        let s = tp(1.0, q);
-        // M4 = ¼(2 − q)³ − (1 − q)³ for q < 1, ¼(2 − q)³ beyond.
-        w = 0.25 * t * t * t - s * s * s;
+        let inner = 1.0 + q * q * (0.75 * q - 1.5);
+        let t = 2.0 - q;
+        let outer = 0.25 * t * t * t;
+        w = select(select(0.0, outer, q < 2.0), inner, q < 1.0);
     } else if (kind == 2u) {
-        w = pow(tp(2.5, q), 4.0) - 5.0 * pow(tp(1.5, q), 4.0) + 10.0 * pow(tp(0.5, q), 4.0);
+        let a = tp(2.5, q);
+        let b = tp(1.5, q);
+        let c = tp(0.5, q);
+        w = (a * a) * (a * a) - 5.0 * ((b * b) * (b * b)) + 10.0 * ((c * c) * (c * c));
     } else if (kind == 3u) {
-        w = pow(tp(3.0, q), 5.0) - 6.0 * pow(tp(2.0, q), 5.0) + 15.0 * pow(tp(1.0, q), 5.0);
+        let a = tp(3.0, q);
+        let b = tp(2.0, q);
+        let c = tp(1.0, q);
+        w = (a * a) * (a * a) * a - 6.0 * ((b * b) * (b * b) * b) + 15.0 * ((c * c) * (c * c) * c);
     } else if (kind == 4u) {
-        w = pow(tp(1.0, 0.5 * q), 4.0) * (1.0 + 2.0 * q);
+        let t = tp(1.0, 0.5 * q);
+        let t2 = t * t;
+        w = t2 * t2 * (1.0 + 2.0 * q);
     } else if (kind == 5u) {
-        w = pow(tp(1.0, 0.5 * q), 6.0) * (1.0 + q * (3.0 + q * (35.0 / 12.0)));
+        let t = tp(1.0, 0.5 * q);
+        let t2 = t * t;
+        w = t2 * t2 * t2 * (1.0 + q * (3.0 + q * (35.0 / 12.0)));
     } else {
-        w = pow(tp(1.0, 0.5 * q), 8.0) * (1.0 + q * (4.0 + q * (6.25 + q * 4.0)));
+        let t = tp(1.0, 0.5 * q);
+        let t2 = t * t;
+        let t4 = t2 * t2;
+        w = t4 * t4 * (1.0 + q * (4.0 + q * (6.25 + q * 4.0)));
     }
     return w;
 }
@@ -139,7 +174,7 @@ fn contains(n: Node, p: vec3<f32>) -> bool {
 // workgroup got each other's sums).
 fn field(p: vec3<f32>) -> Field {
     var f = Field(0.0, 0.0, vec3<f32>(0.0), vec3<f32>(0.0), false);
-    var stack: array<u32, 32>;
+    var stack: array<u32, 128>;
     var sp = 0u;
     var i = 0u;
     var more = P.n_nodes > 0u;
@@ -159,7 +194,7 @@ fn field(p: vec3<f32>) -> Field {
                         var v = 0.0;
                         var g = 0.0;
                         if (P.kernel == 0u) {
-                            v = q.amp * exp(-q.shape * d2);
+                            v = q.amp * exp_cpu(-q.shape * d2);
                             g = -2.0 * q.shape * v;
                         } else {
                             let qq = sqrt(d2) * q.shape;
@@ -179,7 +214,7 @@ fn field(p: vec3<f32>) -> Field {
                 }
             } else {
                 // The left child next, the right one later.
-                if (sp < 32u) {
+                if (sp < 128u) {
                     stack[sp] = i + nd.index;
                     sp++;
                 }
@@ -223,7 +258,8 @@ fn shade(g: vec3<f32>) -> f32 {
 // column of 64 on software rasterisers (Mesa's lavapipe 22.3 returned
 // wrong sums — whole SIMD rows took the same number of samples — when a
 // row of pixels shared SIMD lanes; a column is right, tested bit for bit
-// against the CPU).
+// against the CPU). Open: on lavapipe some long rays still end their walk
+// early in other views (docs/architecture.md, "An open discrepancy").
 override WX: u32 = 8u;
 override WY: u32 = 8u;
 
@@ -245,14 +281,18 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     var color = vec3<f32>(0.0);
     var alpha = 0.0;
-    var going = true;
-    for (var k = 0u; k < cells && going; k++) {
+    var k = 0u;
+    loop {
+        if (k >= cells) {
+            break;
+        }
         let b0 = max(t0 + f32(k) * dt, lo);
         let b1 = min(t0 + f32(k + 1u) * dt, hi);
+        k++;
         if (b0 >= hi) {
-            going = false;
+            break;
         }
-        if (going && b1 > b0) {
+        if (b1 > b0) {
             let len = b1 - b0;
             let m = b0 + 0.5 * len;
             let f = field(o + dir * m);
@@ -273,11 +313,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                     }
                 }
                 if (co.a > 0.0) {
-                    let a = 1.0 - exp(-co.a * P.opacity_scale * len);
+                    let a = 1.0 - exp_cpu(-co.a * P.opacity_scale * len);
                     if (P.light_on != 0u) { c = c * shade(f.grad); }
                     color += c * ((1.0 - alpha) * a);
                     alpha += (1.0 - alpha) * a;
-                    going = alpha < P.early;
+                    if (alpha >= P.early) {
+                        break;
+                    }
                 }
             }
         }
