@@ -164,8 +164,10 @@ pub struct Inner {
     march: std::sync::OnceLock<wgpu::ComputePipeline>,
     /// Set by the device-lost callback.
     lost: std::sync::Arc<Mutex<Option<String>>>,
-    /// The render's workgroup shape (see `march.wgsl`).
+    /// The render's workgroup shape and per-dispatch loop budget (see
+    /// `march.wgsl`).
     march_shape: [u32; 2],
+    march_budget: u32,
     /// Bytes of the buffers the last render held (see
     /// [`Inner::last_render_bytes`]).
     last_bytes: std::sync::atomic::AtomicU64,
@@ -213,6 +215,9 @@ impl Gpu {
                 march: Default::default(),
                 lost,
                 march_shape: if software { [1, 64] } else { [8, 8] },
+                // Mesa's limit of 65,535 loop iterations per SIMD group of
+                // eight, with a margin for one sample's walk.
+                march_budget: if software { 6144 } else { 262_144 },
                 last_bytes: Default::default(),
             }),
         })

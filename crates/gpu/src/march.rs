@@ -99,7 +99,7 @@ impl Gpu {
             return Err(GpuError::Unsupported(what));
         }
         let up = self.upload(volume, tf, settings)?;
-        let pass_bytes = 64 * settings.width as u64 * settings.height as u64;
+        let pass_bytes = 68 * settings.width as u64 * settings.height as u64;
         let held = [&up.particles, &up.attr, &up.nodes, &up.lut]
             .iter()
             .map(|b| b.size())
@@ -194,7 +194,9 @@ impl Gpu {
         })
     }
 
-    /// One pass over `rays` (one per pixel, row-major).
+    /// One pass over `rays` (one per pixel, row-major): dispatches of a
+    /// bounded amount of work each (see `march.wgsl`, BUDGET) until every
+    /// ray is done.
     fn pass(&self, up: &Uploaded, rays: &[LatticeRay]) -> Result<Vec<[f32; 4]>, GpuError> {
         let words: Vec<[f32; 12]> = rays
             .iter()
@@ -215,27 +217,56 @@ impl Gpu {
                 ]
             })
             .collect();
+        let n = rays.len() as u64;
         let rays_buf = self.storage("the rays", &words, false)?;
-        let out = self.zeroed("the image", 16 * rays.len() as u64)?;
+        let out = self.zeroed("the image", 16 * n)?;
+        let next = self.zeroed("the rays' progress", 4 * n)?;
+        let pending = self.zeroed("the count of unfinished rays", 4)?;
         let params = self.uniform("render parameters", &up.params);
         let [wx, wy] = self.march_shape;
-        let shape = [("WX", wx as f64), ("WY", wy as f64)];
+        let shape = [
+            ("WX", wx as f64),
+            ("WY", wy as f64),
+            ("BUDGET", self.march_budget as f64),
+        ];
         let pipeline =
             self.pipeline_in(&self.march, "march", include_str!("march.wgsl"), &shape)?;
         let (w, h) = (up.params.width, up.params.height);
-        self.run::<[f32; 4]>(
-            pipeline,
-            &[
-                &params,
-                &rays_buf,
-                &up.particles,
-                &up.attr,
-                &up.nodes,
-                &up.lut,
-                &out,
-            ],
-            [w.div_ceil(wx), h.div_ceil(wy), 1],
-            Some((&out, rays.len())),
-        )
+        let bind = [
+            &params,
+            &rays_buf,
+            &up.particles,
+            &up.attr,
+            &up.nodes,
+            &up.lut,
+            &out,
+            &next,
+            &pending,
+        ];
+        // Every dispatch moves each unfinished ray on by at least one
+        // cell, so the rays' cells bound the dispatches.
+        let most = rays.iter().map(cells).max().unwrap_or(0) + 2;
+        for _ in 0..most {
+            self.queue.write_buffer(&pending, 0, &[0; 4]);
+            let left = self.run::<u32>(
+                pipeline,
+                &bind,
+                [w.div_ceil(wx), h.div_ceil(wy), 1],
+                Some((&pending, 1)),
+            )?;
+            if left.first().copied().unwrap_or(0) == 0 {
+                return self.run::<[f32; 4]>(pipeline, &bind, [0, 0, 0], Some((&out, rays.len())));
+            }
+        }
+        Err(self.failed("the march did not finish (a ray never advanced)"))
+    }
+}
+
+/// The lattice cells of `r` (as the shader bounds them).
+fn cells(r: &LatticeRay) -> u64 {
+    if r.lo < r.hi && r.dt > 0.0 {
+        ((r.hi - r.t0) / r.dt + 2.0).min(1e8) as u64
+    } else {
+        0
     }
 }

@@ -52,6 +52,24 @@ struct Node {
 @group(0) @binding(4) var<storage, read> nodes: array<Node>;
 @group(0) @binding(5) var<storage, read> lut: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> out: array<vec4<f32>>;
+// Per pixel: the next lattice cell to walk, or DONE.
+@group(0) @binding(7) var<storage, read_write> next_cell: array<u32>;
+// How many rays stopped for want of budget (the host dispatches again).
+@group(0) @binding(8) var<storage, read_write> pending: atomic<u32>;
+
+const DONE: u32 = 0xffffffffu;
+
+// Loop iterations this invocation has run (every loop counts: the march,
+// the BVH walk, a leaf's particles). Mesa's llvmpipe/lavapipe ends every
+// loop of an invocation once 65,535 iterations in all have run (one
+// limiter per shader function, not per loop), which cut long dense rays
+// short (the limiter is shared by a SIMD group of eight invocations, so the
+// budget there is an eighth of it); so an invocation stops at BUDGET,
+// saves where its ray is, and the next dispatch goes on from there. On
+// hardware GPUs the same split keeps each dispatch short (no driver
+// watchdog). Set per adapter (march.rs).
+var<private> work: u32 = 0u;
+override BUDGET: u32 = 262144u;
 
 
 fn tp(k: f32, q: f32) -> f32 {
@@ -179,6 +197,7 @@ fn field(p: vec3<f32>) -> Field {
     var i = 0u;
     var more = P.n_nodes > 0u;
     while (more) {
+        work++;
         let nd = nodes[i];
         var pop = true;
         if (contains(nd, p)) {
@@ -186,6 +205,7 @@ fn field(p: vec3<f32>) -> Field {
                 let first = nd.index * P.cluster;
                 let end = min(first + P.cluster, P.n_particles);
                 for (var j = first; j < end; j++) {
+                    work++;
                     let q = particles[j];
                     let d = p - vec3<f32>(q.x, q.y, q.z);
                     let d2 = dot(d, d);
@@ -255,11 +275,9 @@ fn shade(g: vec3<f32>) -> f32 {
 }
 
 // The workgroup's shape, set per adapter (march.rs): 8×8 on GPUs; one
-// column of 64 on software rasterisers (Mesa's lavapipe 22.3 returned
-// wrong sums — whole SIMD rows took the same number of samples — when a
-// row of pixels shared SIMD lanes; a column is right, tested bit for bit
-// against the CPU). Open: on lavapipe some long rays still end their walk
-// early in other views (docs/architecture.md, "An open discrepancy").
+// column of 64 on software rasterisers (lavapipe's vectorised rows of
+// pixels differ from the CPU in the last bits; a column is the CPU's bit
+// for bit in the tests).
 override WX: u32 = 8u;
 override WY: u32 = 8u;
 
@@ -267,6 +285,8 @@ override WY: u32 = 8u;
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (id.x >= P.width || id.y >= P.height) { return; }
     let at = id.y * P.width + id.x;
+    var k = next_cell[at];
+    if (k == DONE) { return; }
     let ray = rays[at];
     let t0 = ray.o.w;
     let dt = ray.d.w;
@@ -279,13 +299,21 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (lo < hi && dt > 0.0) {
         cells = u32(min((hi - t0) / dt + 2.0, 1.0e8));
     }
-    var color = vec3<f32>(0.0);
-    var alpha = 0.0;
-    var k = 0u;
+    // Where the previous dispatch left the ray (zero at the start).
+    let held = out[at];
+    var color = held.rgb;
+    var alpha = held.a;
+    var done = true;
     loop {
         if (k >= cells) {
             break;
         }
+        if (work >= BUDGET) {
+            // Out of budget: the next dispatch goes on from cell k.
+            done = false;
+            break;
+        }
+        work++;
         let b0 = max(t0 + f32(k) * dt, lo);
         let b1 = min(t0 + f32(k + 1u) * dt, hi);
         k++;
@@ -325,4 +353,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     out[at] = vec4<f32>(color, alpha);
+    if (done) {
+        next_cell[at] = DONE;
+    } else {
+        next_cell[at] = k;
+        atomicAdd(&pending, 1u);
+    }
 }

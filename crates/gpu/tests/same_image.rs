@@ -292,3 +292,36 @@ fn a_buffer_beyond_the_adapter_limit_is_refused_naming_the_limit() {
     let m = e.to_string();
     assert!(m.contains("max_storage_buffer_binding_size"), "{m}");
 }
+
+/// Rays that take more loop iterations than Mesa's llvmpipe lets one shader
+/// invocation run (65,535 over all its loops): dense, overlapping particles
+/// and a fine step. The march stops at a budget and is dispatched again,
+/// so no ray is cut short (on lavapipe they were: whole rays lost a
+/// quarter of their optical depth).
+#[test]
+fn rays_longer_than_a_software_loop_limit_are_not_cut_short() {
+    let Some(gpu) = gpu() else { return };
+    let mut r = Lcg(9);
+    let n = 6000;
+    let positions: Vec<Vec3> = (0..n)
+        .map(|_| Vec3::new(r.f(), r.f(), r.f()) * 0.5)
+        .collect();
+    let d = ParticleData {
+        radii: Some(vec![0.12; n]),
+        weights: None,
+        attribute: Some(positions.iter().map(|p| p.x + p.y).collect()),
+        positions,
+    };
+    let settings = ParticleSettings {
+        kernel: Kernel::CubicSpline,
+        ..Default::default()
+    };
+    let v = ParticleVolume::new(d, settings).unwrap();
+    let tf = TransferFunction::default_for_density();
+    let mut s = RenderSettings::for_volume(&v, 24, 16);
+    s.sampling_rate = 4.0;
+    // Light enough that no ray stops early: every ray walks its whole span.
+    s.opacity_scale *= 0.2;
+    let diff = render_diff(&gpu, &v, &tf, &s);
+    assert!(diff <= 1, "{diff}/255");
+}
