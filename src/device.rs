@@ -192,17 +192,16 @@ impl Device {
 
     /// Renders `volume` with `view` (all `spp` passes) on this device into
     /// a film; `notes` gets what a front-end should say (the CPU standing
-    /// in).
+    /// in). The outer error is the device's; the inner, a cancelled render.
     pub fn render_film(
         &self,
         volume: &AnyVolume,
         view: &Resolved,
         control: &Control,
         notes: &mut Vec<String>,
-    ) -> Result<Film, SceneError> {
+    ) -> Result<Result<Film, Cancelled>, SceneError> {
         let (camera, tf, settings) = (&view.camera, &view.tf, &view.settings);
-        self.render_passes(volume, camera, tf, settings, control, notes, &mut |_| true)?
-            .map_err(|_| SceneError::setting("render", "cancelled"))
+        self.render_passes(volume, camera, tf, settings, control, notes, &mut |_| true)
     }
 
     /// Renders pass by pass on this device: after each pass `on_pass(&film)`
@@ -297,7 +296,8 @@ impl Device {
 }
 
 /// A particle volume's projection with its splats summed on `device`
-/// (`None`: not a splatted projection, take the volume's own path).
+/// (`None`: not a splatted projection, take the volume's own path); the
+/// outer error is the device's, the inner a cancelled projection.
 pub(crate) fn project_particles(
     volume: &AnyVolume,
     camera: &voxless_core::Camera,
@@ -305,11 +305,16 @@ pub(crate) fn project_particles(
     pixels: Option<PixelIntegral>,
     device: &Device,
     control: &Control,
-) -> Option<Result<Vec<f32>, SceneError>> {
+) -> Option<Result<Result<Vec<f32>, Cancelled>, SceneError>> {
     let (AnyVolume::Particles(v), Some(d)) = (volume, device.splat_device()) else {
         return None;
     };
     let pixels = pixels.unwrap_or(v.settings().pixels);
-    let r = v.project_on(camera, w, h, pixels, Some(d), control)?;
-    Some(r.map_err(|e| SceneError::setting("device", e.to_string())))
+    Some(
+        match v.project_on(camera, w, h, pixels, Some(d), control)? {
+            Ok(image) => Ok(Ok(image)),
+            Err(voxless_particles::ParticleError::Cancelled) => Ok(Err(Cancelled)),
+            Err(e) => Err(SceneError::setting("device", e.to_string())),
+        },
+    )
 }

@@ -378,7 +378,7 @@ impl<'c> Placed<'c> {
         match self {
             Placed::Process(s) => {
                 let t = std::time::Instant::now();
-                let film = device.render_film(&s.volume, &s.view, control, notes)?;
+                let film = device.render_film(&s.volume, &s.view, control, notes)??;
                 timings.render += t.elapsed().as_secs_f64();
                 Ok(Some(Rendered {
                     image: film.resolve(),
@@ -621,7 +621,7 @@ impl PlacedData<'_> {
                 let view = ProjectionView::new(projection, &l.volume.bounds(), &l.frame)?;
                 view.check(&l.volume)?;
                 let column =
-                    view.project_on(&l.volume, width, height, None, device, control, notes)?;
+                    view.project_on(&l.volume, width, height, None, device, control, notes)??;
                 Ok((view, Some(column)))
             }
             PlacedData::Ranks(c, p) => {

@@ -484,7 +484,8 @@ impl ProjectionView {
 
     /// [`ProjectionView::project_pixels`] with particle splats summed on
     /// `device` where it can (see [`crate::device::Device::check_projection`]);
-    /// what a front-end should say goes to `notes`.
+    /// what a front-end should say goes to `notes`. The outer error is the
+    /// device's; the inner, a cancelled projection.
     #[allow(clippy::too_many_arguments)]
     pub fn project_on(
         &self,
@@ -495,7 +496,7 @@ impl ProjectionView {
         device: &crate::device::Device,
         control: &Control,
         notes: &mut Vec<String>,
-    ) -> Result<Vec<f32>, SceneError> {
+    ) -> Result<Result<Vec<f32>, Cancelled>, SceneError> {
         let orthographic = matches!(
             self.camera.projection,
             voxless_core::Projection::Orthographic { .. }
@@ -518,10 +519,9 @@ impl ProjectionView {
                 control,
             )
         {
-            return Ok(self.in_world_units(r?));
+            return Ok(r?.map(|local| self.in_world_units(local)));
         }
-        self.project_pixels(volume, w, h, pixels, control)
-            .map_err(|_| SceneError::setting("project", "cancelled"))
+        Ok(self.project_pixels(volume, w, h, pixels, control))
     }
 
     /// Local column densities in world units (× the frame's scale).

@@ -447,7 +447,7 @@ impl Volume {
             }
             r.notes.extend(device_note);
             let mut notes = Vec::new();
-            let film = device.render_film(held.volume(), &r, control, &mut notes)?;
+            let film = device.render_film(held.volume(), &r, control, &mut notes)??;
             r.notes.extend(notes);
             let image = film.resolve();
             let bounds = held.frame().box_to_world(held.volume().bounds());
@@ -519,7 +519,7 @@ impl Volume {
             view.check(held.volume())?;
             let mut notes: Vec<String> = device_note.into_iter().collect();
             let column =
-                view.project_on(held.volume(), w, h, rule, &device, control, &mut notes)?;
+                view.project_on(held.volume(), w, h, rule, &device, control, &mut notes)??;
             Ok((column, view, w, h, notes))
         })?;
         let (column, view, w, h, notes) = done.map_err(|f| raise(py, f))?;

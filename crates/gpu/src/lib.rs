@@ -265,28 +265,23 @@ impl Inner {
         Ok(())
     }
 
-    /// A storage buffer holding `data` (at least 4 bytes: bindings may
-    /// not be empty).
+    /// A read-only storage buffer holding `data` (bindings may not be
+    /// empty: an empty slice gets 16 zero bytes).
     fn storage<T: bytemuck::Pod>(
         &self,
         what: &'static str,
         data: &[T],
-        writable: bool,
     ) -> Result<wgpu::Buffer, GpuError> {
         use wgpu::util::DeviceExt;
         let bytes: &[u8] = bytemuck::cast_slice(data);
         self.check_size(what, bytes.len() as u64)?;
-        let mut usage = wgpu::BufferUsages::STORAGE;
-        if writable {
-            usage |= wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        }
         let contents: &[u8] = if bytes.is_empty() { &[0; 16] } else { bytes };
         Ok(self
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(what),
                 contents,
-                usage,
+                usage: wgpu::BufferUsages::STORAGE,
             }))
     }
 
@@ -366,17 +361,14 @@ impl Inner {
     }
 
     /// Runs `pipeline` over `groups` workgroups with `buffers` bound in
-    /// order, then reads the first `len` elements of `T` of `out` back
-    /// (none: nothing read, the result stays on the device); errors on a
-    /// validation error, a lost device or a timeout.
-    fn run<T: bytemuck::Pod>(
+    /// order (queued: [`Inner::read`] waits for it); errors on a
+    /// validation error.
+    fn run(
         &self,
         pipeline: &wgpu::ComputePipeline,
         buffers: &[&wgpu::Buffer],
         groups: [u32; 3],
-        out: Option<(&wgpu::Buffer, usize)>,
-    ) -> Result<Vec<T>, GpuError> {
-        let len = out.map_or(0, |o| o.1);
+    ) -> Result<(), GpuError> {
         let max = self.limits.max_compute_workgroups_per_dimension;
         if groups.iter().any(|&g| g > max) {
             return Err(GpuError::TooManyGroups {
@@ -400,6 +392,42 @@ impl Inner {
             layout: &layout,
             entries: &entries,
         });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
+        }
+        self.queue.submit([encoder.finish()]);
+        match pollster::block_on(scope.pop()) {
+            Some(e) => Err(self.failed(e.to_string())),
+            None => Ok(()),
+        }
+    }
+
+    /// Waits for the work queued so far; errors on a lost device or a
+    /// timeout.
+    fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: Some(TIMEOUT),
+            })
+            .map_err(|e| self.failed(format!("waiting for the GPU: {e}")))?;
+        match self.lost.lock().ok().and_then(|l| l.clone()) {
+            Some(lost) => Err(self.failed(lost)),
+            None => Ok(()),
+        }
+    }
+
+    /// The first `len` elements of `T` of `buffer`, once the work queued
+    /// before is done; errors on a lost device or a timeout.
+    fn read<T: bytemuck::Pod>(
+        &self,
+        buffer: &wgpu::Buffer,
+        len: usize,
+    ) -> Result<Vec<T>, GpuError> {
         let bytes = (len * std::mem::size_of::<T>()) as u64;
         let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
@@ -408,36 +436,15 @@ impl Inner {
             mapped_at_creation: false,
         });
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            if groups.iter().all(|&g| g > 0) {
-                pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
-            }
-        }
-        if let Some((out, _)) = out
-            && bytes > 0
-        {
-            encoder.copy_buffer_to_buffer(out, 0, &readback, 0, bytes);
+        if bytes > 0 {
+            encoder.copy_buffer_to_buffer(buffer, 0, &readback, 0, bytes);
         }
         self.queue.submit([encoder.finish()]);
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(self.failed(e.to_string()));
-        }
         let (tx, rx) = std::sync::mpsc::channel();
         readback.slice(..).map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
         });
-        self.device
-            .poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: Some(TIMEOUT),
-            })
-            .map_err(|e| self.failed(format!("waiting for the GPU: {e}")))?;
-        if let Some(lost) = self.lost.lock().ok().and_then(|l| l.clone()) {
-            return Err(self.failed(lost));
-        }
+        self.wait()?;
         match rx.recv_timeout(Duration::from_secs(5)) {
             Ok(Ok(())) => {}
             Ok(Err(e)) => return Err(self.failed(format!("reading the result: {e}"))),

@@ -185,10 +185,10 @@ impl Gpu {
             knots: knots.len() as u32,
         };
         Ok(Uploaded {
-            particles: self.storage("the particles", &d.packed, false)?,
-            attr: self.storage("the particle attribute", &attr, false)?,
-            nodes: self.storage("the BVH", &nodes, false)?,
-            lut: self.storage("the transfer function", &knots, false)?,
+            particles: self.storage("the particles", &d.packed)?,
+            attr: self.storage("the particle attribute", &attr)?,
+            nodes: self.storage("the BVH", &nodes)?,
+            lut: self.storage("the transfer function", &knots)?,
             params,
             nominal_dt: d.nominal_dt,
         })
@@ -218,7 +218,7 @@ impl Gpu {
             })
             .collect();
         let n = rays.len() as u64;
-        let rays_buf = self.storage("the rays", &words, false)?;
+        let rays_buf = self.storage("the rays", &words)?;
         let out = self.zeroed("the image", 16 * n)?;
         let next = self.zeroed("the rays' progress", 4 * n)?;
         let pending = self.zeroed("the count of unfinished rays", 4)?;
@@ -248,14 +248,10 @@ impl Gpu {
         let most = rays.iter().map(cells).max().unwrap_or(0) + 2;
         for _ in 0..most {
             self.queue.write_buffer(&pending, 0, &[0; 4]);
-            let left = self.run::<u32>(
-                pipeline,
-                &bind,
-                [w.div_ceil(wx), h.div_ceil(wy), 1],
-                Some((&pending, 1)),
-            )?;
+            self.run(pipeline, &bind, [w.div_ceil(wx), h.div_ceil(wy), 1])?;
+            let left = self.read::<u32>(&pending, 1)?;
             if left.first().copied().unwrap_or(0) == 0 {
-                return self.run::<[f32; 4]>(pipeline, &bind, [0, 0, 0], Some((&out, rays.len())));
+                return self.read::<[f32; 4]>(&out, rays.len());
             }
         }
         Err(self.failed("the march did not finish (a ray never advanced)"))

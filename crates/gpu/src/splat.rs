@@ -63,7 +63,7 @@ impl SplatDevice for Gpu {
             .map_err(device_error)?;
         let table = kernel.sph_table().unwrap_or(&[0.0, 0.0]);
         let table = self
-            .storage("the column table", table, false)
+            .storage("the column table", table)
             .map_err(device_error)?;
         Ok(Box::new(GpuImage {
             gpu: self.clone(),
@@ -99,10 +99,11 @@ impl DeviceImage for GpuImage {
         let (start, members) = bin(splats, tiles_x, tiles_y);
         let gpu = &self.gpu;
         let run = || -> Result<(), GpuError> {
+            gpu.wait()?;
             let words: Vec<[u32; 16]> = splats.iter().map(words).collect();
-            let splats = gpu.storage("the splats", &words, false)?;
-            let start = gpu.storage("the tile lists", &start, false)?;
-            let members = gpu.storage("the tile lists", &members, false)?;
+            let splats = gpu.storage("the splats", &words)?;
+            let start = gpu.storage("the tile lists", &start)?;
+            let members = gpu.storage("the tile lists", &members)?;
             let params = gpu.uniform(
                 "splat parameters",
                 &Params {
@@ -115,51 +116,21 @@ impl DeviceImage for GpuImage {
                 },
             );
             let pipeline = gpu.pipeline_in(&gpu.splat, "splat", include_str!("splat.wgsl"), &[])?;
-            gpu.run::<f32>(
+            // Queued: this chunk's sums run while the CPU places the next
+            // one, which waits for them first (one chunk's buffers in
+            // flight: the stream's memory stays bounded).
+            gpu.run(
                 pipeline,
                 &[&params, &splats, &start, &members, &self.table, &self.image],
                 [tiles_x, tiles_y, 1],
-                None,
-            )?;
-            Ok(())
+            )
         };
         run().map_err(device_error)
     }
 
     fn finish(self: Box<Self>) -> Result<Vec<f32>, ParticleError> {
         let pixels = self.width as usize * self.height as usize;
-        // An empty dispatch that reads the image back.
-        let pipeline = self
-            .gpu
-            .pipeline_in(&self.gpu.splat, "splat", include_str!("splat.wgsl"), &[])
-            .map_err(device_error)?;
-        let empty = self
-            .gpu
-            .storage("the splats", &[[0u32; 16]], false)
-            .map_err(device_error)?;
-        let none = self
-            .gpu
-            .storage("the tile lists", &[0u32, 0], false)
-            .map_err(device_error)?;
-        let params = self.gpu.uniform(
-            "splat parameters",
-            &Params {
-                width: self.width,
-                height: self.height,
-                tiles_x: 1,
-                sph: 0,
-                last: 0.0,
-                _pad: [0; 3],
-            },
-        );
-        self.gpu
-            .run::<f32>(
-                pipeline,
-                &[&params, &empty, &none, &none, &self.table, &self.image],
-                [0, 0, 0],
-                Some((&self.image, pixels)),
-            )
-            .map_err(device_error)
+        self.gpu.read(&self.image, pixels).map_err(device_error)
     }
 }
 

@@ -6,7 +6,9 @@
 //! there is none, unless `VOXLESS_REQUIRE_GPU=1` (CI, on lavapipe).
 
 use voxless_core::testing::prerequisite;
-use voxless_core::{Aabb, Camera, Control, PixelIntegral, Projection, Range1, Vec3, Volume};
+use voxless_core::{
+    Aabb, Camera, Control, PixelIntegral, Projection, Range1, SmallRng, Vec3, Volume,
+};
 use voxless_gpu::Gpu;
 use voxless_particles::splat::{SplatParticle, Splatter};
 use voxless_particles::{Classification, Kernel, ParticleData, ParticleSettings, ParticleVolume};
@@ -22,21 +24,9 @@ fn gpu() -> Option<Gpu> {
     prerequisite(g.is_ok(), "VOXLESS_REQUIRE_GPU", &what).then(|| g.unwrap())
 }
 
-/// A small deterministic generator.
-struct Lcg(u64);
-impl Lcg {
-    fn f(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
-
 /// A clumpy blob of particles with radii, weights and an attribute.
 fn data(n: usize) -> ParticleData {
-    let mut r = Lcg(3);
+    let mut r = SmallRng(3);
     let mut positions = Vec::new();
     for i in 0..n {
         // Two clumps and a sheet.
@@ -301,7 +291,7 @@ fn a_buffer_beyond_the_adapter_limit_is_refused_naming_the_limit() {
 #[test]
 fn rays_longer_than_a_software_loop_limit_are_not_cut_short() {
     let Some(gpu) = gpu() else { return };
-    let mut r = Lcg(9);
+    let mut r = SmallRng(9);
     let n = 6000;
     let positions: Vec<Vec3> = (0..n)
         .map(|_| Vec3::new(r.f(), r.f(), r.f()) * 0.5)

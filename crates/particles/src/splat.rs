@@ -232,7 +232,11 @@ impl Splatter {
                 .extend(self.splats.iter().filter(|p| !p.clip && !p.area).map(plain));
             device.add(&self.plain)?;
         }
-        let lists = Bands::bin(&self.splats, self.height);
+        // On a device the CPU sums only what it keeps (pixel areas,
+        // clipped images), so only those are binned.
+        let lists = Bands::bin(&self.splats, self.height, |p| {
+            !on_device || p.clip || p.area
+        });
         let w = self.width as usize;
         let (camera, mode, kernel) = (&self.camera, self.mode, self.kernel);
         let (width, height) = (self.width, self.height);
@@ -502,11 +506,12 @@ struct Bands {
 }
 
 impl Bands {
-    fn bin(splats: &[Splat], height: u32) -> Bands {
+    /// The splats `keep` accepts, binned.
+    fn bin(splats: &[Splat], height: u32, keep: impl Fn(&Splat) -> bool) -> Bands {
         let bands = height.div_ceil(BAND) as usize;
         let range = |s: &Splat| (s.rows.0 / BAND) as usize..=((s.rows.1 - 1) / BAND) as usize;
         let mut start = vec![0u32; bands + 1];
-        for s in splats {
+        for s in splats.iter().filter(|s| keep(s)) {
             for t in range(s) {
                 start[t + 1] += 1;
             }
@@ -516,7 +521,7 @@ impl Bands {
         }
         let mut fill = start.clone();
         let mut members = vec![0u32; start[bands] as usize];
-        for (i, s) in splats.iter().enumerate() {
+        for (i, s) in splats.iter().enumerate().filter(|(_, s)| keep(s)) {
             for t in range(s) {
                 members[fill[t] as usize] = i as u32;
                 fill[t] += 1;

@@ -7,6 +7,7 @@
 //! (module `march`): the CPU skips only cells whose midpoint lies in no
 //! visible interval, where the transfer function's opacity is zero.
 
+use rayon::prelude::*;
 use voxless_core::{Camera, Interval, Range1, Volume};
 
 use crate::cursor::step_in;
@@ -65,37 +66,38 @@ pub fn lattice_rays<V: Volume>(
 ) -> Vec<LatticeRay> {
     let region = region(volume, settings);
     let (w, h) = (settings.width, settings.height);
-    let mut out = Vec::with_capacity(w as usize * h as usize);
-    for y in 0..h {
-        for x in 0..w {
-            let (rng, ray) = pixel_ray(camera, settings, x, y, sample);
-            let spans = RaySpans::new(&region, settings, &ray, f32::INFINITY);
-            let span = spans.cells;
-            let mut r = LatticeRay {
-                origin: ray.origin.to_array(),
-                dir: ray.dir.to_array(),
-                lo: 1.0,
-                hi: 0.0,
-                ..LatticeRay::default()
-            };
-            if !span.is_empty() {
-                // The step of one interval over the whole span (the CPU's
-                // guards against steps below f32's resolution use the
-                // interval's own ends; they act only where the settings'
-                // step is below what f32 resolves along the ray).
-                let whole = Interval::sampled(span, Range1::new(0.0, 0.0), nominal_dt);
-                let dt = step_in(&whole, settings);
-                // The cursor's lattice (module `cursor`): boundaries at
-                // (n + ξ)·dt, the walk starting one cell before the span.
-                let xi = rng.uniform(2) as f64;
-                let n = ((span.lo as f64 / dt as f64 - xi).floor() as i64).saturating_sub(1);
-                r.t0 = ((n as f64 + xi) * dt as f64) as f32;
-                r.dt = dt;
-                r.lo = span.lo;
-                r.hi = span.hi;
-            }
-            out.push(r);
+    let ray_at = |x: u32, y: u32| {
+        let (rng, ray) = pixel_ray(camera, settings, x, y, sample);
+        let spans = RaySpans::new(&region, settings, &ray, f32::INFINITY);
+        let span = spans.cells;
+        let mut r = LatticeRay {
+            origin: ray.origin.to_array(),
+            dir: ray.dir.to_array(),
+            lo: 1.0,
+            hi: 0.0,
+            ..LatticeRay::default()
+        };
+        if !span.is_empty() {
+            // The step of one interval over the whole span (the CPU's
+            // guards against steps below f32's resolution use the
+            // interval's own ends; they act only where the settings'
+            // step is below what f32 resolves along the ray).
+            let whole = Interval::sampled(span, Range1::new(0.0, 0.0), nominal_dt);
+            let dt = step_in(&whole, settings);
+            // The cursor's lattice (module `cursor`): boundaries at
+            // (n + ξ)·dt, the walk starting one cell before the span.
+            let xi = rng.uniform(2) as f64;
+            let n = ((span.lo as f64 / dt as f64 - xi).floor() as i64).saturating_sub(1);
+            r.t0 = ((n as f64 + xi) * dt as f64) as f32;
+            r.dt = dt;
+            r.lo = span.lo;
+            r.hi = span.hi;
         }
-    }
-    out
+        r
+    };
+    // Rows in parallel, each in order: row-major.
+    (0..h)
+        .into_par_iter()
+        .flat_map_iter(|y| (0..w).map(move |x| ray_at(x, y)))
+        .collect()
 }

@@ -589,6 +589,7 @@ pub fn frame_png(
     let film = app
         .device
         .render_film(&loaded.volume, &resolved, &control, &mut Vec::new())
+        .map_err(|e| e.to_string())?
         .map_err(|e| e.to_string())?;
     let image = film.resolve();
     let bounds = loaded.frame.box_to_world(loaded.volume.bounds());
