@@ -23,6 +23,8 @@
 
 use std::path::Path;
 
+use rayon::prelude::*;
+
 use voxless_core::{Aabb, Control};
 use voxless_particles::check_data;
 use voxless_particles::splat::{CHUNK, SplatParticle, Splatter};
@@ -116,22 +118,44 @@ pub fn project_on(
     let kernel = load::kernel_of(p, p.kernel.unwrap_or(voxless_scene::KernelName::Gaussian3));
     let boxed = periodic::resolve_box(p, None)?;
 
-    // Pass 1: the world reach (the frame), the span and the wrap count.
+    // Pass 1: the world reach (the frame), the span and the wrap count,
+    // the chunks read on every core and combined in order.
     let mut span = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     let mut reach: Option<([f64; 3], [f64; 3])> = None;
     let mut wrapped = 0;
-    for k in 0..chunks {
-        let fd = read(k)?;
-        for q in &fd.positions {
-            periodic::extend_span(&mut span, q);
+    let scans = (0..chunks)
+        .into_par_iter()
+        .map(|k| -> Result<Scan, SceneError> {
+            let fd = read(k)?;
+            let mut span = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+            for q in &fd.positions {
+                periodic::extend_span(&mut span, q);
+            }
+            let (mut wrapped, mut reach) = (0, None);
+            if let Some((b, _)) = &boxed {
+                wrapped = fd
+                    .positions
+                    .iter()
+                    .filter(|q| q.iter().all(|v| v.is_finite()) && !b.contains(**q))
+                    .count();
+            } else {
+                reach = fd.world_reach(p);
+            }
+            Ok(Scan {
+                span,
+                wrapped,
+                reach,
+            })
+        })
+        .collect::<Vec<_>>();
+    for scan in scans {
+        let scan = scan?;
+        for a in 0..3 {
+            span.0[a] = span.0[a].min(scan.span.0[a]);
+            span.1[a] = span.1[a].max(scan.span.1[a]);
         }
-        if let Some((b, _)) = &boxed {
-            wrapped += fd
-                .positions
-                .iter()
-                .filter(|q| q.iter().all(|v| v.is_finite()) && !b.contains(**q))
-                .count();
-        } else if let Some((lo, hi)) = fd.world_reach(p) {
+        wrapped += scan.wrapped;
+        if let Some((lo, hi)) = scan.reach {
             reach = Some(match reach {
                 None => (lo, hi),
                 Some((a, b)) => (
@@ -202,14 +226,21 @@ pub fn project_on(
     let bounds = match local_box {
         Some(b) => b,
         None => {
-            let mut b = Aabb::EMPTY;
             let factor = kernel.support_factor();
-            for k in 0..chunks {
-                let c = prepare(k)?;
-                for q in c.particles.iter().filter(|q| q.radius > 0.0) {
-                    let s = factor * q.radius;
-                    b = b.union(Aabb::around(q.center, (s * s).sqrt()));
-                }
+            let parts = (0..chunks)
+                .into_par_iter()
+                .map(|k| -> Result<Aabb, SceneError> {
+                    let mut b = Aabb::EMPTY;
+                    for q in prepare(k)?.particles.iter().filter(|q| q.radius > 0.0) {
+                        let s = factor * q.radius;
+                        b = b.union(Aabb::around(q.center, (s * s).sqrt()));
+                    }
+                    Ok(b)
+                })
+                .collect::<Vec<_>>();
+            let mut b = Aabb::EMPTY;
+            for part in parts {
+                b = b.union(part?);
             }
             b
         }
@@ -225,27 +256,51 @@ pub fn project_on(
             .map_err(|e| SceneError::setting("device", e.to_string()))?;
     }
 
-    // Pass 3: splat chunk by chunk.
+    // Pass 3: splat chunk by chunk, in file order (the image's bits depend
+    // on it). A group of chunks (one a core) is prepared on every core
+    // while the group before it is splatted, so reading and converting
+    // overlap the splatting; two groups are held at most.
+    let group = rayon::current_num_threads().max(1);
+    let prepare_group = |k0: usize| -> Vec<Result<Prepared, SceneError>> {
+        (k0..(k0 + group).min(chunks))
+            .into_par_iter()
+            .map(prepare)
+            .collect()
+    };
     let mut mass = 0.0;
-    for k in 0..chunks {
-        let c = prepare(k)?;
-        mass += c
-            .particles
-            .iter()
-            .filter(|q| q.radius > 0.0)
-            .map(|q| q.weight as f64 * kernel.integral(q.radius as f64))
-            .sum::<f64>();
-        splatter.add(&c.particles, c.offset, control).map_err(|e| {
-            let field = match e {
-                voxless_particles::ParticleError::Device(_) => "device",
-                _ => "particles.radius",
-            };
-            SceneError::setting(field, e.to_string())
-        })?;
-        if control.is_cancelled() {
-            return Err(SceneError::setting("project", "cancelled"));
-        }
-        control.report(k as u64 + 1, chunks as u64);
+    let mut next = Some(prepare_group(0));
+    let mut k0 = 0;
+    while let Some(current) = next.take() {
+        let k1 = k0 + current.len();
+        let (ahead, added) = rayon::join(
+            || (k1 < chunks && !control.is_cancelled()).then(|| prepare_group(k1)),
+            || -> Result<(), SceneError> {
+                for (k, c) in (k0..).zip(current) {
+                    let c = c?;
+                    mass += c
+                        .particles
+                        .iter()
+                        .filter(|q| q.radius > 0.0)
+                        .map(|q| q.weight as f64 * kernel.integral(q.radius as f64))
+                        .sum::<f64>();
+                    splatter.add(&c.particles, c.offset, control).map_err(|e| {
+                        let field = match e {
+                            voxless_particles::ParticleError::Device(_) => "device",
+                            _ => "particles.radius",
+                        };
+                        SceneError::setting(field, e.to_string())
+                    })?;
+                    if control.is_cancelled() {
+                        return Err(SceneError::setting("project", "cancelled"));
+                    }
+                    control.report(k as u64 + 1, chunks as u64);
+                }
+                Ok(())
+            },
+        );
+        added?;
+        next = ahead;
+        k0 = k1;
     }
     Ok(Some(Streamed {
         view,
@@ -259,6 +314,13 @@ pub fn project_on(
         chunks,
         notes,
     }))
+}
+
+/// What pass 1 learns from one chunk.
+struct Scan {
+    span: ([f64; 3], [f64; 3]),
+    wrapped: usize,
+    reach: Option<([f64; 3], [f64; 3])>,
 }
 
 /// One chunk's particles, local and ready to splat.

@@ -27,14 +27,16 @@
 //! f64); the others add full chords. Either way the line of sight crosses
 //! the box once and each particle's mass is counted once.
 //!
-//! **Determinism.** The image is cut into bands of [`BAND`] rows. A chunk's
-//! particles are binned, in order, to the bands their support reaches;
-//! bands are summed in parallel, each over its list in order, into the f64
-//! image (each lane's f32 column times the particle's f32 scale is exact in
-//! f64). The bits therefore depend on the order of the particles, not on
-//! the number of threads or how the particles are chunked; another order
-//! moves only f64 rounding (a streamed file and the volume's Hilbert order
-//! give the same f32 image in practice, tested to 1e-6 of the peak).
+//! **Determinism.** The image is cut into bands of [`BAND`] rows. A
+//! chunk's particles are placed in pieces of 4,096 on every core, and each
+//! piece's splats are binned, in order, to the bands their support
+//! reaches; bands are summed in parallel, each over the pieces' lists in
+//! order, into the f64 image (each lane's f32 column times the particle's
+//! f32 scale is exact in f64). The bits therefore depend on the order of
+//! the particles, not on the number of threads or how the particles are
+//! chunked; another order moves only f64 rounding (a streamed file and the
+//! volume's Hilbert order give the same f32 image in practice, tested to
+//! 1e-6 of the peak).
 
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -77,9 +79,9 @@ pub struct Splatter {
     half: (f64, f64),
     /// The running sums, row-major, row 0 at the top.
     sum: Vec<f64>,
-    /// Reused between chunks.
-    splats: Vec<Splat>,
-    found: Vec<([i8; 3], Vec3)>,
+    /// Reused between chunks: the chunk's splats, placed and binned in
+    /// pieces of [`PIECE`] particles on every core.
+    pieces: Vec<Piece>,
     /// The SIMD lanes the bands run on (every backend gives the same
     /// image to f32 rounding of the table position; tests pick each).
     simd: Simd,
@@ -183,8 +185,7 @@ impl Splatter {
             mode,
             half: (half_width as f64, half_height as f64),
             sum: vec![0.0; width as usize * height as usize],
-            splats: Vec::new(),
-            found: Vec::new(),
+            pieces: Vec::new(),
             simd: Simd::Auto,
             area: None,
             device: None,
@@ -224,23 +225,61 @@ impl Splatter {
         offset: usize,
         control: &Control,
     ) -> Result<(), ParticleError> {
-        self.place(particles, offset)?;
+        // Place and bin in pieces on every core; a piece's splats keep its
+        // particles' order and the pieces are summed in order, so the bits
+        // do not depend on the number of threads.
         let on_device = self.device.is_some();
+        let mut pieces = std::mem::take(&mut self.pieces);
+        let placer = Placer {
+            basis: self.camera.basis_f64(),
+            size: (self.width, self.height),
+            kernel: self.kernel,
+            mode: self.mode,
+            half: self.half,
+            area: self.area.is_some(),
+        };
+        let count = particles.len().div_ceil(PIECE);
+        if pieces.len() < count {
+            pieces.resize_with(count, Piece::default);
+        }
+        let placed: Vec<Result<(), ParticleError>> = pieces[..count]
+            .par_iter_mut()
+            .zip(particles.par_chunks(PIECE))
+            .enumerate()
+            .map(|(k, (piece, part))| {
+                piece.splats.clear();
+                for (i, p) in part.iter().enumerate() {
+                    placer.place(p, offset + k * PIECE + i, piece)?;
+                }
+                // On a device the CPU sums only what it keeps (pixel
+                // areas, clipped images), so only those are binned.
+                piece.bands.bin(&piece.splats, placer.size.1, |p| {
+                    !on_device || p.clip || p.area
+                });
+                Ok(())
+            })
+            .collect();
+        for piece in &mut pieces[count..] {
+            piece.splats.clear();
+            piece.bands.bin(&[], self.height, |_| true);
+        }
+        self.pieces = pieces;
+        placed.into_iter().collect::<Result<(), _>>()?;
         if let Some(device) = &mut self.device {
             self.plain.clear();
-            self.plain
-                .extend(self.splats.iter().filter(|p| !p.clip && !p.area).map(plain));
+            self.plain.extend(
+                self.pieces
+                    .iter()
+                    .flat_map(|piece| &piece.splats)
+                    .filter(|p| !p.clip && !p.area)
+                    .map(plain),
+            );
             device.add(&self.plain)?;
         }
-        // On a device the CPU sums only what it keeps (pixel areas,
-        // clipped images), so only those are binned.
-        let lists = Bands::bin(&self.splats, self.height, |p| {
-            !on_device || p.clip || p.area
-        });
         let w = self.width as usize;
         let (camera, mode, kernel) = (&self.camera, self.mode, self.kernel);
         let (width, height) = (self.width, self.height);
-        let splats = &self.splats;
+        let pieces = &self.pieces[..count];
         // The Gaussians read no table (their columns are closed forms).
         let pairs = kernel.sph_pairs().unwrap_or(&[[0.0; 2]; 2]);
         let simd = self.simd;
@@ -249,21 +288,20 @@ impl Splatter {
             .par_chunks_mut(w * BAND as usize)
             .enumerate()
             .for_each(|(band, out)| {
-                let members = lists.members(band);
-                if members.is_empty() || control.is_cancelled() {
+                let splats = BandSplats { pieces, band };
+                if splats.is_empty() || control.is_cancelled() {
                     return;
                 }
                 let y0 = band as u32 * BAND;
                 let rows = (out.len() / w) as u32;
                 if let Some(table) = area {
-                    area_band(splats, members, table, (y0, y0 + rows), w, &mut *out);
+                    area_band(splats, table, (y0, y0 + rows), w, &mut *out);
                 }
                 if !on_device {
                     dispatch(
                         simd,
                         SplatBand {
                             splats,
-                            members,
                             y: (y0, y0 + rows),
                             width: w,
                             pairs,
@@ -272,7 +310,7 @@ impl Splatter {
                     );
                 }
                 if let Periodic::OffAxis(b) = mode {
-                    clipped(splats, members, camera, &b, (width, height), y0, out);
+                    clipped(splats, camera, &b, (width, height), y0, out);
                 }
             });
         Ok(())
@@ -303,21 +341,60 @@ impl Splatter {
         self
     }
 
-    /// Each particle's periodic images as splats, in order, into
-    /// `self.splats`.
-    fn place(&mut self, particles: &[SplatParticle], offset: usize) -> Result<(), ParticleError> {
-        self.splats.clear();
+    /// Zeroes the pixels whose centre lies outside the shadow of the box
+    /// `b` along `axis` (their line misses the box).
+    fn outside_shadow_to_zero(&self, b: &Aabb, axis: usize, image: &mut [f32]) {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let (hw, hh) = self.half;
+        let cam = &self.camera;
+        for (k, s) in image.iter_mut().enumerate() {
+            let uu = ((2 * (k % w) + 1) as f64 / w as f64 - 1.0) * hw;
+            let vv = (1.0 - (2 * (k / w) + 1) as f64 / h as f64) * hh;
+            let inside = (0..3).filter(|&a| a != axis).all(|a| {
+                let o = cam.eye[a] as f64 + cam.right[a] as f64 * uu + cam.up[a] as f64 * vv;
+                o >= b.min[a] as f64 && o <= b.max[a] as f64
+            });
+            if !inside {
+                *s = 0.0;
+            }
+        }
+    }
+}
+
+/// What placing a particle needs of its splatter.
+#[derive(Clone, Copy)]
+struct Placer {
+    size: (u32, u32),
+    kernel: Kernel,
+    mode: Periodic,
+    half: (f64, f64),
+    /// Pixel areas asked for.
+    area: bool,
+    /// The camera's eye, right, up and forward in f64.
+    basis: [[f64; 3]; 4],
+}
+
+impl Placer {
+    /// Particle `p`'s periodic images as splats, in order, onto the
+    /// piece's splats (`index`: the particle's index in the whole set, for
+    /// errors).
+    fn place(
+        &self,
+        p: &SplatParticle,
+        index: usize,
+        piece: &mut Piece,
+    ) -> Result<(), ParticleError> {
         let factor = self.kernel.support_factor();
-        let (w, h) = (self.width as f64, self.height as f64);
+        let (w, h) = (self.size.0 as f64, self.size.1 as f64);
         let (hw, hh) = self.half;
         // Pixel coordinates of a point: x = (a / hw + 1)·W/2 with a its
         // offset along `right` from the eye, y = (1 − b / hh)·H/2 along `up`.
         let (pw, ph) = (2.0 * hw / w, 2.0 * hh / h);
-        let [eye, right, up, fwd] = self.camera.basis_f64();
+        let [eye, right, up, fwd] = self.basis;
         let dot = |d: [f64; 3], e: [f64; 3]| d[0] * e[0] + d[1] * e[1] + d[2] * e[2];
-        for (i, p) in particles.iter().enumerate() {
+        {
             if !(p.radius > 0.0) || p.weight == 0.0 {
-                continue;
+                return Ok(());
             }
             let support = factor * p.radius;
             let periodic = match self.mode {
@@ -328,12 +405,20 @@ impl Splatter {
                 periodic.as_ref(),
                 p.center,
                 support,
-                offset + i,
-                &mut self.found,
+                index,
+                &mut piece.found,
             )?;
-            let column = self.kernel.column(p.radius as f64);
+            // Neighbours often share a radius (a global one always).
+            let column = match piece.column {
+                Some((r, c)) if r == p.radius => c,
+                _ => {
+                    let c = self.kernel.column(p.radius as f64);
+                    piece.column = Some((p.radius, c));
+                    c
+                }
+            };
             let s = support as f64;
-            for &(shift, q) in &self.found {
+            for &(shift, q) in &piece.found {
                 let clip = match self.mode {
                     Periodic::No => false,
                     // Images shifted along the view repeat the particle's own chord.
@@ -390,41 +475,18 @@ impl Splatter {
                     clip,
                     // Supports narrower than table_pixels take the table;
                     // wider ones are sampled at pixel centres.
-                    area: self.area.is_some() && rx.min(ry) < table_pixels(self.kernel),
-                    cells: SubCells {
-                        n: 1,
-                        size: (self.width, self.height),
-                        half: self.half,
-                    },
+                    area: self.area && rx.min(ry) < table_pixels(self.kernel),
+                    cells: SubCells::centres(self.size, self.half),
                     clip_scale: p.weight as f64,
                 };
-                if clip && self.area.is_some() {
-                    splat.cells = SubCells::new(&splat, (self.width, self.height), self.half);
+                if clip && self.area {
+                    splat.cells = SubCells::new(&splat, self.size, self.half);
                     splat.clip_scale = splat.cells.scale(&splat);
                 }
-                self.splats.push(splat);
+                piece.splats.push(splat);
             }
         }
         Ok(())
-    }
-
-    /// Zeroes the pixels whose centre lies outside the shadow of the box
-    /// `b` along `axis` (their line misses the box).
-    fn outside_shadow_to_zero(&self, b: &Aabb, axis: usize, image: &mut [f32]) {
-        let (w, h) = (self.width as usize, self.height as usize);
-        let (hw, hh) = self.half;
-        let cam = &self.camera;
-        for (k, s) in image.iter_mut().enumerate() {
-            let uu = ((2 * (k % w) + 1) as f64 / w as f64 - 1.0) * hw;
-            let vv = (1.0 - (2 * (k / w) + 1) as f64 / h as f64) * hh;
-            let inside = (0..3).filter(|&a| a != axis).all(|a| {
-                let o = cam.eye[a] as f64 + cam.right[a] as f64 * uu + cam.up[a] as f64 * vv;
-                o >= b.min[a] as f64 && o <= b.max[a] as f64
-            });
-            if !inside {
-                *s = 0.0;
-            }
-        }
     }
 }
 
@@ -498,7 +560,23 @@ struct Splat {
     clip_scale: f64,
 }
 
-/// A chunk's splats binned to bands of rows (counting sort, in order).
+/// Particles a piece holds: the chunk is placed and binned in pieces of
+/// this many particles on every core.
+const PIECE: usize = 4096;
+
+/// A piece of a chunk: its particles' splats, in order, binned to bands.
+#[derive(Default)]
+struct Piece {
+    splats: Vec<Splat>,
+    /// Reused: a particle's periodic images.
+    found: Vec<([i8; 3], Vec3)>,
+    /// The last radius placed and its column.
+    column: Option<(f32, Column)>,
+    bands: Bands,
+}
+
+/// A piece's splats binned to bands of rows (counting sort, in order).
+#[derive(Default)]
 struct Bands {
     /// Band `t`'s splats are `members[start[t]..start[t + 1]]`.
     start: Vec<u32>,
@@ -506,11 +584,13 @@ struct Bands {
 }
 
 impl Bands {
-    /// The splats `keep` accepts, binned.
-    fn bin(splats: &[Splat], height: u32, keep: impl Fn(&Splat) -> bool) -> Bands {
+    /// Bins the splats `keep` accepts (reusing the buffers).
+    fn bin(&mut self, splats: &[Splat], height: u32, keep: impl Fn(&Splat) -> bool) {
         let bands = height.div_ceil(BAND) as usize;
         let range = |s: &Splat| (s.rows.0 / BAND) as usize..=((s.rows.1 - 1) / BAND) as usize;
-        let mut start = vec![0u32; bands + 1];
+        self.start.clear();
+        self.start.resize(bands + 1, 0);
+        let start = &mut self.start;
         for s in splats.iter().filter(|s| keep(s)) {
             for t in range(s) {
                 start[t + 1] += 1;
@@ -520,26 +600,53 @@ impl Bands {
             start[t + 1] += start[t];
         }
         let mut fill = start.clone();
-        let mut members = vec![0u32; start[bands] as usize];
+        self.members.clear();
+        self.members.resize(start[bands] as usize, 0);
         for (i, s) in splats.iter().enumerate().filter(|(_, s)| keep(s)) {
             for t in range(s) {
-                members[fill[t] as usize] = i as u32;
+                self.members[fill[t] as usize] = i as u32;
                 fill[t] += 1;
             }
         }
-        Bands { start, members }
     }
 
     fn members(&self, band: usize) -> &[u32] {
-        &self.members[self.start[band] as usize..self.start[band + 1] as usize]
+        match self.start.get(band..band + 2) {
+            Some(&[a, b]) => &self.members[a as usize..b as usize],
+            _ => &[],
+        }
+    }
+}
+
+/// The splats of one band over a chunk's pieces, in order.
+#[derive(Clone, Copy)]
+struct BandSplats<'a> {
+    pieces: &'a [Piece],
+    band: usize,
+}
+
+impl<'a> BandSplats<'a> {
+    fn is_empty(self) -> bool {
+        self.pieces
+            .iter()
+            .all(|p| p.bands.members(self.band).is_empty())
+    }
+
+    fn iter(self) -> impl Iterator<Item = &'a Splat> {
+        self.pieces.iter().flat_map(move |piece| {
+            piece
+                .bands
+                .members(self.band)
+                .iter()
+                .map(move |&i| &piece.splats[i as usize])
+        })
     }
 }
 
 /// One band's f64 sums over its splats in order (on the SIMD lanes the
 /// splatter was given). Clipped splats are left to [`clipped`].
 struct SplatBand<'a> {
-    splats: &'a [Splat],
-    members: &'a [u32],
+    splats: BandSplats<'a>,
     y: (u32, u32),
     width: usize,
     /// The kernel's column table as (value, next value) pairs.
@@ -557,8 +664,7 @@ impl WithLanes for SplatBand<'_> {
         let last = (crate::kernel::sph::COLUMN_TABLE - 1) as f64;
         let s = L::splat;
         let (top, edge) = (s(last as f32), s((last - 1.0) as f32));
-        for &i in self.members {
-            let p = &self.splats[i as usize];
+        for p in self.splats.iter() {
             if p.clip || p.area {
                 continue;
             }
@@ -571,7 +677,8 @@ impl WithLanes for SplatBand<'_> {
                 }
                 // The columns of the support's square (a pixel of margin):
                 // the lanes outside the support add 0, which costs less than
-                // finding each row's chord.
+                // finding each row's chord (a varying trip count mispredicts:
+                // measured 1.3× slower).
                 let (first, end) = p.cols;
                 if first >= end {
                     continue;
@@ -626,191 +733,9 @@ impl WithLanes for SplatBand<'_> {
     }
 }
 
-/// One band's f64 sums over its splats in order that average each pixel
-/// over its square ([`PixelIntegral::Area`], supports narrower than
-/// [`table_pixels`]): each pixel's share of the mass from the kernel's area
-/// table at its corners, so the shares add up to the whole. Wider supports
-/// take the pixel-centre lanes ([`SplatBand`]), clipped splats [`clipped`].
-fn area_band(
-    splats: &[Splat],
-    members: &[u32],
-    table: &AreaTable,
-    y: (u32, u32),
-    width: usize,
-    out: &mut [f64],
-) {
-    let mut upper: Vec<f64> = Vec::new();
-    let mut lower: Vec<f64> = Vec::new();
-    for &i in members {
-        let p = &splats[i as usize];
-        if p.clip || !p.area {
-            continue;
-        }
-        let (first, end) = (p.cols.0 as usize, p.cols.1 as usize);
-        let rows = p.rows.0.max(y.0)..p.rows.1.min(y.1);
-        if first >= end || rows.is_empty() {
-            continue;
-        }
-        let (pw, ph) = p.pixel;
-        let support = p.column.support2().sqrt();
-        // The support in pixels along x and y; pixel edges in units of the
-        // support: (x − cx) / sx.
-        let (sx, sy) = (support / pw, support / ph);
-        let mass = p.weight * p.column.mass() / (pw * ph);
-        let corners = |row: f64, into: &mut Vec<f64>| {
-            let v = (row - p.cy) / sy;
-            into.clear();
-            into.extend((first..=end).map(|x| table.at((x as f64 - p.cx) / sx, v)));
-        };
-        corners(rows.start as f64, &mut upper);
-        for r in rows {
-            corners(r as f64 + 1.0, &mut lower);
-            let line = &mut out[(r - y.0) as usize * width..][..width];
-            for (k, o) in line[first..end].iter_mut().enumerate() {
-                *o += mass * (lower[k + 1] - lower[k] - upper[k + 1] + upper[k]);
-            }
-            std::mem::swap(&mut upper, &mut lower);
-        }
-    }
-}
-
-/// The sub-pixel cells a clipped splat is sampled at ([`clipped`]): with
-/// pixel areas, `n × n` cells a pixel, no wider than an eighth of the
-/// support (only those near the support are visited); else one, the pixel
-/// centre.
-#[derive(Clone, Copy)]
-struct SubCells {
-    n: u32,
-    /// Image width and height, and half the image plane's width and height.
-    size: (u32, u32),
-    half: (f64, f64),
-}
-
-impl SubCells {
-    fn new(p: &Splat, size: (u32, u32), half: (f64, f64)) -> SubCells {
-        let (pw, ph) = p.pixel;
-        let n = (8.0 * pw.max(ph) / p.column.support2().sqrt())
-            .ceil()
-            .clamp(1.0, 4096.0) as u32;
-        SubCells { n, size, half }
-    }
-
-    /// The image plane's (u, v) of the centre of sub-cell `(kx, ky)` of
-    /// pixel `(x, y)`.
-    fn at(&self, (x, kx): (u32, u32), (y, ky): (u32, u32)) -> (f64, f64) {
-        let n = self.n as f64;
-        let (w, h) = (self.size.0 as f64, self.size.1 as f64);
-        let u = (2.0 * (x as f64 + (kx as f64 + 0.5) / n) / w - 1.0) * self.half.0;
-        let v = (1.0 - 2.0 * (y as f64 + (ky as f64 + 0.5) / n) / h) * self.half.1;
-        (u, v)
-    }
-
-    /// The cells of pixel `k` (along an axis where the splat's centre is at
-    /// `centre` pixels and the support spans `support` pixels) whose centres
-    /// may lie in the support.
-    fn near(&self, k: u32, centre: f64, support: f64) -> std::ops::Range<u32> {
-        if self.n == 1 {
-            return 0..1;
-        }
-        let n = self.n as f64;
-        let c = (centre - k as f64) * n - 0.5;
-        let lo = (c - support * n).floor().clamp(0.0, n) as u32;
-        let hi = ((c + support * n).ceil() + 1.0).clamp(0.0, n) as u32;
-        lo..hi
-    }
-
-    /// The factor of a pixel's sum of samples: the weight, or with cells
-    /// the mean over a pixel's cells scaled so that the splat's unclipped
-    /// samples add up to its exact mass.
-    fn scale(&self, p: &Splat) -> f64 {
-        if self.n == 1 {
-            return p.weight;
-        }
-        let mut full = 0.0;
-        self.each(p, p.rows.0..p.rows.1, |_, _, b2, _, _| {
-            full += p.column.at(b2);
-        });
-        let cells = (self.n as f64).powi(2);
-        let cell_area = p.pixel.0 * p.pixel.1 / cells;
-        if full > 0.0 {
-            p.weight * p.column.mass() / (full * cell_area) / cells
-        } else {
-            0.0
-        }
-    }
-
-    /// Calls `f(x, y, b², u, v)` for every cell centre of rows `rows` inside
-    /// the splat's support (`b²` its squared distance from the centre).
-    fn each(
-        &self,
-        p: &Splat,
-        rows: std::ops::Range<u32>,
-        mut f: impl FnMut(u32, u32, f64, f64, f64),
-    ) {
-        let support2 = p.column.support2();
-        let (sx, sy) = (support2.sqrt() / p.pixel.0, support2.sqrt() / p.pixel.1);
-        for y in rows {
-            for ky in self.near(y, p.cy, sy) {
-                for x in p.cols.0..p.cols.1 {
-                    for kx in self.near(x, p.cx, sx) {
-                        let (u, v) = self.at((x, kx), (y, ky));
-                        let (du, dv) = (u - p.a, v - p.b);
-                        let b2 = du * du + dv * dv;
-                        if b2 < support2 {
-                            f(x, y, b2, u, v);
-                        }
-                    }
-                }
-            }
-        }
-    }
-}
-
-/// The clipped splats of a band (off-axis periodic projections): the part
-/// of each sample's chord inside the box `b`, in f64, at pixel centres or,
-/// with pixel areas, at sub-pixel cells no wider than an eighth of the
-/// support, scaled so that the kernel's unclipped samples would hold its
-/// exact mass (then the images of a particle crossing faces add up to its
-/// mass to the quadrature's error along the faces; [`SubCells`]).
-fn clipped(
-    splats: &[Splat],
-    members: &[u32],
-    camera: &Camera,
-    b: &Aabb,
-    (width, height): (u32, u32),
-    y0: u32,
-    out: &mut [f64],
-) {
-    let [eye, right, up, fwd] = camera.basis_f64();
-    let y1 = (y0 + BAND).min(height);
-    for &i in members {
-        let p = &splats[i as usize];
-        if !p.clip {
-            continue;
-        }
-        p.cells
-            .each(p, p.rows.0.max(y0)..p.rows.1.min(y1), |x, y, b2, u, v| {
-                // The line's segment [t0, t1] through the box.
-                let mut t = (f64::NEG_INFINITY, f64::INFINITY);
-                for k in 0..3 {
-                    let o = eye[k] + right[k] * u + up[k] * v;
-                    let (lo, hi) = (b.min[k] as f64, b.max[k] as f64);
-                    if fwd[k] == 0.0 {
-                        if o < lo || o > hi {
-                            t = (1.0, 0.0);
-                        }
-                        continue;
-                    }
-                    let (t0, t1) = ((lo - o) / fwd[k], (hi - o) / fwd[k]);
-                    t = (t.0.max(t0.min(t1)), t.1.min(t0.max(t1)));
-                }
-                if t.0 < t.1 {
-                    let c = p.column.chord(b2, t.0 - p.depth, t.1 - p.depth);
-                    out[(y - y0) as usize * width as usize + x as usize] += p.clip_scale * c;
-                }
-            });
-    }
-}
+#[path = "splat_pixels.rs"]
+mod pixels;
+use pixels::{SubCells, area_band, clipped};
 
 #[cfg(test)]
 #[path = "splat_tests.rs"]

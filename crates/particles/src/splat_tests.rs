@@ -27,7 +27,8 @@ fn image(p: &[SplatParticle], chunk: usize, kernel: Kernel, periodic: Option<Aab
 
 #[test]
 fn chunks_and_threads_do_not_change_the_bits() {
-    let p = particles(3000);
+    // More than two pieces of PIECE particles in the whole chunk.
+    let p = particles(2 * PIECE + 1000);
     let unit = Some(Aabb::new(Vec3::splat(0.0), Vec3::splat(1.0)));
     for kernel in [Kernel::WendlandC2, Kernel::QuinticSpline, Kernel::Gaussian3] {
         for periodic in [None, unit] {
@@ -56,6 +57,23 @@ fn too_wide_a_support_for_the_box_is_an_error() {
     let e = s.add(&[wide], 41, &Control::new()).unwrap_err();
     assert!(
         matches!(e, ParticleError::SupportBeyondBox { index: 41, .. }),
+        "{e}"
+    );
+    // In a chunk placed in pieces on every core, the first such particle
+    // in order is named, whichever piece finishes first.
+    let mut many = vec![
+        SplatParticle {
+            center: Vec3::splat(0.5),
+            radius: 0.01,
+            weight: 1.0,
+        };
+        3 * PIECE
+    ];
+    many[PIECE + 7] = wide;
+    many[2 * PIECE + 3] = wide;
+    let e = s.add(&many, 100, &Control::new()).unwrap_err();
+    assert!(
+        matches!(e, ParticleError::SupportBeyondBox { index, .. } if index == 100 + PIECE + 7),
         "{e}"
     );
 }
