@@ -17,9 +17,13 @@
 //! volume's Hilbert order there), so the images agree to f32 rounding of
 //! the sums (tested to 1e-6 of the peak).
 //!
-//! Passes over the file: one for the reach (and the periodic box's wrap
-//! count), one for the local bounds when the view needs them (no periodic
-//! box), and the splatting pass.
+//! Passes over the file: with a periodic box one, the splatting pass (the
+//! frame is the box's; the span and wrap count are taken on the way, and a
+//! set wider than a given box is handed to the in-memory path, which
+//! refuses it); without one, a pass for the reach (the frame), one for the
+//! local bounds the view needs, and the splatting pass. Each pass reads
+//! its chunks on every core; the splatting pass reads the next group of
+//! chunks while it splats one.
 
 use std::path::Path;
 
@@ -27,6 +31,7 @@ use rayon::prelude::*;
 
 use voxless_core::{Aabb, Control};
 use voxless_particles::check_data;
+use voxless_particles::neighbours::PeriodicBox;
 use voxless_particles::splat::{CHUNK, SplatParticle, Splatter};
 
 use crate::device::Device;
@@ -118,64 +123,34 @@ pub fn project_on(
     let kernel = load::kernel_of(p, p.kernel.unwrap_or(voxless_scene::KernelName::Gaussian3));
     let boxed = periodic::resolve_box(p, None)?;
 
-    // Pass 1: the world reach (the frame), the span and the wrap count,
-    // the chunks read on every core and combined in order.
-    let mut span = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    let mut reach: Option<([f64; 3], [f64; 3])> = None;
-    let mut wrapped = 0;
-    let scans = (0..chunks)
-        .into_par_iter()
-        .map(|k| -> Result<Scan, SceneError> {
-            let fd = read(k)?;
-            let mut span = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-            for q in &fd.positions {
-                periodic::extend_span(&mut span, q);
-            }
-            let (mut wrapped, mut reach) = (0, None);
-            if let Some((b, _)) = &boxed {
-                wrapped = fd
-                    .positions
-                    .iter()
-                    .filter(|q| q.iter().all(|v| v.is_finite()) && !b.contains(**q))
-                    .count();
-            } else {
-                reach = fd.world_reach(p);
-            }
-            Ok(Scan {
-                span,
-                wrapped,
-                reach,
-            })
-        })
-        .collect::<Vec<_>>();
-    for scan in scans {
-        let scan = scan?;
-        for a in 0..3 {
-            span.0[a] = span.0[a].min(scan.span.0[a]);
-            span.1[a] = span.1[a].max(scan.span.1[a]);
-        }
-        wrapped += scan.wrapped;
-        if let Some((lo, hi)) = scan.reach {
-            reach = Some(match reach {
-                None => (lo, hi),
-                Some((a, b)) => (
-                    std::array::from_fn(|i| a[i].min(lo[i])),
-                    std::array::from_fn(|i| b[i].max(hi[i])),
-                ),
-            });
+    // Pass 1: the span, the wrap count and, without a periodic box, the
+    // world reach (the frame), the chunks read on every core and combined
+    // in order. With a box the frame is the box's, so the span and wrap
+    // count are taken while splatting instead (pass 3), and a set wider
+    // than the box is sent to the in-memory path afterwards.
+    let mut seen = Scan::EMPTY;
+    if boxed.is_none() {
+        let scans = (0..chunks)
+            .into_par_iter()
+            .map(|k| read(k).map(|fd| Scan::of(&fd, p, boxed.as_ref())))
+            .collect::<Vec<_>>();
+        for scan in scans {
+            seen.merge(scan?);
         }
     }
-    let mut notes = Vec::new();
-    if let Some((b, given)) = &boxed {
-        // Particles spanning more than the box are refused (or wrapped
-        // with --wrap) by the loader, which words it.
-        let too_wide = (0..3).any(|a| span.1[a] - span.0[a] > b.size[a] * (1.0 + 1e-6));
-        if *given && p.wrap != Some(true) && too_wide {
-            return Ok(None);
+    // Particles spanning more than a given box are refused (or wrapped with
+    // --wrap) by the loader, which words it: such a set does not stream.
+    let too_wide = |scan: &Scan| match &boxed {
+        Some((b, true)) if p.wrap != Some(true) => {
+            let span = scan.span;
+            (0..3).any(|a| span.1[a] - span.0[a] > b.size[a] * (1.0 + 1e-6))
         }
-        notes.push(periodic::box_note(b, *given, wrapped, total, span));
-        reach = Some(periodic::corners(b));
-    }
+        _ => false,
+    };
+    let reach = match &boxed {
+        Some((b, _)) => Some(periodic::corners(b)),
+        None => seen.reach,
+    };
     let world = load::frame_for(reach);
     let local_box = load::local_box(boxed.as_ref().map(|b| &b.0), &world);
     // The global radius in the frame (validated as the loader does; the
@@ -194,6 +169,15 @@ pub fn project_on(
     // once above, for the whole set.)
     let prepare = |k: usize| -> Result<Prepared, SceneError> {
         let mut fd = read(k)?;
+        let scan = boxed.is_some().then(|| Scan::of(&fd, p, boxed.as_ref()));
+        if scan.as_ref().is_some_and(&too_wide) {
+            // The in-memory path refuses it, naming the whole set's span.
+            return Ok(Prepared {
+                particles: Vec::new(),
+                offset: fd.offset,
+                scan,
+            });
+        }
         periodic::settle(
             p,
             None,
@@ -219,7 +203,11 @@ pub fn project_on(
                 }
             })
             .collect();
-        Ok(Prepared { particles, offset })
+        Ok(Prepared {
+            particles,
+            offset,
+            scan,
+        })
     };
 
     // Pass 2 (no box): the volume's bounds, the union of the supports.
@@ -277,6 +265,12 @@ pub fn project_on(
             || -> Result<(), SceneError> {
                 for (k, c) in (k0..).zip(current) {
                     let c = c?;
+                    if let Some(scan) = c.scan {
+                        seen.merge(scan);
+                        if too_wide(&seen) {
+                            return Ok(());
+                        }
+                    }
                     mass += c
                         .particles
                         .iter()
@@ -299,8 +293,24 @@ pub fn project_on(
             },
         );
         added?;
+        if too_wide(&seen) {
+            return Ok(None);
+        }
         next = ahead;
         k0 = k1;
+    }
+    if too_wide(&seen) {
+        return Ok(None);
+    }
+    let mut notes = Vec::new();
+    if let Some((b, given)) = &boxed {
+        notes.push(periodic::box_note(
+            b,
+            *given,
+            seen.wrapped,
+            total,
+            seen.span,
+        ));
     }
     Ok(Some(Streamed {
         view,
@@ -323,10 +333,58 @@ struct Scan {
     reach: Option<([f64; 3], [f64; 3])>,
 }
 
+impl Scan {
+    const EMPTY: Scan = Scan {
+        span: ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+        wrapped: 0,
+        reach: None,
+    };
+
+    /// A chunk's span, and its wrap count in the periodic box `boxed` or,
+    /// without one, its world reach.
+    fn of(fd: &FrameData, p: &ParticlesDesc, boxed: Option<&(PeriodicBox, bool)>) -> Scan {
+        let mut scan = Scan::EMPTY;
+        for q in &fd.positions {
+            periodic::extend_span(&mut scan.span, q);
+        }
+        match boxed {
+            Some((b, _)) => {
+                scan.wrapped = fd
+                    .positions
+                    .iter()
+                    .filter(|q| q.iter().all(|v| v.is_finite()) && !b.contains(**q))
+                    .count();
+            }
+            None => scan.reach = fd.world_reach(p),
+        }
+        scan
+    }
+
+    /// Adds a later chunk's scan.
+    fn merge(&mut self, other: Scan) {
+        for a in 0..3 {
+            self.span.0[a] = self.span.0[a].min(other.span.0[a]);
+            self.span.1[a] = self.span.1[a].max(other.span.1[a]);
+        }
+        self.wrapped += other.wrapped;
+        if let Some((lo, hi)) = other.reach {
+            self.reach = Some(match self.reach {
+                None => (lo, hi),
+                Some((a, b)) => (
+                    std::array::from_fn(|i| a[i].min(lo[i])),
+                    std::array::from_fn(|i| b[i].max(hi[i])),
+                ),
+            });
+        }
+    }
+}
+
 /// One chunk's particles, local and ready to splat.
 struct Prepared {
     particles: Vec<SplatParticle>,
     offset: usize,
+    /// With a periodic box: what pass 1 would have learned of the chunk.
+    scan: Option<Scan>,
 }
 
 /// The particle description of a scene that can stream (module docs).

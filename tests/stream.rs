@@ -192,3 +192,44 @@ fn the_cli_streams_npy_projections() {
         assert!((x - y).abs() <= 1e-6 * peak, "{x} vs {y}");
     }
 }
+
+#[test]
+fn a_set_wider_than_its_box_does_not_stream() {
+    // With a box the span is taken while splatting; a set wider than the
+    // box goes to the in-memory path, which refuses it naming the whole
+    // set's span — also when every chunk alone fits the box.
+    let s = Scratch::new("stream-wide");
+    let n = 150_000;
+    let pos: Vec<f32> = (0..n)
+        .flat_map(|i| {
+            // Chunk by chunk the particles move along x: 0.0–0.4, then
+            // 0.3–0.7, then 0.6–0.95 (a box of 0.5 holds each chunk).
+            let x = 0.3 * (i / 65_536) as f32 + 0.4 * (i % 1000) as f32 / 1000.0;
+            [x.min(0.95), 0.2, 0.2]
+        })
+        .collect();
+    voxless_io::write_npy_f32(&s.path("p.npy"), &[n, 3], &pos).unwrap();
+    let mut desc = SceneDesc {
+        particles: Some(ParticlesDesc {
+            file: Some(s.str("p.npy")),
+            radius: Some(0.01),
+            kernel: Some(KernelName::WendlandC2),
+            periodic_box: Some(BoxDesc::Corners([0.0, 0.0, 0.0, 0.5, 0.5, 0.5])),
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let (axis, c) = (ProjectionDesc::default(), Control::new());
+    let none = voxless::stream::project(&desc, ".".as_ref(), 0, &axis, (8, 8), &c).unwrap();
+    assert!(none.is_none());
+    let err = voxless::load(&desc, ".".as_ref(), 0)
+        .err()
+        .expect("too wide");
+    assert!(err.to_string().contains("--wrap"), "{err}");
+    // Asked to wrap, it streams.
+    desc.particles.as_mut().unwrap().wrap = Some(true);
+    let wrapped = voxless::stream::project(&desc, ".".as_ref(), 0, &axis, (8, 8), &c)
+        .unwrap()
+        .expect("wrapped into the box, it streams");
+    assert!(wrapped.notes.iter().any(|n| n.contains("were wrapped in")));
+}

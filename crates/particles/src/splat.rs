@@ -85,6 +85,9 @@ pub struct Splatter {
     /// The SIMD lanes the bands run on (every backend gives the same
     /// image to f32 rounding of the table position; tests pick each).
     simd: Simd,
+    /// SPH splats on sixteen lanes (`Simd::Auto` on a CPU with AVX-512:
+    /// the eight lanes' bits; see `splat_wide.rs`).
+    wide: bool,
     /// Pixel areas ([`PixelIntegral::Area`]): the kernel's area table.
     area: Option<Arc<AreaTable>>,
     /// The device summing the plain splats, and its image.
@@ -187,6 +190,7 @@ impl Splatter {
             sum: vec![0.0; width as usize * height as usize],
             pieces: Vec::new(),
             simd: Simd::Auto,
+            wide: splat_wide::available(),
             area: None,
             device: None,
             plain: Vec::new(),
@@ -282,7 +286,7 @@ impl Splatter {
         let pieces = &self.pieces[..count];
         // The Gaussians read no table (their columns are closed forms).
         let pairs = kernel.sph_pairs().unwrap_or(&[[0.0; 2]; 2]);
-        let simd = self.simd;
+        let (simd, wide) = (self.simd, self.wide);
         let area = self.area.as_deref();
         self.sum
             .par_chunks_mut(w * BAND as usize)
@@ -302,6 +306,7 @@ impl Splatter {
                         simd,
                         SplatBand {
                             splats,
+                            wide,
                             y: (y0, y0 + rows),
                             width: w,
                             pairs,
@@ -338,6 +343,7 @@ impl Splatter {
     #[cfg(test)]
     pub(crate) fn on(mut self, simd: Simd) -> Self {
         self.simd = simd;
+        self.wide = simd == Simd::Auto && splat_wide::available();
         self
     }
 
@@ -647,6 +653,8 @@ impl<'a> BandSplats<'a> {
 /// splatter was given). Clipped splats are left to [`clipped`].
 struct SplatBand<'a> {
     splats: BandSplats<'a>,
+    /// SPH splats on sixteen lanes ([`Splatter`]'s `wide`).
+    wide: bool,
     y: (u32, u32),
     width: usize,
     /// The kernel's column table as (value, next value) pairs.
@@ -669,6 +677,12 @@ impl WithLanes for SplatBand<'_> {
                 continue;
             }
             let sph = p.column.is_sph();
+            #[cfg(target_arch = "x86_64")]
+            if sph && self.wide {
+                // SAFETY: `wide` is set only where the CPU has AVX-512F.
+                unsafe { splat_wide::sph_rows(p, self.y, self.width, self.pairs, last, self.out) };
+                continue;
+            }
             for y in p.rows.0.max(self.y.0)..p.rows.1.min(self.y.1) {
                 let dy = y as f64 + 0.5 - p.cy;
                 let ty = p.ay * dy * dy;
@@ -735,6 +749,8 @@ impl WithLanes for SplatBand<'_> {
 
 #[path = "splat_pixels.rs"]
 mod pixels;
+#[path = "splat_wide.rs"]
+mod splat_wide;
 use pixels::{SubCells, area_band, clipped};
 
 #[cfg(test)]

@@ -195,3 +195,53 @@ fn pixel_areas_equal_a_fine_quadrature_of_the_column() {
         );
     }
 }
+
+#[test]
+fn sixteen_lanes_give_the_bits_of_eight() {
+    if !splat_wide::available() {
+        println!("note: this CPU has no AVX-512F; the sixteen-lane splats are not run here");
+        return;
+    }
+    if !Simd::Avx2.available() {
+        return;
+    }
+    // Supports from under a pixel to ~60 pixels across, many crossing the
+    // image's edges (the tails of the rows), widths not a multiple of 16.
+    let mut rng = SmallRng(11);
+    let p: Vec<SplatParticle> = (0..4000)
+        .map(|_| SplatParticle {
+            center: Vec3::new(1.2 * rng.f() - 0.1, 1.2 * rng.f() - 0.1, rng.f()),
+            radius: 0.002 + 0.2 * rng.f() * rng.f(),
+            weight: 0.5 + rng.f(),
+        })
+        .collect();
+    let cam = Camera::axis_projection(&Aabb::new(Vec3::splat(0.0), Vec3::splat(1.0)), 2).unwrap();
+    let unit = Some(Aabb::new(Vec3::splat(-0.2), Vec3::splat(1.2)));
+    for kernel in [
+        Kernel::CubicSpline,
+        Kernel::QuarticSpline,
+        Kernel::QuinticSpline,
+        Kernel::WendlandC2,
+        Kernel::WendlandC4,
+        Kernel::WendlandC6,
+    ] {
+        for periodic in [None, unit] {
+            for (w, h) in [(150, 97), (33, 40)] {
+                let run = |simd: Simd| {
+                    let mut s = Splatter::new(&cam, w, h, kernel, periodic)
+                        .unwrap()
+                        .on(simd);
+                    assert_eq!(s.wide, simd == Simd::Auto);
+                    s.add(&p, 0, &Control::new()).unwrap();
+                    s.finish().unwrap()
+                };
+                let wide = run(Simd::Auto);
+                assert!(wide.iter().any(|&v| v > 0.0));
+                let eight = run(Simd::Avx2);
+                for (k, (a, b)) in wide.iter().zip(&eight).enumerate() {
+                    assert_eq!(a.to_bits(), b.to_bits(), "{kernel:?} {w}×{h} pixel {k}");
+                }
+            }
+        }
+    }
+}
