@@ -404,3 +404,41 @@ fn bad_boxes_are_refused() {
         ));
     }
 }
+
+/// The images of every particle against every shift in −2..=2 whose
+/// support box meets the box: the shortcut for particles that reach no
+/// face gives the same list as the enumeration.
+#[test]
+fn images_are_every_shift_whose_support_meets_the_box() {
+    let b = Aabb::new(Vec3::new(-1.0, 0.0, 2.0), Vec3::new(1.0, 3.0, 2.5));
+    let size = b.extent();
+    let mut rng = Lcg(3);
+    let mut out = Vec::new();
+    for i in 0..20_000 {
+        let c = Vec3::new(
+            b.min.x + size.x * rng.f(),
+            b.min.y + size.y * rng.f(),
+            b.min.z + size.z * rng.f(),
+        );
+        let s = if i % 2 == 0 { 0.01 } else { 0.3 } * rng.f() + 1e-4;
+        crate::volume::images(Some(&b), c, s, i, &mut out).unwrap();
+        let mut want = Vec::new();
+        for kx in -2i8..=2 {
+            for ky in -2i8..=2 {
+                for kz in -2i8..=2 {
+                    let q = Vec3::new(
+                        c.x + kx as f32 * size.x,
+                        c.y + ky as f32 * size.y,
+                        c.z + kz as f32 * size.z,
+                    );
+                    if (kx, ky, kz) == (0, 0, 0)
+                        || (0..3).all(|a| q[a] - s <= b.max[a] && q[a] + s >= b.min[a])
+                    {
+                        want.push(([kx, ky, kz], q));
+                    }
+                }
+            }
+        }
+        assert_eq!(out, want, "particle {i} at {c:?}, support {s}");
+    }
+}

@@ -452,14 +452,8 @@ impl Placer {
                 {
                     continue;
                 }
-                let rows = (
-                    (cy - ry - 1.5).floor().clamp(0.0, h) as u32,
-                    (cy + ry + 0.5).ceil().clamp(0.0, h) as u32,
-                );
-                let cols = (
-                    (cx - rx - 1.5).floor().clamp(0.0, w) as u32,
-                    (cx + rx + 0.5).ceil().clamp(0.0, w) as u32,
-                );
+                let rows = (floor_in(cy - ry - 1.5, h), ceil_in(cy + ry + 0.5, h));
+                let cols = (floor_in(cx - rx - 1.5, w), ceil_in(cx + rx + 0.5, w));
                 if rows.0 >= rows.1 || cols.0 >= cols.1 {
                     continue;
                 }
@@ -494,6 +488,23 @@ impl Placer {
         }
         Ok(())
     }
+}
+
+/// `⌊x⌋` clamped to `0..=hi` (`hi` a whole number; NaN gives 0): the
+/// clamp first, then a truncation, which is the floor of a value ≥ 0 and
+/// needs no call into libm (the default x86-64 target has no SSE4.1
+/// rounding instruction).
+#[inline(always)]
+fn floor_in(x: f64, hi: f64) -> u32 {
+    x.clamp(0.0, hi) as u32
+}
+
+/// `⌈x⌉` clamped to `0..=hi`, as [`floor_in`].
+#[inline(always)]
+fn ceil_in(x: f64, hi: f64) -> u32 {
+    let x = x.clamp(0.0, hi);
+    let t = x as u32;
+    t + ((t as f64) < x) as u32
 }
 
 /// What a device sums of splat `p` (see [`PlainSplat`]).

@@ -142,7 +142,17 @@ pub fn images(
         return Ok(());
     }
     let (s, size) = (support, b.extent());
-    // Shifts k along each axis with [c + kL − s, c + kL + s] ∩ [lo, hi] ≠ ∅.
+    // Shifts k along each axis with [c + kL − s, c + kL + s] ∩ [lo, hi] ≠ ∅:
+    // from ⌈(lo − c − s)/L⌉ to ⌊(hi − c + s)/L⌋. Most particles reach no
+    // face: both quotients lie in (−1, 1) on every axis, so the particle
+    // is its only image (the same test as the bounds below, without them).
+    if (0..3)
+        .all(|a| (b.min[a] - c[a] - s) / size[a] > -1.0 && (b.max[a] - c[a] + s) / size[a] < 1.0)
+    {
+        // (+ 0 as the loop below adds it: a −0 coordinate becomes +0.)
+        out.push(([0; 3], c + Vec3::splat(0.0)));
+        return Ok(());
+    }
     let mut span = [(0i32, 0i32); 3];
     for a in 0..3 {
         let lo = ((b.min[a] - c[a] - s) / size[a]).ceil() as i32;
