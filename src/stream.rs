@@ -123,11 +123,11 @@ pub fn project_on(
     let kernel = load::kernel_of(p, p.kernel.unwrap_or(voxless_scene::KernelName::Gaussian3));
     let boxed = periodic::resolve_box(p, None)?;
 
-    // Pass 1: the span, the wrap count and, without a periodic box, the
-    // world reach (the frame), the chunks read on every core and combined
-    // in order. With a box the frame is the box's, so the span and wrap
-    // count are taken while splatting instead (pass 3), and a set wider
-    // than the box is sent to the in-memory path afterwards.
+    // Pass 1, without a periodic box: the world reach (the frame), the
+    // chunks read on every core and combined in order. With a box the
+    // frame is the box's; the span and wrap count are taken while
+    // splatting (pass 3), and a set wider than the box is sent to the
+    // in-memory path.
     let mut seen = Scan::EMPTY;
     if boxed.is_none() {
         let scans = (0..chunks)
@@ -295,6 +295,10 @@ pub fn project_on(
         added?;
         if too_wide(&seen) {
             return Ok(None);
+        }
+        if k1 < chunks && ahead.is_none() {
+            // Cancelled after the group's last check.
+            return Err(SceneError::setting("project", "cancelled"));
         }
         next = ahead;
         k0 = k1;

@@ -263,10 +263,8 @@ impl Splatter {
                 Ok(())
             })
             .collect();
-        for piece in &mut pieces[count..] {
-            piece.splats.clear();
-            piece.bands.bin(&[], self.height, |_| true);
-        }
+        // (Pieces left from a larger chunk would be summed again.)
+        pieces.truncate(count);
         self.pieces = pieces;
         placed.into_iter().collect::<Result<(), _>>()?;
         if let Some(device) = &mut self.device {
@@ -283,7 +281,7 @@ impl Splatter {
         let w = self.width as usize;
         let (camera, mode, kernel) = (&self.camera, self.mode, self.kernel);
         let (width, height) = (self.width, self.height);
-        let pieces = &self.pieces[..count];
+        let pieces = &self.pieces;
         // The Gaussians read no table (their columns are closed forms).
         let pairs = kernel.sph_pairs().unwrap_or(&[[0.0; 2]; 2]);
         let (simd, wide) = (self.simd, self.wide);
@@ -398,93 +396,88 @@ impl Placer {
         let (pw, ph) = (2.0 * hw / w, 2.0 * hh / h);
         let [eye, right, up, fwd] = self.basis;
         let dot = |d: [f64; 3], e: [f64; 3]| d[0] * e[0] + d[1] * e[1] + d[2] * e[2];
-        {
-            if !(p.radius > 0.0) || p.weight == 0.0 {
-                return Ok(());
+        if !(p.radius > 0.0) || p.weight == 0.0 {
+            return Ok(());
+        }
+        let support = factor * p.radius;
+        let periodic = match self.mode {
+            Periodic::No => None,
+            Periodic::OnAxis(b, _) | Periodic::OffAxis(b) => Some(b),
+        };
+        images(
+            periodic.as_ref(),
+            p.center,
+            support,
+            index,
+            &mut piece.found,
+        )?;
+        // Neighbours often share a radius (a global one always).
+        let column = match piece.column {
+            Some((r, c)) if r == p.radius => c,
+            _ => {
+                let c = self.kernel.column(p.radius as f64);
+                piece.column = Some((p.radius, c));
+                c
             }
-            let support = factor * p.radius;
-            let periodic = match self.mode {
-                Periodic::No => None,
-                Periodic::OnAxis(b, _) | Periodic::OffAxis(b) => Some(b),
-            };
-            images(
-                periodic.as_ref(),
-                p.center,
-                support,
-                index,
-                &mut piece.found,
-            )?;
-            // Neighbours often share a radius (a global one always).
-            let column = match piece.column {
-                Some((r, c)) if r == p.radius => c,
-                _ => {
-                    let c = self.kernel.column(p.radius as f64);
-                    piece.column = Some((p.radius, c));
-                    c
+        };
+        let s = support as f64;
+        for &(shift, q) in &piece.found {
+            let clip = match self.mode {
+                Periodic::No => false,
+                // Images shifted along the view repeat the particle's own chord.
+                Periodic::OnAxis(_, axis) if shift[axis] != 0 => continue,
+                Periodic::OnAxis(..) => false,
+                Periodic::OffAxis(b) => {
+                    !(0..3).all(|k| q[k] - support >= b.min[k] && q[k] + support <= b.max[k])
                 }
             };
-            let s = support as f64;
-            for &(shift, q) in &piece.found {
-                let clip = match self.mode {
-                    Periodic::No => false,
-                    // Images shifted along the view repeat the particle's own chord.
-                    Periodic::OnAxis(_, axis) if shift[axis] != 0 => continue,
-                    Periodic::OnAxis(..) => false,
-                    Periodic::OffAxis(b) => {
-                        !(0..3).all(|k| q[k] - support >= b.min[k] && q[k] + support <= b.max[k])
-                    }
-                };
-                let d = [
-                    q.x as f64 - eye[0],
-                    q.y as f64 - eye[1],
-                    q.z as f64 - eye[2],
-                ];
-                let (a, b) = (dot(d, right), dot(d, up));
-                let cx = (a / hw + 1.0) * 0.5 * w;
-                let cy = (1.0 - b / hh) * 0.5 * h;
-                let (rx, ry) = (s / pw, s / ph);
-                // Rows and columns whose pixel centres (k + 0.5) may lie in
-                // the support, a pixel of margin against rounding.
-                if cx + rx + 1.0 < 0.0
-                    || cx - rx - 1.0 > w
-                    || cy + ry + 1.0 < 0.0
-                    || cy - ry - 1.0 > h
-                {
-                    continue;
-                }
-                let rows = (floor_in(cy - ry - 1.5, h), ceil_in(cy + ry + 0.5, h));
-                let cols = (floor_in(cx - rx - 1.5, w), ceil_in(cx + rx + 0.5, w));
-                if rows.0 >= rows.1 || cols.0 >= cols.1 {
-                    continue;
-                }
-                let mut splat = Splat {
-                    cx,
-                    cy,
-                    // Table position per pixel² along x and y.
-                    ax: column.to_index() * pw * pw,
-                    ay: column.to_index() * ph * ph,
-                    pixel: (pw, ph),
-                    rows,
-                    cols,
-                    scale: column.scale() * p.weight as f64,
-                    weight: p.weight as f64,
-                    column,
-                    a,
-                    b,
-                    depth: dot(d, fwd),
-                    clip,
-                    // Supports narrower than table_pixels take the table;
-                    // wider ones are sampled at pixel centres.
-                    area: self.area && rx.min(ry) < table_pixels(self.kernel),
-                    cells: SubCells::centres(self.size, self.half),
-                    clip_scale: p.weight as f64,
-                };
-                if clip && self.area {
-                    splat.cells = SubCells::new(&splat, self.size, self.half);
-                    splat.clip_scale = splat.cells.scale(&splat);
-                }
-                piece.splats.push(splat);
+            let d = [
+                q.x as f64 - eye[0],
+                q.y as f64 - eye[1],
+                q.z as f64 - eye[2],
+            ];
+            let (a, b) = (dot(d, right), dot(d, up));
+            let cx = (a / hw + 1.0) * 0.5 * w;
+            let cy = (1.0 - b / hh) * 0.5 * h;
+            let (rx, ry) = (s / pw, s / ph);
+            // Rows and columns whose pixel centres (k + 0.5) may lie in
+            // the support, a pixel of margin against rounding.
+            if cx + rx + 1.0 < 0.0 || cx - rx - 1.0 > w || cy + ry + 1.0 < 0.0 || cy - ry - 1.0 > h
+            {
+                continue;
             }
+            let rows = (floor_in(cy - ry - 1.5, h), ceil_in(cy + ry + 0.5, h));
+            let cols = (floor_in(cx - rx - 1.5, w), ceil_in(cx + rx + 0.5, w));
+            if rows.0 >= rows.1 || cols.0 >= cols.1 {
+                continue;
+            }
+            let mut splat = Splat {
+                cx,
+                cy,
+                // Table position per pixel² along x and y.
+                ax: column.to_index() * pw * pw,
+                ay: column.to_index() * ph * ph,
+                pixel: (pw, ph),
+                rows,
+                cols,
+                scale: column.scale() * p.weight as f64,
+                weight: p.weight as f64,
+                column,
+                a,
+                b,
+                depth: dot(d, fwd),
+                clip,
+                // Supports narrower than table_pixels take the table;
+                // wider ones are sampled at pixel centres.
+                area: self.area && rx.min(ry) < table_pixels(self.kernel),
+                cells: SubCells::centres(self.size, self.half),
+                clip_scale: p.weight as f64,
+            };
+            if clip && self.area {
+                splat.cells = SubCells::new(&splat, self.size, self.half);
+                splat.clip_scale = splat.cells.scale(&splat);
+            }
+            piece.splats.push(splat);
         }
         Ok(())
     }
