@@ -234,19 +234,26 @@ impl Splatter {
         // do not depend on the number of threads.
         let on_device = self.device.is_some();
         let mut pieces = std::mem::take(&mut self.pieces);
+        let (w, h) = (self.width as f64, self.height as f64);
         let placer = Placer {
             basis: self.camera.basis_f64(),
             size: (self.width, self.height),
+            pixel: (2.0 * self.half.0 / w, 2.0 * self.half.1 / h),
             kernel: self.kernel,
+            factor: self.kernel.support_factor(),
             mode: self.mode,
+            periodic: match self.mode {
+                Periodic::No => None,
+                Periodic::OnAxis(b, _) | Periodic::OffAxis(b) => Some(b),
+            },
             half: self.half,
             area: self.area.is_some(),
         };
-        let count = particles.len().div_ceil(PIECE);
-        if pieces.len() < count {
-            pieces.resize_with(count, Piece::default);
-        }
-        let placed: Vec<Result<(), ParticleError>> = pieces[..count]
+        // (Pieces left from a larger chunk would be summed again.)
+        pieces.resize_with(particles.len().div_ceil(PIECE), Piece::default);
+        // Collected in order, so the first bad particle in order is named
+        // whichever piece fails first.
+        let placed: Vec<Result<(), ParticleError>> = pieces
             .par_iter_mut()
             .zip(particles.par_chunks(PIECE))
             .enumerate()
@@ -263,8 +270,6 @@ impl Splatter {
                 Ok(())
             })
             .collect();
-        // (Pieces left from a larger chunk would be summed again.)
-        pieces.truncate(count);
         self.pieces = pieces;
         placed.into_iter().collect::<Result<(), _>>()?;
         if let Some(device) = &mut self.device {
@@ -369,8 +374,14 @@ impl Splatter {
 #[derive(Clone, Copy)]
 struct Placer {
     size: (u32, u32),
+    /// A pixel's width and height in the image plane.
+    pixel: (f64, f64),
     kernel: Kernel,
+    /// The kernel's support over its radius.
+    factor: f32,
     mode: Periodic,
+    /// The mode's periodic box.
+    periodic: Option<Aabb>,
     half: (f64, f64),
     /// Pixel areas asked for.
     area: bool,
@@ -388,24 +399,19 @@ impl Placer {
         index: usize,
         piece: &mut Piece,
     ) -> Result<(), ParticleError> {
-        let factor = self.kernel.support_factor();
+        if !(p.radius > 0.0) || p.weight == 0.0 {
+            return Ok(());
+        }
         let (w, h) = (self.size.0 as f64, self.size.1 as f64);
         let (hw, hh) = self.half;
         // Pixel coordinates of a point: x = (a / hw + 1)·W/2 with a its
         // offset along `right` from the eye, y = (1 − b / hh)·H/2 along `up`.
-        let (pw, ph) = (2.0 * hw / w, 2.0 * hh / h);
+        let (pw, ph) = self.pixel;
         let [eye, right, up, fwd] = self.basis;
         let dot = |d: [f64; 3], e: [f64; 3]| d[0] * e[0] + d[1] * e[1] + d[2] * e[2];
-        if !(p.radius > 0.0) || p.weight == 0.0 {
-            return Ok(());
-        }
-        let support = factor * p.radius;
-        let periodic = match self.mode {
-            Periodic::No => None,
-            Periodic::OnAxis(b, _) | Periodic::OffAxis(b) => Some(b),
-        };
+        let support = self.factor * p.radius;
         images(
-            periodic.as_ref(),
+            self.periodic.as_ref(),
             p.center,
             support,
             index,
@@ -621,10 +627,7 @@ impl Bands {
     }
 
     fn members(&self, band: usize) -> &[u32] {
-        match self.start.get(band..band + 2) {
-            Some(&[a, b]) => &self.members[a as usize..b as usize],
-            _ => &[],
-        }
+        &self.members[self.start[band] as usize..self.start[band + 1] as usize]
     }
 }
 

@@ -217,14 +217,13 @@ fn sixteen_lanes_give_the_bits_of_eight() {
         .collect();
     let cam = Camera::axis_projection(&Aabb::new(Vec3::splat(0.0), Vec3::splat(1.0)), 2).unwrap();
     let unit = Some(Aabb::new(Vec3::splat(-0.2), Vec3::splat(1.2)));
-    for kernel in [
-        Kernel::CubicSpline,
-        Kernel::QuarticSpline,
-        Kernel::QuinticSpline,
-        Kernel::WendlandC2,
-        Kernel::WendlandC4,
-        Kernel::WendlandC6,
-    ] {
+    // Every SPH kernel (the Gaussians take the closed form, not the lanes).
+    let sph: Vec<Kernel> = crate::tests::KERNELS
+        .into_iter()
+        .filter(|k| k.column(1.0).is_sph())
+        .collect();
+    assert_eq!(sph.len(), 6, "the cubic spline, M5, M6 and three Wendlands");
+    for kernel in sph {
         for periodic in [None, unit] {
             for (w, h) in [(150, 97), (33, 40)] {
                 let run = |simd: Simd| {
