@@ -10,6 +10,7 @@
 //! kernels are normalised per unit volume) by its cube, so densities stay in
 //! world units.
 
+use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 use voxless_core::Vec3;
@@ -109,7 +110,11 @@ impl FrameData {
         mut self,
         frame: &WorldFrame,
     ) -> (ParticleData, PathBuf, Vec<(&'static str, PathBuf)>) {
-        self.data.positions = self.positions.iter().map(|&q| frame.to_local(q)).collect();
+        self.data.positions = self
+            .positions
+            .par_iter()
+            .map(|&q| frame.to_local(q))
+            .collect();
         (self.data, self.main_file, self.files)
     }
 }

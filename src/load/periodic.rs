@@ -16,6 +16,7 @@
 //! snapshots that carry no smoothing length (dark matter, AREPO cells).
 //! The radii are world lengths, like radii read from a file.
 
+use rayon::prelude::*;
 use std::path::Path;
 
 use voxless_particles::Kernel;
@@ -161,14 +162,14 @@ fn wrap_positions(
     file: &Path,
 ) -> Result<usize, SceneError> {
     if given && p.wrap != Some(true) {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for q in positions.iter().filter(|q| q.iter().all(|v| v.is_finite())) {
-            for a in 0..3 {
-                lo[a] = lo[a].min(q[a]);
-                hi[a] = hi[a].max(q[a]);
-            }
-        }
+        let (lo, hi) = positions
+            .par_iter()
+            .filter(|q| q.iter().all(|v| v.is_finite()))
+            .fold(empty_span, |mut s, q| {
+                extend_span(&mut s, q);
+                s
+            })
+            .reduce(empty_span, join_spans);
         for a in 0..3 {
             let span = hi[a] - lo[a];
             // A box edge's own rounding is allowed.
@@ -186,14 +187,16 @@ fn wrap_positions(
             }
         }
     }
-    let mut wrapped = 0;
-    for q in positions.iter_mut() {
-        if q.iter().all(|v| v.is_finite()) && !b.contains(*q) {
-            *q = b.wrap(*q);
-            wrapped += 1;
-        }
-    }
-    Ok(wrapped)
+    Ok(positions
+        .par_iter_mut()
+        .map(|q| {
+            let outside = q.iter().all(|v| v.is_finite()) && !b.contains(*q);
+            if outside {
+                *q = b.wrap(*q);
+            }
+            outside as usize
+        })
+        .sum())
 }
 
 /// The note for the box `b` (`given`, or the file's) and the `wrapped`
@@ -201,11 +204,28 @@ fn wrap_positions(
 /// (wrapped into it): it also asks whether the box is right when the
 /// particles fill less than a hundredth of its side along every axis.
 fn wrap_note(b: &PeriodicBox, given: bool, wrapped: usize, positions: &[[f64; 3]]) -> String {
-    let mut span = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for q in positions {
-        extend_span(&mut span, q);
-    }
+    let span = positions
+        .par_iter()
+        .fold(empty_span, |mut s, q| {
+            extend_span(&mut s, q);
+            s
+        })
+        .reduce(empty_span, join_spans);
     box_note(b, given, wrapped, positions.len(), span)
+}
+
+/// A span holding nothing (see [`extend_span`]).
+fn empty_span() -> ([f64; 3], [f64; 3]) {
+    ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3])
+}
+
+/// The union of two spans (min and max are exact: any grouping gives the
+/// serial loop's span).
+fn join_spans(a: ([f64; 3], [f64; 3]), b: ([f64; 3], [f64; 3])) -> ([f64; 3], [f64; 3]) {
+    (
+        std::array::from_fn(|k| a.0[k].min(b.0[k])),
+        std::array::from_fn(|k| a.1[k].max(b.1[k])),
+    )
 }
 
 /// Grows the per-axis span `(lo, hi)` by the finite coordinates of `q`.

@@ -128,7 +128,9 @@ impl MacroGrid {
             }
             let n = self.dims[a];
             let scale = n as f32 / (max - min).max(f32::MIN_POSITIVE);
-            let cell = |v: f32| (((v - min) * scale).floor().max(0.0) as usize).min(n - 1);
+            // Truncation is the floor at or above zero (and `max` maps NaN to
+            // zero, as it did after `floor`): no libm call per bound.
+            let cell = |v: f32| (((v - min) * scale).max(0.0) as usize).min(n - 1);
             lo[a] = cell(b.min[a]);
             hi[a] = cell(b.max[a]);
         }

@@ -289,7 +289,10 @@ pub fn read_table(
 ) -> Result<Table, IoError> {
     check_options(path, format, opts)?;
     let table = match format {
-        ParticleFormat::Npy => npy_table(crate::read_npy(path)?, path)?,
+        ParticleFormat::Npy => ParticleTable {
+            positions: crate::npy::read_npy_positions(path)?,
+            ..Default::default()
+        },
         ParticleFormat::Csv => csv_table(crate::read_csv(path)?, path)?,
         ParticleFormat::Vtk => crate::read_vtk_points(path)?,
         ParticleFormat::Xyz => crate::read_xyz(path, frame)?,
@@ -435,19 +438,7 @@ fn not_applicable(path: &Path, key: &str, applies: &str, format: ParticleFormat)
 
 /// The positions of an N×3 array.
 fn npy_table(a: NpyArray, path: &Path) -> Result<ParticleTable, IoError> {
-    if a.shape.len() != 2 || a.shape[1] != 3 {
-        return Err(IoError::format(
-            path,
-            format!(
-                "expected an N×3 array of positions, found shape ({})",
-                a.shape
-                    .iter()
-                    .map(|s| s.to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        ));
-    }
+    crate::npy::check_positions_shape(&a.shape, path)?;
     let positions = a.data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     Ok(ParticleTable {
         positions,

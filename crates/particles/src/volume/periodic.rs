@@ -19,6 +19,7 @@
 //! ray through the lattice cells it crosses, integrating each piece in the
 //! box with the ray shifted back by that cell's offset.
 
+use rayon::prelude::*;
 use voxless_core::{Aabb, Range1, Ray, Vec3};
 
 use super::{ParticleData, ParticleSettings, ParticleVolume, part::map_factor};
@@ -69,28 +70,44 @@ pub(super) fn with_images(
     range: voxless_core::Range1,
 ) -> Result<Images, ParticleError> {
     let n = data.positions.len();
-    let mut wrapped = 0;
-    for p in &mut data.positions {
-        let q = wrap(b, *p);
-        if q != *p {
-            wrapped += 1;
+    // Every particle on its own: on every core, in blocks whose ghosts
+    // are joined in particle order (the order a serial loop gives them).
+    let wrapped = data
+        .positions
+        .par_iter_mut()
+        .map(|p| {
+            let q = wrap(b, *p);
+            let moved = q != *p;
             *p = q;
-        }
-    }
+            moved as usize
+        })
+        .sum();
     let factor = settings.kernel.support_factor();
     let mut source: Vec<u32> = (0..n as u32).collect();
-    let mut extra: Vec<(u32, Vec3)> = Vec::new();
-    let mut found = Vec::new();
-    for i in 0..n {
-        let base = data.radii.as_ref().map_or(settings.radius, |r| r[i]);
-        let attr = data.attribute.as_ref().map(|a| a[i]);
-        let r = base * map_factor(&settings.radius_map, attr, range);
-        images(Some(b), data.positions[i], factor * r, i, &mut found)?;
-        for &(k, q) in &found {
-            if k != [0; 3] {
-                extra.push((i as u32, q));
+    const BLOCK: usize = 1 << 16;
+    let data_ref = &data;
+    let blocks: Vec<Result<Vec<(u32, Vec3)>, ParticleError>> = (0..n.div_ceil(BLOCK))
+        .into_par_iter()
+        .map(|blk| {
+            let (mut extra, mut found) = (Vec::new(), Vec::new());
+            for i in blk * BLOCK..(n.min((blk + 1) * BLOCK)) {
+                let base = data_ref.radii.as_ref().map_or(settings.radius, |r| r[i]);
+                let attr = data_ref.attribute.as_ref().map(|a| a[i]);
+                let r = base * map_factor(&settings.radius_map, attr, range);
+                images(Some(b), data_ref.positions[i], factor * r, i, &mut found)?;
+                for &(k, q) in &found {
+                    if k != [0; 3] {
+                        extra.push((i as u32, q));
+                    }
+                }
             }
-        }
+            Ok(extra)
+        })
+        .collect();
+    // The first refusal in particle order, as a serial loop would give.
+    let mut extra = Vec::new();
+    for block in blocks {
+        extra.append(&mut block?);
     }
     // Exactly the room the ghosts need (pushing one by one would double
     // the arrays' capacity: 12 bytes a particle of positions alone).
