@@ -332,14 +332,14 @@ pub fn project_on(
 
 /// What pass 1 learns from one chunk.
 struct Scan {
-    span: ([f64; 3], [f64; 3]),
+    span: periodic::Span,
     wrapped: usize,
-    reach: Option<([f64; 3], [f64; 3])>,
+    reach: Option<periodic::Span>,
 }
 
 impl Scan {
     const EMPTY: Scan = Scan {
-        span: ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+        span: periodic::EMPTY_SPAN,
         wrapped: 0,
         reach: None,
     };
@@ -366,19 +366,10 @@ impl Scan {
 
     /// Adds a later chunk's scan.
     fn merge(&mut self, other: Scan) {
-        for a in 0..3 {
-            self.span.0[a] = self.span.0[a].min(other.span.0[a]);
-            self.span.1[a] = self.span.1[a].max(other.span.1[a]);
-        }
+        self.span = periodic::join_spans(self.span, other.span);
         self.wrapped += other.wrapped;
-        if let Some((lo, hi)) = other.reach {
-            self.reach = Some(match self.reach {
-                None => (lo, hi),
-                Some((a, b)) => (
-                    std::array::from_fn(|i| a[i].min(lo[i])),
-                    std::array::from_fn(|i| b[i].max(hi[i])),
-                ),
-            });
+        if let Some(r) = other.reach {
+            self.reach = Some(self.reach.map_or(r, |s| periodic::join_spans(s, r)));
         }
     }
 }

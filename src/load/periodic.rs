@@ -162,14 +162,11 @@ fn wrap_positions(
     file: &Path,
 ) -> Result<usize, SceneError> {
     if given && p.wrap != Some(true) {
-        let (lo, hi) = positions
-            .par_iter()
-            .filter(|q| q.iter().all(|v| v.is_finite()))
-            .fold(empty_span, |mut s, q| {
-                extend_span(&mut s, q);
-                s
-            })
-            .reduce(empty_span, join_spans);
+        let (lo, hi) = span_of(
+            positions
+                .par_iter()
+                .filter(|q| q.iter().all(|v| v.is_finite())),
+        );
         for a in 0..3 {
             let span = hi[a] - lo[a];
             // A box edge's own rounding is allowed.
@@ -204,32 +201,44 @@ fn wrap_positions(
 /// (wrapped into it): it also asks whether the box is right when the
 /// particles fill less than a hundredth of its side along every axis.
 fn wrap_note(b: &PeriodicBox, given: bool, wrapped: usize, positions: &[[f64; 3]]) -> String {
-    let span = positions
-        .par_iter()
-        .fold(empty_span, |mut s, q| {
-            extend_span(&mut s, q);
-            s
-        })
-        .reduce(empty_span, join_spans);
-    box_note(b, given, wrapped, positions.len(), span)
+    box_note(
+        b,
+        given,
+        wrapped,
+        positions.len(),
+        span_of(positions.par_iter()),
+    )
 }
+
+/// A per-axis span `(lo, hi)` of coordinates.
+pub(crate) type Span = ([f64; 3], [f64; 3]);
 
 /// A span holding nothing (see [`extend_span`]).
-fn empty_span() -> ([f64; 3], [f64; 3]) {
-    ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3])
-}
+pub(crate) const EMPTY_SPAN: Span = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
 
-/// The union of two spans (min and max are exact: any grouping gives the
-/// serial loop's span).
-fn join_spans(a: ([f64; 3], [f64; 3]), b: ([f64; 3], [f64; 3])) -> ([f64; 3], [f64; 3]) {
+/// The union of two spans (min and max are exact: any grouping of rows
+/// gives a serial loop's span).
+pub(crate) fn join_spans(a: Span, b: Span) -> Span {
     (
         std::array::from_fn(|k| a.0[k].min(b.0[k])),
         std::array::from_fn(|k| a.1[k].max(b.1[k])),
     )
 }
 
+/// The span of the finite coordinates of `rows`, on every core.
+fn span_of<'a>(rows: impl ParallelIterator<Item = &'a [f64; 3]>) -> Span {
+    rows.fold(
+        || EMPTY_SPAN,
+        |mut s, q| {
+            extend_span(&mut s, q);
+            s
+        },
+    )
+    .reduce(|| EMPTY_SPAN, join_spans)
+}
+
 /// Grows the per-axis span `(lo, hi)` by the finite coordinates of `q`.
-pub(crate) fn extend_span(span: &mut ([f64; 3], [f64; 3]), q: &[f64; 3]) {
+pub(crate) fn extend_span(span: &mut Span, q: &[f64; 3]) {
     for (a, &v) in q.iter().enumerate() {
         if v.is_finite() {
             span.0[a] = span.0[a].min(v);

@@ -85,16 +85,15 @@ pub(super) fn with_images(
     let factor = settings.kernel.support_factor();
     let mut source: Vec<u32> = (0..n as u32).collect();
     const BLOCK: usize = 1 << 16;
-    let data_ref = &data;
     let blocks: Vec<Result<Vec<(u32, Vec3)>, ParticleError>> = (0..n.div_ceil(BLOCK))
         .into_par_iter()
         .map(|blk| {
             let (mut extra, mut found) = (Vec::new(), Vec::new());
             for i in blk * BLOCK..(n.min((blk + 1) * BLOCK)) {
-                let base = data_ref.radii.as_ref().map_or(settings.radius, |r| r[i]);
-                let attr = data_ref.attribute.as_ref().map(|a| a[i]);
+                let base = data.radii.as_ref().map_or(settings.radius, |r| r[i]);
+                let attr = data.attribute.as_ref().map(|a| a[i]);
                 let r = base * map_factor(&settings.radius_map, attr, range);
-                images(Some(b), data_ref.positions[i], factor * r, i, &mut found)?;
+                images(Some(b), data.positions[i], factor * r, i, &mut found)?;
                 for &(k, q) in &found {
                     if k != [0; 3] {
                         extra.push((i as u32, q));
