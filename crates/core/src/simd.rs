@@ -157,15 +157,18 @@ pub trait Lanes:
     /// Each lane's bit pattern shifted left by 23 bits (into the exponent
     /// field), zeros shifted in.
     fn shl23(self) -> Self;
+    /// Each lane's bit pattern shifted right by 23 bits (a positive f32's
+    /// biased exponent), zeros shifted in.
+    fn shr23(self) -> Self;
+    /// `self[i & 7]` in every lane, `i` the lane of `at` as a `u32` bit
+    /// pattern: a lookup in an eight-entry table held in lanes (AVX2: one
+    /// `vpermps`), no memory read.
+    fn permute(self, at: Self) -> Self;
     /// `v[i]` in every lane, `i` its value truncated toward zero and
     /// clamped into `0..v.len()`; a lane whose value is not in `[0, 2³¹)`
     /// (NaN included) reads `v[0]`. Zero in every lane when `v` is empty.
     /// (AVX2: one hardware gather; portable: eight loads.)
     fn gather(v: &[f32], at: Self) -> Self;
-    /// `(v[i][0], v[i][1])` in every lane, `i` as for [`Lanes::gather`]:
-    /// a table and its next entry in one read of eight bytes per lane
-    /// (AVX2: two 64-bit gathers; portable: eight loads).
-    fn gather_pair(v: &[[f32; 2]], at: Self) -> (Self, Self);
     /// `acc[k] += a[k] as f64 * b[k] as f64` in every lane: the product is
     /// exact (an f32 × f32 product fits an f64), the sum rounded once — for
     /// sums that must stay exact where the terms' weights add up to one.
@@ -397,6 +400,16 @@ impl Lanes for wide::f32x8 {
         wide::bytemuck::cast(bits << 23u32)
     }
     #[inline(always)]
+    fn shr23(self) -> Self {
+        let bits: wide::u32x8 = wide::bytemuck::cast(self);
+        wide::bytemuck::cast(bits >> 23u32)
+    }
+    #[inline(always)]
+    fn permute(self, at: Self) -> Self {
+        let (v, at) = (wide::f32x8::to_array(self), wide::f32x8::to_array(at));
+        wide::f32x8::new(at.map(|i| v[(i.to_bits() & 7) as usize]))
+    }
+    #[inline(always)]
     fn gather(v: &[f32], at: Self) -> Self {
         let Some(last) = v.len().checked_sub(1) else {
             return Self::splat(0.0);
@@ -410,25 +423,6 @@ impl Lanes for wide::f32x8 {
             };
             v[i.min(last) as usize]
         }))
-    }
-    #[inline(always)]
-    fn gather_pair(v: &[[f32; 2]], at: Self) -> (Self, Self) {
-        let Some(last) = v.len().checked_sub(1) else {
-            return (Self::splat(0.0), Self::splat(0.0));
-        };
-        let last = last.min(i32::MAX as usize) as i32;
-        let p = wide::f32x8::to_array(at).map(|x| {
-            let i = if (0.0..2_147_483_648.0).contains(&x) {
-                x as i32
-            } else {
-                0
-            };
-            v[i.min(last) as usize]
-        });
-        (
-            wide::f32x8::new(p.map(|q| q[0])),
-            wide::f32x8::new(p.map(|q| q[1])),
-        )
     }
     #[inline(always)]
     fn add_product_f64(acc: &mut [f64; LANES], a: Self, b: Self) {
@@ -590,34 +584,6 @@ mod avx2 {
             }
         }
         #[inline(always)]
-        fn gather_pair(v: &[[f32; 2]], at: Self) -> (Self, Self) {
-            let Some(last) = v.len().checked_sub(1) else {
-                return (Self::splat(0.0), Self::splat(0.0));
-            };
-            let last = last.min(i32::MAX as usize) as i32;
-            // As `gather`: every index read is in 0..v.len(); each entry's
-            // eight bytes are read as one f64 lane.
-            unsafe {
-                let i = _mm256_cvttps_epi32(at.0);
-                let i = _mm256_max_epi32(i, _mm256_setzero_si256());
-                let i = _mm256_min_epi32(i, _mm256_set1_epi32(last));
-                let base = v.as_ptr().cast::<f64>();
-                let a = _mm256_castpd_ps(_mm256_i32gather_pd::<8>(base, _mm256_castsi256_si128(i)));
-                let b = _mm256_castpd_ps(_mm256_i32gather_pd::<8>(
-                    base,
-                    _mm256_extracti128_si256::<1>(i),
-                ));
-                // a = x0 y0 x1 y1 | x2 y2 x3 y3, b = x4 y4 x5 y5 | x6 y6 x7 y7.
-                let x = _mm256_shuffle_ps::<0b10_00_10_00>(a, b); // x0 x1 x4 x5 | x2 x3 x6 x7
-                let y = _mm256_shuffle_ps::<0b11_01_11_01>(a, b);
-                let order = _mm256_setr_epi32(0, 1, 4, 5, 2, 3, 6, 7);
-                (
-                    Avx2Lanes(_mm256_permutevar8x32_ps(x, order)),
-                    Avx2Lanes(_mm256_permutevar8x32_ps(y, order)),
-                )
-            }
-        }
-        #[inline(always)]
         fn add_product_f64(acc: &mut [f64; LANES], a: Self, b: Self) {
             // Two halves of four f64 lanes; `acc` is eight f64s, so both
             // unaligned loads and stores stay inside it.
@@ -660,6 +626,19 @@ mod avx2 {
                     _mm256_castps_si256(self.0),
                 )))
             }
+        }
+        #[inline(always)]
+        fn shr23(self) -> Self {
+            unsafe {
+                Avx2Lanes(_mm256_castsi256_ps(_mm256_srli_epi32::<23>(
+                    _mm256_castps_si256(self.0),
+                )))
+            }
+        }
+        #[inline(always)]
+        fn permute(self, at: Self) -> Self {
+            // `vpermps` reads the low three bits of each index.
+            unsafe { Avx2Lanes(_mm256_permutevar8x32_ps(self.0, _mm256_castps_si256(at.0))) }
         }
     }
 }

@@ -91,6 +91,12 @@ impl WithLanes for AllOps {
                 ("ge", bits(x.ge(y))),
                 ("select", bits(m.select(x, y))),
                 ("shl23", bits(x.shl23())),
+                ("shr23", bits(x.shr23())),
+                ("permute", bits(y.permute(x.shr23()))),
+                (
+                    "permute bits",
+                    bits(x.permute(L::from_bits(b.map(f32::to_bits)))),
+                ),
                 ("exp", bits(x.exp())),
                 ("splat", bits(L::splat(a[i % LANES]))),
                 ("from_bits", bits(L::from_bits(b.map(f32::to_bits)))),
@@ -98,13 +104,6 @@ impl WithLanes for AllOps {
                 ("trunc_i32", trunc),
                 ("gather", bits(L::gather(&TABLE, x))),
                 ("gather empty", bits(L::gather(&[], x))),
-                ("gather_pair", {
-                    let pairs: Vec<[f32; 2]> = TABLE.iter().map(|&t| [t, -2.0 * t]).collect();
-                    let (p, q) = L::gather_pair(&pairs, x);
-                    let (p, q) = (bits(p), bits(q));
-                    std::array::from_fn(|k| p[k] ^ q[k].rotate_left(7))
-                }),
-                ("gather_pair empty", bits(L::gather_pair(&[], x).1)),
                 ("trunc", bits(x.trunc())),
                 ("add_product_f64", {
                     let mut acc = [0.25f64; LANES];

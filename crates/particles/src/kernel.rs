@@ -34,6 +34,7 @@ use voxless_core::simd::Lanes;
 
 pub mod area;
 pub mod chords;
+pub mod column_poly;
 pub mod sph;
 
 pub use sph::{Sph, SphFamily};
@@ -461,23 +462,6 @@ impl Kernel {
             Some(s) => Some(s.column_table()),
             None => None,
         }
-    }
-
-    /// [`Kernel::sph_table`] as pairs `(value, next value)`, so that one
-    /// eight-byte read gives both ends of an interpolation.
-    pub fn sph_pairs(&self) -> Option<&'static [[f32; 2]]> {
-        use std::sync::OnceLock;
-        static PAIRS: [OnceLock<Vec<[f32; 2]>>; 6] = [const { OnceLock::new() }; 6];
-        let table = self.sph_table()?;
-        let slot = match self.sph() {
-            None => 0,
-            Some(s) => 1 + s as usize,
-        };
-        Some(PAIRS[slot].get_or_init(|| {
-            (0..table.len())
-                .map(|i| [table[i], table.get(i + 1).copied().unwrap_or(0.0)])
-                .collect()
-        }))
     }
 
     /// The full column of a particle of radius `r` (see [`Column`]).

@@ -6,15 +6,14 @@
 //!
 //! **What is added.** Every particle adds `weight × F(b)` to the pixels
 //! whose centre lies inside its support, `F(b)` its kernel's full column at
-//! the pixel centre's distance `b` from it ([`crate::kernel::Column`]); the
-//! SPH kernels read their projected kernel from the table in `q² = b²/h²`
-//! that the exact path reads, with linear interpolation, eight pixels at a
-//! time (two 64-bit gathers of (value, next value) pairs per eight pixels, no square root; every pixel of the
-//! support's square is evaluated, those outside add 0, which costs less
-//! than finding each row's chord). The table position
-//! is computed in f32 from the pixel offset, so the value agrees with the
-//! f64 evaluation to ~1e-7 of the peak column (tested against the per-pixel
-//! line integrals).
+//! the pixel centre's distance `b` from it ([`crate::kernel::Column`]). The
+//! SPH kernels' columns are evaluated eight pixels at a time as piecewise
+//! polynomials of the table position `t ∝ b²` (no square root, no table
+//! read: [`crate::kernel::column_poly`]; a gather per eight pixels cost more
+//! than the rest of the pixel's work), within 1e-6 of the column's peak;
+//! the table position is computed in f32 from the pixel offset. Every pixel
+//! of the support's square is evaluated, those outside add 0, which costs
+//! less than finding each row's chord.
 //!
 //! **Periodic boxes.** Each particle (wrapped into the box) is added once
 //! per periodic image whose support meets the box. Along a box axis only
@@ -46,6 +45,7 @@ use voxless_core::{Aabb, Camera, Control, PixelIntegral, Projection, Vec3};
 
 use crate::ParticleError;
 use crate::kernel::area::{AreaTable, table_pixels};
+use crate::kernel::column_poly::{ColumnPoly, DEGREE, OFFSET};
 use crate::kernel::{Column, Kernel};
 use crate::volume::images;
 
@@ -287,8 +287,8 @@ impl Splatter {
         let (camera, mode, kernel) = (&self.camera, self.mode, self.kernel);
         let (width, height) = (self.width, self.height);
         let pieces = &self.pieces;
-        // The Gaussians read no table (their columns are closed forms).
-        let pairs = kernel.sph_pairs().unwrap_or(&[[0.0; 2]; 2]);
+        // The Gaussians read none (their columns are closed forms).
+        let poly = kernel.column_poly().unwrap_or(&NO_POLY);
         let (simd, wide) = (self.simd, self.wide);
         let area = self.area.as_deref();
         self.sum
@@ -312,7 +312,7 @@ impl Splatter {
                             wide,
                             y: (y0, y0 + rows),
                             width: w,
-                            pairs,
+                            poly,
                             out: &mut *out,
                         },
                     );
@@ -576,6 +576,12 @@ struct Splat {
     clip_scale: f64,
 }
 
+/// The polynomials of the kernels that have none (the Gaussians).
+static NO_POLY: ColumnPoly = ColumnPoly {
+    lanes8: [[0.0; 8]; DEGREE + 1],
+    lanes16: [[0.0; 16]; DEGREE + 1],
+};
+
 /// Particles a piece holds: the chunk is placed and binned in pieces of
 /// this many particles on every core.
 const PIECE: usize = 4096;
@@ -664,8 +670,8 @@ struct SplatBand<'a> {
     wide: bool,
     y: (u32, u32),
     width: usize,
-    /// The kernel's column table as (value, next value) pairs.
-    pairs: &'a [[f32; 2]],
+    /// The kernel's column as polynomials (zeros for the Gaussians).
+    poly: &'a ColumnPoly,
     /// The band's rows of the image.
     out: &'a mut [f64],
 }
@@ -678,7 +684,14 @@ impl WithLanes for SplatBand<'_> {
         // columns scale their offsets alike).
         let last = (crate::kernel::sph::COLUMN_TABLE - 1) as f64;
         let s = L::splat;
-        let (top, edge) = (s(last as f32), s((last - 1.0) as f32));
+        let top = s(last as f32);
+        // The column's polynomials, one coefficient per register, and the
+        // constants that split a table position into segment and variable
+        // (see `kernel::column_poly`).
+        let c: [L; DEGREE + 1] = std::array::from_fn(|k| L::from_array(self.poly.lanes8[k]));
+        let (offset, half) = (s(OFFSET), s(1.5));
+        let mantissa = L::from_bits([0x007f_ffff; LANES]);
+        let one = L::from_bits([0x3f80_0000; LANES]);
         for p in self.splats.iter() {
             if p.clip || p.area {
                 continue;
@@ -687,72 +700,101 @@ impl WithLanes for SplatBand<'_> {
             #[cfg(target_arch = "x86_64")]
             if sph && self.wide {
                 // SAFETY: `wide` is set only where the CPU has AVX-512F.
-                unsafe { splat_wide::sph_rows(p, self.y, self.width, self.pairs, last, self.out) };
+                unsafe { splat_wide::sph_rows(p, self.y, self.width, self.poly, last, self.out) };
                 continue;
             }
-            for y in p.rows.0.max(self.y.0)..p.rows.1.min(self.y.1) {
-                let dy = y as f64 + 0.5 - p.cy;
-                let ty = p.ay * dy * dy;
-                if !(ty < last) {
-                    continue;
-                }
-                // The columns of the support's square (a pixel of margin):
-                // the lanes outside the support add 0, which costs less than
-                // finding each row's chord (a varying trip count mispredicts:
-                // measured 1.3× slower).
-                let (first, end) = p.cols;
-                if first >= end {
-                    continue;
-                }
-                let (first, end) = (first as usize, end as usize);
-                let row = &mut self.out[(y - self.y.0) as usize * self.width..][..self.width];
-                if !sph {
-                    // The Gaussians: the closed form per pixel, in f64.
-                    let (pw, ph) = p.pixel;
+            // The columns of the support's square (a pixel of margin): the
+            // lanes outside the support add 0, which costs less than finding
+            // each row's chord (a varying trip count mispredicts: measured
+            // 1.3× slower).
+            let (first, end) = (p.cols.0 as usize, p.cols.1 as usize);
+            let rows = p.rows.0.max(self.y.0)..p.rows.1.min(self.y.1);
+            if first >= end || rows.is_empty() {
+                continue;
+            }
+            if !sph {
+                // The Gaussians: the closed form per pixel, in f64.
+                let (pw, ph) = p.pixel;
+                for y in rows {
+                    let dy = y as f64 + 0.5 - p.cy;
+                    let row = &mut self.out[(y - self.y.0) as usize * self.width..][..self.width];
                     for (x, o) in row.iter_mut().enumerate().take(end).skip(first) {
                         let dx = x as f64 + 0.5 - p.cx;
                         let b2 = dx * dx * pw * pw + dy * dy * ph * ph;
                         *o += p.weight * p.column.at(b2);
                     }
-                    continue;
                 }
-                // Offsets of evenly spaced pixel centres: dx = dx0 + k.
-                let dx0 = (first as f64 + 0.5 - p.cx) as f32;
-                let scale = s(p.scale as f32);
-                let lanes_end = s((end - first) as f32);
-                let mut k = 0;
-                let (ax, ty) = (s(p.ax as f32), s(ty as f32));
-                while first + k < end {
-                    let kk = L::iota() + s(k as f32);
-                    let dx = s(dx0) + kk;
-                    let t = dx * dx * ax + ty;
-                    // Inside the support and the row (lanes past the end
-                    // add 0).
-                    let inside = kk.lt(lanes_end).select(t.lt(top), s(0.0));
-                    let x = t.min(edge);
-                    let i = x.trunc();
-                    let f = x - i;
-                    let (lo, hi) = L::gather_pair(self.pairs, i);
-                    let col = inside.select(lo + (hi - lo) * f, s(0.0));
-                    // Summed in f64: the product with the scale is exact,
-                    // so the order of the particles moves only f64 bits.
-                    let at = first + k;
-                    match row.get_mut(at..at + LANES) {
-                        Some(o) => L::add_product_f64(o.try_into().expect("LANES"), col, scale),
-                        None => {
-                            let mut tail = [0.0f64; LANES];
-                            L::add_product_f64(&mut tail, col, scale);
-                            for (o, t) in row[at..].iter_mut().zip(tail) {
-                                *o += t;
+                continue;
+            }
+            // Offsets of evenly spaced pixel centres: dx = dx0 + k.
+            let dx0 = s((first as f64 + 0.5 - p.cx) as f32);
+            let scale = s(p.scale as f32);
+            let lanes_end = s((end - first) as f32);
+            let ax = s(p.ax as f32);
+            // Spans of up to SPAN lane groups: each group's `dx²·ax` and
+            // its mask of lanes inside the row are the same on every row,
+            // so they are computed once a span, which takes them off the
+            // chain each lane group waits on (the loop is bound by that
+            // chain's latency, not by its operations).
+            let mut span = first;
+            while span < end {
+                let groups = (end - span).div_ceil(LANES).min(SPAN);
+                let mut tx = [s(0.0); SPAN];
+                let mut live = [s(0.0); SPAN];
+                for g in 0..groups {
+                    let kk = L::iota() + s((span - first + g * LANES) as f32);
+                    let dx = dx0 + kk;
+                    tx[g] = dx * dx * ax;
+                    live[g] = kk.lt(lanes_end);
+                }
+                for y in rows.clone() {
+                    let dy = y as f64 + 0.5 - p.cy;
+                    let ty = p.ay * dy * dy;
+                    if !(ty < last) {
+                        continue;
+                    }
+                    let ty = s(ty as f32);
+                    let row = &mut self.out[(y - self.y.0) as usize * self.width..][..self.width];
+                    for g in 0..groups {
+                        let t = tx[g] + ty;
+                        // Inside the support and the row (lanes past the
+                        // end add 0).
+                        let inside = live[g].select(t.lt(top), s(0.0));
+                        // The segment from the exponent of t + 64, the
+                        // variable from its mantissa; Estrin's scheme on
+                        // permuted coefficients (as `ColumnPoly::at`).
+                        let tp = t + offset;
+                        let at = tp.shr23();
+                        let x = ((tp & mantissa) | one) - half;
+                        let c = |k: usize| c[k].permute(at);
+                        let x2 = x * x;
+                        let lo = (c(4) * x + c(5)) * x2 + (c(6) * x + c(7));
+                        let hi = (c(0) * x + c(1)) * x2 + (c(2) * x + c(3));
+                        let col = inside.select(hi * (x2 * x2) + lo, s(0.0));
+                        // Summed in f64: the product with the scale is
+                        // exact, so the order of the particles moves only
+                        // f64 bits.
+                        let at = span + g * LANES;
+                        match row.get_mut(at..at + LANES) {
+                            Some(o) => L::add_product_f64(o.try_into().expect("LANES"), col, scale),
+                            None => {
+                                let mut tail = [0.0f64; LANES];
+                                L::add_product_f64(&mut tail, col, scale);
+                                for (o, t) in row[at..].iter_mut().zip(tail) {
+                                    *o += t;
+                                }
                             }
                         }
                     }
-                    k += LANES;
                 }
+                span += groups * LANES;
             }
         }
     }
 }
+
+/// Lane groups per span of a splat's columns (see `SplatBand::run`).
+const SPAN: usize = 8;
 
 #[path = "splat_pixels.rs"]
 mod pixels;

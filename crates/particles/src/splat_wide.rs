@@ -2,13 +2,14 @@
 //!
 //! The same arithmetic as the eight-lane loop of `SplatBand` (the table
 //! position `dx·dx·ax + ty` in f32 without fused multiply-adds, the
-//! truncated index clamped to the table, the linear interpolation, the f64
-//! sums of the exact f32 × f32 products), lane for lane, so every pixel
-//! gets the same bits; only the number of pixels per step differs. A row
-//! of a support 10–16 pixels wide takes one step where eight lanes take two,
-//! and one 64-bit gather reads eight (value, next value) pairs.
+//! segment from its exponent, Estrin's scheme on the segment's
+//! coefficients, the f64 sums of the exact f32 × f32 products), lane for
+//! lane, so every pixel gets the same bits; only the number of pixels per
+//! step differs. A row of a support 10–16 pixels wide takes one step where
+//! eight lanes take two.
 
 use super::Splat;
+use crate::kernel::column_poly::{ColumnPoly, DEGREE, OFFSET};
 
 /// Whether the sixteen-lane path can run on this CPU.
 pub(super) fn available() -> bool {
@@ -23,9 +24,8 @@ pub(super) fn available() -> bool {
 }
 
 /// Adds SPH splat `p` (not clipped, no pixel areas) to the rows `y.0..y.1`
-/// of a band, `out` being those rows of an image `width` wide, reading the
-/// column table as (value, next value) `pairs` (`last`: the table's last
-/// position).
+/// of a band, `out` being those rows of an image `width` wide, with the
+/// kernel's column polynomials `poly` (`last`: the table's last position).
 ///
 /// # Safety
 /// The CPU must have AVX-512F ([`available`]).
@@ -35,32 +35,27 @@ pub(super) unsafe fn sph_rows(
     p: &Splat,
     y: (u32, u32),
     width: usize,
-    pairs: &[[f32; 2]],
+    poly: &ColumnPoly,
     last: f64,
     out: &mut [f64],
 ) {
     use std::arch::x86_64::*;
     let (first, end) = (p.cols.0 as usize, p.cols.1 as usize);
-    let Some(max_index) = pairs.len().checked_sub(1) else {
-        return;
-    };
     if first >= end {
         return;
     }
-    let max_index = _mm512_set1_epi32(max_index.min(i32::MAX as usize) as i32);
-    let zero = _mm512_setzero_si512();
-    let (top, edge) = (
-        _mm512_set1_ps(last as f32),
-        _mm512_set1_ps((last - 1.0) as f32),
-    );
+    let top = _mm512_set1_ps(last as f32);
     let iota = _mm512_setr_ps(
         0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 15.0,
     );
-    // The values (even f32s) and the next values (odd) of the two gathers'
-    // sixteen pairs, in lane order.
-    let even = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
-    let odd = _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31);
-    let base = pairs.as_ptr().cast::<f64>();
+    // SAFETY: each table is sixteen f32s.
+    let c: [__m512; DEGREE + 1] =
+        std::array::from_fn(|k| unsafe { _mm512_loadu_ps(poly.lanes16[k].as_ptr()) });
+    let (offset, half) = (_mm512_set1_ps(OFFSET), _mm512_set1_ps(1.5));
+    let (mantissa, one) = (
+        _mm512_set1_epi32(0x007f_ffff),
+        _mm512_set1_epi32(0x3f80_0000),
+    );
     let dx0 = _mm512_set1_ps((first as f64 + 0.5 - p.cx) as f32);
     let scale = _mm512_set1_pd(p.scale as f32 as f64);
     let lanes_end = _mm512_set1_ps((end - first) as f32);
@@ -80,26 +75,20 @@ pub(super) unsafe fn sph_rows(
             let t = _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(dx, dx), ax), ty);
             let inside = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(kk, lanes_end)
                 & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, top);
-            let x = _mm512_min_ps(t, edge);
-            let i = _mm512_roundscale_ps::<{ _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC }>(x);
-            let f = _mm512_sub_ps(x, i);
-            let at_table =
-                _mm512_min_epi32(_mm512_max_epi32(_mm512_cvttps_epi32(i), zero), max_index);
-            // SAFETY: every index is clamped to 0..pairs.len(); each pair's
-            // eight bytes are read as one f64.
-            let (a, b) = unsafe {
-                (
-                    _mm512_i32gather_pd::<8>(_mm512_castsi512_si256(at_table), base),
-                    _mm512_i32gather_pd::<8>(_mm512_extracti64x4_epi64::<1>(at_table), base),
-                )
-            };
-            let (a, b) = (_mm512_castpd_ps(a), _mm512_castpd_ps(b));
-            let lo = _mm512_permutex2var_ps(a, even, b);
-            let hi = _mm512_permutex2var_ps(a, odd, b);
-            let col = _mm512_maskz_mov_ps(
-                inside,
-                _mm512_add_ps(lo, _mm512_mul_ps(_mm512_sub_ps(hi, lo), f)),
+            let tp = _mm512_castps_si512(_mm512_add_ps(t, offset));
+            // The exponent's low four bits pick the segment.
+            let at = _mm512_srli_epi32::<23>(tp);
+            let x = _mm512_sub_ps(
+                _mm512_castsi512_ps(_mm512_or_si512(_mm512_and_si512(tp, mantissa), one)),
+                half,
             );
+            let c = |k: usize| _mm512_permutexvar_ps(at, c[k]);
+            let ma = |a: __m512, b: __m512, c: __m512| _mm512_add_ps(_mm512_mul_ps(a, b), c);
+            let x2 = _mm512_mul_ps(x, x);
+            let lo = ma(ma(c(4), x, c(5)), x2, ma(c(6), x, c(7)));
+            let hi = ma(ma(c(0), x, c(1)), x2, ma(c(2), x, c(3)));
+            let v = ma(hi, _mm512_mul_ps(x2, x2), lo);
+            let col = _mm512_maskz_mov_ps(inside, v);
             // Summed in f64 as the eight lanes do: (column × scale) exact,
             // one rounding per add.
             let col_lo = _mm512_cvtps_pd(_mm512_castps512_ps256(col));

@@ -1,0 +1,217 @@
+//! The SPH kernels' projected columns as piecewise polynomials, for the
+//! splatter's lanes: a table read would need a gather per eight pixels,
+//! which costs more than everything else a pixel needs (measured: more than
+//! half of a projection's time on an AMD Zen 3, whose gathers are
+//! microcoded); eight polynomials of degree seven are read with one
+//! in-register permute per coefficient instead.
+//!
+//! **The function.** `T(t)`, the column table's value at table position
+//! `t ∈ [0, L]` (`L` = [`COLUMN_TABLE`] − 1, `t = L·q_b²/Q²`, `Q` the
+//! support factor; see [`super::Column`]), fitted to the kernel's column by
+//! quadrature in f64 (not to the table).
+//!
+//! **Segments.** With `t' = t + 64`, segment `s` (0–7) is the octave
+//! `t' ∈ [64·2ˢ, 128·2ˢ)`, read straight from the f32 exponent of `t'`
+//! (`s = exponent − 133`), and the polynomial's variable is `x = m − 1.5`,
+//! `m ∈ [1, 2)` the mantissa of `t'`: two bit operations, no division. The
+//! octaves are narrow where the column is least smooth: at `t = 0` (terms
+//! `u·ln u` in `u = q_b²` for kernels with odd powers of `q`), the first
+//! segment is 64 table positions wide; they widen towards the support,
+//! where every column is smooth except at the splines' kinks. The last
+//! segment holds only `t ∈ [8128, 8192]`, where the columns are below 1e-7
+//! of their peak: a straight line to 0 there.
+//!
+//! **Bound.** `|P(t) − F(t)| ≤ 1e-6 · F(0)` for every kernel and every
+//! `t` (measured 1.5e-7–7e-7, the largest for M5 at its kink; the linear
+//! table it replaces on the lanes: 1.4e-7–3.9e-7), evaluated in f32
+//! exactly as the lanes do (tested).
+//!
+//! **Evaluation.** Estrin's scheme, `((c₀x + c₁)x² + (c₂x + c₃))x⁴ +
+//! ((c₄x + c₅)x² + (c₆x + c₇))`: three dependent multiply-add levels
+//! instead of Horner's seven, so a lane group's result is ready sooner and
+//! more groups overlap. Each step is one IEEE-rounded f32 operation (no
+//! fused multiply-add), the same on every lane width.
+//!
+//! **Fit.** Interpolation at the eight Chebyshev nodes of each segment
+//! (within a small factor of the best polynomial), in Newton's form in f64,
+//! expanded to coefficients in `x` and rounded to f32.
+
+use std::sync::OnceLock;
+
+use super::Kernel;
+use super::sph::COLUMN_TABLE;
+
+/// Polynomial degree per segment.
+pub const DEGREE: usize = 7;
+
+/// Added to the table position before its octave is taken.
+pub const OFFSET: f32 = 64.0;
+
+/// The biased f32 exponent of `OFFSET` (segment 0).
+const FIRST_EXPONENT: u32 = 133;
+
+/// One SPH kernel's column as eight polynomials (see the module docs).
+#[derive(Clone, Debug)]
+pub struct ColumnPoly {
+    /// Coefficient `k` (highest degree first) of segment `s` at position
+    /// `(133 + s) & 7`: the lanes' permute index is the exponent's low
+    /// three bits.
+    pub lanes8: [[f32; 8]; DEGREE + 1],
+    /// The same at position `(133 + s) & 15`, for sixteen-lane permutes
+    /// (which read four bits); the other positions hold zeros.
+    pub lanes16: [[f32; 16]; DEGREE + 1],
+}
+
+impl ColumnPoly {
+    /// `P(t)` in f32, step for step as the lanes compute it (NaN, or a
+    /// meaningless value, for `t` outside `[0, L]`; callers mask).
+    pub fn at(&self, t: f32) -> f32 {
+        let tp = t + OFFSET;
+        let bits = tp.to_bits();
+        let p = ((bits >> 23) & 7) as usize;
+        let x = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000) - 1.5;
+        let c = |k: usize| self.lanes8[k][p];
+        let x2 = x * x;
+        let lo = (c(4) * x + c(5)) * x2 + (c(6) * x + c(7));
+        let hi = (c(0) * x + c(1)) * x2 + (c(2) * x + c(3));
+        hi * (x2 * x2) + lo
+    }
+
+    /// Fits `f(t)` over `t ∈ [0, L]`.
+    fn fit(f: impl Fn(f64) -> f64) -> ColumnPoly {
+        let last = (COLUMN_TABLE - 1) as f64;
+        let offset = OFFSET as f64;
+        let mut lanes8 = [[0.0f32; 8]; DEGREE + 1];
+        let mut lanes16 = [[0.0f32; 16]; DEGREE + 1];
+        for s in 0..8u32 {
+            // The octave of t' and its part inside the table.
+            let lo = offset * (1u32 << s) as f64;
+            let (xa, xb) = (-0.5, ((2.0 * lo).min(last + offset) / lo) - 1.5);
+            let t_of = |x: f64| (x + 1.5) * lo - offset;
+            let coef = if 2.0 * lo > last + offset {
+                // The last sliver: a line from the column to 0 at L.
+                let (y0, x1) = (f(t_of(xa)), xb);
+                let slope = -y0 / (x1 - xa);
+                let mut c = [0.0; DEGREE + 1];
+                c[DEGREE - 1] = slope;
+                c[DEGREE] = y0 - slope * xa;
+                c
+            } else {
+                interpolate(|x| f(t_of(x)), xa, xb)
+            };
+            let e = FIRST_EXPONENT + s;
+            for k in 0..=DEGREE {
+                lanes8[k][(e & 7) as usize] = coef[k] as f32;
+                lanes16[k][(e & 15) as usize] = coef[k] as f32;
+            }
+        }
+        ColumnPoly { lanes8, lanes16 }
+    }
+}
+
+/// The polynomial of degree [`DEGREE`] through `g` at the Chebyshev nodes
+/// of `[a, b]`, as coefficients of `x^DEGREE … x^0`.
+fn interpolate(g: impl Fn(f64) -> f64, a: f64, b: f64) -> [f64; DEGREE + 1] {
+    const N: usize = DEGREE + 1;
+    let nodes: [f64; N] = std::array::from_fn(|k| {
+        let c = ((2 * k + 1) as f64 * std::f64::consts::PI / (2 * N) as f64).cos();
+        0.5 * (a + b) + 0.5 * (b - a) * c
+    });
+    // Newton's divided differences, in place.
+    let mut d: [f64; N] = nodes.map(&g);
+    for j in 1..N {
+        for i in (j..N).rev() {
+            d[i] = (d[i] - d[i - 1]) / (nodes[i] - nodes[i - j]);
+        }
+    }
+    // Expand d[0] + d[1](x − x0) + d[2](x − x0)(x − x1) + … by Horner's
+    // scheme on coefficient vectors (lowest degree first while building).
+    let mut poly = [0.0f64; N];
+    poly[0] = d[N - 1];
+    for k in (0..N - 1).rev() {
+        // poly ← poly·(x − x_k) + d[k]
+        for i in (1..N).rev() {
+            poly[i] = poly[i - 1] - nodes[k] * poly[i];
+        }
+        poly[0] = -nodes[k] * poly[0] + d[k];
+    }
+    let mut out = [0.0; N];
+    for (k, c) in poly.iter().enumerate() {
+        out[DEGREE - k] = *c;
+    }
+    out
+}
+
+impl Kernel {
+    /// The kernel's column as piecewise polynomials in the table position
+    /// (see [`column_poly`](self)); `None` for the Gaussians. Built once per
+    /// kernel on first use.
+    pub fn column_poly(&self) -> Option<&'static ColumnPoly> {
+        static POLYS: [OnceLock<ColumnPoly>; 6] = [const { OnceLock::new() }; 6];
+        if !self.is_sph() {
+            return None;
+        }
+        let (slot, q) = match self.sph() {
+            None => (0, 2.0),
+            Some(s) => (1 + s as usize, s.support()),
+        };
+        let last = (COLUMN_TABLE - 1) as f64;
+        Some(POLYS[slot].get_or_init(|| {
+            ColumnPoly::fit(|t| column_by_quadrature(*self, (q * q * t.max(0.0) / last).sqrt()))
+        }))
+    }
+}
+
+/// An SPH kernel's `F(q_b)` by quadrature in f64 (the function the table
+/// and the polynomials hold; 0 for the Gaussians).
+pub(crate) fn column_by_quadrature(kernel: Kernel, qb: f64) -> f64 {
+    match kernel.sph() {
+        _ if kernel == Kernel::CubicSpline => super::projected_m4_quadrature(qb),
+        Some(s) => s.projected_quadrature(qb),
+        None => 0.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The polynomials against the columns by quadrature, in f32 as the
+    /// lanes evaluate them: within 1e-6 of the peak everywhere, on a grid
+    /// through every segment and geometrically towards `t = 0`.
+    #[test]
+    fn polynomials_hold_the_columns_to_1e_6_of_the_peak() {
+        let last = (COLUMN_TABLE - 1) as f64;
+        let sph = crate::tests::KERNELS.into_iter().filter(|k| k.is_sph());
+        assert_eq!(sph.clone().count(), 6);
+        for kernel in sph {
+            let poly = kernel.column_poly().unwrap();
+            let q = kernel.support_factor() as f64;
+            let exact = |t: f64| column_by_quadrature(kernel, (q * q * t / last).sqrt());
+            let peak = exact(0.0);
+            let ts = (0..=6000)
+                .map(|i| last * i as f64 / 6000.0)
+                .chain((0..200).map(|i| 64.0 * 0.9f64.powi(i)));
+            let mut worst: f64 = 0.0;
+            for t in ts {
+                let t = t as f32;
+                let err = (poly.at(t) as f64 - exact(t as f64)).abs();
+                worst = worst.max(err / peak);
+            }
+            assert!(worst < 1e-6, "{kernel:?}: {worst:e} of the peak");
+            assert!(kernel.column_poly().unwrap().at(last as f32).abs() < 1e-7 * peak as f32);
+        }
+        assert!(Kernel::Gaussian3.column_poly().is_none());
+    }
+
+    /// Interpolation reproduces a polynomial of its degree.
+    #[test]
+    fn interpolation_is_exact_for_polynomials() {
+        let want = [0.5, -1.0, 2.0, 0.25, -3.0, 1.5, 0.75, -2.0];
+        let p = |x: f64| want.iter().fold(0.0, |acc, c| acc * x + c);
+        let got = interpolate(p, -0.5, 0.5);
+        for (g, w) in got.iter().zip(want) {
+            assert!((g - w).abs() < 1e-9, "{got:?}");
+        }
+    }
+}
