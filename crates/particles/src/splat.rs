@@ -717,6 +717,9 @@ impl WithLanes for SplatBand<'_> {
                 let (pw, ph) = p.pixel;
                 for y in rows {
                     let dy = y as f64 + 0.5 - p.cy;
+                    if !(p.ay * dy * dy < last) {
+                        continue;
+                    }
                     let row = &mut self.out[(y - self.y.0) as usize * self.width..][..self.width];
                     for (x, o) in row.iter_mut().enumerate().take(end).skip(first) {
                         let dx = x as f64 + 0.5 - p.cx;
