@@ -45,7 +45,7 @@ use voxless_core::{Aabb, Camera, Control, PixelIntegral, Projection, Vec3};
 
 use crate::ParticleError;
 use crate::kernel::area::{AreaTable, table_pixels};
-use crate::kernel::column_poly::{ColumnPoly, DEGREE, OFFSET};
+use crate::kernel::column_poly::{ColumnPoly, DEGREE};
 use crate::kernel::{Column, Kernel};
 use crate::volume::images;
 
@@ -685,13 +685,8 @@ impl WithLanes for SplatBand<'_> {
         let last = (crate::kernel::sph::COLUMN_TABLE - 1) as f64;
         let s = L::splat;
         let top = s(last as f32);
-        // The column's polynomials, one coefficient per register, and the
-        // constants that split a table position into segment and variable
-        // (see `kernel::column_poly`).
-        let c: [L; DEGREE + 1] = std::array::from_fn(|k| L::from_array(self.poly.lanes8[k]));
-        let (offset, half) = (s(OFFSET), s(1.5));
-        let mantissa = L::from_bits([0x007f_ffff; LANES]);
-        let one = L::from_bits([0x3f80_0000; LANES]);
+        // The column's polynomials, one coefficient per register.
+        let c = self.poly.lanes::<L>();
         for p in self.splats.iter() {
             if p.clip || p.area {
                 continue;
@@ -762,17 +757,7 @@ impl WithLanes for SplatBand<'_> {
                         // Inside the support and the row (lanes past the
                         // end add 0).
                         let inside = live[g].select(t.lt(top), s(0.0));
-                        // The segment from the exponent of t + 64, the
-                        // variable from its mantissa; Estrin's scheme on
-                        // permuted coefficients (as `ColumnPoly::at`).
-                        let tp = t + offset;
-                        let at = tp.shr23();
-                        let x = ((tp & mantissa) | one) - half;
-                        let c = |k: usize| c[k].permute(at);
-                        let x2 = x * x;
-                        let lo = (c(4) * x + c(5)) * x2 + (c(6) * x + c(7));
-                        let hi = (c(0) * x + c(1)) * x2 + (c(2) * x + c(3));
-                        let col = inside.select(hi * (x2 * x2) + lo, s(0.0));
+                        let col = inside.select(ColumnPoly::eval(&c, t), s(0.0));
                         // Summed in f64: the product with the scale is
                         // exact, so the order of the particles moves only
                         // f64 bits.

@@ -284,6 +284,10 @@ fn pixel_centres_hold_the_exact_columns() {
                 s.add(&[q], 0, &Control::new()).unwrap();
                 let got = s.finish().unwrap();
                 let mut worst = 0.0f64;
+                assert!(
+                    got.iter().all(|&v| v >= 0.0),
+                    "{kernel:?}: a negative column"
+                );
                 for (k, &v) in got.iter().enumerate() {
                     let (x, y) = ((k as u32 % n) as f64, (k as u32 / n) as f64);
                     let bx = (x + 0.5) / n as f64 - q.center.x as f64;

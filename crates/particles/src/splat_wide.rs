@@ -87,7 +87,8 @@ pub(super) unsafe fn sph_rows(
             let x2 = _mm512_mul_ps(x, x);
             let lo = ma(ma(c(4), x, c(5)), x2, ma(c(6), x, c(7)));
             let hi = ma(ma(c(0), x, c(1)), x2, ma(c(2), x, c(3)));
-            let v = ma(hi, _mm512_mul_ps(x2, x2), lo);
+            // Never below 0, as `ColumnPoly::eval`.
+            let v = _mm512_max_ps(ma(hi, _mm512_mul_ps(x2, x2), lo), _mm512_setzero_ps());
             let col = _mm512_maskz_mov_ps(inside, v);
             // Summed in f64 as the eight lanes do: (column × scale) exact,
             // one rounding per add.
