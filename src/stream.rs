@@ -2,12 +2,17 @@
 //! summed chunk by chunk, never holding the particles, their order or a
 //! BVH — peak memory is the image and one chunk, whatever the file's size.
 //!
-//! Which scenes stream: particles from `.npy` files (positions, and radii
-//! and weights when given as `.npy`), with a global radius or per-particle
-//! radii, no radius or weight map, and a projection over the whole line
+//! Which scenes stream: particles from files whose readers read a range of
+//! rows — `.npy` positions (with radii and weights given as `.npy`),
+//! Gadget binary, Tipsy and HDF5 (SWIFT, Gadget, AREPO, GIZMO, PySPH)
+//! files with the per-particle arrays as their columns; one snapshot type
+//! — with a global radius or per-particle radii (a snapshot's smoothing
+//! lengths), no radius or weight map, and a projection over the whole line
 //! (no `depth`). Everything else — radii from neighbours or the spacing,
-//! which need every particle at once; snapshots, tables and regions;
-//! slabs — takes the in-memory path ([`crate::PlacedData::project`]).
+//! which need every particle at once; text and VTK tables, species and
+//! regions; several types; slabs — takes the in-memory path
+//! ([`crate::PlacedData::project`]). A snapshot's kernel, units, masses
+//! and periodic box are the loader's, read with every chunk.
 //!
 //! The result is the in-memory projection's: the same frame (chosen from
 //! the whole set's reach in a first pass), the same local positions,
@@ -92,8 +97,9 @@ pub fn project_on(
     let Some(p) = streamable(desc, projection) else {
         return Ok(None);
     };
-    // No rows: the header's shape (and the other files' checked).
-    let Some(first) = load::npy_rows(
+    // No rows: the row count, the file's box, kernel and notes, and which
+    // per-particle arrays there are (the other files checked).
+    let Some(first) = load::rows_of(
         p,
         base,
         frame,
@@ -105,11 +111,14 @@ pub fn project_on(
     else {
         return Ok(None);
     };
+    // Radii from neighbours or the spacing need every particle.
+    if p.radius.is_none() && first.data.radii.is_none() {
+        return Ok(None);
+    }
     let total = first.total;
     let chunks = total.div_ceil(CHUNK).max(1);
-    drop(first);
     let read = |k: usize| -> Result<FrameData, SceneError> {
-        load::npy_rows(
+        load::rows_of(
             p,
             base,
             frame,
@@ -120,8 +129,9 @@ pub fn project_on(
         )?
         .ok_or_else(|| SceneError::setting("particles.file", "the files changed while being read"))
     };
-    let kernel = load::kernel_of(p, p.kernel.unwrap_or(voxless_scene::KernelName::Gaussian3));
-    let boxed = periodic::resolve_box(p, None)?;
+    let kernel = first.kernel(p);
+    let boxed = periodic::resolve_box(p, first.periodic)?;
+    let (has_radii, mut notes) = (first.data.radii.is_some(), first.notes);
 
     // Pass 1, without a periodic box: the world reach (the frame), the
     // chunks read on every core and combined in order. With a box the
@@ -158,7 +168,7 @@ pub fn project_on(
     let radius = load::particle_settings(
         p,
         kernel,
-        p.radii.is_some(),
+        has_radii,
         &mut |_| (1.0, String::new()),
         world.scale,
         &mut Vec::new(),
@@ -169,7 +179,7 @@ pub fn project_on(
     // once above, for the whole set.)
     let prepare = |k: usize| -> Result<Prepared, SceneError> {
         let mut fd = read(k)?;
-        let scan = boxed.is_some().then(|| Scan::of(&fd, p, boxed.as_ref()));
+        let mut scan = boxed.is_some().then(|| Scan::of(&fd, p, boxed.as_ref()));
         if scan.as_ref().is_some_and(&too_wide) {
             // The in-memory path refuses it, naming the whole set's span.
             return Ok(Prepared {
@@ -178,19 +188,15 @@ pub fn project_on(
                 scan,
             });
         }
-        periodic::settle(
-            p,
-            None,
-            &mut fd.positions,
-            &mut fd.data.radii,
-            (false, false),
-            kernel,
-            &fd.main_file,
-            &mut Vec::new(),
-        )?;
-        let offset = fd.offset;
+        // The loader's wrap (`periodic::settle` of a share: no region, no
+        // neighbours; the span it checks against a given box is the
+        // scan's, checked above), counted for the box's note.
+        if let (Some((b, _)), Some(scan)) = (&boxed, scan.as_mut()) {
+            scan.wrapped = periodic::wrap_into(&mut fd.positions, b);
+        }
+        let (offset, fd_kernel) = (fd.offset, fd.sph_defaults);
         let (mut data, main_file, files) = fd.place(&world);
-        load::prepare_arrays(&mut data, p, None, world.scale)?;
+        load::prepare_arrays(&mut data, p, fd_kernel, world.scale)?;
         check_data(&data, offset).map_err(|e| load::blame(main_file, &files, e))?;
         let particles = (0..data.positions.len())
             .map(|i| {
@@ -306,7 +312,6 @@ pub fn project_on(
     if too_wide(&seen) {
         return Ok(None);
     }
-    let mut notes = Vec::new();
     if let Some((b, given)) = &boxed {
         notes.push(periodic::box_note(
             b,
@@ -344,22 +349,16 @@ impl Scan {
         reach: None,
     };
 
-    /// A chunk's span, and its wrap count in the periodic box `boxed` or,
-    /// without one, its world reach.
+    /// A chunk's span, and without a periodic box (`boxed`) its world
+    /// reach (with one, the wrap count is taken while wrapping).
     fn of(fd: &FrameData, p: &ParticlesDesc, boxed: Option<&(PeriodicBox, bool)>) -> Scan {
         let mut scan = Scan::EMPTY;
         for q in &fd.positions {
             periodic::extend_span(&mut scan.span, q);
         }
-        match boxed {
-            Some((b, _)) => {
-                scan.wrapped = fd
-                    .positions
-                    .iter()
-                    .filter(|q| q.iter().all(|v| v.is_finite()) && !b.contains(**q))
-                    .count();
-            }
-            None => scan.reach = fd.world_reach(p),
+        // With a box, the wrap count is taken while wrapping.
+        if boxed.is_none() {
+            scan.reach = fd.world_reach(p);
         }
         scan
     }
@@ -382,7 +381,9 @@ struct Prepared {
     scan: Option<Scan>,
 }
 
-/// The particle description of a scene that can stream (module docs).
+/// The particle description of a scene that may stream (module docs;
+/// whether its file is read by rows and has radii is learnt by reading
+/// none of its rows).
 fn streamable<'a>(desc: &'a SceneDesc, projection: &ProjectionDesc) -> Option<&'a ParticlesDesc> {
     let p = desc.particles.as_ref()?;
     let plain = desc.amr.is_none()
@@ -390,17 +391,12 @@ fn streamable<'a>(desc: &'a SceneDesc, projection: &ProjectionDesc) -> Option<&'
         && projection.depth.is_none()
         && p.demo != Some(true)
         && p.materials.is_none()
-        && p.part_type.is_none()
+        // Several snapshot types are materials.
+        && p.part_type.as_ref().is_none_or(|t| !t.0.contains(','))
         && p.species.is_none()
         && p.region.is_none()
         && p.neighbours.is_none()
         && p.radius_map.is_none()
-        && p.weight_map.is_none()
-        && (p.radius.is_some() || p.radii.is_some());
-    let npy = |s: &Option<String>| s.as_ref().is_none_or(|f| load::is_npy(Path::new(f)));
-    (plain
-        && p.file.as_ref().is_some_and(|f| load::is_npy(Path::new(f)))
-        && npy(&p.radii)
-        && npy(&p.weights))
-    .then_some(p)
+        && p.weight_map.is_none();
+    (plain && p.file.is_some()).then_some(p)
 }

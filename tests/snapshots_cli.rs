@@ -364,3 +364,48 @@ fn swift_cells_let_a_region_read_only_what_overlaps() {
     );
     assert!(err.contains("h⁻¹"), "{err}");
 }
+
+/// `project` of `file` with its defaults, streamed, against the in-memory
+/// path (`--save-radii` loads the volume): the same map to f64 summation
+/// order, and the log says which path ran.
+fn streams_as_in_memory(dir: &Scratch, file: &str) {
+    let run = |extra: &[&str], out: &str| {
+        let path = dir.str(out);
+        let mut args = vec!["project", "--particles", file, "--size", "64", "48"];
+        args.extend_from_slice(extra);
+        args.extend(["-o", &path]);
+        let err = ok(&args);
+        (read(&dir.path(out)).1, err)
+    };
+    let (a, log) = run(&[], "a.npy");
+    assert!(log.contains("streamed in"), "{file}:\n{log}");
+    let radii = dir.str("radii.npy");
+    let (b, log) = run(&["--save-radii", &radii], "b.npy");
+    assert!(!log.contains("streamed in"), "{file}:\n{log}");
+    let peak = b.iter().fold(0.0f64, |m, &v| m.max(v));
+    assert!(peak > 0.0, "{file}");
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() <= 1e-6 * peak, "{file}: {x} vs {y}");
+    }
+}
+
+#[test]
+fn binary_snapshots_with_smoothing_lengths_stream() {
+    let dir = Scratch::new("snapshots-stream");
+    for name in ["gadget2_gas_snap", "gadget_multi/snap_005", "snap.tipsy"] {
+        streams_as_in_memory(&dir, &set(name));
+    }
+}
+
+#[cfg(feature = "hdf5")]
+#[test]
+fn hdf5_snapshots_with_smoothing_lengths_stream() {
+    let dir = Scratch::new("snapshots-stream-hdf5");
+    for name in [
+        "swift_snap.hdf5",
+        "gizmo_snap.hdf5",
+        "arepo_multi/snapdir_010",
+    ] {
+        streams_as_in_memory(&dir, &set(name));
+    }
+}

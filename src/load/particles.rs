@@ -217,16 +217,7 @@ fn read_share(
     if let Some(rows) = npy_rows(p, base, frame, share)? {
         return Ok(rows);
     }
-    // HDF5 files read only the share's rows (hyperslabs) when the
-    // per-particle arrays are columns of the file.
-    let columns_only = [&p.attribute, &p.radii, &p.weights]
-        .into_iter()
-        .flatten()
-        .all(|spec| !is_npy(&base.join(spec)));
-    // A region's rows are known only once read: every rank reads the
-    // region (bounded by it) and keeps its share.
-    let part = (p.species.is_none() && p.region.is_none() && columns_only)
-        .then_some((share.rank, share.ranks));
+    let part = by_rows(p, base).then_some((share.rank, share.ranks));
     let (mut fd, shared) = read_frame_share(p, base, frame, part)?;
     if shared {
         return Ok(fd);
@@ -239,6 +230,50 @@ fn read_share(
     fd.data.weights = cut(fd.data.weights);
     fd.offset = r.start;
     Ok(fd)
+}
+
+/// Whether a share of the file's rows can be asked of its reader: HDF5,
+/// Gadget binary and Tipsy files read only the share's rows when the
+/// per-particle arrays are columns of the file (not `.npy` files beside
+/// it). A region's rows are known only once read (every rank reads the
+/// region, bounded by it, and keeps its share), and PySPH species are
+/// picked after reading.
+fn by_rows(p: &ParticlesDesc, base: &Path) -> bool {
+    let columns_only = [&p.attribute, &p.radii, &p.weights]
+        .into_iter()
+        .flatten()
+        .all(|spec| !is_npy(&base.join(spec)));
+    p.species.is_none() && p.region.is_none() && columns_only
+}
+
+/// Share `share` of the rows of frame `frame` (as [`read_rows`] before
+/// the box and the neighbours), when only those rows are read: `.npy`
+/// files by offset ([`npy_rows`]), HDF5, Gadget binary and Tipsy snapshots
+/// by row range ([`by_rows`]). `None` for every other file, which is read
+/// whole (its errors are the whole read's to word).
+pub(crate) fn rows_of(
+    p: &ParticlesDesc,
+    base: &Path,
+    frame: usize,
+    share: Share,
+) -> Result<Option<FrameData>, SceneError> {
+    if let Some(rows) = npy_rows(p, base, frame, share)? {
+        return Ok(Some(rows));
+    }
+    let Some(f) = &p.file else {
+        return Ok(None);
+    };
+    let (path, _) = locate(f, base, frame)?;
+    let format = ParticleFormat::detect(&path).ok().flatten();
+    let ranged = matches!(
+        format,
+        Some(ParticleFormat::Hdf5 | ParticleFormat::GadgetBinary | ParticleFormat::Tipsy)
+    );
+    if !(ranged && by_rows(p, base)) {
+        return Ok(None);
+    }
+    let (fd, shared) = read_frame_share(p, base, frame, Some((share.rank, share.ranks)))?;
+    Ok(shared.then_some(fd))
 }
 
 pub(crate) fn is_npy(path: &Path) -> bool {

@@ -184,7 +184,12 @@ fn wrap_positions(
             }
         }
     }
-    Ok(positions
+    Ok(wrap_into(positions, b))
+}
+
+/// Wraps the finite `positions` outside `b` into it; returns how many.
+pub(crate) fn wrap_into(positions: &mut [[f64; 3]], b: &PeriodicBox) -> usize {
+    positions
         .par_iter_mut()
         .map(|q| {
             let outside = q.iter().all(|v| v.is_finite()) && !b.contains(*q);
@@ -193,7 +198,7 @@ fn wrap_positions(
             }
             outside as usize
         })
-        .sum())
+        .sum()
 }
 
 /// The note for the box `b` (`given`, or the file's) and the `wrapped`

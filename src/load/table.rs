@@ -70,7 +70,10 @@ pub fn open(path: &Path, frame: usize, select: &Selection) -> Result<Opened, Sce
     if let Some(species) = species {
         formats::keep_species(&mut table, species, path, format, frame)?;
     }
-    if table.is_empty() {
+    // An empty share of a file holding particles is not an error (a rank
+    // past the last row, a stream's look at the header).
+    let holds_some = table.rows.is_some_and(|(_, total)| total > 0);
+    if table.is_empty() && !holds_some {
         if let Some(r) = &options.region {
             let box_text = match table.domain {
                 Some((lo, hi)) => format!(" (the snapshot's box is {lo:?} to {hi:?})"),

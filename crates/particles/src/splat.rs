@@ -39,7 +39,7 @@
 
 use rayon::prelude::*;
 use std::sync::Arc;
-use voxless_core::simd::{LANES, Lanes, Simd, WithLanes, dispatch};
+use voxless_core::simd::{Simd, dispatch};
 
 use voxless_core::{Aabb, Camera, Control, PixelIntegral, Projection, Vec3};
 
@@ -248,6 +248,7 @@ impl Splatter {
             },
             half: self.half,
             area: self.area.is_some(),
+            lean: !on_device && self.kernel.column_poly().is_some(),
         };
         // (Pieces left from a larger chunk would be summed again.)
         pieces.resize_with(particles.len().div_ceil(PIECE), Piece::default);
@@ -259,14 +260,18 @@ impl Splatter {
             .enumerate()
             .map(|(k, (piece, part))| {
                 piece.splats.clear();
+                piece.lean.clear();
                 for (i, p) in part.iter().enumerate() {
                     placer.place(p, offset + k * PIECE + i, piece)?;
                 }
                 // On a device the CPU sums only what it keeps (pixel
                 // areas, clipped images), so only those are binned.
-                piece.bands.bin(&piece.splats, placer.size.1, |p| {
-                    !on_device || p.clip || p.area
-                });
+                let height = placer.size.1;
+                let keep = |p: &Splat| (!on_device || p.clip || p.area).then_some(p.rows);
+                piece.bands.bin(piece.splats.iter().map(keep), height);
+                piece
+                    .lean_bands
+                    .bin(piece.lean.iter().map(|p| Some(p.rows)), height);
                 Ok(())
             })
             .collect();
@@ -385,6 +390,8 @@ struct Placer {
     half: (f64, f64),
     /// Pixel areas asked for.
     area: bool,
+    /// SPH splats summed on the CPU's lanes are kept as [`Lean`] splats.
+    lean: bool,
     /// The camera's eye, right, up and forward in f64.
     basis: [[f64; 3]; 4],
 }
@@ -457,6 +464,21 @@ impl Placer {
             if rows.0 >= rows.1 || cols.0 >= cols.1 {
                 continue;
             }
+            // Supports narrower than table_pixels take the area table;
+            // wider ones are sampled at pixel centres.
+            let area = self.area && rx.min(ry) < table_pixels(self.kernel);
+            if self.lean && !clip && !area {
+                piece.lean.push(Lean {
+                    cx,
+                    cy,
+                    ay: column.to_index() * ph * ph,
+                    ax: (column.to_index() * pw * pw) as f32,
+                    scale: (column.scale() * p.weight as f64) as f32,
+                    rows,
+                    cols,
+                });
+                continue;
+            }
             let mut splat = Splat {
                 cx,
                 cy,
@@ -473,9 +495,7 @@ impl Placer {
                 b,
                 depth: dot(d, fwd),
                 clip,
-                // Supports narrower than table_pixels take the table;
-                // wider ones are sampled at pixel centres.
-                area: self.area && rx.min(ry) < table_pixels(self.kernel),
+                area,
                 cells: SubCells::centres(self.size, self.half),
                 clip_scale: p.weight as f64,
             };
@@ -576,6 +596,41 @@ struct Splat {
     clip_scale: f64,
 }
 
+impl Splat {
+    /// What the lanes read of it (see [`Lean`]).
+    fn lean(&self) -> Lean {
+        Lean {
+            cx: self.cx,
+            cy: self.cy,
+            ay: self.ay,
+            ax: self.ax as f32,
+            scale: self.scale as f32,
+            rows: self.rows,
+            cols: self.cols,
+        }
+    }
+}
+
+/// An SPH splat summed at pixel centres on the CPU's lanes (neither
+/// clipped nor averaged over pixel areas: nearly every splat), with what
+/// the lanes read of it alone — 48 bytes against a [`Splat`]'s ~200, so a
+/// chunk's splats stay in the cores' caches between placing, binning and
+/// summing.
+#[derive(Clone, Copy)]
+struct Lean {
+    /// The centre in pixel coordinates (as [`Splat`]'s).
+    cx: f64,
+    cy: f64,
+    /// The table position of a row offset: `ay·dy²` (f64, as the lanes
+    /// take it), and of a column offset: `ax·dx²` (f32).
+    ay: f64,
+    ax: f32,
+    /// `weight ×` the column table's scale, in f32 as the lanes take it.
+    scale: f32,
+    rows: (u32, u32),
+    cols: (u32, u32),
+}
+
 /// The polynomials of the kernels that have none (the Gaussians).
 static NO_POLY: ColumnPoly = ColumnPoly {
     lanes8: [[0.0; 8]; DEGREE + 1],
@@ -590,6 +645,9 @@ const PIECE: usize = 4096;
 #[derive(Default)]
 struct Piece {
     splats: Vec<Splat>,
+    /// The SPH splats summed on the lanes, in order, and their bands.
+    lean: Vec<Lean>,
+    lean_bands: Bands,
     /// Reused: a particle's periodic images.
     found: Vec<([i8; 3], Vec3)>,
     /// The last radius placed and its column.
@@ -606,15 +664,16 @@ struct Bands {
 }
 
 impl Bands {
-    /// Bins the splats `keep` accepts (reusing the buffers).
-    fn bin(&mut self, splats: &[Splat], height: u32, keep: impl Fn(&Splat) -> bool) {
+    /// Bins splats by their rows (`None`: not binned), splat `i` the
+    /// `i`-th item (reusing the buffers).
+    fn bin(&mut self, rows: impl Iterator<Item = Option<(u32, u32)>> + Clone, height: u32) {
         let bands = height.div_ceil(BAND) as usize;
-        let range = |s: &Splat| (s.rows.0 / BAND) as usize..=((s.rows.1 - 1) / BAND) as usize;
+        let range = |r: (u32, u32)| (r.0 / BAND) as usize..=((r.1 - 1) / BAND) as usize;
         self.start.clear();
         self.start.resize(bands + 1, 0);
         let start = &mut self.start;
-        for s in splats.iter().filter(|s| keep(s)) {
-            for t in range(s) {
+        for r in rows.clone().flatten() {
+            for t in range(r) {
                 start[t + 1] += 1;
             }
         }
@@ -624,8 +683,9 @@ impl Bands {
         let mut fill = start.clone();
         self.members.clear();
         self.members.resize(start[bands] as usize, 0);
-        for (i, s) in splats.iter().enumerate().filter(|(_, s)| keep(s)) {
-            for t in range(s) {
+        for (i, r) in rows.enumerate() {
+            let Some(r) = r else { continue };
+            for t in range(r) {
                 self.members[fill[t] as usize] = i as u32;
                 fill[t] += 1;
             }
@@ -646,9 +706,20 @@ struct BandSplats<'a> {
 
 impl<'a> BandSplats<'a> {
     fn is_empty(self) -> bool {
-        self.pieces
-            .iter()
-            .all(|p| p.bands.members(self.band).is_empty())
+        self.pieces.iter().all(|p| {
+            p.bands.members(self.band).is_empty() && p.lean_bands.members(self.band).is_empty()
+        })
+    }
+
+    /// The band's lean splats, in order.
+    fn lean(self) -> impl Iterator<Item = &'a Lean> {
+        self.pieces.iter().flat_map(move |piece| {
+            piece
+                .lean_bands
+                .members(self.band)
+                .iter()
+                .map(move |&i| &piece.lean[i as usize])
+        })
     }
 
     fn iter(self) -> impl Iterator<Item = &'a Splat> {
@@ -662,131 +733,13 @@ impl<'a> BandSplats<'a> {
     }
 }
 
-/// One band's f64 sums over its splats in order (on the SIMD lanes the
-/// splatter was given). Clipped splats are left to [`clipped`].
-struct SplatBand<'a> {
-    splats: BandSplats<'a>,
-    /// SPH splats on sixteen lanes ([`Splatter`]'s `wide`).
-    wide: bool,
-    y: (u32, u32),
-    width: usize,
-    /// The kernel's column as polynomials (zeros for the Gaussians).
-    poly: &'a ColumnPoly,
-    /// The band's rows of the image.
-    out: &'a mut [f64],
-}
-
-impl WithLanes for SplatBand<'_> {
-    type Output = ();
-    #[inline(always)]
-    fn run<L: Lanes>(self) {
-        // Table positions run over 0..=LAST for every kernel (the Gaussians'
-        // columns scale their offsets alike).
-        let last = (crate::kernel::sph::COLUMN_TABLE - 1) as f64;
-        let s = L::splat;
-        let top = s(last as f32);
-        // The column's polynomials, one coefficient per register.
-        let c = self.poly.lanes::<L>();
-        for p in self.splats.iter() {
-            if p.clip || p.area {
-                continue;
-            }
-            let sph = p.column.is_sph();
-            #[cfg(target_arch = "x86_64")]
-            if sph && self.wide {
-                // SAFETY: `wide` is set only where the CPU has AVX-512F.
-                unsafe { splat_wide::sph_rows(p, self.y, self.width, self.poly, last, self.out) };
-                continue;
-            }
-            // The columns of the support's square (a pixel of margin): the
-            // lanes outside the support add 0, which costs less than finding
-            // each row's chord (a varying trip count mispredicts: measured
-            // 1.3× slower).
-            let (first, end) = (p.cols.0 as usize, p.cols.1 as usize);
-            let rows = p.rows.0.max(self.y.0)..p.rows.1.min(self.y.1);
-            if first >= end || rows.is_empty() {
-                continue;
-            }
-            if !sph {
-                // The Gaussians: the closed form per pixel, in f64.
-                let (pw, ph) = p.pixel;
-                for y in rows {
-                    let dy = y as f64 + 0.5 - p.cy;
-                    if !(p.ay * dy * dy < last) {
-                        continue;
-                    }
-                    let row = &mut self.out[(y - self.y.0) as usize * self.width..][..self.width];
-                    for (x, o) in row.iter_mut().enumerate().take(end).skip(first) {
-                        let dx = x as f64 + 0.5 - p.cx;
-                        let b2 = dx * dx * pw * pw + dy * dy * ph * ph;
-                        *o += p.weight * p.column.at(b2);
-                    }
-                }
-                continue;
-            }
-            // Offsets of evenly spaced pixel centres: dx = dx0 + k.
-            let dx0 = s((first as f64 + 0.5 - p.cx) as f32);
-            let scale = s(p.scale as f32);
-            let lanes_end = s((end - first) as f32);
-            let ax = s(p.ax as f32);
-            // Spans of up to SPAN lane groups: each group's `dx²·ax` and
-            // its mask of lanes inside the row are the same on every row,
-            // so they are computed once a span (measured: 5–10 % of the
-            // loop).
-            let mut span = first;
-            while span < end {
-                let groups = (end - span).div_ceil(LANES).min(SPAN);
-                let mut tx = [s(0.0); SPAN];
-                let mut live = [s(0.0); SPAN];
-                for g in 0..groups {
-                    let kk = L::iota() + s((span - first + g * LANES) as f32);
-                    let dx = dx0 + kk;
-                    tx[g] = dx * dx * ax;
-                    live[g] = kk.lt(lanes_end);
-                }
-                for y in rows.clone() {
-                    let dy = y as f64 + 0.5 - p.cy;
-                    let ty = p.ay * dy * dy;
-                    if !(ty < last) {
-                        continue;
-                    }
-                    let ty = s(ty as f32);
-                    let row = &mut self.out[(y - self.y.0) as usize * self.width..][..self.width];
-                    for g in 0..groups {
-                        let t = tx[g] + ty;
-                        // Inside the support and the row (lanes past the
-                        // end add 0).
-                        let inside = live[g].select(t.lt(top), s(0.0));
-                        let col = inside.select(ColumnPoly::eval(&c, t), s(0.0));
-                        // Summed in f64: the product with the scale is
-                        // exact, so the order of the particles moves only
-                        // f64 bits.
-                        let at = span + g * LANES;
-                        match row.get_mut(at..at + LANES) {
-                            Some(o) => L::add_product_f64(o.try_into().expect("LANES"), col, scale),
-                            None => {
-                                let mut tail = [0.0f64; LANES];
-                                L::add_product_f64(&mut tail, col, scale);
-                                for (o, t) in row[at..].iter_mut().zip(tail) {
-                                    *o += t;
-                                }
-                            }
-                        }
-                    }
-                }
-                span += groups * LANES;
-            }
-        }
-    }
-}
-
-/// Lane groups per span of a splat's columns (see `SplatBand::run`).
-const SPAN: usize = 8;
-
+#[path = "splat_band.rs"]
+mod band;
 #[path = "splat_pixels.rs"]
 mod pixels;
 #[path = "splat_wide.rs"]
 mod splat_wide;
+use band::SplatBand;
 use pixels::{SubCells, area_band, clipped};
 
 #[cfg(test)]

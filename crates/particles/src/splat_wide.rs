@@ -8,7 +8,7 @@
 //! step differs. A row of a support 10–16 pixels wide takes one step where
 //! eight lanes take two.
 
-use super::Splat;
+use super::Lean;
 use crate::kernel::column_poly::{ColumnPoly, DEGREE, OFFSET};
 
 /// Whether the sixteen-lane path can run on this CPU.
@@ -32,7 +32,7 @@ pub(super) fn available() -> bool {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 pub(super) unsafe fn sph_rows(
-    p: &Splat,
+    p: &Lean,
     y: (u32, u32),
     width: usize,
     poly: &ColumnPoly,
@@ -57,9 +57,9 @@ pub(super) unsafe fn sph_rows(
         _mm512_set1_epi32(0x3f80_0000),
     );
     let dx0 = _mm512_set1_ps((first as f64 + 0.5 - p.cx) as f32);
-    let scale = _mm512_set1_pd(p.scale as f32 as f64);
+    let scale = _mm512_set1_pd(p.scale as f64);
     let lanes_end = _mm512_set1_ps((end - first) as f32);
-    let ax = _mm512_set1_ps(p.ax as f32);
+    let ax = _mm512_set1_ps(p.ax);
     for yy in p.rows.0.max(y.0)..p.rows.1.min(y.1) {
         let dy = yy as f64 + 0.5 - p.cy;
         let ty = p.ay * dy * dy;

@@ -319,6 +319,13 @@ pub fn read_gadget_snapshot(
             }
             start += n;
         }
+        // An empty share still has the type's columns (empty): the first
+        // file holding the type gives them.
+        if pieces.is_empty()
+            && let Some(k) = counts.iter().position(|&n| n > 0)
+        {
+            pieces.push((k, 0..0));
+        }
     }
 
     let mut table = ParticleTable::default();
