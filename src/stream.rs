@@ -117,8 +117,12 @@ pub fn project_on(
     }
     let total = first.total;
     let chunks = total.div_ceil(CHUNK).max(1);
+    let kernel = first.kernel(p);
+    let boxed = periodic::resolve_box(p, first.periodic)?;
+    // Each chunk with the box the loader settles on (the file's may be
+    // ignored with --no-box, or replaced by a given one).
     let read = |k: usize| -> Result<FrameData, SceneError> {
-        load::rows_of(
+        let mut fd = load::rows_of(
             p,
             base,
             frame,
@@ -127,10 +131,12 @@ pub fn project_on(
                 ranks: chunks,
             },
         )?
-        .ok_or_else(|| SceneError::setting("particles.file", "the files changed while being read"))
+        .ok_or_else(|| {
+            SceneError::setting("particles.file", "the files changed while being read")
+        })?;
+        fd.periodic = boxed.as_ref().map(|(b, _)| *b);
+        Ok(fd)
     };
-    let kernel = first.kernel(p);
-    let boxed = periodic::resolve_box(p, first.periodic)?;
     let (has_radii, mut notes) = (first.data.radii.is_some(), first.notes);
 
     // Pass 1, without a periodic box: the world reach (the frame), the
