@@ -1,4 +1,4 @@
-//! Projections streamed from `.npy` files (`voxless::stream`) against the
+//! Projections streamed from `.npy` files and snapshots (`voxless::stream`) against the
 //! in-memory path they replace: the same image to f64 summation order (the
 //! streamed particles come in file order, the volume's in Hilbert order),
 //! for periodic and open sets, on and off axis, several chunks; the scenes
@@ -9,6 +9,7 @@ mod common;
 use std::path::PathBuf;
 
 use common::{Lcg, Scratch, bin};
+use voxless::stream::Streamed;
 use voxless::{
     BoxDesc, Control, KernelName, ParticlesDesc, ProjectionDesc, ProjectionView, SceneDesc,
 };
@@ -64,6 +65,44 @@ fn in_memory(desc: &SceneDesc, projection: &ProjectionDesc, (w, h): (u32, u32)) 
     view.project(&l.volume, w, h, &Control::new()).unwrap()
 }
 
+/// The views every comparison takes: on axis and off axis.
+fn views() -> [ProjectionDesc; 2] {
+    [
+        ProjectionDesc {
+            axis: Some(2),
+            ..Default::default()
+        },
+        ProjectionDesc {
+            normal: Some([1.0, 0.4, 0.3]),
+            ..Default::default()
+        },
+    ]
+}
+
+/// `desc` (`n` particles) streamed through `projection` at 96×80, in at
+/// least three chunks, against the in-memory path: f64 sums in another
+/// order, rounded once to f32, within 1e-6 of the peak.
+fn streams_as_in_memory(desc: &SceneDesc, projection: &ProjectionDesc, n: usize) -> Streamed {
+    let size = (96, 80);
+    let c = Control::new();
+    let streamed = voxless::stream::project(desc, ".".as_ref(), 0, projection, size, &c)
+        .unwrap()
+        .expect("streams");
+    assert_eq!(streamed.particles, n);
+    assert!(streamed.chunks >= 3);
+    let memory = in_memory(desc, projection, size);
+    let peak = memory.iter().fold(0.0f32, |m, &v| m.max(v));
+    assert!(peak > 0.0);
+    let worst = streamed
+        .column
+        .iter()
+        .zip(&memory)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert!(worst <= 1e-6 * peak, "{projection:?}: {worst} of {peak}");
+    streamed
+}
+
 #[test]
 fn streamed_projections_equal_the_in_memory_path() {
     let s = Scratch::new("stream-equal");
@@ -71,37 +110,8 @@ fn streamed_projections_equal_the_in_memory_path() {
     let n = 150_000;
     for (periodic, offset) in [(true, -3.0f32), (false, 1000.0)] {
         let desc = files(&s, n, 8.0, offset, periodic);
-        for projection in [
-            ProjectionDesc {
-                axis: Some(2),
-                ..Default::default()
-            },
-            ProjectionDesc {
-                normal: Some([1.0, 0.4, 0.3]),
-                ..Default::default()
-            },
-        ] {
-            let size = (96, 80);
-            let c = Control::new();
-            let streamed = voxless::stream::project(&desc, ".".as_ref(), 0, &projection, size, &c)
-                .unwrap()
-                .expect("npy particles with radii stream");
-            assert_eq!(streamed.particles, n);
-            assert!(streamed.chunks >= 3);
-            let memory = in_memory(&desc, &projection, size);
-            let peak = memory.iter().fold(0.0f32, |m, &v| m.max(v));
-            assert!(peak > 0.0);
-            let worst = streamed
-                .column
-                .iter()
-                .zip(&memory)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0f32, f32::max);
-            // f64 sums in another order, rounded once to f32.
-            assert!(
-                worst <= 1e-6 * peak,
-                "periodic {periodic}, {projection:?}: {worst} of {peak}"
-            );
+        for projection in views() {
+            streams_as_in_memory(&desc, &projection, n);
         }
     }
 }
@@ -308,23 +318,8 @@ fn snapshots_stream_by_rows_and_equal_the_in_memory_path() {
         }),
         ..Default::default()
     };
-    for projection in [
-        ProjectionDesc {
-            axis: Some(2),
-            ..Default::default()
-        },
-        ProjectionDesc {
-            normal: Some([1.0, 0.4, 0.3]),
-            ..Default::default()
-        },
-    ] {
-        let size = (96, 80);
-        let c = Control::new();
-        let streamed = voxless::stream::project(&desc, ".".as_ref(), 0, &projection, size, &c)
-            .unwrap()
-            .expect("gas with smoothing lengths streams");
-        assert_eq!(streamed.particles, n);
-        assert!(streamed.chunks >= 3);
+    for projection in views() {
+        let streamed = streams_as_in_memory(&desc, &projection, n);
         for said in ["cubic-spline", "periodic box (the file's)", "were wrapped"] {
             assert!(
                 streamed.notes.iter().any(|m| m.contains(said)),
@@ -332,16 +327,6 @@ fn snapshots_stream_by_rows_and_equal_the_in_memory_path() {
                 streamed.notes
             );
         }
-        let memory = in_memory(&desc, &projection, size);
-        let peak = memory.iter().fold(0.0f32, |m, &v| m.max(v));
-        assert!(peak > 0.0);
-        let worst = streamed
-            .column
-            .iter()
-            .zip(&memory)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0f32, f32::max);
-        assert!(worst <= 1e-6 * peak, "{projection:?}: {worst} of {peak}");
         // Σ masses (1, 1.25, …, 2 in turn): the mass of every kernel.
         let mass: f64 = (0..n).map(|i| 1.0 + (i % 5) as f64 * 0.25).sum();
         assert!(

@@ -267,7 +267,7 @@ impl Splatter {
                 // On a device the CPU sums only what it keeps (pixel
                 // areas, clipped images), so only those are binned.
                 let height = placer.size.1;
-                let keep = |p: &Splat| (!on_device || p.clip || p.area).then_some(p.rows);
+                let keep = |p: &Splat| (!on_device || p.clip || p.area).then_some(p.lean.rows);
                 piece.bands.bin(piece.splats.iter().map(keep), height);
                 piece
                     .lean_bands
@@ -467,28 +467,23 @@ impl Placer {
             // Supports narrower than table_pixels take the area table;
             // wider ones are sampled at pixel centres.
             let area = self.area && rx.min(ry) < table_pixels(self.kernel);
+            let lean = Lean {
+                cx,
+                cy,
+                // Table position per pixel² along y and x.
+                ay: column.to_index() * ph * ph,
+                ax: (column.to_index() * pw * pw) as f32,
+                scale: (column.scale() * p.weight as f64) as f32,
+                rows,
+                cols,
+            };
             if self.lean && !clip && !area {
-                piece.lean.push(Lean {
-                    cx,
-                    cy,
-                    ay: column.to_index() * ph * ph,
-                    ax: (column.to_index() * pw * pw) as f32,
-                    scale: (column.scale() * p.weight as f64) as f32,
-                    rows,
-                    cols,
-                });
+                piece.lean.push(lean);
                 continue;
             }
             let mut splat = Splat {
-                cx,
-                cy,
-                // Table position per pixel² along x and y.
-                ax: column.to_index() * pw * pw,
-                ay: column.to_index() * ph * ph,
+                lean,
                 pixel: (pw, ph),
-                rows,
-                cols,
-                scale: column.scale() * p.weight as f64,
                 weight: p.weight as f64,
                 column,
                 a,
@@ -529,9 +524,10 @@ fn ceil_in(x: f64, hi: f64) -> u32 {
 /// What a device sums of splat `p` (see [`PlainSplat`]).
 fn plain(p: &Splat) -> PlainSplat {
     let (pw, ph) = p.pixel;
+    let q = &p.lean;
     let (scale, g_exp, g_erf) = match p.column.gaussian() {
         // The SPH kernels read the table.
-        None => (p.scale, 0.0, 0.0),
+        None => (q.scale as f64, 0.0, 0.0),
         // amp·exp(−b²/2s²)·s·√(π/2)·(erf(l/√2s) − erf(−l/√2s)).
         Some((s, amp)) => (
             p.weight * amp * s * (2.0 * std::f64::consts::PI).sqrt(),
@@ -540,18 +536,18 @@ fn plain(p: &Splat) -> PlainSplat {
         ),
     };
     PlainSplat {
-        cx: p.cx as f32,
-        cy: p.cy as f32,
-        ax: p.ax as f32,
-        ay: p.ay as f32,
+        cx: q.cx as f32,
+        cy: q.cy as f32,
+        ax: q.ax,
+        ay: q.ay as f32,
         scale: scale as f32,
         g_exp: g_exp as f32,
         g_erf: g_erf as f32,
         support2: p.column.support2() as f32,
         pw2: (pw * pw) as f32,
         ph2: (ph * ph) as f32,
-        rows: [p.rows.0, p.rows.1],
-        cols: [p.cols.0, p.cols.1],
+        rows: [q.rows.0, q.rows.1],
+        cols: [q.cols.0, q.cols.1],
         _pad: [0; 2],
     }
 }
@@ -566,20 +562,11 @@ enum Periodic {
 
 /// One particle image as the image sees it.
 struct Splat {
-    /// The centre in pixel coordinates (x right, y down; pixel `k`'s
-    /// centre at `k + 0.5`).
-    cx: f64,
-    cy: f64,
-    /// The table position of a pixel offset: `ax·dx² + ay·dy²`.
-    ax: f64,
-    ay: f64,
+    /// What the lanes read: the centre, table positions, scale, rows and
+    /// columns.
+    lean: Lean,
     /// World (local) width and height of a pixel.
     pixel: (f64, f64),
-    /// Rows `rows.0..rows.1` and columns `cols.0..cols.1` it may touch.
-    rows: (u32, u32),
-    cols: (u32, u32),
-    /// `weight ×` the column table's scale.
-    scale: f64,
     weight: f64,
     column: Column,
     /// Offsets of the centre from the eye along right, up and the view.
@@ -596,29 +583,15 @@ struct Splat {
     clip_scale: f64,
 }
 
-impl Splat {
-    /// What the lanes read of it (see [`Lean`]).
-    fn lean(&self) -> Lean {
-        Lean {
-            cx: self.cx,
-            cy: self.cy,
-            ay: self.ay,
-            ax: self.ax as f32,
-            scale: self.scale as f32,
-            rows: self.rows,
-            cols: self.cols,
-        }
-    }
-}
-
-/// An SPH splat summed at pixel centres on the CPU's lanes (neither
-/// clipped nor averaged over pixel areas: nearly every splat), with what
-/// the lanes read of it alone — 48 bytes against a [`Splat`]'s ~200, so a
-/// chunk's splats stay in the cores' caches between placing, binning and
-/// summing.
+/// What the lanes read of a particle image. SPH splats summed at pixel
+/// centres on the CPU (neither clipped nor averaged over pixel areas:
+/// nearly every splat) are kept as this alone — 48 bytes against a
+/// [`Splat`]'s ~200, so a chunk's splats stay in the cores' caches between
+/// placing, binning and summing.
 #[derive(Clone, Copy)]
 struct Lean {
-    /// The centre in pixel coordinates (as [`Splat`]'s).
+    /// The centre in pixel coordinates (x right, y down; pixel `k`'s
+    /// centre at `k + 0.5`).
     cx: f64,
     cy: f64,
     /// The table position of a row offset: `ay·dy²` (f64, as the lanes
@@ -627,6 +600,7 @@ struct Lean {
     ax: f32,
     /// `weight ×` the column table's scale, in f32 as the lanes take it.
     scale: f32,
+    /// Rows `rows.0..rows.1` and columns `cols.0..cols.1` it may touch.
     rows: (u32, u32),
     cols: (u32, u32),
 }

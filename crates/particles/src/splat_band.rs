@@ -38,26 +38,27 @@ impl WithLanes for SplatBand<'_> {
                 continue;
             }
             if p.column.is_sph() {
-                // (Kept whole only where the lanes do not sum them.)
-                self.lean_rows::<L>(&p.lean(), &c, last, top);
+                // (On the CPU these are lean splats unless clipped or averaged;
+                // the loop sums any it is given.)
+                self.lean_rows::<L>(&p.lean, &c, last, top);
                 continue;
             }
             // The columns of the support's square (a pixel of margin).
-            let (first, end) = (p.cols.0 as usize, p.cols.1 as usize);
-            let rows = p.rows.0.max(self.y.0)..p.rows.1.min(self.y.1);
+            let (first, end) = (p.lean.cols.0 as usize, p.lean.cols.1 as usize);
+            let rows = p.lean.rows.0.max(self.y.0)..p.lean.rows.1.min(self.y.1);
             if first >= end || rows.is_empty() {
                 continue;
             }
             // The Gaussians: the closed form per pixel, in f64.
             let (pw, ph) = p.pixel;
             for y in rows {
-                let dy = y as f64 + 0.5 - p.cy;
-                if !(p.ay * dy * dy < last) {
+                let dy = y as f64 + 0.5 - p.lean.cy;
+                if !(p.lean.ay * dy * dy < last) {
                     continue;
                 }
                 let row = &mut self.out[(y - self.y.0) as usize * self.width..][..self.width];
                 for (x, o) in row.iter_mut().enumerate().take(end).skip(first) {
-                    let dx = x as f64 + 0.5 - p.cx;
+                    let dx = x as f64 + 0.5 - p.lean.cx;
                     let b2 = dx * dx * pw * pw + dy * dy * ph * ph;
                     *o += p.weight * p.column.at(b2);
                 }

@@ -25,8 +25,8 @@ pub(super) fn area_band(
         if p.clip || !p.area {
             continue;
         }
-        let (first, end) = (p.cols.0 as usize, p.cols.1 as usize);
-        let rows = p.rows.0.max(y.0)..p.rows.1.min(y.1);
+        let (first, end) = (p.lean.cols.0 as usize, p.lean.cols.1 as usize);
+        let rows = p.lean.rows.0.max(y.0)..p.lean.rows.1.min(y.1);
         if first >= end || rows.is_empty() {
             continue;
         }
@@ -37,9 +37,9 @@ pub(super) fn area_band(
         let (sx, sy) = (support / pw, support / ph);
         let mass = p.weight * p.column.mass() / (pw * ph);
         let corners = |row: f64, into: &mut Vec<f64>| {
-            let v = (row - p.cy) / sy;
+            let v = (row - p.lean.cy) / sy;
             into.clear();
-            into.extend((first..=end).map(|x| table.at((x as f64 - p.cx) / sx, v)));
+            into.extend((first..=end).map(|x| table.at((x as f64 - p.lean.cx) / sx, v)));
         };
         corners(rows.start as f64, &mut upper);
         for r in rows {
@@ -111,7 +111,7 @@ impl SubCells {
             return p.weight;
         }
         let mut full = 0.0;
-        self.each(p, p.rows.0..p.rows.1, |_, _, b2, _, _| {
+        self.each(p, p.lean.rows.0..p.lean.rows.1, |_, _, b2, _, _| {
             full += p.column.at(b2);
         });
         let cells = (self.n as f64).powi(2);
@@ -134,9 +134,9 @@ impl SubCells {
         let support2 = p.column.support2();
         let (sx, sy) = (support2.sqrt() / p.pixel.0, support2.sqrt() / p.pixel.1);
         for y in rows {
-            for ky in self.near(y, p.cy, sy) {
-                for x in p.cols.0..p.cols.1 {
-                    for kx in self.near(x, p.cx, sx) {
+            for ky in self.near(y, p.lean.cy, sy) {
+                for x in p.lean.cols.0..p.lean.cols.1 {
+                    for kx in self.near(x, p.lean.cx, sx) {
                         let (u, v) = self.at((x, kx), (y, ky));
                         let (du, dv) = (u - p.a, v - p.b);
                         let b2 = du * du + dv * dv;
@@ -170,8 +170,10 @@ pub(super) fn clipped(
         if !p.clip {
             continue;
         }
-        p.cells
-            .each(p, p.rows.0.max(y0)..p.rows.1.min(y1), |x, y, b2, u, v| {
+        p.cells.each(
+            p,
+            p.lean.rows.0.max(y0)..p.lean.rows.1.min(y1),
+            |x, y, b2, u, v| {
                 // The line's segment [t0, t1] through the box.
                 let mut t = (f64::NEG_INFINITY, f64::INFINITY);
                 for k in 0..3 {
@@ -190,6 +192,7 @@ pub(super) fn clipped(
                     let c = p.column.chord(b2, t.0 - p.depth, t.1 - p.depth);
                     out[(y - y0) as usize * width as usize + x as usize] += p.clip_scale * c;
                 }
-            });
+            },
+        );
     }
 }
