@@ -341,6 +341,72 @@ pub fn project_on(
     }))
 }
 
+/// A projection of the data a description names, for a front-end that
+/// holds no volume (Python's `voxless.project`): see [`project_file`].
+pub struct FileProjection {
+    pub view: ProjectionView,
+    /// Column densities in world units, row-major, row 0 at the top.
+    pub column: Vec<f32>,
+    /// `∫ field dV` in world units, when known.
+    pub mass: Option<f64>,
+    /// What the loader and the projection said.
+    pub notes: Vec<String>,
+    /// The chunks the particles were streamed in; `None` when the data
+    /// was loaded whole.
+    pub chunks: Option<usize>,
+}
+
+/// Projects frame `frame` of the data `desc` names at `w` × `h` on
+/// `device`, the way the CLI's one-process `project` does: streamed from
+/// the files when the scene can be ([`project_on`]: peak memory the image
+/// and a chunk), else loaded whole and projected in memory (the same
+/// image to f32 rounding of the sums' order). The inner error is a
+/// cancelled projection.
+pub fn project_file(
+    desc: &SceneDesc,
+    base: &Path,
+    frame: usize,
+    projection: &ProjectionDesc,
+    (w, h): (u32, u32),
+    device: &Device,
+    control: &Control,
+) -> Result<Result<FileProjection, voxless_core::Cancelled>, SceneError> {
+    match project_on(desc, base, frame, projection, (w, h), device, control) {
+        Ok(Some(s)) => {
+            return Ok(Ok(FileProjection {
+                view: s.view,
+                column: s.column,
+                mass: Some(s.mass),
+                notes: s.notes,
+                chunks: Some(s.chunks),
+            }));
+        }
+        Ok(None) => {}
+        // The stream words a cancelled projection as a setting.
+        Err(_) if control.is_cancelled() => return Ok(Err(voxless_core::Cancelled)),
+        Err(e) => return Err(e),
+    }
+    let loaded = crate::load::load_for(desc, base, frame, crate::load::Purpose::Project)?;
+    let mut notes = loaded.notes.clone();
+    let view = ProjectionView::new(projection, &loaded.volume.bounds(), &loaded.frame)?;
+    view.check(&loaded.volume)?;
+    let column = match view.project_on(&loaded.volume, w, h, None, device, control, &mut notes)? {
+        Ok(c) => c,
+        Err(c) => return Ok(Err(c)),
+    };
+    let mass = loaded
+        .volume
+        .total_mass()
+        .map(|m| m * loaded.frame.scale.powi(3));
+    Ok(Ok(FileProjection {
+        view,
+        column,
+        mass,
+        notes,
+        chunks: None,
+    }))
+}
+
 /// What pass 1 learns from one chunk.
 struct Scan {
     span: periodic::Span,

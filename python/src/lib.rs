@@ -350,6 +350,84 @@ fn load(
     })
 }
 
+/// Projects the data the scene `tables` (paths relative to `base`) and
+/// `flags` (relative to `cwd`) name without holding a volume: streamed from
+/// its files when it can be, else loaded and projected (see
+/// `voxless::stream::project_file`, the CLI's one-process `project`): the
+/// column densities and the geometry, as [`Volume::project`].
+#[pyfunction]
+#[pyo3(signature = (tables, flags, base, cwd, frame=0, axis=None, normal=None, north=None, center=None, width=None, bounds=None, depth=None, pixels=None, device=None))]
+#[allow(clippy::too_many_arguments)]
+fn project_file<'py>(
+    py: Python<'py>,
+    tables: &Bound<'py, PyAny>,
+    flags: &Bound<'py, PyAny>,
+    base: PathBuf,
+    cwd: PathBuf,
+    frame: usize,
+    axis: Option<usize>,
+    normal: Option<[f64; 3]>,
+    north: Option<[f64; 3]>,
+    center: Option<[f64; 3]>,
+    width: Option<[f64; 2]>,
+    bounds: Option<[f64; 6]>,
+    depth: Option<f64>,
+    pixels: Option<&str>,
+    device: Option<&str>,
+) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyDict>)> {
+    let mut desc = describe(tables, flags, &cwd, "project", &data_names())?;
+    let (device, device_note) = self::device(device)?;
+    let projection = ProjectionDesc {
+        axis,
+        normal,
+        north,
+        center,
+        width,
+        bounds,
+        depth,
+    };
+    let pixels = pixels_name(pixels)?;
+    voxless::set_projection_pixels(&mut desc, pixels, &projection)
+        .map_err(|e| errors::scene(py, e))?;
+    let done = run::cancellable(py, move |control| -> Result<_, Failure> {
+        let (w, h) = voxless::projection::image_size(&desc.image)?;
+        let p = voxless::stream::project_file(
+            &desc,
+            &base,
+            frame,
+            &projection,
+            (w, h),
+            &device,
+            control,
+        )??;
+        Ok((p, w, h, device_note))
+    })?;
+    let (p, w, h, device_note) = done.map_err(|f| raise(py, f))?;
+    let image = PyArray1::from_vec(py, p.column).reshape([h as usize, w as usize])?;
+    let geometry = plane_geometry(py, &p.view)?;
+    geometry.set_item("pixel_area", p.view.pixel_area(w, h))?;
+    geometry.set_item("depth", depth)?;
+    geometry.set_item("total_mass", p.mass)?;
+    geometry.set_item("chunks", p.chunks)?;
+    let notes: Vec<String> = device_note.into_iter().chain(p.notes).collect();
+    geometry.set_item("notes", notes)?;
+    Ok((image, geometry))
+}
+
+/// The pixel rule `pixels` names (`"centre"` or `"area"`, with the scene's
+/// aliases).
+fn pixels_name(pixels: Option<&str>) -> PyResult<Option<voxless::PixelsName>> {
+    pixels
+        .map(|p| serde_json::from_value(serde_json::Value::from(p)))
+        .transpose()
+        .map_err(|_| {
+            PyValueError::new_err(format!(
+                "pixels: {:?} is not \"centre\" or \"area\"",
+                pixels.unwrap_or_default()
+            ))
+        })
+}
+
 /// The data flag a bare path is read with (`particles`, `amr`, `cells` or
 /// `amrclaw`): the library decides, as for every front-end.
 #[pyfunction]
@@ -492,15 +570,7 @@ impl Volume {
         // The pixel rule: particles choose it per projection; a
         // tessellation's is part of how it was opened.
         // The scene's names (aliases included).
-        let pixels: Option<voxless::PixelsName> = pixels
-            .map(|p| serde_json::from_value(serde_json::Value::from(p)))
-            .transpose()
-            .map_err(|_| {
-                PyValueError::new_err(format!(
-                    "pixels: {:?} is not \"centre\" or \"area\"",
-                    pixels.unwrap_or_default()
-                ))
-            })?;
+        let pixels = pixels_name(pixels)?;
         if pixels.is_some() && desc.tets.is_some() {
             return Err(PyValueError::new_err(
                 "pixels: a tessellation's pixel rule is chosen when it is opened (tets.pixels \
@@ -912,6 +982,7 @@ fn _voxless(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(amr, m)?)?;
     m.add_function(wrap_pyfunction!(tessellation, m)?)?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
+    m.add_function(wrap_pyfunction!(project_file, m)?)?;
     m.add_function(wrap_pyfunction!(read_scene, m)?)?;
     m.add_function(wrap_pyfunction!(data_flag_for, m)?)?;
     m.add_function(wrap_pyfunction!(srgb8, m)?)?;

@@ -122,3 +122,50 @@ def test_pixel_area_with_a_slab_is_refused_as_the_cli_refuses_it(tmp_path):
     # Whole lines of sight conserve the mass exactly.
     col = vol.project(size=(32, 32), axis="z")
     assert abs(col.mass() - vol.total_mass) <= 1e-4 * vol.total_mass
+
+
+def test_a_file_projects_streamed_as_the_cli_and_the_volume(tmp_path, cli):
+    # 200,000 particles in a periodic box, radii and masses of their own:
+    # four chunks of the stream (65,536 rows each).
+    rng = np.random.default_rng(5)
+    n, box = 200_000, 10.0
+    files = {}
+    for name, a in (
+        ("pos", (rng.random((n, 3)) * box).astype(np.float32)),
+        ("h", (0.05 + 0.1 * rng.random(n)).astype(np.float32)),
+        ("m", (0.5 + rng.random(n)).astype(np.float32)),
+    ):
+        files[name] = tmp_path / f"{name}.npy"
+        np.save(files[name], a)
+    data = dict(radii=str(files["h"]), weights=str(files["m"]), kernel="wendland-c2", box=box)
+    streamed = voxless.project(files["pos"], size=(200, 150), axis="z", **data)
+    assert streamed.shape == (150, 200) and streamed.chunks == 4
+    assert any("periodic box" in note for note in streamed.notes)
+    # The CLI's one-process projection, bit for bit.
+    out = tmp_path / "cli.npy"
+    cli("project", "--particles", files["pos"], "--radii", files["h"], "--weights", files["m"],
+        "--kernel", "wendland-c2", "--box", box, "--axis", "z", "--size", 200, 150, "-o", out)  # fmt: skip
+    np.testing.assert_array_equal(np.asarray(streamed), np.load(out))
+    # The volume in memory sums in Hilbert order: f32 rounding apart.
+    vol = voxless.load(files["pos"], **data)
+    for view in (dict(axis="z"), dict(normal=(1.0, 0.7, 0.4), width=12.0, center=(5.0, 5.0, 5.0))):
+        a = voxless.project(files["pos"], size=(200, 150), **view, **data) if "normal" in view else streamed
+        b = vol.project(size=(200, 150), **view)
+        assert np.abs(np.asarray(a) - np.asarray(b)).max() <= 1e-6 * float(b.max()), view
+        assert a.pixel_area == pytest.approx(b.pixel_area, rel=1e-12)
+        assert np.allclose(a.center, b.center) and np.allclose(a.right, b.right)
+    assert streamed.total_mass == pytest.approx(vol.total_mass, rel=1e-6)
+    assert streamed.mass() == pytest.approx(streamed.total_mass, rel=1e-4)
+
+
+def test_a_file_that_cannot_stream_is_loaded(tmp_path):
+    # Radii from the particle spacing need every particle at once.
+    path = tmp_path / "pos.npy"
+    np.save(path, np.random.default_rng(6).random((3000, 3)).astype(np.float32))
+    a = voxless.project(path, size=(64, 48), axis="x")
+    b = voxless.load(path).project(size=(64, 48), axis="x")
+    assert a.chunks is None
+    np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    assert a.total_mass == pytest.approx(b.total_mass, rel=1e-12)
+    with pytest.raises(TypeError, match="got the data twice"):
+        voxless.project(path, particles=path)

@@ -9,6 +9,10 @@ an :class:`Image`, H×W×4 float32 premultiplied linear RGBA), projected
 library and with the same defaults as the CLI. Keyword arguments are the
 CLI's flags; a scene dictionary is the TOML scene file's tables.
 
+:func:`project` projects a file without building a volume: particles are
+streamed from their files in chunks when they can be, so a snapshot of
+10⁸ particles projects in the memory of its image.
+
 The GIL is released while voxless works and Ctrl-C cancels a render. Bad
 input raises ``TypeError`` or ``ValueError`` (:class:`VoxlessError`, a
 ``ValueError``) naming the argument. ``voxless.yt`` (imported on use) brings
@@ -23,7 +27,7 @@ yt data sets: ``voxless.yt.off_axis_projection`` and ``VoxlessSource``.
 
 from ._voxless import VoxlessError, colormaps, default_north
 from .image import Fields, Image, Projection, Slice
-from .volume import AmrCells, Camera, Particles, Tessellation, Volume, load, render
+from .volume import AmrCells, Camera, Particles, Tessellation, Volume, load, project, render
 
 __all__ = [
     "AmrCells",
@@ -39,6 +43,7 @@ __all__ = [
     "colormaps",
     "default_north",
     "load",
+    "project",
     "render",
 ]
 

@@ -465,6 +465,15 @@ def load(source=None, *, frame=0, **kwargs) -> Volume:
     snapshot particle types without smoothing lengths: 32). ``frame`` picks
     a frame of a time series.
     """
+    tables, flags, base = _source("load", source, kwargs)
+    frame = opt.integer("frame", frame, lo=0)
+    return Volume(_call(_voxless.load, tables, flags, base, frame=frame))
+
+
+def _source(where, source, kwargs):
+    """``source`` (a file, a ``.toml`` scene or a scene dict) and the keyword
+    flags as ``(tables, flags, base)``, ``base`` the directory the scene's
+    paths are relative to."""
     tables, base = {}, os.getcwd()
     if isinstance(source, dict):
         tables = source
@@ -474,14 +483,71 @@ def load(source=None, *, frame=0, **kwargs) -> Volume:
         tables = _voxless.read_scene(scene)
         base = os.path.dirname(scene)
         source = None
-    sugar, flags = opt.split("load", kwargs, opt.DATA_FLAGS)
+    sugar, flags = opt.split(where, kwargs, opt.DATA_FLAGS)
     if source is not None:
         key = _voxless.data_flag_for(os.fspath(opt.path("source", source)))
         if key in flags:
-            raise TypeError(f"load() got the data twice: source and {key}=")
+            raise TypeError(f"{where}() got the data twice: source and {key}=")
         flags[key] = os.fspath(source)
+    return opt.merge(tables, sugar), flags, base
+
+
+def project(
+    source=None,
+    *,
+    frame=0,
+    axis=None,
+    normal=None,
+    north=None,
+    center=None,
+    width=None,
+    bounds=None,
+    depth=None,
+    pixels=None,
+    device=None,
+    **kwargs,
+) -> Projection:
+    """Projects ``source`` (see :func:`load`) without building a volume: a :class:`Projection`.
+
+    Particles whose files are read by row range (``.npy``; Gadget binary,
+    Tipsy and HDF5 snapshots) with known radii (a ``radius``, ``radii``, or
+    the snapshot's smoothing lengths) are streamed from the files in chunks
+    and splatted, so memory holds the image and a chunk whatever the number
+    of particles (``geometry["chunks"]`` says how many); any other data is
+    loaded and projected as ``load(source, ...).project(...)``. The image is
+    the CLI's ``voxless project`` one. The projection arguments are
+    :meth:`Volume.project`'s (``size`` among the keywords); the other
+    keywords are :func:`load`'s.
+
+    >>> import numpy as np, voxless
+    >>> np.save("pos.npy", np.random.default_rng(1).random((100_000, 3), np.float32))
+    >>> p = voxless.project("pos.npy", radius=0.01, box=1, axis="z", size=(256, 256))
+    >>> p.shape, p.chunks, round(p.mass() / p.total_mass, 3)
+    ((256, 256), 2, 1.0)
+    """
+    tables, flags, base = _source("project", source, kwargs)
     frame = opt.integer("frame", frame, lo=0)
-    return Volume(_call(_voxless.load, opt.merge(tables, sugar), flags, base, frame=frame))
+    if axis is not None and (not isinstance(axis, (str, int)) or axis not in AXES):
+        raise ValueError(f"axis: {axis!r} is not 'x', 'y' or 'z'")
+    if width is not None and np.ndim(width) == 0:
+        width = (width, width)
+    column, geometry = _call(
+        _voxless.project_file,
+        tables,
+        flags,
+        base,
+        frame=frame,
+        axis=None if axis is None else AXES[axis],
+        normal=None if normal is None else opt.vector("normal", normal, 3),
+        north=None if north is None else opt.vector("north", north, 3),
+        center=None if center is None else opt.vector("center", center, 3),
+        width=None if width is None else opt.vector("width", width, 2),
+        bounds=None if bounds is None else opt.box("bounds", bounds),
+        depth=None if depth is None else opt.number("depth", depth),
+        pixels=pixels,
+        device=device,
+    )
+    return Projection.wrap(column, geometry)
 
 
 def render(source=None, *, frame=0, **kwargs) -> Image:
