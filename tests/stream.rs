@@ -164,6 +164,54 @@ fn scenes_that_need_every_particle_do_not_stream() {
 }
 
 #[test]
+fn a_file_projection_streams_when_it_can_and_loads_when_it_cannot() {
+    // What a front-end without a volume calls (Python's `voxless.project`).
+    let s = Scratch::new("stream-file");
+    let (n, size, c) = (70_000, (64, 48), Control::new());
+    let axis = ProjectionDesc {
+        axis: Some(0),
+        ..Default::default()
+    };
+    let cpu = voxless::device::Device::cpu();
+    let mut desc = files(&s, n, 2.0, 0.0, true);
+    let file = |desc: &SceneDesc| {
+        voxless::stream::project_file(desc, ".".as_ref(), 0, &axis, size, &cpu, &c)
+            .unwrap()
+            .unwrap()
+    };
+    let streamed = file(&desc);
+    let direct = voxless::stream::project(&desc, ".".as_ref(), 0, &axis, size, &c)
+        .unwrap()
+        .unwrap();
+    assert_eq!(streamed.chunks, Some(2));
+    assert_eq!(streamed.column, direct.column);
+    assert_eq!(streamed.mass, Some(direct.mass));
+    assert_eq!(streamed.notes, direct.notes);
+    // Radii from the spacing need every particle: loaded, as in memory.
+    desc.particles.as_mut().unwrap().radii = None;
+    let loaded = file(&desc);
+    assert_eq!(loaded.chunks, None);
+    assert_eq!(loaded.column, in_memory(&desc, &axis, size));
+    let l = voxless::load(&desc, ".".as_ref(), 0).unwrap();
+    let mass = l.volume.total_mass().unwrap() * l.frame.scale.powi(3);
+    assert_eq!(loaded.mass, Some(mass));
+    assert!(loaded.notes.iter().any(|n| n.contains("periodic box")));
+    // A cancelled projection, streamed or loaded, is not an error of the
+    // data.
+    let token = voxless_core::CancelToken::new();
+    token.cancel();
+    let cancelled = Control::new().with_cancel(token);
+    let streamable = files(&s, 1000, 2.0, 0.0, true);
+    for desc in [&streamable, &desc] {
+        assert!(
+            voxless::stream::project_file(desc, ".".as_ref(), 0, &axis, size, &cpu, &cancelled)
+                .unwrap()
+                .is_err()
+        );
+    }
+}
+
+#[test]
 fn the_cli_streams_npy_projections() {
     let s = Scratch::new("stream-cli");
     files(&s, 20_000, 4.0, 0.0, true);
