@@ -107,14 +107,22 @@ impl FrameData {
     /// The arrays with positions in `frame`'s local coordinates (radii and
     /// weights stay in world units until [`build_particles`]).
     pub fn place(
-        mut self,
+        self,
         frame: &WorldFrame,
     ) -> (ParticleData, PathBuf, Vec<(&'static str, PathBuf)>) {
-        self.data.positions = self
-            .positions
-            .par_iter()
-            .map(|&q| frame.to_local(q))
-            .collect();
+        self.place_into(frame, Vec::new())
+    }
+
+    /// [`FrameData::place`] writing the local positions into `local`
+    /// (emptied first; its allocation reused when large enough).
+    pub fn place_into(
+        mut self,
+        frame: &WorldFrame,
+        mut local: Vec<Vec3>,
+    ) -> (ParticleData, PathBuf, Vec<(&'static str, PathBuf)>) {
+        local.clear();
+        local.par_extend(self.positions.par_iter().map(|&q| frame.to_local(q)));
+        self.data.positions = local;
         (self.data, self.main_file, self.files)
     }
 }
