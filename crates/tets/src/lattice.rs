@@ -178,9 +178,10 @@ impl Lattice {
                         tets += 6;
                         continue;
                     }
-                    for t in KUHN {
+                    let volumes = Tet::kuhn_volumes(&corners);
+                    for (t, volume) in KUHN.into_iter().zip(volumes) {
                         let v = t.map(|c| corners[c]);
-                        let vol = Tet::signed_volume(&v).abs();
+                        let vol = volume.abs();
                         let (lo, hi) = extent(&v);
                         let (shifts, count) = if inside {
                             ([[0i8; 3]; 27], 1)
@@ -240,11 +241,11 @@ impl Lattice {
         (lo, hi): ([f32; 3], [f32; 3]),
         groups: &mut Vec<([i8; 3], u64, Aabb)>,
     ) -> bool {
-        for t in KUHN {
-            let v = t.map(|c| corners[c]);
-            if Tet::signed_volume(&v).abs() < self.floor {
-                return false;
-            }
+        if Tet::kuhn_volumes(corners)
+            .iter()
+            .any(|v| v.abs() < self.floor)
+        {
+            return false;
         }
         let bounds = Aabb::new(
             Vec3::new(lo[0], lo[1], lo[2]),

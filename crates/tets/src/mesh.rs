@@ -92,6 +92,36 @@ impl Tet {
             + a[2] * (b[0] * c[1] - b[1] * c[0]))
             / 6.0
     }
+    /// The signed volumes of a cell's six [`KUHN`] tets, in order: each
+    /// is [`Tet::signed_volume`] of its vertices bit for bit (the same
+    /// differences and products in the same order), but the tets share the
+    /// cell's first corner and its opposite one, so the edges from the
+    /// first corner and the three cross products with the diagonal are
+    /// computed once for all six.
+    #[inline(always)]
+    pub fn kuhn_volumes(corners: &[Vec3; 8]) -> [f64; 6] {
+        let d = |a: Vec3, b: Vec3| [(a.x - b.x) as f64, (a.y - b.y) as f64, (a.z - b.z) as f64];
+        let e: [[f64; 3]; 8] = std::array::from_fn(|k| d(corners[k], corners[0]));
+        let c = e[7];
+        // `signed_volume`'s (b × c) terms for the tets' third vertices.
+        let cross = |b: [f64; 3]| {
+            [
+                b[1] * c[2] - b[2] * c[1],
+                b[0] * c[2] - b[2] * c[0],
+                b[0] * c[1] - b[1] * c[0],
+            ]
+        };
+        let (x3, x5, x6) = (cross(e[3]), cross(e[5]), cross(e[6]));
+        let volume = |a: [f64; 3], x: [f64; 3]| (a[0] * x[0] - a[1] * x[1] + a[2] * x[2]) / 6.0;
+        [
+            volume(e[1], x3),
+            volume(e[1], x5),
+            volume(e[2], x3),
+            volume(e[2], x6),
+            volume(e[4], x5),
+            volume(e[4], x6),
+        ]
+    }
     /// Whether `p` lies inside (boundary included), by the signs of the four
     /// sub-volumes.
     pub fn contains(&self, p: Vec3) -> bool {

@@ -491,3 +491,32 @@ fn fast_projection_equals_full_ray_clipping() {
 mod area;
 mod lean;
 mod ortho;
+
+#[test]
+fn kuhn_volumes_are_each_tets_signed_volume_bit_for_bit() {
+    // Cells of every shape: unit-ish, sheared, far from the origin, folded
+    // (corners crossing over), flat and with repeated corners.
+    let mut rng = Lcg(17);
+    for case in 0..4000 {
+        let origin = Vec3::splat([0.0, 1e3, -7e4, 3.3][case % 4]);
+        let scale = [1.0, 1e-3, 40.0, 0.25][(case / 4) % 4];
+        let mut corners: [Vec3; 8] = std::array::from_fn(|c| {
+            let unit = Vec3::new((c & 1) as f32, ((c >> 1) & 1) as f32, ((c >> 2) & 1) as f32);
+            let jitter = Vec3::new(rng.f() - 0.5, rng.f() - 0.5, rng.f() - 0.5);
+            origin + (unit + jitter * [0.1, 0.9, 2.5][case % 3]) * scale
+        });
+        if case % 7 == 0 {
+            corners[3] = corners[1];
+        }
+        if case % 11 == 0 {
+            for c in &mut corners {
+                c.z = origin.z;
+            }
+        }
+        let volumes = Tet::kuhn_volumes(&corners);
+        for (k, t) in crate::mesh::KUHN.into_iter().enumerate() {
+            let one = Tet::signed_volume(&t.map(|c| corners[c]));
+            assert_eq!(volumes[k].to_bits(), one.to_bits(), "case {case}, tet {k}");
+        }
+    }
+}
