@@ -521,7 +521,7 @@ impl PlacedData<'_> {
     /// process holds a kind that knows it exactly.
     pub fn total_mass(&self) -> Option<f64> {
         match self {
-            PlacedData::Process(l) => l.volume.total_mass().map(|m| m * l.frame.scale.powi(3)),
+            PlacedData::Process(l) => l.total_mass(),
             PlacedData::Ranks(..) => None,
         }
     }
@@ -618,10 +618,8 @@ impl PlacedData<'_> {
         }
         match self {
             PlacedData::Process(l) => {
-                let view = ProjectionView::new(projection, &l.volume.bounds(), &l.frame)?;
-                view.check(&l.volume)?;
-                let column =
-                    view.project_on(&l.volume, width, height, None, device, control, notes)??;
+                let (view, column) =
+                    l.project_on(projection, (width, height), None, device, control, notes)??;
                 Ok((view, Some(column)))
             }
             PlacedData::Ranks(c, p) => {

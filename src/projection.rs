@@ -209,6 +209,37 @@ pub(crate) fn corners(lo: V3, hi: V3) -> impl Iterator<Item = V3> {
     })
 }
 
+impl crate::Loaded {
+    /// `∫ field dV` in world units, when the volume knows it exactly.
+    pub fn total_mass(&self) -> Option<f64> {
+        self.volume
+            .total_mass()
+            .map(|m| m * self.frame.scale.powi(3))
+    }
+
+    /// Projects the volume through `projection` at `w` × `h` (see
+    /// [`ProjectionView::project_on`]: `pixels` overrides the description's
+    /// pixel rule, splats summed on `device`, notes for a front-end): the
+    /// view and the column densities. The inner error is a cancelled
+    /// projection.
+    #[allow(clippy::too_many_arguments)]
+    pub fn project_on(
+        &self,
+        projection: &ProjectionDesc,
+        (w, h): (u32, u32),
+        pixels: Option<voxless_core::PixelIntegral>,
+        device: &crate::device::Device,
+        control: &Control,
+        notes: &mut Vec<String>,
+    ) -> Result<Result<(ProjectionView, Vec<f32>), Cancelled>, SceneError> {
+        let view = ProjectionView::new(projection, &self.volume.bounds(), &self.frame)?;
+        view.check(&self.volume)?;
+        Ok(view
+            .project_on(&self.volume, w, h, pixels, device, control, notes)?
+            .map(|column| (view, column)))
+    }
+}
+
 impl ProjectionView {
     /// Resolves `desc` for a volume with `volume_bounds` (in its frame)
     /// whose frame is `frame`. Errors name the setting (`axis`, `normal`,

@@ -181,18 +181,18 @@ pub fn project_on(
         &mut Vec::new(),
     )?
     .radius;
-    // Each chunk as the loader prepares it: wrapped (world), placed in the
-    // frame, scaled, local radii and weights. (The loader's notes were said
-    // once above, for the whole set.)
     // The buffers of splatted chunks, reused by the chunks prepared after
     // them: freed and allocated afresh, megabytes a chunk went back to the
-    // kernel and returned as zeroed pages (5–20 % of a 10⁷-particle run).
+    // kernel and returned as zeroed pages (10–15 % of a 10⁷-particle run).
     let spare: Mutex<Vec<(Vec<Vec3>, Vec<SplatParticle>)>> = Mutex::new(Vec::new());
     let take_spare = || spare.lock().unwrap_or_else(|e| e.into_inner()).pop();
     let give_back = |c: Prepared| {
         let mut spare = spare.lock().unwrap_or_else(|e| e.into_inner());
         spare.push((c.local, c.particles));
     };
+    // Each chunk as the loader prepares it: wrapped (world), placed in the
+    // frame, scaled, local radii and weights. (The loader's notes were said
+    // once above, for the whole set.)
     let prepare = |k: usize| -> Result<Prepared, SceneError> {
         let mut fd = read(k)?;
         let mut scan = boxed.is_some().then(|| Scan::of(&fd, p, boxed.as_ref()));
@@ -403,20 +403,11 @@ pub fn project_file(
     }
     let loaded = crate::load::load_for(desc, base, frame, crate::load::Purpose::Project)?;
     let mut notes = loaded.notes.clone();
-    let view = ProjectionView::new(projection, &loaded.volume.bounds(), &loaded.frame)?;
-    view.check(&loaded.volume)?;
-    let column = match view.project_on(&loaded.volume, w, h, None, device, control, &mut notes)? {
-        Ok(c) => c,
-        Err(c) => return Ok(Err(c)),
-    };
-    let mass = loaded
-        .volume
-        .total_mass()
-        .map(|m| m * loaded.frame.scale.powi(3));
-    Ok(Ok(FileProjection {
+    let projected = loaded.project_on(projection, (w, h), None, device, control, &mut notes)?;
+    Ok(projected.map(|(view, column)| FileProjection {
         view,
         column,
-        mass,
+        mass: loaded.total_mass(),
         notes,
         chunks: None,
     }))

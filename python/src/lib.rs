@@ -61,9 +61,7 @@ impl Held {
     }
     /// ∫ field dV in world units (see [`voxless::Scene::total_mass`]).
     fn total_mass(&self) -> Option<f64> {
-        self.volume()
-            .total_mass()
-            .map(|m| m * self.frame().scale.powi(3))
+        self.loaded.total_mass()
     }
     fn resolve(&self, desc: &SceneDesc) -> Result<voxless::Resolved, SceneError> {
         voxless::resolve_in(self.volume(), self.frame(), desc, &self.base)
@@ -403,13 +401,27 @@ fn project_file<'py>(
         Ok((p, w, h, device_note))
     })?;
     let (p, w, h, device_note) = done.map_err(|f| raise(py, f))?;
-    let image = PyArray1::from_vec(py, p.column).reshape([h as usize, w as usize])?;
-    let geometry = plane_geometry(py, &p.view)?;
-    geometry.set_item("pixel_area", p.view.pixel_area(w, h))?;
-    geometry.set_item("depth", depth)?;
+    let notes = device_note.into_iter().chain(p.notes).collect();
+    let (image, geometry) = projected(py, p.column, &p.view, (w, h), depth, notes)?;
     geometry.set_item("total_mass", p.mass)?;
     geometry.set_item("chunks", p.chunks)?;
-    let notes: Vec<String> = device_note.into_iter().chain(p.notes).collect();
+    Ok((image, geometry))
+}
+
+/// A projection as Python gets it: the H×W image and its geometry (the
+/// plane, pixel area, depth and notes; callers add the mass).
+fn projected<'py>(
+    py: Python<'py>,
+    column: Vec<f32>,
+    view: &ProjectionView,
+    (w, h): (u32, u32),
+    depth: Option<f64>,
+    notes: Vec<String>,
+) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyDict>)> {
+    let image = PyArray1::from_vec(py, column).reshape([h as usize, w as usize])?;
+    let geometry = plane_geometry(py, view)?;
+    geometry.set_item("pixel_area", view.pixel_area(w, h))?;
+    geometry.set_item("depth", depth)?;
     geometry.set_item("notes", notes)?;
     Ok((image, geometry))
 }
@@ -584,21 +596,16 @@ impl Volume {
         let rule = pixels.map(|p| voxless::projection::pixel_integral(Some(p)));
         let held = self.held.clone();
         let done = run::cancellable(py, move |control| -> Result<_, Failure> {
-            let (w, h) = voxless::projection::image_size(&desc.image)?;
-            let view = ProjectionView::new(&projection, &held.volume().bounds(), held.frame())?;
-            view.check(held.volume())?;
+            let size = voxless::projection::image_size(&desc.image)?;
             let mut notes: Vec<String> = device_note.into_iter().collect();
-            let column =
-                view.project_on(held.volume(), w, h, rule, &device, control, &mut notes)??;
-            Ok((column, view, w, h, notes))
+            let (view, column) =
+                held.loaded
+                    .project_on(&projection, size, rule, &device, control, &mut notes)??;
+            Ok((column, view, size, notes))
         })?;
-        let (column, view, w, h, notes) = done.map_err(|f| raise(py, f))?;
-        let image = PyArray1::from_vec(py, column).reshape([h as usize, w as usize])?;
-        let geometry = plane_geometry(py, &view)?;
-        geometry.set_item("pixel_area", view.pixel_area(w, h))?;
-        geometry.set_item("depth", depth)?;
+        let (column, view, size, notes) = done.map_err(|f| raise(py, f))?;
+        let (image, geometry) = projected(py, column, &view, size, depth, notes)?;
         geometry.set_item("total_mass", self.held.total_mass())?;
-        geometry.set_item("notes", notes)?;
         Ok((image, geometry))
     }
 

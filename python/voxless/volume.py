@@ -218,22 +218,8 @@ class Volume:
         :meth:`render` (particle splats are summed on the GPU).
         """
         flags = {} if size is None else opt.split("project", {"size": size})[1]
-        if axis is not None and (not isinstance(axis, (str, int)) or axis not in AXES):
-            raise ValueError(f"axis: {axis!r} is not 'x', 'y' or 'z'")
-        if width is not None and np.ndim(width) == 0:
-            width = (width, width)
-        column, geometry = self._native.project(
-            flags,
-            axis=None if axis is None else AXES[axis],
-            normal=None if normal is None else opt.vector("normal", normal, 3),
-            north=None if north is None else opt.vector("north", north, 3),
-            center=None if center is None else opt.vector("center", center, 3),
-            width=None if width is None else opt.vector("width", width, 2),
-            bounds=None if bounds is None else opt.box("bounds", bounds),
-            depth=None if depth is None else opt.number("depth", depth),
-            pixels=pixels,
-            device=device,
-        )
+        plane = _plane(axis, normal, north, center, width, bounds, depth)
+        column, geometry = self._native.project(flags, **plane, pixels=pixels, device=device)
         return Projection.wrap(column, geometry)
 
     def slice(
@@ -527,16 +513,20 @@ def project(
     """
     tables, flags, base = _source("project", source, kwargs)
     frame = opt.integer("frame", frame, lo=0)
+    plane = _plane(axis, normal, north, center, width, bounds, depth)
+    column, geometry = _call(
+        _voxless.project_file, tables, flags, base, frame=frame, **plane, pixels=pixels, device=device
+    )
+    return Projection.wrap(column, geometry)
+
+
+def _plane(axis, normal, north, center, width, bounds, depth):
+    """A projection's plane and slab as the native module takes them (checked)."""
     if axis is not None and (not isinstance(axis, (str, int)) or axis not in AXES):
         raise ValueError(f"axis: {axis!r} is not 'x', 'y' or 'z'")
     if width is not None and np.ndim(width) == 0:
         width = (width, width)
-    column, geometry = _call(
-        _voxless.project_file,
-        tables,
-        flags,
-        base,
-        frame=frame,
+    return dict(
         axis=None if axis is None else AXES[axis],
         normal=None if normal is None else opt.vector("normal", normal, 3),
         north=None if north is None else opt.vector("north", north, 3),
@@ -544,10 +534,7 @@ def project(
         width=None if width is None else opt.vector("width", width, 2),
         bounds=None if bounds is None else opt.box("bounds", bounds),
         depth=None if depth is None else opt.number("depth", depth),
-        pixels=pixels,
-        device=device,
     )
-    return Projection.wrap(column, geometry)
 
 
 def render(source=None, *, frame=0, **kwargs) -> Image:
