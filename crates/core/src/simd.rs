@@ -8,8 +8,9 @@
 //! process-wide flag — and [`dispatch`] turns it into the instantiation.
 //!
 //! **Invariants.**
-//! - Every operation is one IEEE-rounded step (no fused multiply-add, no
-//!   approximate reciprocals), and the composite ones ([`Lanes::exp`],
+//! - Every operation is one IEEE-rounded step (no approximate
+//!   reciprocals; [`Lanes::mul_add`] is fused — one rounding — on every
+//!   backend, and no other operation is), and the composite ones ([`Lanes::exp`],
 //!   [`Lanes::abs`], [`Lanes::first`]) are written once, in terms of the
 //!   others. So on x86-64 the portable and the AVX2 types give the same
 //!   bits for the same operations in the same order (tested below,
@@ -24,8 +25,8 @@
 //!
 //! **Safety.** AVX2 code is only entered after the run-time check: the AVX2
 //! lane type is private to this module, values of it are only made inside
-//! [`dispatch`]'s AVX2 branch — a `#[target_feature(enable = "avx2")]`
-//! entry function reached only when [`Simd::resolve`] found AVX2 on this
+//! [`dispatch`]'s AVX2 branch — a `#[target_feature(enable = "avx2,fma")]`
+//! entry function reached only when [`Simd::resolve`] found both on this
 //! CPU — so its safe methods can use the intrinsics. Its methods are
 //! `#[inline(always)]`: inlined into the AVX2 entry, they compile to single
 //! instructions; kernels should avoid closures in their hot loops for the
@@ -50,7 +51,7 @@ pub enum Simd {
     Auto,
     /// `wide`'s portable eight-lane type (SSE2 on x86-64).
     Portable,
-    /// AVX2 (x86-64 CPUs that have it).
+    /// AVX2 with FMA (x86-64 CPUs that have AVX2: all of them have FMA).
     Avx2,
 }
 
@@ -91,7 +92,8 @@ impl Simd {
 fn avx2_detected() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        std::arch::is_x86_feature_detected!("avx2")
+        // Every AVX2 CPU has FMA as well; checked, since the AVX2 entry uses it.
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
@@ -173,6 +175,13 @@ pub trait Lanes:
     /// exact (an f32 × f32 product fits an f64), the sum rounded once — for
     /// sums that must stay exact where the terms' weights add up to one.
     fn add_product_f64(acc: &mut [f64; LANES], a: Self, b: Self);
+    /// `acc[k] += a[k] as f64` in every lane (the sum rounded once).
+    fn add_f64(acc: &mut [f64; LANES], a: Self);
+    /// `self * b + c` rounded once (fused), the same bits on every
+    /// backend: AVX2 `vfmadd`, NEON `vfma`, else each lane's
+    /// `f32::mul_add` (exact in software where the CPU has no FMA: slow,
+    /// but only x86-64 CPUs older than AVX2 run that).
+    fn mul_add(self, b: Self, c: Self) -> Self;
     /// `(num[k] / den[k]) as f32` in every lane where `den[k] > 0`, NaN
     /// elsewhere: the quotient of two such sums, rounded once to `f64` and
     /// once to `f32`, as scalar code does it.
@@ -308,9 +317,11 @@ pub fn dispatch<W: WithLanes>(simd: Simd, w: W) -> W::Output {
     }
 }
 
-/// The AVX2 entry: `w` compiled with AVX2 enabled, on AVX2 lanes.
+/// The AVX2 entry: `w` compiled with AVX2 and FMA enabled, on AVX2 lanes
+/// (Rust never contracts a separate multiply and add into an FMA, so only
+/// [`Lanes::mul_add`] fuses).
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,fma")]
 fn run_avx2<W: WithLanes>(w: W) -> W::Output {
     w.run::<Avx2Lanes>()
 }
@@ -429,6 +440,25 @@ impl Lanes for wide::f32x8 {
         let (a, b) = (wide::f32x8::to_array(a), wide::f32x8::to_array(b));
         for k in 0..LANES {
             acc[k] += a[k] as f64 * b[k] as f64;
+        }
+    }
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        #[cfg(any(target_feature = "fma", target_arch = "aarch64"))]
+        {
+            // `wide` fuses where the target has FMA (x86-64 `fma`, NEON).
+            wide::f32x8::mul_add(self, b, c)
+        }
+        #[cfg(not(any(target_feature = "fma", target_arch = "aarch64")))]
+        {
+            let (a, b, c) = (self.to_array(), b.to_array(), c.to_array());
+            wide::f32x8::new(std::array::from_fn(|k| a[k].mul_add(b[k], c[k])))
+        }
+    }
+    #[inline(always)]
+    fn add_f64(acc: &mut [f64; LANES], a: Self) {
+        for (o, a) in acc.iter_mut().zip(wide::f32x8::to_array(a)) {
+            *o += a as f64;
         }
     }
     #[inline(always)]
@@ -596,6 +626,22 @@ mod avx2 {
                     _mm256_cvtps_pd(_mm256_extractf128_ps::<1>(a.0)),
                     _mm256_cvtps_pd(_mm256_extractf128_ps::<1>(b.0)),
                 );
+                let p = acc.as_mut_ptr();
+                _mm256_storeu_pd(p, _mm256_add_pd(_mm256_loadu_pd(p), lo));
+                _mm256_storeu_pd(p.add(4), _mm256_add_pd(_mm256_loadu_pd(p.add(4)), hi));
+            }
+        }
+        #[inline(always)]
+        fn mul_add(self, b: Self, c: Self) -> Self {
+            // The AVX2 entry enables FMA too (`avx2_detected` checks both).
+            unsafe { Avx2Lanes(_mm256_fmadd_ps(self.0, b.0, c.0)) }
+        }
+        #[inline(always)]
+        fn add_f64(acc: &mut [f64; LANES], a: Self) {
+            // As `add_product_f64`, without the product.
+            unsafe {
+                let lo = _mm256_cvtps_pd(_mm256_castps256_ps128(a.0));
+                let hi = _mm256_cvtps_pd(_mm256_extractf128_ps::<1>(a.0));
                 let p = acc.as_mut_ptr();
                 _mm256_storeu_pd(p, _mm256_add_pd(_mm256_loadu_pd(p), lo));
                 _mm256_storeu_pd(p.add(4), _mm256_add_pd(_mm256_loadu_pd(p.add(4)), hi));

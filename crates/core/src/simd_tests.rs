@@ -77,6 +77,11 @@ impl WithLanes for AllOps {
                 ("add", bits(x + y)),
                 ("sub", bits(x - y)),
                 ("mul", bits(x * y)),
+                (
+                    "mul_add",
+                    bits(x.mul_add(y, L::from_array(b).permute(L::iota()))),
+                ),
+                ("mul_add cancels", bits(x.mul_add(y, L::splat(0.0) - x * y))),
                 ("div", bits(x / y)),
                 ("and", bits(x & y)),
                 ("or", bits(x | y)),

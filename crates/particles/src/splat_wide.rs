@@ -2,8 +2,9 @@
 //!
 //! The same arithmetic as the eight-lane loop of `SplatBand` (the table
 //! position `dx·dx·ax + ty` in f32 without fused multiply-adds, the
-//! segment from its exponent, Estrin's scheme on the segment's
-//! coefficients, the f64 sums of the exact f32 × f32 products), lane for
+//! segment from its exponent, Estrin's scheme with fused multiply-adds on
+//! the segment's coefficients times the particle's scale, the f32 columns
+//! summed in f64), lane for
 //! lane, so every pixel gets the same bits; only the number of pixels per
 //! step differs. A row of a support 10–16 pixels wide takes one step where
 //! eight lanes take two.
@@ -48,16 +49,18 @@ pub(super) unsafe fn sph_rows(
     let iota = _mm512_setr_ps(
         0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 15.0,
     );
+    // The coefficients times the scale, as the eight lanes take them.
+    let scale = _mm512_set1_ps(p.scale);
     // SAFETY: each table is sixteen f32s.
-    let c: [__m512; DEGREE + 1] =
-        std::array::from_fn(|k| unsafe { _mm512_loadu_ps(poly.lanes16[k].as_ptr()) });
+    let c: [__m512; DEGREE + 1] = std::array::from_fn(|k| unsafe {
+        _mm512_mul_ps(_mm512_loadu_ps(poly.lanes16[k].as_ptr()), scale)
+    });
     let (offset, half) = (_mm512_set1_ps(OFFSET), _mm512_set1_ps(1.5));
     let (mantissa, one) = (
         _mm512_set1_epi32(0x007f_ffff),
         _mm512_set1_epi32(0x3f80_0000),
     );
     let dx0 = _mm512_set1_ps((first as f64 + 0.5 - p.cx) as f32);
-    let scale = _mm512_set1_pd(p.scale as f64);
     let lanes_end = _mm512_set1_ps((end - first) as f32);
     let ax = _mm512_set1_ps(p.ax);
     for yy in p.rows.0.max(y.0)..p.rows.1.min(y.1) {
@@ -83,15 +86,14 @@ pub(super) unsafe fn sph_rows(
                 half,
             );
             let c = |k: usize| _mm512_permutexvar_ps(at, c[k]);
-            let ma = |a: __m512, b: __m512, c: __m512| _mm512_add_ps(_mm512_mul_ps(a, b), c);
+            let ma = |a: __m512, b: __m512, c: __m512| _mm512_fmadd_ps(a, b, c);
             let x2 = _mm512_mul_ps(x, x);
             let lo = ma(ma(c(4), x, c(5)), x2, ma(c(6), x, c(7)));
             let hi = ma(ma(c(0), x, c(1)), x2, ma(c(2), x, c(3)));
             // Never below 0, as `ColumnPoly::eval`.
             let v = _mm512_max_ps(ma(hi, _mm512_mul_ps(x2, x2), lo), _mm512_setzero_ps());
             let col = _mm512_maskz_mov_ps(inside, v);
-            // Summed in f64 as the eight lanes do: (column × scale) exact,
-            // one rounding per add.
+            // Summed in f64 as the eight lanes do: one rounding per add.
             let col_lo = _mm512_cvtps_pd(_mm512_castps512_ps256(col));
             let col_hi = _mm512_cvtps_pd(_mm256_castpd_ps(_mm512_extractf64x4_pd::<1>(
                 _mm512_castps_pd(col),
@@ -107,13 +109,9 @@ pub(super) unsafe fn sph_rows(
             // SAFETY: the masks keep the lanes inside the row.
             unsafe {
                 let o = row.as_mut_ptr().add(at);
-                let sum_lo =
-                    _mm512_add_pd(_mm512_maskz_loadu_pd(m_lo, o), _mm512_mul_pd(col_lo, scale));
+                let sum_lo = _mm512_add_pd(_mm512_maskz_loadu_pd(m_lo, o), col_lo);
                 _mm512_mask_storeu_pd(o, m_lo, sum_lo);
-                let sum_hi = _mm512_add_pd(
-                    _mm512_maskz_loadu_pd(m_hi, o.wrapping_add(8)),
-                    _mm512_mul_pd(col_hi, scale),
-                );
+                let sum_hi = _mm512_add_pd(_mm512_maskz_loadu_pd(m_hi, o.wrapping_add(8)), col_hi);
                 _mm512_mask_storeu_pd(o.wrapping_add(8), m_hi, sum_hi);
             }
             k += 16;

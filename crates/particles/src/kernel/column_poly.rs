@@ -19,7 +19,8 @@
 //! segment is 64 table positions wide; they widen towards the support,
 //! where every column is smooth except at the splines' kinks. The last
 //! segment holds only `t ∈ [8128, 8192]`, where the columns are below 1e-7
-//! of their peak: a straight line to 0 there.
+//! of their peak: a straight line to 0 at `t = L − 1`, exactly 0 from `L`
+//! to [`ZERO_UNTIL`] (tested).
 //!
 //! **Bound.** `|P(t) − F(t)| ≤ 1e-6 · F(0)` and `P(t) ≥ 0` (the fit dips
 //! a hair below 0 near the support: clamped) for every kernel and every
@@ -30,8 +31,13 @@
 //! **Evaluation.** Estrin's scheme, `((c₀x + c₁)x² + (c₂x + c₃))x⁴ +
 //! ((c₄x + c₅)x² + (c₆x + c₇))`: three dependent multiply-add levels
 //! instead of Horner's seven (measured on the splat: within the noise of
-//! Horner on a Zen 3; kept for the shorter chain). Each step is one IEEE-rounded f32 operation (no fused
-//! multiply-add), the same on every lane width.
+//! Horner on a Zen 3; kept for the shorter chain). Each `a·x + b` is one
+//! fused multiply-add ([`Lanes::mul_add`], one rounding, the same bits on
+//! every lane type and width): 6 % of a projection's time against a
+//! separate multiply and add (Zen 3). The splatter scales the coefficients
+//! by a particle's weight before the evaluation (eight products a particle
+//! instead of one a pixel); the bound below is then relative to the scaled
+//! peak, plus one f32 rounding.
 //!
 //! **Fit.** Interpolation at the eight Chebyshev nodes of each segment
 //! (within a small factor of the best polynomial), in Newton's form in f64,
@@ -49,6 +55,12 @@ pub const DEGREE: usize = 7;
 
 /// Added to the table position before its octave is taken.
 pub const OFFSET: f32 = 64.0;
+
+/// The table position up to which `P(t)` is exactly 0 past the last one
+/// (`L`): the last segment's line is negative there and the evaluation
+/// clamps it (tested for every kernel and scale), so the splatter clamps
+/// `t` to this instead of masking lanes outside the support.
+pub const ZERO_UNTIL: f32 = (COLUMN_TABLE - 1 + 32) as f32;
 
 /// The biased f32 exponent of `OFFSET` (segment 0).
 const FIRST_EXPONENT: u32 = 133;
@@ -86,14 +98,24 @@ impl ColumnPoly {
         let one = L::from_bits([0x3f80_0000; LANES]);
         let x = ((tp & mantissa) | one) - L::splat(1.5);
         let x2 = x * x;
-        let lo = (c[4].permute(at) * x + c[5].permute(at)) * x2
-            + (c[6].permute(at) * x + c[7].permute(at));
-        let hi = (c[0].permute(at) * x + c[1].permute(at)) * x2
-            + (c[2].permute(at) * x + c[3].permute(at));
+        // (No closure for the permutes: it would be compiled without the
+        // AVX2 entry's target features.)
+        let p = [
+            c[0].permute(at),
+            c[1].permute(at),
+            c[2].permute(at),
+            c[3].permute(at),
+            c[4].permute(at),
+            c[5].permute(at),
+            c[6].permute(at),
+            c[7].permute(at),
+        ];
+        let lo = p[4].mul_add(x, p[5]).mul_add(x2, p[6].mul_add(x, p[7]));
+        let hi = p[0].mul_add(x, p[1]).mul_add(x2, p[2].mul_add(x, p[3]));
         // Near the support the fit dips a hair below 0, where a column
         // never goes (a negative density would read as a hole on a log
         // scale): clamped.
-        (hi * (x2 * x2) + lo).max(L::splat(0.0))
+        hi.mul_add(x2 * x2, lo).max(L::splat(0.0))
     }
 
     /// `P(t)` in f32: [`ColumnPoly::eval`] on the portable lanes (the same
@@ -114,8 +136,11 @@ impl ColumnPoly {
             let (xa, xb) = (-0.5, ((2.0 * lo).min(last + offset) / lo) - 1.5);
             let t_of = |x: f64| (x + 1.5) * lo - offset;
             let coef = if 2.0 * lo > last + offset {
-                // The last sliver: a line from the column to 0 at L.
-                let (y0, x1) = (f(t_of(xa)), xb);
+                // The last sliver: a line from the column to 0 one table
+                // position before L, so that rounded to f32 it is ≤ 0 from
+                // L on (the clamp then gives exactly 0 there; the column
+                // is below 1e-7 of its peak on the whole sliver).
+                let (y0, x1) = (f(t_of(xa)), xb - 1.0 / lo);
                 let slope = -y0 / (x1 - xa);
                 let mut c = [0.0; DEGREE + 1];
                 c[DEGREE - 1] = slope;
@@ -227,6 +252,32 @@ mod tests {
             assert!(kernel.column_poly().unwrap().at(last as f32).abs() < 1e-7 * peak as f32);
         }
         assert!(Kernel::Gaussian3.column_poly().is_none());
+    }
+
+    /// Past the support, up to `ZERO_UNTIL`, the evaluation gives exactly
+    /// 0 (what the splatter's clamp of `t` relies on), whatever the scale
+    /// the coefficients are multiplied by.
+    #[test]
+    fn the_column_is_exactly_zero_past_the_support() {
+        let last = (COLUMN_TABLE - 1) as f32;
+        for kernel in crate::tests::KERNELS.into_iter().filter(|k| k.is_sph()) {
+            let poly = kernel.column_poly().unwrap();
+            for scale in [1.0f32, 3.7e-9, 0.31, 2.9e7, f32::MIN_POSITIVE] {
+                let c = poly
+                    .lanes::<PortableLanes>()
+                    .map(|c| c * PortableLanes::splat(scale));
+                let mut t = last;
+                while t <= ZERO_UNTIL {
+                    let at = |t: f32| ColumnPoly::eval(&c, PortableLanes::splat(t)).to_array()[0];
+                    assert_eq!(at(t).to_bits(), 0, "{kernel:?} × {scale}: {} at {t}", at(t));
+                    t = if t < last + 1.0 {
+                        t.next_up()
+                    } else {
+                        t + 0.25
+                    };
+                }
+            }
+        }
     }
 
     /// Interpolation reproduces a polynomial of its degree.
