@@ -508,7 +508,7 @@ impl Placer {
 /// bands read each pixel before they write it, and a read of an untouched
 /// page maps the shared zero page, whose copy on the following write
 /// flushes the other cores' TLBs (measured: 2.5 % of a 2.1M-particle
-/// projection at 1024², in the kernel).
+/// projection's samples at 1024², in the kernel's TLB flushes).
 fn written_zeros(n: usize) -> Vec<f64> {
     rayon::iter::repeat_n(0.0, n).collect()
 }

@@ -36,8 +36,8 @@
 //! every lane type and width): 6 % of a projection's time against a
 //! separate multiply and add (Zen 3). The splatter scales the coefficients
 //! by a particle's weight before the evaluation (eight products a particle
-//! instead of one a pixel); the bound below is then relative to the scaled
-//! peak, plus one f32 rounding.
+//! instead of one a pixel); the bound above then holds relative to the
+//! scaled peak, plus one f32 rounding.
 //!
 //! **Fit.** Interpolation at the eight Chebyshev nodes of each segment
 //! (within a small factor of the best polynomial), in Newton's form in f64,
