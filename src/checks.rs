@@ -359,9 +359,10 @@ pub(crate) fn check_ranks(
         return Err(SceneError::setting(
             "pixels",
             format!(
-                "the pixel-area projection (--pixels area, {key}) runs in one process; under \
-                 mpirun each rank projects its box through pixel centres (leave it out, or run \
-                 voxless project without mpirun)"
+                "the pixel-area projection (--pixels area, {key}) of this data runs in one \
+                 process (particles with radii, streamed from their files, take it under mpirun \
+                 too); under mpirun each rank projects its box through pixel centres (leave it \
+                 out, or run voxless project without mpirun)"
             ),
         ));
     }

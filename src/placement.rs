@@ -91,6 +91,18 @@ impl<'c> Placement<'c> {
         }
     }
 
+    /// Whether projections may sum on `device` here: under mpirun they
+    /// run on the ranks' CPUs.
+    pub fn check_device(&self, device: &Device) -> Result<(), SceneError> {
+        if device.is_gpu() && matches!(self, Placement::Ranks(_)) {
+            return Err(SceneError::setting(
+                "device",
+                "a projection under mpirun runs on the ranks' CPUs: use --device cpu",
+            ));
+        }
+        Ok(())
+    }
+
     /// Opens frame `frame` of the data `desc` names (paths relative to
     /// `base`) with every default filled, for renders and samples.
     pub fn open(
@@ -609,12 +621,8 @@ impl PlacedData<'_> {
         control: &Control,
         notes: &mut Vec<String>,
     ) -> Result<(ProjectionView, Option<Vec<f32>>), ParallelError> {
-        if device.is_gpu() && matches!(self, PlacedData::Ranks(..)) {
-            return Err(SceneError::setting(
-                "device",
-                "a projection under mpirun runs on the ranks' CPUs: use --device cpu",
-            )
-            .into());
+        if let PlacedData::Ranks(c, _) = self {
+            Placement::Ranks(*c).check_device(device)?;
         }
         match self {
             PlacedData::Process(l) => {

@@ -396,3 +396,78 @@ fn snapshots_stream_by_rows_and_equal_the_in_memory_path() {
             .is_none()
     );
 }
+
+#[test]
+fn ranks_stream_shares_of_the_file_to_one_process_image() {
+    // Each rank streams a share of the chunks; the images add up on rank
+    // 0: one process's image to f32 rounding of the sums' order, the same
+    // mass, notes and counts; the other ranks get no image.
+    let s = Scratch::new("stream-ranks");
+    let (n, size, c) = (70_000, (96, 80), Control::new());
+    for (periodic, offset) in [(true, -3.0f32), (false, 1000.0)] {
+        let desc = files(&s, n, 8.0, offset, periodic);
+        for projection in views() {
+            let one = voxless::stream::project(&desc, ".".as_ref(), 0, &projection, size, &c)
+                .unwrap()
+                .unwrap();
+            let peak = one.column.iter().fold(0.0f32, |m, &v| m.max(v));
+            for ranks in [2, 3] {
+                let got = voxless::parallel::run_local(ranks, |comm| {
+                    voxless::stream::project_ranks(
+                        comm,
+                        &desc,
+                        ".".as_ref(),
+                        0,
+                        &projection,
+                        size,
+                        &c,
+                    )
+                    .unwrap()
+                    .unwrap()
+                });
+                let reads: usize = got.iter().map(|g| g.read).sum();
+                assert_eq!(reads, n);
+                for g in &got[1..] {
+                    assert!(g.column.is_empty());
+                    assert_eq!((g.mass, &g.notes), (got[0].mass, &got[0].notes));
+                }
+                let root = &got[0];
+                assert_eq!(root.chunks % ranks, 0);
+                assert_eq!((root.particles, &root.notes), (n, &one.notes));
+                assert!((root.mass / one.mass - 1.0).abs() < 1e-12);
+                assert_eq!(root.view.camera, one.view.camera);
+                let worst = root
+                    .column
+                    .iter()
+                    .zip(&one.column)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0f32, f32::max);
+                assert!(worst <= 1e-6 * peak, "{ranks} ranks: {worst} of {peak}");
+            }
+        }
+    }
+    // A bad row in the last rank's share is an error on every rank, named
+    // on the rank that read it.
+    let mut desc = files(&s, 70_000, 8.0, 0.0, false);
+    let mut pos = vec![0.5f32; 3 * 70_000];
+    pos[3 * 69_990 + 1] = f32::NAN;
+    voxless_io::write_npy_f32(&s.path("nan.npy"), &[70_000, 3], &pos).unwrap();
+    desc.particles.as_mut().unwrap().file = Some(s.str("nan.npy"));
+    let axis = ProjectionDesc::default();
+    let errs = voxless::parallel::run_local(3, |comm| {
+        voxless::stream::project_ranks(comm, &desc, ".".as_ref(), 0, &axis, (8, 8), &c)
+            .err()
+            .expect("every rank fails")
+            .to_string()
+    });
+    assert!(
+        errs[2].contains("nan.npy") && errs[2].contains("particle 69990"),
+        "{}",
+        errs[2]
+    );
+    assert!(
+        errs[0].contains("rank 2") && errs[0].contains("particle 69990"),
+        "{}",
+        errs[0]
+    );
+}

@@ -609,36 +609,43 @@ fn project(
             String::new()
         }
     };
-    // One process, nothing else asked of the particles: stream them.
-    if matches!(placement, Placement::Process) && radii.is_none() {
-        let progress = Progress::new("projecting (streamed)", 1, true);
+    // Nothing else asked of the particles: stream them (under mpirun each
+    // rank streams a share of the file, and the images add up on rank 0).
+    if radii.is_none() {
+        let progress = Progress::new("projecting (streamed)", 1, placement.is_root());
         let report = |d: u64, total: u64| progress.set_fraction(0, d, total);
         let control = Control::new().with_progress(&report);
-        let streamed =
-            voxless::stream::project_on(desc, base, frame, projection, (w, h), device, &control)?;
+        let streamed = match placement {
+            Placement::Process => voxless::stream::project_on(
+                desc,
+                base,
+                frame,
+                projection,
+                (w, h),
+                device,
+                &control,
+            )?,
+            Placement::Ranks(c) => {
+                placement.check_device(device)?;
+                voxless::stream::project_ranks(c, desc, base, frame, projection, (w, h), &control)?
+            }
+        };
         if let Some(s) = streamed {
             progress.finish();
-            for n in &s.notes {
-                eprintln!("note: {n}");
-            }
-            write_map(output, desc, base, frame, &s.view, (w, h), &s.column)?;
-            let integral: f64 =
-                s.column.iter().map(|&c| c as f64).sum::<f64>() * s.view.pixel_area(w, h);
-            eprintln!(
-                "projected {w}×{h} from {} particles streamed in {} chunk{}{} in {:.3}s → {} \
-                 (Σ column × pixel area = {integral:.6e}, exact ∫ field dV = {:.6e})",
-                s.particles,
-                s.chunks,
-                if s.chunks == 1 { "" } else { "s" },
-                // A streamed projection splats: on the GPU whenever it is open.
-                on(device.is_gpu()),
-                t.elapsed().as_secs_f64(),
-                output.display(),
-                s.mass
-            );
-            if let Some(n) = voxless::projection::mass_note(integral, s.mass, desc) {
-                eprintln!("note: {n}");
-            }
+            let written = if placement.is_root() {
+                for n in &s.notes {
+                    eprintln!("note: {n}");
+                }
+                write_streamed(placement, desc, base, frame, (w, h), output, device, &s, t)
+            } else {
+                Ok(())
+            };
+            render::agree(placement, written)?;
+            let counts = voxless::parallel::PartCounts {
+                read: s.read as u64,
+                held: 0,
+            };
+            render::say(placement.memory_report(Some(counts))?);
             return Ok(());
         }
     }
@@ -679,6 +686,44 @@ fn project(
     });
     render::agree(placement, written)?;
     render::say(placement.memory_report(data.counts())?);
+    Ok(())
+}
+
+/// Writes a streamed projection (rank 0) and says what it summed.
+#[allow(clippy::too_many_arguments)]
+fn write_streamed(
+    placement: Placement,
+    desc: &voxless::SceneDesc,
+    base: &Path,
+    frame: usize,
+    (w, h): (u32, u32),
+    output: &Path,
+    device: &voxless::device::Device,
+    s: &voxless::stream::Streamed,
+    t: Instant,
+) -> Result<()> {
+    write_map(output, desc, base, frame, &s.view, (w, h), &s.column)?;
+    let integral: f64 = s.column.iter().map(|&c| c as f64).sum::<f64>() * s.view.pixel_area(w, h);
+    // A streamed projection splats: on the GPU whenever it is open (one
+    // process only).
+    let on = if device.is_gpu() && matches!(placement, Placement::Process) {
+        format!(" on the {}", device.name())
+    } else {
+        render::on_ranks(placement)
+    };
+    eprintln!(
+        "projected {w}×{h} from {} particles streamed in {} chunk{}{on} in {:.3}s → {} \
+         (Σ column × pixel area = {integral:.6e}, exact ∫ field dV = {:.6e})",
+        s.particles,
+        s.chunks,
+        if s.chunks == 1 { "" } else { "s" },
+        t.elapsed().as_secs_f64(),
+        output.display(),
+        s.mass
+    );
+    if let Some(n) = voxless::projection::mass_note(integral, s.mass, desc) {
+        eprintln!("note: {n}");
+    }
     Ok(())
 }
 

@@ -57,7 +57,7 @@ pub use voxless_parallel::{
 
 pub(crate) use particles::Earlier;
 pub(crate) use probe::probe;
-pub(crate) use render::{gather_images, project, render, sample, work};
+pub(crate) use render::{COMPOSITE_TILE, gather_images, project, render, sample, work};
 
 pub use crate::ParallelError;
 use crate::load::whole_set::agree;
