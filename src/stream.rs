@@ -61,13 +61,16 @@ use crate::{ParallelError, SceneError};
 /// A projection streamed from its files.
 pub struct Streamed {
     pub view: ProjectionView,
-    /// Column densities in world units, row-major, row 0 at the top.
+    /// Column densities in world units, row-major, row 0 at the top (on
+    /// rank 0 of [`project_ranks`]; empty on the others).
     pub column: Vec<f32>,
-    /// `∫ field dV` of the particles, in world units.
+    /// `∫ field dV` of all the particles, in world units.
     pub mass: f64,
+    /// The particles in the file, and the chunks they were read in (over
+    /// every rank).
     pub particles: usize,
     pub chunks: usize,
-    /// The particles this process read (its ranks' share: see
+    /// The particles this process read (its share under
     /// [`project_ranks`]; all of them for one process).
     pub read: usize,
     /// What the loader would say (the periodic box, the wrap).

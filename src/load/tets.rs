@@ -8,6 +8,7 @@
 //! overdensity 1 + δ), whatever the box size; a given mass is divided by the
 //! scale's cube so densities (mass over tet volume) stay in world units.
 
+use rayon::prelude::*;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -95,7 +96,16 @@ pub(crate) fn read_grid(
     {
         return Ok((grid, path));
     }
-    let (positions, _) = super::table::read_positions(&path)?;
+    // A whole `.npy` decoded on every core into its rows; other tables
+    // through their readers.
+    let positions = if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npy"))
+    {
+        voxless_io::npy::read_npy_positions(&path)?
+    } else {
+        super::table::read_positions(&path)?.0
+    };
     Ok((cut(world_grid(positions, t, &path)?), path))
 }
 
@@ -119,19 +129,16 @@ fn npy_planes(t: &TetsDesc, path: &Path, share: Share) -> Result<Option<WorldGri
     check_count(n, shape[0], path)?;
     let (_, first, last, planes) = slab_planes(n, share);
     let nn = n * n;
-    let mut positions = Vec::with_capacity(planes * nn);
+    // The share's planes and the plane after them (the first, across the
+    // periodic seam, for the last share), decoded on every core into
+    // their places: no copy through another buffer (a second of the 256³
+    // set-up on one core, with the pages it faulted in).
+    let mut positions = vec![[0.0f64; 3]; planes * nn];
     if planes > 0 {
-        let read = |a: usize, b: usize| -> Result<Vec<[f64; 3]>, SceneError> {
-            let (arr, _) = voxless_io::read_npy_rows(path, a * nn..b * nn)?;
-            Ok(arr
-                .data
-                .chunks_exact(3)
-                .map(|c| [c[0], c[1], c[2]])
-                .collect())
-        };
-        positions.extend(read(first, last)?);
-        check_inside(&positions, first * nn, l, path)?;
-        positions.extend(read(last % n, last % n + 1)?);
+        let (slab, next) = positions.split_at_mut((last - first) * nn);
+        voxless_io::npy::read_npy_positions_into(path, first * nn, slab)?;
+        check_inside(slab, first * nn, l, path)?;
+        voxless_io::npy::read_npy_positions_into(path, (last % n) * nn, next)?;
     }
     Ok(Some(WorldGrid {
         n,
@@ -237,7 +244,8 @@ pub(crate) fn build_world(
     let grid = LagrangianGrid {
         n: g.n,
         box_size: (g.box_size / frame.scale) as f32,
-        positions: g.positions.iter().map(|&p| frame.to_local(p)).collect(),
+        // On every core (200 MB at 256³).
+        positions: g.positions.par_iter().map(|&p| frame.to_local(p)).collect(),
     };
     // The float64 world positions are not needed past this point.
     drop(g.positions);

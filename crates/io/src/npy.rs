@@ -29,7 +29,7 @@ use crate::{IoError, checked_product, open_with_len, remaining_len};
 mod positions;
 mod rows;
 pub(crate) use positions::check_positions_shape;
-pub use positions::read_npy_positions;
+pub use positions::{read_npy_positions, read_npy_positions_into};
 pub use rows::read_npy_rows;
 
 /// Magic bytes at the start of every `.npy` file.

@@ -5,7 +5,7 @@
 
 use voxless_core::{Camera, Projection, Ray, Vec3};
 
-use crate::lattice::Cell;
+use crate::lattice::{Cell, max, min};
 use crate::mesh::{KUHN, Tet, TetMesh};
 use crate::raster::{Screen, TILE, corners};
 
@@ -241,8 +241,8 @@ impl Frame {
             let rect_over = |k: &[usize]| {
                 let (mut x0, mut x1, mut y0, mut y1) = (px[k[0]], px[k[0]], py[k[0]], py[k[0]]);
                 for &c in &k[1..] {
-                    (x0, x1) = (x0.min(px[c]), x1.max(px[c]));
-                    (y0, y1) = (y0.min(py[c]), y1.max(py[c]));
+                    (x0, x1) = (min(x0, px[c]), max(x1, px[c]));
+                    (y0, y1) = (min(y0, py[c]), max(y1, py[c]));
                 }
                 self.screen
                     .rect_of(x0 - pad, x1 + pad, y0 - pad, y1 + pad)
@@ -287,8 +287,8 @@ impl Frame {
         let (px, py) = self.screen.ortho_points(c, (half_width, half_height));
         let (mut x0, mut x1, mut y0, mut y1) = (px[0], px[0], py[0], py[0]);
         for k in 1..8 {
-            (x0, x1) = (x0.min(px[k]), x1.max(px[k]));
-            (y0, y1) = (y0.min(py[k]), y1.max(py[k]));
+            (x0, x1) = (min(x0, px[k]), max(x1, px[k]));
+            (y0, y1) = (min(y0, py[k]), max(y1, py[k]));
         }
         let (tx0, ty0, w, h) = self.tile(tile);
         let pad = self.pad;

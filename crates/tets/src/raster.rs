@@ -11,6 +11,7 @@ use voxless_core::simd::{LANES, Lanes, PortableLanes};
 use voxless_core::{Aabb, Camera, Projection, Ray, Vec3};
 
 pub use crate::frame::{BlockTets, Frame};
+use crate::lattice::{max, min};
 use crate::mesh::{Tet, TetMesh};
 
 /// Side of a tile in pixels.
@@ -84,10 +85,10 @@ impl Screen {
             f32::NEG_INFINITY,
         );
         let mut grow = |(x, y): (f32, f32)| {
-            x0 = x0.min(x);
-            x1 = x1.max(x);
-            y0 = y0.min(y);
-            y1 = y1.max(y);
+            x0 = min(x0, x);
+            x1 = max(x1, x);
+            y0 = min(y0, y);
+            y1 = max(y1, y);
         };
         let mut behind = false;
         for &p in points {
@@ -170,8 +171,8 @@ impl Screen {
         let (px, py) = self.ortho_lanes::<PortableLanes>(&eight, half);
         let (mut x0, mut x1, mut y0, mut y1) = (px[0], px[0], py[0], py[0]);
         for k in 1..4 {
-            (x0, x1) = (x0.min(px[k]), x1.max(px[k]));
-            (y0, y1) = (y0.min(py[k]), y1.max(py[k]));
+            (x0, x1) = (min(x0, px[k]), max(x1, px[k]));
+            (y0, y1) = (min(y0, py[k]), max(y1, py[k]));
         }
         (x0, x1, y0, y1)
     }

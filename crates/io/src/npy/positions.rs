@@ -31,29 +31,75 @@ pub fn read_npy_positions(path: &Path) -> Result<Vec<[f64; 3]>, IoError> {
         let a = super::read_npy(path)?;
         return Ok(a.data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect());
     }
+    // Zeroed pages come from the kernel on first touch: in the block that
+    // writes them, on whichever core decodes it.
+    let mut rows = vec![[0.0f64; 3]; header.shape[0]];
+    decode_rows(&file, path, &dtype, offset, &mut rows)?;
+    Ok(rows)
+}
+
+/// Rows `first .. first + out.len()` of the N×3 position array in the
+/// `.npy` at `path`, decoded on every core straight into `out` (a share of
+/// a larger set: no copy of the rows through another buffer). The errors
+/// of [`read_npy_positions`], and one naming the rows when the array has
+/// fewer.
+pub fn read_npy_positions_into(
+    path: &Path,
+    first: usize,
+    out: &mut [[f64; 3]],
+) -> Result<(), IoError> {
+    let (file, len) = open_with_len(path)?;
+    let (header, dtype, offset) = read_header(&mut BufReader::new(&file), len, path)?;
+    check_positions_shape(&header.shape, path)?;
+    let end = first.saturating_add(out.len());
+    if end > header.shape[0] {
+        return Err(IoError::format(
+            path,
+            format!(
+                "rows {first}..{end} asked of an array of {} rows",
+                header.shape[0]
+            ),
+        ));
+    }
+    if header.fortran_order {
+        let a = super::read_npy(path)?;
+        for (o, c) in out.iter_mut().zip(a.data.chunks_exact(3).skip(first)) {
+            *o = [c[0], c[1], c[2]];
+        }
+        return Ok(());
+    }
+    let at = offset + (first * 3 * dtype.size) as u64;
+    decode_rows(&file, path, &dtype, at, out)
+}
+
+/// The rows from byte `offset` of a C-ordered N×3 array into `out`, blocks
+/// of [`BLOCK_ROWS`] read at their offsets and decoded on every core.
+fn decode_rows(
+    file: &std::fs::File,
+    path: &Path,
+    dtype: &super::Dtype,
+    offset: u64,
+    out: &mut [[f64; 3]],
+) -> Result<(), IoError> {
     let size = dtype.size;
     let read_err = |e: std::io::Error| match e.kind() {
         ErrorKind::UnexpectedEof => IoError::format(path, "file ends inside the array data"),
         _ => IoError::io(path, e),
     };
-    // Zeroed pages come from the kernel on first touch: in the block that
-    // writes them, on whichever core decodes it.
-    let mut rows = vec![[0.0f64; 3]; header.shape[0]];
-    rows.par_chunks_mut(BLOCK_ROWS)
+    out.par_chunks_mut(BLOCK_ROWS)
         .enumerate()
         .try_for_each_init(
             || (Vec::new(), Vec::new()),
             |(bytes, values): &mut (Vec<u8>, Vec<f64>), (b, out)| {
                 bytes.resize(out.len() * 3 * size, 0);
                 let at = offset + (b * BLOCK_ROWS * 3 * size) as u64;
-                read_at(&file, bytes, at).map_err(read_err)?;
+                read_at(file, bytes, at).map_err(read_err)?;
                 values.clear();
-                decode(bytes, &dtype, values);
+                decode(bytes, dtype, values);
                 out.as_flattened_mut().copy_from_slice(values);
                 Ok(())
             },
-        )?;
-    Ok(rows)
+        )
 }
 
 /// Refuses an array that is not N×3 (positions), naming its shape.
@@ -105,6 +151,13 @@ mod tests {
         let whole = read_npy(&path).unwrap();
         assert_eq!(rows.len(), n);
         assert_eq!(rows.as_flattened(), &whole.data[..]);
+        // A share of the rows, across a block boundary, into its place.
+        let (first, count) = (BLOCK_ROWS - 5, BLOCK_ROWS + 9);
+        let mut part = vec![[0.0; 3]; count];
+        read_npy_positions_into(&path, first, &mut part).unwrap();
+        assert_eq!(part, rows[first..first + count]);
+        let e = read_npy_positions_into(&path, n - 2, &mut part).unwrap_err();
+        assert!(e.to_string().contains(&format!("of {n} rows")), "{e}");
         write_npy_f32(&path, &[n, 3, 1], &v).unwrap();
         let e = read_npy_positions(&path).unwrap_err().to_string();
         assert!(
