@@ -349,12 +349,12 @@ impl Outline {
                 continue;
             }
             if ay == by {
-                lo = lo.min(ax.min(bx));
-                hi = hi.max(ax.max(bx));
+                lo = min(lo, min(ax, bx));
+                hi = max(hi, max(ax, bx));
             } else {
                 let x = ax + (yc - ay) / (by - ay) * (bx - ax);
-                lo = lo.min(x);
-                hi = hi.max(x);
+                lo = min(lo, x);
+                hi = max(hi, x);
             }
         }
         (lo <= hi).then_some((lo - OUTLINE_SLACK, hi + OUTLINE_SLACK))
