@@ -41,7 +41,7 @@ impl WithLanes for SplatBand<'_> {
                 self.lean_rows::<L>(&p.lean, &c, last);
                 continue;
             }
-            // The columns of the support's square (a pixel of margin).
+            // The columns of the support's square.
             let (first, end) = (p.lean.cols.0 as usize, p.lean.cols.1 as usize);
             let rows = p.lean.rows.0.max(self.y.0)..p.lean.rows.1.min(self.y.1);
             if first >= end || rows.is_empty() {
@@ -81,10 +81,9 @@ impl SplatBand<'_> {
             return;
         }
         let s = L::splat;
-        // The columns of the support's square (a pixel of margin): the
-        // lanes outside the support add 0, which costs less than finding
-        // each row's chord (a varying trip count mispredicts: measured
-        // 1.3× slower).
+        // The columns of the support's square: the lanes outside the
+        // support add 0, which costs less than finding each row's chord (a
+        // varying trip count mispredicts: measured 1.3× slower).
         let (first, end) = (p.cols.0 as usize, p.cols.1 as usize);
         let rows = p.rows.0.max(self.y.0)..p.rows.1.min(self.y.1);
         if first >= end || rows.is_empty() {

@@ -165,6 +165,9 @@ pub(super) fn clipped(
     out: &mut [f64],
 ) {
     let [eye, right, up, fwd] = camera.basis_f64();
+    // The line's parameter at a face is (face − o)/fwd: a product with the
+    // reciprocal per pixel instead of a division.
+    let per_fwd = fwd.map(|f| 1.0 / f);
     let y1 = (y0 + BAND).min(height);
     for p in splats.iter() {
         if !p.clip {
@@ -185,7 +188,7 @@ pub(super) fn clipped(
                         }
                         continue;
                     }
-                    let (t0, t1) = ((lo - o) / fwd[k], (hi - o) / fwd[k]);
+                    let (t0, t1) = ((lo - o) * per_fwd[k], (hi - o) * per_fwd[k]);
                     t = (t.0.max(t0.min(t1)), t.1.min(t0.max(t1)));
                 }
                 if t.0 < t.1 {

@@ -258,10 +258,23 @@ fn pixel_centres_hold_the_exact_columns() {
         .into_iter()
         .filter(|k| k.is_sph())
         .collect();
+    // Supports a whole number of pixels wide and centres on pixel centres
+    // and edges too: the splats' rows and columns are the pixel centres
+    // inside the support, with no margin, so a centre on the edge of that
+    // square must neither lose nor gain a pixel.
+    let cases = [
+        (3.3f32, (0.31f32, -0.27f32)),
+        (20.7, (0.31, -0.27)),
+        (4.0, (0.0, 0.0)),
+        (4.0, (0.5, 0.5)),
+        (8.0, (0.5, 0.0)),
+        (8.0, (0.25, -0.5)),
+        (1.0, (0.0, 0.5)),
+    ];
     for kernel in sph {
-        for support_px in [3.3f32, 20.7] {
+        for (support_px, (ox, oy)) in cases {
             let q = SplatParticle {
-                center: Vec3::new(0.5 + 0.31 / n as f32, 0.5 - 0.27 / n as f32, 0.5),
+                center: Vec3::new(0.5 + ox / n as f32, 0.5 + oy / n as f32, 0.5),
                 radius: support_px / n as f32 / kernel.support_factor(),
                 weight: 1.5,
             };

@@ -34,6 +34,8 @@ pub struct PartialChords {
     support: f64,
     /// `T` at `(q_b index, u index)`, row-major in `q_b`.
     table: Box<[f32]>,
+    /// The table's last column, `T(q_b², Q)`.
+    last: Box<[f32]>,
 }
 
 impl PartialChords {
@@ -53,31 +55,48 @@ impl PartialChords {
                 *t = sum as f32;
             }
         }
-        PartialChords { support, table }
+        let last = table.chunks_exact(N).map(|row| row[N - 1]).collect();
+        PartialChords {
+            support,
+            table,
+            last,
+        }
     }
 
-    /// `T(q2, u)` for `u ≥ 0` (bilinear; `u` beyond the support reads the
-    /// last column, `q2` beyond it gives 0).
+    /// `T(q2, u)` for `u ≥ 0` on the row `i + s` of `q_b` (bilinear; `u`
+    /// beyond the support reads the last column).
     #[inline]
-    fn cumulative(&self, q2: f64, u: f64) -> f64 {
+    fn cumulative(&self, (i, s): (usize, f64), u: f64) -> f64 {
         let last = (N - 1) as f64;
-        let x = q2.max(0.0).sqrt() * (last / self.support);
-        if !(x < last) {
-            return 0.0;
-        }
         let y = (u / self.support * last).min(last);
-        let (i, j) = ((x.max(0.0) as usize).min(N - 2), (y as usize).min(N - 2));
-        let (s, t) = (x - i as f64, y - j as f64);
+        if y >= last {
+            // The far end of a chord cut by one face lies beyond the
+            // support: the last column, from its own copy (4 kB, in the
+            // L1 cache, where the table's rows are 4 kB apart; the same
+            // values: the bilinear weights there are exactly 0 and 1).
+            return self.last[i] as f64 * (1.0 - s) + self.last[i + 1] as f64 * s;
+        }
+        let j = (y as usize).min(N - 2);
+        let t = y - j as f64;
         let at = |i: usize, j: usize| self.table[i * N + j] as f64;
         let lo = at(i, j) * (1.0 - t) + at(i, j + 1) * t;
         let hi = at(i + 1, j) * (1.0 - t) + at(i + 1, j + 1) * t;
         lo * (1.0 - s) + hi * s
     }
 
-    /// `∫ w(√(q2 + u²)) du` over `[u0, u1]`, `u` in units of h.
+    /// `∫ w(√(q2 + u²)) du` over `[u0, u1]`, `u` in units of h (`q2`
+    /// beyond the support gives 0).
     #[inline]
     pub fn chord(&self, q2: f64, u0: f64, u1: f64) -> f64 {
-        let signed = |u: f64| u.signum() * self.cumulative(q2, u.abs());
+        let last = (N - 1) as f64;
+        let x = q2.max(0.0).sqrt() * (last / self.support);
+        if !(x < last) {
+            return 0.0;
+        }
+        // The row of q_b, once for both ends.
+        let i = (x.max(0.0) as usize).min(N - 2);
+        let row = (i, x - i as f64);
+        let signed = |u: f64| u.signum() * self.cumulative(row, u.abs());
         signed(u1) - signed(u0)
     }
 }

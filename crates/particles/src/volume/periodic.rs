@@ -142,6 +142,7 @@ pub(super) fn with_images(
 /// (cleared): each image's shift in boxes and centre. A hidden particle
 /// (support ≤ 0) in a box has none. Refused when the images would reach
 /// beyond [`MAX_SHIFT`] boxes.
+#[inline]
 pub fn images(
     b: Option<&Aabb>,
     c: Vec3,
@@ -161,14 +162,33 @@ pub fn images(
     // Shifts k along each axis with [c + kL − s, c + kL + s] ∩ [lo, hi] ≠ ∅:
     // from ⌈(lo − c − s)/L⌉ to ⌊(hi − c + s)/L⌋. Most particles reach no
     // face: both quotients lie in (−1, 1) on every axis, so the particle
-    // is its only image (the same test as the bounds below, without them).
+    // is its only image. Tested without the divisions (six were 8 % of a
+    // 16.7M-particle projection) and a hair inside (−1, 1), so that a
+    // quotient this passes is in (−1, 1) however it rounds; the few it
+    // leaves take the divisions below, as before.
+    const INSIDE: f32 = 1.0 - 1.0 / (1 << 20) as f32;
     if (0..3)
-        .all(|a| (b.min[a] - c[a] - s) / size[a] > -1.0 && (b.max[a] - c[a] + s) / size[a] < 1.0)
+        .all(|a| b.min[a] - c[a] - s > -INSIDE * size[a] && b.max[a] - c[a] + s < INSIDE * size[a])
     {
         // (+ 0 as the loop below adds it: a −0 coordinate becomes +0.)
         out.push(([0; 3], c + Vec3::splat(0.0)));
         return Ok(());
     }
+    images_near_faces(b, c, s, index, out)
+}
+
+/// [`images`] of a particle whose support may reach a face of `b` (kept
+/// out of line: the common case above is inlined into the splatter's
+/// loop).
+#[inline(never)]
+fn images_near_faces(
+    b: &Aabb,
+    c: Vec3,
+    s: f32,
+    index: usize,
+    out: &mut Vec<([i8; 3], Vec3)>,
+) -> Result<(), ParticleError> {
+    let size = b.extent();
     let mut span = [(0i32, 0i32); 3];
     for a in 0..3 {
         let lo = ((b.min[a] - c[a] - s) / size[a]).ceil() as i32;
