@@ -27,6 +27,7 @@ use super::periodic;
 use super::reach::{Reach, Unresolvable};
 pub(crate) use super::snapshot::selection;
 use super::spacing;
+use super::table::is_npy;
 use super::{Share, frames, table as load};
 use crate::checks::{positive, range};
 use crate::{SceneError, WorldFrame, demo};
@@ -282,11 +283,6 @@ pub(crate) fn rows_of(
     }
     let (fd, shared) = read_frame_share(p, base, frame, Some((share.rank, share.ranks)))?;
     Ok(shared.then_some(fd))
-}
-
-pub(crate) fn is_npy(path: &Path) -> bool {
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("npy"))
 }
 
 /// Share `share` of the rows read by offset, when the positions and every

@@ -34,7 +34,8 @@ pub struct Selection<'a> {
     pub part_type: Option<&'a str>,
 }
 
-fn is_npy(path: &Path) -> bool {
+/// Whether `path` names a `.npy` file (by its extension, any case).
+pub(crate) fn is_npy(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("npy"))
 }

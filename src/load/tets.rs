@@ -98,10 +98,7 @@ pub(crate) fn read_grid(
     }
     // A whole `.npy` decoded on every core into its rows; other tables
     // through their readers.
-    let positions = if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("npy"))
-    {
+    let positions = if super::table::is_npy(&path) {
         voxless_io::npy::read_npy_positions(&path)?
     } else {
         super::table::read_positions(&path)?.0
@@ -112,10 +109,7 @@ pub(crate) fn read_grid(
 /// The share's planes of an N×3 `.npy`, read by offset after checking N
 /// and L as the whole grid is checked; `None` for other files (read whole).
 fn npy_planes(t: &TetsDesc, path: &Path, share: Share) -> Result<Option<WorldGrid>, SceneError> {
-    let is_npy = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
-    let shape = if is_npy {
+    let shape = if super::table::is_npy(path) {
         voxless_io::read_npy_rows(path, 0..0)?.1
     } else {
         return Ok(None);

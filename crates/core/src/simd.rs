@@ -39,6 +39,10 @@ use std::ops::{Add, BitAnd, BitOr, Div, Mul, Sub};
 /// Lanes per [`Lanes`] value.
 pub const LANES: usize = 8;
 
+/// Half of [`LANES`]: [`Lanes::add_f64_halves`] adds each half to its own
+/// four f64s.
+pub const HALF_LANES: usize = LANES / 2;
+
 /// Which SIMD backend a kernel runs on.
 ///
 /// `Auto` picks the best one the CPU has; `Avx2` on a CPU (or target)
@@ -175,8 +179,10 @@ pub trait Lanes:
     /// exact (an f32 × f32 product fits an f64), the sum rounded once — for
     /// sums that must stay exact where the terms' weights add up to one.
     fn add_product_f64(acc: &mut [f64; LANES], a: Self, b: Self);
-    /// `acc[k] += a[k] as f64` in every lane (the sum rounded once).
-    fn add_f64(acc: &mut [f64; LANES], a: Self);
+    /// `lo[k] += a[k] as f64` and `hi[k] += a[k + 4] as f64` (each sum
+    /// rounded once): the halves may go to different places, two rows of
+    /// an image say.
+    fn add_f64_halves(lo: &mut [f64; HALF_LANES], hi: &mut [f64; HALF_LANES], a: Self);
     /// `self * b + c` rounded once (fused), the same bits on every
     /// backend: AVX2 `vfmadd`, NEON `vfma`, else each lane's
     /// `f32::mul_add` (exact in software where the CPU has no FMA: slow,
@@ -456,9 +462,11 @@ impl Lanes for wide::f32x8 {
         }
     }
     #[inline(always)]
-    fn add_f64(acc: &mut [f64; LANES], a: Self) {
-        for (o, a) in acc.iter_mut().zip(wide::f32x8::to_array(a)) {
-            *o += a as f64;
+    fn add_f64_halves(lo: &mut [f64; HALF_LANES], hi: &mut [f64; HALF_LANES], a: Self) {
+        let a = wide::f32x8::to_array(a);
+        for k in 0..HALF_LANES {
+            lo[k] += a[k] as f64;
+            hi[k] += a[k + HALF_LANES] as f64;
         }
     }
     #[inline(always)]
@@ -478,7 +486,7 @@ use avx2::Avx2Lanes;
 
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
-    use super::{LANES, Lanes, Simd};
+    use super::{HALF_LANES, LANES, Lanes, Simd};
     use std::arch::x86_64::*;
     use std::ops::{Add, BitAnd, BitOr, Div, Mul, Sub};
 
@@ -637,14 +645,15 @@ mod avx2 {
             unsafe { Avx2Lanes(_mm256_fmadd_ps(self.0, b.0, c.0)) }
         }
         #[inline(always)]
-        fn add_f64(acc: &mut [f64; LANES], a: Self) {
-            // As `add_product_f64`, without the product.
+        fn add_f64_halves(lo: &mut [f64; HALF_LANES], hi: &mut [f64; HALF_LANES], a: Self) {
+            // As `add_product_f64`, without the product, each half to its
+            // own four f64s.
             unsafe {
-                let lo = _mm256_cvtps_pd(_mm256_castps256_ps128(a.0));
-                let hi = _mm256_cvtps_pd(_mm256_extractf128_ps::<1>(a.0));
-                let p = acc.as_mut_ptr();
-                _mm256_storeu_pd(p, _mm256_add_pd(_mm256_loadu_pd(p), lo));
-                _mm256_storeu_pd(p.add(4), _mm256_add_pd(_mm256_loadu_pd(p.add(4)), hi));
+                let (l, h) = (lo.as_mut_ptr(), hi.as_mut_ptr());
+                let a_lo = _mm256_cvtps_pd(_mm256_castps256_ps128(a.0));
+                let a_hi = _mm256_cvtps_pd(_mm256_extractf128_ps::<1>(a.0));
+                _mm256_storeu_pd(l, _mm256_add_pd(_mm256_loadu_pd(l), a_lo));
+                _mm256_storeu_pd(h, _mm256_add_pd(_mm256_loadu_pd(h), a_hi));
             }
         }
         #[inline(always)]

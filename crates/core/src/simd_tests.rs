@@ -116,6 +116,13 @@ impl WithLanes for AllOps {
                     L::add_product_f64(&mut acc, y, x);
                     acc.map(|v| (v.to_bits() ^ (v.to_bits() >> 32)) as u32)
                 }),
+                ("add_f64_halves", {
+                    let (mut lo, mut hi) = ([0.25f64; 4], [-1.5f64; 4]);
+                    L::add_f64_halves(&mut lo, &mut hi, x);
+                    L::add_f64_halves(&mut hi, &mut lo, y);
+                    let v: [f64; LANES] = std::array::from_fn(|k| [lo, hi][k / 4][k % 4]);
+                    v.map(|v| (v.to_bits() ^ (v.to_bits() >> 32)) as u32)
+                }),
                 ("quotient_f64", {
                     // Sums as the reconstruction forms them, and the
                     // edge cases themselves as denominators (zeros,

@@ -6,8 +6,7 @@
 //! the segment's coefficients times the particle's scale, the f32 columns
 //! summed in f64), lane for
 //! lane, so every pixel gets the same bits; only the number of pixels per
-//! step differs. A row of a support 10–16 pixels wide takes one step where
-//! eight lanes take two.
+//! step differs: eight columns of two rows where the eight lanes take four.
 
 use super::Lean;
 use crate::kernel::column_poly::{ColumnPoly, DEGREE, OFFSET};
@@ -46,8 +45,11 @@ pub(super) unsafe fn sph_rows(
         return;
     }
     let top = _mm512_set1_ps(last as f32);
+    // Lanes 0–7: columns `k..k + 8` of a pair's upper row; 8–15: the same
+    // columns of its lower row (as the eight lanes pair rows, four columns
+    // a row).
     let iota = _mm512_setr_ps(
-        0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 15.0,
+        0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0,
     );
     // The coefficients times the scale, as the eight lanes take them.
     let scale = _mm512_set1_ps(p.scale);
@@ -63,14 +65,20 @@ pub(super) unsafe fn sph_rows(
     let dx0 = _mm512_set1_ps((first as f64 + 0.5 - p.cx) as f32);
     let lanes_end = _mm512_set1_ps((end - first) as f32);
     let ax = _mm512_set1_ps(p.ax);
-    for yy in p.rows.0.max(y.0)..p.rows.1.min(y.1) {
-        let dy = yy as f64 + 0.5 - p.cy;
-        let ty = p.ay * dy * dy;
-        if !(ty < last) {
+    let rows = p.rows.0.max(y.0)..p.rows.1.min(y.1);
+    // A row's table position, infinite (every lane masked) past the
+    // support or the band.
+    let row_t = |yy: u32| p.row_position(yy, rows.end, last).unwrap_or(f32::INFINITY);
+    for yy in rows.clone().step_by(2) {
+        let (t0, t1) = (row_t(yy), row_t(yy + 1));
+        if t0 == f32::INFINITY && t1 == f32::INFINITY {
             continue;
         }
-        let ty = _mm512_set1_ps(ty as f32);
-        let row = &mut out[(yy - y.0) as usize * width..][..width];
+        let ty = _mm512_mask_blend_ps(0xff00, _mm512_set1_ps(t0), _mm512_set1_ps(t1));
+        let up = out[(yy - y.0) as usize * width..].as_mut_ptr();
+        // The lower row, where it is in the band (else never written).
+        let lower = yy + 1 < rows.end;
+        let down = up.wrapping_add(width);
         let mut k = 0;
         while first + k < end {
             let kk = _mm512_add_ps(iota, _mm512_set1_ps(k as f32));
@@ -94,27 +102,27 @@ pub(super) unsafe fn sph_rows(
             let v = _mm512_max_ps(ma(hi, _mm512_mul_ps(x2, x2), lo), _mm512_setzero_ps());
             let col = _mm512_maskz_mov_ps(inside, v);
             // Summed in f64 as the eight lanes do: one rounding per add.
-            let col_lo = _mm512_cvtps_pd(_mm512_castps512_ps256(col));
-            let col_hi = _mm512_cvtps_pd(_mm256_castpd_ps(_mm512_extractf64x4_pd::<1>(
+            let col_up = _mm512_cvtps_pd(_mm512_castps512_ps256(col));
+            let col_down = _mm512_cvtps_pd(_mm256_castpd_ps(_mm512_extractf64x4_pd::<1>(
                 _mm512_castps_pd(col),
             )));
             let at = first + k;
-            let room = row.len() - at;
-            let (m_lo, m_hi): (__mmask8, __mmask8) = if room >= 16 {
-                (0xff, 0xff)
+            let room = width - at;
+            let m_up: __mmask8 = if room >= 8 {
+                0xff
             } else {
-                let keep = |n: usize| ((1u32 << n.min(8)) - 1) as __mmask8;
-                (keep(room), keep(room.saturating_sub(8)))
+                ((1u32 << room) - 1) as __mmask8
             };
-            // SAFETY: the masks keep the lanes inside the row.
+            let m_down = if lower { m_up } else { 0 };
+            // SAFETY: the masks keep the lanes inside the rows of the band.
             unsafe {
-                let o = row.as_mut_ptr().add(at);
-                let sum_lo = _mm512_add_pd(_mm512_maskz_loadu_pd(m_lo, o), col_lo);
-                _mm512_mask_storeu_pd(o, m_lo, sum_lo);
-                let sum_hi = _mm512_add_pd(_mm512_maskz_loadu_pd(m_hi, o.wrapping_add(8)), col_hi);
-                _mm512_mask_storeu_pd(o.wrapping_add(8), m_hi, sum_hi);
+                let (u, d) = (up.add(at), down.wrapping_add(at));
+                let sum_up = _mm512_add_pd(_mm512_maskz_loadu_pd(m_up, u), col_up);
+                _mm512_mask_storeu_pd(u, m_up, sum_up);
+                let sum_down = _mm512_add_pd(_mm512_maskz_loadu_pd(m_down, d), col_down);
+                _mm512_mask_storeu_pd(d, m_down, sum_down);
             }
-            k += 16;
+            k += 8;
         }
     }
 }

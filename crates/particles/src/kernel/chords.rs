@@ -94,7 +94,8 @@ impl PartialChords {
             return 0.0;
         }
         // The row of q_b, once for both ends.
-        let i = (x.max(0.0) as usize).min(N - 2);
+        // (x ≥ 0: a square root.)
+        let i = (x as usize).min(N - 2);
         let row = (i, x - i as f64);
         let signed = |u: f64| u.signum() * self.cumulative(row, u.abs());
         signed(u1) - signed(u0)

@@ -142,7 +142,7 @@ pub(super) fn with_images(
 /// (cleared): each image's shift in boxes and centre. A hidden particle
 /// (support ≤ 0) in a box has none. Refused when the images would reach
 /// beyond [`MAX_SHIFT`] boxes.
-#[inline]
+#[inline(always)]
 pub fn images(
     b: Option<&Aabb>,
     c: Vec3,
