@@ -40,7 +40,7 @@
 
 use rayon::prelude::*;
 use std::sync::Arc;
-use voxless_core::simd::{Simd, dispatch};
+use voxless_core::simd::{Lanes, Simd, WithLanes, dispatch};
 
 use voxless_core::{Aabb, Camera, Control, PixelIntegral, Projection, Vec3};
 
@@ -252,6 +252,7 @@ impl Splatter {
             area: self.area.is_some(),
             lean: !on_device && self.kernel.column_poly().is_some(),
         };
+        let simd = self.simd;
         // (Pieces left from a larger chunk would be summed again.)
         pieces.resize_with(particles.len().div_ceil(PIECE), Piece::default);
         // Collected in order, so the first bad particle in order is named
@@ -263,7 +264,19 @@ impl Splatter {
             .map(|(k, (piece, part))| {
                 piece.splats.clear();
                 piece.lean.clear();
-                placer.place_all(part, offset + k * PIECE, piece)?;
+                // Compiled for the lanes `simd` picks (AVX2: `floor` and
+                // `ceil` one instruction each, not SSE2's sequences; the
+                // same bits, no operation fused or reordered).
+                let first = offset + k * PIECE;
+                dispatch(
+                    simd,
+                    PlaceAll {
+                        placer: &placer,
+                        part,
+                        first,
+                        piece,
+                    },
+                )?;
                 // On a device the CPU sums only what it keeps (pixel
                 // areas, clipped images), so only those are binned.
                 let height = placer.size.1;
@@ -401,49 +414,27 @@ struct Placer {
     basis: [[f64; 3]; 4],
 }
 
-impl Placer {
-    /// [`Placer::place`] for each of `part`, the first being particle
-    /// `offset` of the whole set: on x86-64 CPUs with AVX2, compiled for
-    /// them (`floor`/`ceil` one instruction each, not SSE2's sequences;
-    /// the same bits: no operation is fused or reordered).
-    fn place_all(
-        &self,
-        part: &[SplatParticle],
-        offset: usize,
-        piece: &mut Piece,
-    ) -> Result<(), ParticleError> {
-        #[cfg(target_arch = "x86_64")]
-        if Simd::Avx2.available() {
-            // SAFETY: the CPU has AVX2 and FMA (`Simd::available`).
-            return unsafe { self.place_all_avx2(part, offset, piece) };
-        }
-        self.place_all_here(part, offset, piece)
-    }
+/// [`Placer::place`] for each particle of `part`, the first being particle
+/// `first` of the whole set (run through [`dispatch`] for its compilation).
+struct PlaceAll<'a> {
+    placer: &'a Placer,
+    part: &'a [SplatParticle],
+    first: usize,
+    piece: &'a mut Piece,
+}
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn place_all_avx2(
-        &self,
-        part: &[SplatParticle],
-        offset: usize,
-        piece: &mut Piece,
-    ) -> Result<(), ParticleError> {
-        self.place_all_here(part, offset, piece)
-    }
-
+impl WithLanes for PlaceAll<'_> {
+    type Output = Result<(), ParticleError>;
     #[inline(always)]
-    fn place_all_here(
-        &self,
-        part: &[SplatParticle],
-        offset: usize,
-        piece: &mut Piece,
-    ) -> Result<(), ParticleError> {
-        for (i, p) in part.iter().enumerate() {
-            self.place(p, offset + i, piece)?;
+    fn run<L: Lanes>(self) -> Self::Output {
+        for (i, p) in self.part.iter().enumerate() {
+            self.placer.place(p, self.first + i, self.piece)?;
         }
         Ok(())
     }
+}
 
+impl Placer {
     /// Particle `p`'s periodic images as splats, in order, onto the
     /// piece's splats (`index`: the particle's index in the whole set, for
     /// errors).
