@@ -184,4 +184,4 @@ impl SplatBand<'_> {
 }
 
 /// Lane groups per span of a splat's columns (see `SplatBand::lean_rows`).
-const SPAN: usize = 16;
+pub(super) const SPAN: usize = 16;
