@@ -86,7 +86,9 @@ pub(super) unsafe fn sph_rows(
                 continue;
             }
             let ty = _mm512_mask_blend_ps(0xff00, _mm512_set1_ps(t0), _mm512_set1_ps(t1));
-            let up = out[(yy - y.0) as usize * width..].as_mut_ptr().wrapping_add(span);
+            let up = out[(yy - y.0) as usize * width..]
+                .as_mut_ptr()
+                .wrapping_add(span);
             // The lower row, where it is in the band (else never written).
             let lower = yy + 1 < rows.end;
             let down = up.wrapping_add(width);
