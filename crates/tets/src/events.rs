@@ -41,11 +41,45 @@ const RESIDUE: f64 = 1e-9;
 /// integral is its length times its density); integrators ignore slivers
 /// and rounding gaps when they look for iso-surfaces.
 pub fn sweep(events: &[(f32, f32)], out: &mut Vec<Interval>) -> f32 {
+    sweep_in_order(events.iter().copied(), out)
+}
+
+/// An event `(t, Δρ)` as one word whose integer order is `t`'s order
+/// (`f32::total_cmp`; ties by the bits of `Δρ`), for [`sort_and_sweep`]:
+/// a list of words sorts as plain integers, where pairs compared by
+/// `total_cmp` took twice the time (measured on the 256³ exact render).
+#[inline(always)]
+pub fn event(t: f32, d: f32) -> u64 {
+    let b = t.to_bits();
+    // Negative values reversed below the positive ones.
+    let key = if b >> 31 == 1 { !b } else { b | 1 << 31 };
+    (u64::from(key) << 32) | u64::from(d.to_bits())
+}
+
+/// The `(t, Δρ)` of an [`event`].
+#[inline(always)]
+fn unpack(e: u64) -> (f32, f32) {
+    let key = (e >> 32) as u32;
+    let b = if key >> 31 == 1 {
+        key & !(1 << 31)
+    } else {
+        !key
+    };
+    (f32::from_bits(b), f32::from_bits(e as u32))
+}
+
+/// Sorts the [`event`]s of one ray and [`sweep`]s them.
+pub fn sort_and_sweep(events: &mut [u64], out: &mut Vec<Interval>) -> f32 {
+    events.sort_unstable();
+    sweep_in_order(events.iter().map(|&e| unpack(e)), out)
+}
+
+fn sweep_in_order(events: impl Iterator<Item = (f32, f32)>, out: &mut Vec<Interval>) -> f32 {
     let mut rho = 0.0f64;
     // The largest single contribution seen on this ray sets the residue scale.
     let mut peak = 0.0f64;
     let mut t_prev = f32::NAN;
-    for &(t, d) in events {
+    for (t, d) in events {
         if t > t_prev {
             let r = if rho.abs() < RESIDUE * peak { 0.0 } else { rho };
             if r as f32 > 0.0 {
@@ -92,7 +126,7 @@ impl Layers {
 thread_local! {
     /// Per-pixel event lists kept between a thread's tiles (see
     /// `TetTileView::intervals`).
-    static EVENTS: std::cell::RefCell<Vec<Vec<(f32, f32)>>> =
+    static EVENTS: std::cell::RefCell<Vec<Vec<u64>>> =
         const { std::cell::RefCell::new(Vec::new()) };
 }
 
@@ -195,12 +229,10 @@ impl TileIntervals for TetTileView<'_> {
                     ev.clear();
                 }
                 self.crossings(tile, &spans, |p, t0, t1, rho| {
-                    events[p].push((t0, rho));
-                    events[p].push((t1, -rho));
+                    events[p].extend([event(t0, rho), event(t1, -rho)]);
                 });
                 for ev in &mut events[..n] {
-                    ev.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-                    sweep(ev, &mut out.intervals);
+                    sort_and_sweep(ev, &mut out.intervals);
                     out.end_ray();
                 }
                 EVENTS.with_borrow_mut(|kept| *kept = events);
@@ -268,5 +300,72 @@ fn kbuffer(
             }
         }
         out.end_ray();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Packed events sort as `f32::total_cmp` sorts their `t`, and unpack
+    /// to the same bits.
+    #[test]
+    fn packed_events_keep_the_order_of_t() {
+        let ts = [
+            f32::NEG_INFINITY,
+            -3.5e7,
+            -1.0,
+            -f32::MIN_POSITIVE,
+            -1e-45,
+            -0.0,
+            0.0,
+            1e-45,
+            f32::MIN_POSITIVE,
+            0.3,
+            1.0,
+            1.000_000_1,
+            2.5e30,
+            f32::INFINITY,
+        ];
+        for &a in &ts {
+            for &b in &ts {
+                for d in [0.5f32, -7.25] {
+                    assert_eq!(event(a, d).cmp(&event(b, d)), a.total_cmp(&b), "{a} {b}");
+                }
+            }
+            for d in [0.5f32, -7.25, 0.0, -0.0, 3.4e38] {
+                let (t, e) = unpack(event(a, d));
+                assert_eq!((t.to_bits(), e.to_bits()), (a.to_bits(), d.to_bits()));
+            }
+        }
+    }
+
+    /// The packed sort gives the intervals of pairs sorted by `total_cmp`
+    /// (distinct event times: no ties to order differently).
+    #[test]
+    fn packed_sweep_equals_the_pairs_sweep() {
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut pairs = Vec::new();
+        for _ in 0..300 {
+            let (a, len, rho) = (next() * 10.0 - 2.0, next(), 0.1 + next() * 5.0);
+            pairs.push((a, rho));
+            pairs.push((a + len, -rho));
+        }
+        let mut packed: Vec<u64> = pairs.iter().map(|&(t, d)| event(t, d)).collect();
+        pairs.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        let (mut want, mut got) = (Vec::new(), Vec::new());
+        let last = sweep(&pairs, &mut want);
+        assert_eq!(
+            sort_and_sweep(&mut packed, &mut got).to_bits(),
+            last.to_bits()
+        );
+        assert!(want.len() > 100);
+        assert_eq!(format!("{want:?}"), format!("{got:?}"));
     }
 }

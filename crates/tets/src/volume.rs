@@ -17,7 +17,7 @@ use voxless_core::{
 };
 
 use crate::TetError;
-use crate::events::{TetTileView, sweep};
+use crate::events::{TetTileView, event, sort_and_sweep};
 use crate::index::TetIndex;
 use crate::mesh::{LagrangianGrid, TetMesh, TetSettings};
 use crate::raster::Planes;
@@ -199,17 +199,15 @@ impl Volume for TetVolume {
     /// traversal, plane clip), events sorted and swept. Every piece of
     /// positive density is handed out, visible or not.
     fn intervals(&self, ray: &Ray, t: Range1, _: &IntervalQuery, out: &mut Vec<Interval>) {
-        let mut events: Vec<(f32, f32)> = Vec::new();
+        let mut events = Vec::new();
         self.index().along_ray(&self.mesh, ray, t, |tet| {
             let (a, b) = Planes::new(tet).clip(ray);
             let (a, b) = (a.max(t.lo), b.min(t.hi));
             if b > a {
-                events.push((a, tet.density));
-                events.push((b, -tet.density));
+                events.extend([event(a, tet.density), event(b, -tet.density)]);
             }
         });
-        events.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-        sweep(&events, out);
+        sort_and_sweep(&mut events, out);
     }
 
     fn tile_view(&self, view: &View) -> Option<Box<dyn TileIntervals + '_>> {

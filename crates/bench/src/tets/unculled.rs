@@ -5,7 +5,7 @@
 //! blocks `raster::Frame` bins to a tile. [`Binned`] wraps a `TetVolume`
 //! with its own tile view built from the public raster pieces — a `Frame`
 //! whose bins it may replace, `for_each_crossing` for the crossings and
-//! `events::sweep` for the constant pieces — so the same integrator renders
+//! `events::sort_and_sweep` for the constant pieces — so the same integrator renders
 //! both variants and only the bins differ. With the frame's own bins
 //! ([`Bins::Culled`]) it must give the library's image (tested below, and
 //! reported by the culling table as its correctness check). Exact mode
@@ -17,7 +17,7 @@ use voxless_core::{
     Aabb, Camera, Interval, IntervalLists, IntervalQuery, Prepare, PrepareQuery, Range1, Ray,
     Sample, TileIntervals, TileRays, Vec3, View, Volume,
 };
-use voxless_tets::events::sweep;
+use voxless_tets::events::{event, sort_and_sweep};
 use voxless_tets::raster::{Frame, TILE, for_each_crossing, for_each_crossing_jittered};
 use voxless_tets::{TetMesh, TetVolume};
 
@@ -122,10 +122,9 @@ impl TileIntervals for BinnedView<'_> {
                 }
             })
             .collect();
-        let mut events: Vec<Vec<(f32, f32)>> = vec![Vec::new(); tile.rays.len()];
+        let mut events: Vec<Vec<u64>> = vec![Vec::new(); tile.rays.len()];
         let visit = |p: usize, t0: f32, t1: f32, rho: f32| {
-            events[p].push((t0, rho));
-            events[p].push((t1, -rho));
+            events[p].extend([event(t0, rho), event(t1, -rho)]);
         };
         let index = |f: &Frame| (tile.y0 / TILE) * f.tiles_x + tile.x0 / TILE;
         if tile.centred {
@@ -140,8 +139,7 @@ impl TileIntervals for BinnedView<'_> {
             for_each_crossing_jittered(self.mesh, f, index(f), tile.rays, &spans, visit);
         }
         for ev in &mut events {
-            ev.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-            sweep(ev, &mut out.intervals);
+            sort_and_sweep(ev, &mut out.intervals);
             out.end_ray();
         }
     }
