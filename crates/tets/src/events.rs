@@ -46,8 +46,9 @@ pub fn sweep(events: &[(f32, f32)], out: &mut Vec<Interval>) -> f32 {
 
 /// An event `(t, Δρ)` as one word whose integer order is `t`'s order
 /// (`f32::total_cmp`; ties by the bits of `Δρ`), for [`sort_and_sweep`]:
-/// a list of words sorts as plain integers, where pairs compared by
-/// `total_cmp` took twice the time (measured on the 256³ exact render).
+/// a list of words sorts as plain integers (sorting and sweeping were 11.1 %
+/// of the 256³ exact render's samples as pairs compared by `total_cmp`,
+/// 7.6 % so).
 #[inline(always)]
 pub fn event(t: f32, d: f32) -> u64 {
     let b = t.to_bits();
@@ -74,6 +75,7 @@ pub fn sort_and_sweep(events: &mut [u64], out: &mut Vec<Interval>) -> f32 {
     sweep_in_order(events.iter().map(|&e| unpack(e)), out)
 }
 
+/// [`sweep`] over events already in order.
 fn sweep_in_order(events: impl Iterator<Item = (f32, f32)>, out: &mut Vec<Interval>) -> f32 {
     let mut rho = 0.0f64;
     // The largest single contribution seen on this ray sets the residue scale.
