@@ -14,7 +14,9 @@ pub(super) struct SplatBand<'a> {
     /// SPH splats on sixteen lanes (the `Splatter`'s `wide`).
     pub(super) wide: bool,
     pub(super) y: (u32, u32),
-    pub(super) width: usize,
+    /// The distance between the band's rows (the image's width and its
+    /// padding: `row_stride`).
+    pub(super) stride: usize,
     /// The kernel's column as polynomials (zeros for the Gaussians).
     pub(super) poly: &'a ColumnPoly,
     /// The band's rows of the image.
@@ -54,7 +56,7 @@ impl WithLanes for SplatBand<'_> {
                 if !(p.lean.ay * dy * dy < last) {
                     continue;
                 }
-                let row = &mut self.out[(y - self.y.0) as usize * self.width..][..self.width];
+                let row = &mut self.out[(y - self.y.0) as usize * self.stride..][..self.stride];
                 for (x, o) in row.iter_mut().enumerate().take(end).skip(first) {
                     let dx = x as f64 + 0.5 - p.lean.cx;
                     let b2 = dx * dx * pw * pw + dy * dy * ph * ph;
@@ -78,7 +80,7 @@ impl SplatBand<'_> {
         #[cfg(target_arch = "x86_64")]
         if self.wide {
             // SAFETY: `wide` is set only where the CPU has AVX-512F.
-            unsafe { splat_wide::sph_rows(p, self.y, self.width, self.poly, last, self.out) };
+            unsafe { splat_wide::sph_rows(p, self.y, self.stride, self.poly, last, self.out) };
             return;
         }
         let s = L::splat;
@@ -124,7 +126,7 @@ impl SplatBand<'_> {
         // and adding that +0 leaves every sum's bits as they were.
         let zero = s(ZERO_UNTIL);
         let row_t = |y: u32| p.row_position(y, rows.end, last).unwrap_or(ZERO_UNTIL);
-        let width = self.width;
+        let width = self.stride;
         let mut span = first;
         while span < end {
             let groups = (end - span).div_ceil(HALF_LANES).min(SPAN);

@@ -12,11 +12,12 @@ use crate::kernel::area::AreaTable;
 /// [`table_pixels`]): each pixel's share of the mass from the kernel's area
 /// table at its corners, so the shares add up to the whole. Wider supports
 /// take the pixel-centre lanes ([`SplatBand`]), clipped splats [`clipped`].
+/// `out`: the band's rows, `stride` apart.
 pub(super) fn area_band(
     splats: BandSplats,
     table: &AreaTable,
     y: (u32, u32),
-    width: usize,
+    stride: usize,
     out: &mut [f64],
 ) {
     let mut upper: Vec<f64> = Vec::new();
@@ -44,7 +45,7 @@ pub(super) fn area_band(
         corners(rows.start as f64, &mut upper);
         for r in rows {
             corners(r as f64 + 1.0, &mut lower);
-            let line = &mut out[(r - y.0) as usize * width..][..width];
+            let line = &mut out[(r - y.0) as usize * stride..][..stride];
             for (k, o) in line[first..end].iter_mut().enumerate() {
                 *o += mass * (lower[k + 1] - lower[k] - upper[k + 1] + upper[k]);
             }
@@ -160,9 +161,9 @@ pub(super) fn clipped(
     splats: BandSplats,
     camera: &Camera,
     b: &Aabb,
-    (width, height): (u32, u32),
+    height: u32,
     y0: u32,
-    out: &mut [f64],
+    (stride, out): (usize, &mut [f64]),
 ) {
     let [eye, right, up, fwd] = camera.basis_f64();
     // The line's parameter at a face is (face − o)/fwd: a product with the
@@ -193,7 +194,7 @@ pub(super) fn clipped(
                 }
                 if t.0 < t.1 {
                     let c = p.column.chord(b2, t.0 - p.depth, t.1 - p.depth);
-                    out[(y - y0) as usize * width as usize + x as usize] += p.clip_scale * c;
+                    out[(y - y0) as usize * stride + x as usize] += p.clip_scale * c;
                 }
             },
         );
