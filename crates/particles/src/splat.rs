@@ -594,6 +594,11 @@ const CENTRE_SLACK: f64 = 1e-4;
 /// image's right edge add their zeros to the padding, which the image
 /// leaves out.
 fn row_stride(width: u32) -> usize {
+    // (Rows under 2 KiB are left as they are: no two rows of a lane group
+    // alias, and a narrow image is not made many times wider.)
+    if width < 256 {
+        return width as usize;
+    }
     let mut s = (width as usize).next_multiple_of(8);
     while !(256..=4096 - 256).contains(&(s * 8 % 4096)) {
         s += 8;
