@@ -615,20 +615,26 @@ fn written_zeros(n: usize) -> Vec<f64> {
     rayon::iter::repeat_n(0.0, n).collect()
 }
 
-/// `⌊x⌋` clamped to `0..=hi` (`hi` a whole number; NaN gives 0): the
-/// clamp first, then a truncation, which is the floor of a value ≥ 0 and
-/// needs no call into libm (the default x86-64 target has no SSE4.1
-/// rounding instruction).
+/// `⌊x⌋` clamped to `0..=hi` (`hi` a whole number below 2³²; NaN gives
+/// 0): the clamp first, then a truncation, which is the floor of a value
+/// ≥ 0 and needs no call into libm (the default x86-64 target has no
+/// SSE4.1 rounding instruction). `max`/`min` and an unchecked truncation,
+/// not `clamp` and `as`: `clamp` keeps NaN and asserts its bounds, `as`
+/// saturates (four of these a splat were 7 % of a 16.7M-particle
+/// projection's samples).
 #[inline(always)]
 fn floor_in(x: f64, hi: f64) -> u32 {
-    x.clamp(0.0, hi) as u32
+    let x = x.max(0.0).min(hi);
+    // SAFETY: `x` is in `[0, hi]` (`max` drops NaN), so its truncation is
+    // a u32.
+    unsafe { x.to_int_unchecked::<u32>() }
 }
 
 /// `⌈x⌉` clamped to `0..=hi`, as [`floor_in`].
 #[inline(always)]
 fn ceil_in(x: f64, hi: f64) -> u32 {
-    let x = x.clamp(0.0, hi);
-    let t = x as u32;
+    let x = x.max(0.0).min(hi);
+    let t = floor_in(x, hi);
     t + ((t as f64) < x) as u32
 }
 
