@@ -171,7 +171,7 @@ pub(crate) fn nearest_within(positions: &[Vec3], probes: &[Vec3], b: &Aabb, h: f
         .enumerate()
         .map(|(i, p)| (key(cell_of(*p)), i as u32))
         .collect();
-    keyed.par_sort_unstable();
+    voxless_bvh::order::sort_pairs(&mut keyed);
     let run = |k: u64| {
         let start = keyed.partition_point(|e| e.0 < k);
         let end = keyed.partition_point(|e| e.0 <= k);

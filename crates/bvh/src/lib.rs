@@ -125,7 +125,7 @@ impl Bvh {
                     )
                 })
                 .collect_into_vec(keys);
-            keys.par_sort_unstable();
+            order::sort_pairs(keys);
         });
     }
 

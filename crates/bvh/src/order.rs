@@ -4,8 +4,11 @@
 //! key; sorting by the key puts points that are close in space close in memory.
 //! Hilbert order has no long jumps (consecutive keys are face-adjacent cells),
 //! which makes runs of consecutive particles compact clusters; Morton order is
-//! cheaper and its bit prefixes define the LBVH hierarchy.
+//! cheaper and its bit prefixes define the LBVH hierarchy. [`sort_pairs`]
+//! sorts `(key, index)` pairs on every core by the keys' bits, in exactly
+//! the order a comparison sort gives.
 
+use rayon::prelude::*;
 use voxless_core::{Aabb, Vec3};
 
 /// Bits per axis of the lattice.
@@ -204,6 +207,151 @@ fn hilbert_reference(c: [u32; 3]) -> u64 {
     morton(x)
 }
 
+/// Sorts `(key, index)` pairs ascending, in the order `sort_unstable`
+/// gives them (pairs compare as tuples, so ties in the key go by index):
+/// on every core, by the keys' bits from the top. The pairs are first
+/// scattered to 2¹² buckets by their top bits (of the keys' span, so that
+/// keys of a clustered set still spread), each bucket then split the same
+/// way, 2⁸ at a time, while it holds more than [`SMALL`] pairs, and small
+/// runs sorted by comparison. Measured on 16.7M Hilbert keys (2 cores):
+/// ~0.65 → ~0.33 core-seconds against `par_sort_unstable`, whose ~24
+/// levels of comparisons each read the whole array; this reads it about
+/// four times. Takes a second buffer as large as `v` while it runs.
+pub fn sort_pairs(v: &mut Vec<(u64, u32)>) {
+    let n = v.len();
+    if n <= 1 << 16 {
+        v.par_sort_unstable();
+        return;
+    }
+    let (lo, hi) = v
+        .par_iter()
+        .map(|p| (p.0, p.0))
+        .reduce(|| (u64::MAX, 0), |a, b| (a.0.min(b.0), a.1.max(b.1)));
+    if lo == hi {
+        // One key: the order is the indices'.
+        v.par_sort_unstable();
+        return;
+    }
+    const TOP: u32 = 12;
+    let shift = (u64::BITS - (hi - lo).leading_zeros()).saturating_sub(TOP);
+    let bucket = move |k: u64| ((k - lo) >> shift) as usize;
+    // Per-piece counts, then each piece's first slot in each bucket
+    // (bucket-major, so a bucket's pairs keep the pieces' order).
+    let piece = n.div_ceil(4 * rayon::current_num_threads());
+    let counts: Vec<Vec<usize>> = v
+        .par_chunks(piece)
+        .map(|c| {
+            let mut h = vec![0usize; 1 << TOP];
+            for p in c {
+                h[bucket(p.0)] += 1;
+            }
+            h
+        })
+        .collect();
+    let mut slots = vec![vec![0usize; 1 << TOP]; counts.len()];
+    let mut starts = Vec::with_capacity((1 << TOP) + 1);
+    let mut at = 0;
+    for b in 0..1 << TOP {
+        starts.push(at);
+        for (slot, count) in slots.iter_mut().zip(&counts) {
+            slot[b] = at;
+            at += count[b];
+        }
+    }
+    starts.push(at);
+    let mut out: Vec<(u64, u32)> = Vec::with_capacity(n);
+    let dst = SendPtr(out.as_mut_ptr());
+    v.par_chunks(piece)
+        .zip(slots.into_par_iter())
+        .for_each(|(c, mut slot)| {
+            for &p in c {
+                let b = bucket(p.0);
+                // SAFETY: the slots of different pieces and buckets are
+                // disjoint ranges of `0..n` (prefix sums of the counts),
+                // and each piece writes its own `count[b]` slots of bucket
+                // `b`, so every index below `n` is written exactly once.
+                unsafe { dst.get().add(slot[b]).write(p) };
+                slot[b] += 1;
+            }
+        });
+    // SAFETY: all `n` pairs were written above.
+    unsafe { out.set_len(n) };
+    // The buckets, each sorted on its own (the second buffer is `v`'s).
+    let mut runs: Vec<(&mut [Pair], &mut [Pair])> = Vec::with_capacity(1 << TOP);
+    let (mut rest, mut spare) = (&mut out[..], &mut v[..]);
+    for w in starts.windows(2) {
+        let len = w[1] - w[0];
+        let (run, r) = rest.split_at_mut(len);
+        let (scratch, s) = spare.split_at_mut(len);
+        (rest, spare) = (r, s);
+        if len > 1 {
+            runs.push((run, scratch));
+        }
+    }
+    runs.into_par_iter()
+        .for_each(|(run, scratch)| split_sort(run, scratch));
+    *v = out;
+}
+
+/// A key and the index it belongs to.
+type Pair = (u64, u32);
+
+/// Runs of at most this many pairs are sorted by comparison.
+const SMALL: usize = 64;
+
+/// Sorts `run` as [`sort_pairs`] does, `scratch` as long as it.
+fn split_sort(run: &mut [(u64, u32)], scratch: &mut [(u64, u32)]) {
+    if run.len() <= SMALL {
+        run.sort_unstable();
+        return;
+    }
+    let (lo, hi) = run
+        .iter()
+        .fold((u64::MAX, 0), |a, p| (a.0.min(p.0), a.1.max(p.0)));
+    if lo == hi {
+        run.sort_unstable();
+        return;
+    }
+    const STEP: u32 = 8;
+    let shift = (u64::BITS - (hi - lo).leading_zeros()).saturating_sub(STEP);
+    let bucket = |k: u64| ((k - lo) >> shift) as usize;
+    let mut at = [0usize; (1 << STEP) + 1];
+    for p in run.iter() {
+        at[bucket(p.0) + 1] += 1;
+    }
+    for b in 0..1 << STEP {
+        at[b + 1] += at[b];
+    }
+    let starts = at;
+    for &p in run.iter() {
+        let b = bucket(p.0);
+        scratch[at[b]] = p;
+        at[b] += 1;
+    }
+    run.copy_from_slice(scratch);
+    for w in starts.windows(2) {
+        if w[1] - w[0] > 1 {
+            split_sort(&mut run[w[0]..w[1]], &mut scratch[w[0]..w[1]]);
+        }
+    }
+}
+
+/// A pointer written from every core at disjoint indices ([`sort_pairs`]).
+struct SendPtr<T>(*mut T);
+
+// SAFETY: the writers touch disjoint elements (see `sort_pairs`).
+unsafe impl<T: Send> Send for SendPtr<T> {}
+// SAFETY: as above.
+unsafe impl<T: Send> Sync for SendPtr<T> {}
+
+impl<T> SendPtr<T> {
+    /// The pointer (a method, so closures capture the wrapper, not the
+    /// raw field).
+    fn get(&self) -> *mut T {
+        self.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -246,6 +394,47 @@ mod tests {
         for w in cells.windows(2) {
             let d: u32 = (0..3).map(|a| w[0].1[a].abs_diff(w[1].1[a])).sum();
             assert_eq!(d, 1, "{:?} -> {:?}", w[0].1, w[1].1);
+        }
+    }
+
+    /// `sort_pairs` gives `sort_unstable`'s order: uniform keys, clustered
+    /// keys (most in a few narrow ranges), many equal keys, one key for
+    /// all, and sizes on both sides of the small-input path.
+    #[test]
+    fn sort_pairs_equals_sort_unstable() {
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        // A size and how a random number becomes a key.
+        type Case = (usize, fn(u64) -> u64);
+        let cases: [Case; 6] = [
+            (300_000, |r| r >> 1),
+            (200_001, |r| {
+                if r.is_multiple_of(5) {
+                    r >> 1
+                } else {
+                    (1 << 40) + (r % 977)
+                }
+            }),
+            (150_000, |r| r % 13),
+            (100_000, |_| 42),
+            (65_536, |r| r),
+            (1000, |r| r % 100),
+        ];
+        for (n, key) in cases {
+            let mut v: Vec<(u64, u32)> = (0..n).map(|i| (key(next()), i as u32)).collect();
+            // Shuffle the indices too, so ties are not already in order.
+            for i in (1..n).rev() {
+                v.swap(i, next() as usize % (i + 1));
+            }
+            let mut want = v.clone();
+            want.sort_unstable();
+            sort_pairs(&mut v);
+            assert!(v == want, "{n} pairs");
         }
     }
 

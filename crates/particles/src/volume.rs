@@ -272,7 +272,7 @@ impl ParticleVolume {
             .enumerate()
             .map(|(i, p)| (order::hilbert(order::quantize(*p, &bounds)), i as u32))
             .collect();
-        keys.par_sort_unstable();
+        order::sort_pairs(&mut keys);
         let order: Vec<u32> = keys.par_iter().map(|k| k.1).collect();
         drop(keys);
         // Gathers are random reads: on every core (order-preserving).
