@@ -217,7 +217,7 @@ fn hilbert_reference(c: [u32; 3]) -> u64 {
 /// ~0.65 → ~0.33 core-seconds against `par_sort_unstable`, whose ~24
 /// levels of comparisons each read the whole array; this reads it about
 /// four times. Takes a second buffer as large as `v` while it runs.
-pub fn sort_pairs(v: &mut Vec<(u64, u32)>) {
+pub fn sort_pairs(v: &mut Vec<Pair>) {
     let n = v.len();
     if n <= 1 << 16 {
         v.par_sort_unstable();
@@ -259,7 +259,7 @@ pub fn sort_pairs(v: &mut Vec<(u64, u32)>) {
         }
     }
     starts.push(at);
-    let mut out: Vec<(u64, u32)> = Vec::with_capacity(n);
+    let mut out: Vec<Pair> = Vec::with_capacity(n);
     let dst = SendPtr(out.as_mut_ptr());
     v.par_chunks(piece)
         .zip(slots.into_par_iter())
@@ -294,13 +294,13 @@ pub fn sort_pairs(v: &mut Vec<(u64, u32)>) {
 }
 
 /// A key and the index it belongs to.
-type Pair = (u64, u32);
+pub type Pair = (u64, u32);
 
 /// Runs of at most this many pairs are sorted by comparison.
 const SMALL: usize = 64;
 
 /// Sorts `run` as [`sort_pairs`] does, `scratch` as long as it.
-fn split_sort(run: &mut [(u64, u32)], scratch: &mut [(u64, u32)]) {
+fn split_sort(run: &mut [Pair], scratch: &mut [Pair]) {
     if run.len() <= SMALL {
         run.sort_unstable();
         return;

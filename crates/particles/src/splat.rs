@@ -628,18 +628,25 @@ fn written_zeros(n: usize) -> Vec<f64> {
 /// projection's samples).
 #[inline(always)]
 fn floor_in(x: f64, hi: f64) -> u32 {
-    let x = x.max(0.0).min(hi);
-    // SAFETY: `x` is in `[0, hi]` (`max` drops NaN), so its truncation is
-    // a u32.
-    unsafe { x.to_int_unchecked::<u32>() }
+    truncate(x.max(0.0).min(hi))
 }
 
 /// `⌈x⌉` clamped to `0..=hi`, as [`floor_in`].
 #[inline(always)]
 fn ceil_in(x: f64, hi: f64) -> u32 {
     let x = x.max(0.0).min(hi);
-    let t = floor_in(x, hi);
+    let t = truncate(x);
     t + ((t as f64) < x) as u32
+}
+
+/// `x` (in `[0, hi]` for a `hi` below 2³², as [`floor_in`] clamps it)
+/// truncated.
+#[inline(always)]
+fn truncate(x: f64) -> u32 {
+    debug_assert!((0.0..4294967296.0).contains(&x));
+    // SAFETY: the callers clamp `x` to `[0, hi]` (`max` drops NaN), so its
+    // truncation is a u32.
+    unsafe { x.to_int_unchecked::<u32>() }
 }
 
 /// What a device sums of splat `p` (see [`PlainSplat`]).
