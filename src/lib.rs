@@ -73,6 +73,7 @@ mod fields;
 pub mod flags;
 mod frame;
 pub mod histogram;
+pub mod huge_pages;
 mod label;
 pub mod load;
 pub mod map_fits;

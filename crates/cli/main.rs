@@ -22,6 +22,11 @@ use voxless::annotate::Marks;
 use voxless::output::OutputKind;
 use voxless::{Control, ParticlesDesc, Placement, ProjectionDesc, Purpose};
 
+/// Large arrays on huge pages where the kernel offers them (see the
+/// library's `huge_pages`).
+#[global_allocator]
+static ALLOC: voxless::huge_pages::HugePages = voxless::huge_pages::HugePages;
+
 use args::{DataArgs, DeviceArgs, KindArgs, PlaneArgs, SceneArgs, ViewArgs};
 use progress::Progress;
 

@@ -21,6 +21,11 @@ mod convert;
 mod errors;
 mod run;
 
+/// Large arrays on huge pages where the kernel offers them (see the
+/// library's `huge_pages`).
+#[global_allocator]
+static ALLOC: voxless::huge_pages::HugePages = voxless::huge_pages::HugePages;
+
 use std::path::PathBuf;
 use std::sync::Arc;
 

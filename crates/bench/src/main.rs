@@ -46,6 +46,11 @@ mod serve;
 mod surfaces;
 mod tets;
 
+/// Large arrays on huge pages where the kernel offers them (see the
+/// library's `huge_pages`).
+#[global_allocator]
+static ALLOC: voxless::huge_pages::HugePages = voxless::huge_pages::HugePages;
+
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
