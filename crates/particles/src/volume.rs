@@ -262,10 +262,19 @@ impl ParticleVolume {
         let ghosts = data.positions.len() - n;
 
         // Hilbert order so runs of consecutive particles are compact clusters.
-        let mut bounds = Aabb::EMPTY;
-        for p in &data.positions {
-            bounds.grow(*p);
-        }
+        // (On every core: min and max are exact, so any grouping gives the
+        // serial loop's box.)
+        let bounds = data
+            .positions
+            .par_chunks(1 << 16)
+            .map(|chunk| {
+                let mut b = Aabb::EMPTY;
+                for p in chunk {
+                    b.grow(*p);
+                }
+                b
+            })
+            .reduce(|| Aabb::EMPTY, Aabb::union);
         let mut keys: Vec<(u64, u32)> = data
             .positions
             .par_iter()
