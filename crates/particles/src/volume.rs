@@ -262,19 +262,7 @@ impl ParticleVolume {
         let ghosts = data.positions.len() - n;
 
         // Hilbert order so runs of consecutive particles are compact clusters.
-        // (On every core: min and max are exact, so any grouping gives the
-        // serial loop's box.)
-        let bounds = data
-            .positions
-            .par_chunks(1 << 16)
-            .map(|chunk| {
-                let mut b = Aabb::EMPTY;
-                for p in chunk {
-                    b.grow(*p);
-                }
-                b
-            })
-            .reduce(|| Aabb::EMPTY, Aabb::union);
+        let bounds = box_of(&data.positions, |p| *p);
         let mut keys: Vec<(u64, u32)> = data
             .positions
             .par_iter()
@@ -440,10 +428,7 @@ impl ParticleVolume {
         if self.len() <= EXEMPT {
             return Ok(());
         }
-        let mut b = Aabb::EMPTY;
-        for p in &self.packed {
-            b.grow(p.center);
-        }
+        let b = box_of(&self.packed, |p| p.center);
         let factor = self.settings.kernel.support_factor();
         let mut supports: Vec<f32> = self.probes().map(|j| self.radius[j] * factor).collect();
         let support = median(&mut supports);
@@ -830,4 +815,19 @@ pub(crate) fn to_sample(f: &FieldSample) -> Sample {
             None => Attribute::None,
         },
     }
+}
+
+/// The box of the points `at` gives for `items`, on every core (min and max
+/// are exact, so any grouping gives a serial loop's box; a serial pass over
+/// a 16.7M-particle set was 0.035–0.05 s of its load).
+fn box_of<T: Sync>(items: &[T], at: impl Fn(&T) -> Vec3 + Sync) -> Aabb {
+    items
+        .par_chunks(1 << 16)
+        .map(|chunk| {
+            chunk.iter().fold(Aabb::EMPTY, |mut b, p| {
+                b.grow(at(p));
+                b
+            })
+        })
+        .reduce(|| Aabb::EMPTY, Aabb::union)
 }

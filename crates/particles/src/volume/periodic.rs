@@ -67,6 +67,10 @@ pub(super) struct Images {
     pub wrapped: usize,
 }
 
+/// A block's count of particles moved into the box, and its ghosts (the
+/// particle's index and the ghost's centre), in particle order.
+type Block = (usize, Vec<(u32, Vec3)>);
+
 /// The ghosts of `data` in the periodic box `b` (every image whose support
 /// box overlaps `b`); `range` normalises the attribute for the radius map.
 pub(super) fn with_images(
@@ -77,42 +81,43 @@ pub(super) fn with_images(
 ) -> Result<Images, ParticleError> {
     let n = data.positions.len();
     // Every particle on its own: on every core, in blocks whose ghosts
-    // are joined in particle order (the order a serial loop gives them).
-    let wrapped = data
-        .positions
-        .par_iter_mut()
-        .map(|p| {
-            let q = wrap(b, *p);
-            let moved = q != *p;
-            *p = q;
-            moved as usize
-        })
-        .sum();
+    // are joined in particle order (the order a serial loop gives them);
+    // each particle wrapped into the box as its block reaches it (one pass
+    // over the positions, not one to wrap and one to find the images).
     let factor = settings.kernel.support_factor();
     let mut source: Vec<u32> = (0..n as u32).collect();
     const BLOCK: usize = 1 << 16;
-    let blocks: Vec<Result<Vec<(u32, Vec3)>, ParticleError>> = (0..n.div_ceil(BLOCK))
-        .into_par_iter()
-        .map(|blk| {
-            let (mut extra, mut found) = (Vec::new(), Vec::new());
-            for i in blk * BLOCK..(n.min((blk + 1) * BLOCK)) {
-                let base = data.radii.as_ref().map_or(settings.radius, |r| r[i]);
-                let attr = data.attribute.as_ref().map(|a| a[i]);
+    let (radii, attribute) = (data.radii.as_deref(), data.attribute.as_deref());
+    let blocks: Vec<Result<Block, ParticleError>> = data
+        .positions
+        .par_chunks_mut(BLOCK)
+        .enumerate()
+        .map(|(blk, chunk)| {
+            let (mut moved, mut extra, mut found) = (0, Vec::new(), Vec::new());
+            for (k, p) in chunk.iter_mut().enumerate() {
+                let i = blk * BLOCK + k;
+                let q = wrap(b, *p);
+                moved += (q != *p) as usize;
+                *p = q;
+                let base = radii.map_or(settings.radius, |r| r[i]);
+                let attr = attribute.map(|a| a[i]);
                 let r = base * map_factor(&settings.radius_map, attr, range);
-                images(Some(b), data.positions[i], factor * r, i, &mut found)?;
+                images(Some(b), q, factor * r, i, &mut found)?;
                 for &(k, q) in &found {
                     if k != [0; 3] {
                         extra.push((i as u32, q));
                     }
                 }
             }
-            Ok(extra)
+            Ok((moved, extra))
         })
         .collect();
     // The first refusal in particle order, as a serial loop would give.
-    let mut extra = Vec::new();
+    let (mut extra, mut wrapped) = (Vec::new(), 0);
     for block in blocks {
-        extra.append(&mut block?);
+        let (moved, mut ghosts) = block?;
+        wrapped += moved;
+        extra.append(&mut ghosts);
     }
     // Exactly the room the ghosts need (pushing one by one would double
     // the arrays' capacity: 12 bytes a particle of positions alone).
