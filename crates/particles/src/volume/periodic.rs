@@ -103,9 +103,9 @@ pub(super) fn with_images(
                 let attr = attribute.map(|a| a[i]);
                 let r = base * map_factor(&settings.radius_map, attr, range);
                 images(Some(b), q, factor * r, i, &mut found)?;
-                for &(k, q) in &found {
-                    if k != [0; 3] {
-                        extra.push((i as u32, q));
+                for &(shift, ghost) in &found {
+                    if shift != [0; 3] {
+                        extra.push((i as u32, ghost));
                     }
                 }
             }
