@@ -409,13 +409,8 @@ mod tests {
             lo: [-1.0, 2.0, 0.0],
             size: [10.0, 5.0, 3.0],
         };
-        let mut state = 12345u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = voxless_core::SmallRng(12345);
+        let mut next = || f64::from(rng.f());
         let n = 5 * 4096 + 123;
         let mut rows: Vec<[f64; 3]> = (0..n)
             .map(|_| std::array::from_fn(|a| b.lo[a] + next() * b.size[a]))

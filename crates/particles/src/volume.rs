@@ -263,7 +263,7 @@ impl ParticleVolume {
 
         // Hilbert order so runs of consecutive particles are compact clusters.
         let bounds = box_of(&data.positions, |p| *p);
-        let mut keys: Vec<(u64, u32)> = data
+        let mut keys: Vec<order::Pair> = data
             .positions
             .par_iter()
             .enumerate()
