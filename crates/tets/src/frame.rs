@@ -215,15 +215,7 @@ impl Frame {
             let (px, py) = match ortho {
                 Some(half) => self.screen.ortho_points(corners, half),
                 None => {
-                    let mut px = [0.0; 8];
-                    let mut py = [0.0; 8];
-                    let mut front = true;
-                    for (c, &p) in corners.iter().enumerate() {
-                        match self.screen.project(p) {
-                            Some((x, y)) => (px[c], py[c]) = (x, y),
-                            None => front = false,
-                        }
-                    }
+                    let (px, py, front) = self.screen.perspective_points(corners);
                     if !front {
                         let (tets, count) = cell.tets();
                         for (_, t) in &tets[..count] {

@@ -300,7 +300,15 @@ impl Lattice {
         let off = offset(shift, self.l);
         let [ri, rj, rk] = self.cells(b);
         let n = self.n;
+        if let Some(i) = ri.clone().next() {
+            self.prefetch_rows(i, &rj, &rk);
+        }
         for i in ri {
+            // The next plane's rows while this one's cells are worked on:
+            // a block's rows are ~100 bytes each, N·12 bytes apart, which
+            // the hardware prefetchers do not follow (the first read of a
+            // cell's anchor was ~8 % of an exact 256³ render's samples).
+            self.prefetch_rows(i + 1, &rj, &rk);
             let plane = self.plane(i) * n * n;
             for j in rj.clone() {
                 for k in rk.clone() {
@@ -317,6 +325,25 @@ impl Lattice {
                         complete,
                     });
                 }
+            }
+        }
+    }
+
+    /// Prefetches the positions of plane `i`'s rows `rj` and the row after
+    /// (the cells' corners), columns `rk` and the one after.
+    #[inline]
+    fn prefetch_rows(&self, i: usize, rj: &Range<usize>, rk: &Range<usize>) {
+        let n = self.n;
+        let plane = self.plane(i) * n * n;
+        let last = rk.end.min(n - 1);
+        for j in rj.start..=rj.end.min(n - 1) {
+            let row = &self.positions[plane + j * n..plane + (j + 1) * n];
+            let (a, b) = (
+                row[rk.start..].as_ptr() as usize,
+                &row[last] as *const Vec3 as usize,
+            );
+            for line in (a & !63..=b).step_by(64) {
+                voxless_core::simd::prefetch(line as *const u8);
             }
         }
     }

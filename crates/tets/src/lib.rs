@@ -51,6 +51,7 @@
 
 mod area;
 pub mod events;
+mod faces;
 mod frame;
 mod index;
 mod lattice;

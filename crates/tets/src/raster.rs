@@ -10,6 +10,7 @@
 use voxless_core::simd::{LANES, Lanes, PortableLanes};
 use voxless_core::{Aabb, Camera, Projection, Ray, Vec3};
 
+use crate::faces::FaceLanes;
 pub use crate::frame::{BlockTets, Frame};
 use crate::lattice::{max, min};
 use crate::mesh::{Tet, TetMesh};
@@ -160,6 +161,33 @@ impl Screen {
     #[inline]
     pub(crate) fn ortho_points(&self, c: &[Vec3; 8], half: (f32, f32)) -> ([f32; 8], [f32; 8]) {
         self.ortho_lanes::<PortableLanes>(c, half)
+    }
+
+    /// [`Screen::project`] of eight points under a perspective camera, at
+    /// once (lane by lane the same operations, so the same bits): their
+    /// continuous pixel coordinates, and whether all eight are in front of
+    /// the eye plane (else the coordinates of those behind are meaningless).
+    #[inline(always)]
+    fn perspective_lanes<L: Lanes>(&self, v: &[Vec3; LANES]) -> ([f32; LANES], [f32; LANES], bool) {
+        let c = &self.camera;
+        let s = L::splat;
+        let x = L::from_array(v.map(|p| p.x)) - s(c.eye.x);
+        let y = L::from_array(v.map(|p| p.y)) - s(c.eye.y);
+        let z = L::from_array(v.map(|p| p.z)) - s(c.eye.z);
+        let dot = |d: Vec3| x * s(d.x) + y * s(d.y) + z * s(d.z);
+        let depth = dot(c.forward);
+        let behind = depth.le(s(1e-6)).any();
+        let sx = dot(c.right) / (depth * s(self.tan_half) * s(self.aspect));
+        let sy = dot(c.up) / (depth * s(self.tan_half));
+        let px = ((sx + s(1.0)) * s(0.5) * s(self.width as f32)).to_array();
+        let py = ((s(1.0) - sy) * s(0.5) * s(self.height as f32)).to_array();
+        (px, py, !behind)
+    }
+
+    /// [`Screen::perspective_lanes`] of a cell's eight corners.
+    #[inline]
+    pub(crate) fn perspective_points(&self, c: &[Vec3; 8]) -> ([f32; 8], [f32; 8], bool) {
+        self.perspective_lanes::<PortableLanes>(c)
     }
 
     /// The continuous pixel extent `(x0, x1, y0, y1)` of four points under
@@ -537,6 +565,8 @@ pub fn for_each_crossing_jittered(
     });
 }
 
+const SMALL_RECT: u32 = 16;
+
 /// The pixels of `rect` whose rays cross `tet`, by clipping each ray against
 /// the tet's planes (only pixels inside its projected outline are tried).
 pub fn clip_tet(
@@ -550,20 +580,27 @@ pub fn clip_tet(
 ) {
     let (tx0, ty0, w, _) = frame.tile(tile);
     let (x0, x1, y0, y1) = rect;
-    let planes = Planes::new(tet);
     let perspective = matches!(
         frame.screen.camera.projection,
         Projection::Perspective { .. }
     );
     // The tet's screen outline: pixels outside it need no 3D test.
-    let outline = Outline::new(&frame.screen, tet);
+    let small = (x1 - x0 + 1) * (y1 - y0 + 1) <= SMALL_RECT;
+    let outline = if small {
+        None
+    } else {
+        Outline::new(&frame.screen, tet)
+    };
     let row_span = |y: u32| -> Option<(u32, u32)> {
         let (xa, xb) = match &outline {
             Some(o) => {
                 let (a, b) = o.row(y as f32 + 0.5)?;
+                // Clamped to the rectangle (and a pixel past it) before
+                // rounding, through i32 (`ceil` is a call without SSE4.1).
+                let (lo, hi) = (x0 as f32, x1 as f32);
                 (
-                    ((a - 0.5).ceil().max(x0 as f32)) as u32,
-                    ((b - 0.5).floor().min(x1 as f32)) as u32,
+                    ceil_small((a - 0.5).max(lo).min(hi + 1.0)) as u32,
+                    floor_small((b - 0.5).min(hi).max(-1.0)) as u32,
                 )
             }
             None => (x0, x1),
@@ -571,15 +608,17 @@ pub fn clip_tet(
         (xa <= xb).then_some((xa, xb))
     };
     if perspective {
-        // Rays share their origin: its plane distances once per tet.
-        let dist = planes.with_origin(frame.screen.camera.eye);
+        // Rays share their origin: its plane distances once per tet, the
+        // four faces in lanes.
+        let faces = FaceLanes::new(tet);
+        let dist = faces.with_origin(frame.screen.camera.eye);
         for y in y0..=y1 {
             let Some((xa, xb)) = row_span(y) else {
                 continue;
             };
             for x in xa..=xb {
                 let local = ((y - ty0) * w + (x - tx0)) as usize;
-                let (t0, t1) = planes.clip_from(&dist, rays[local].dir);
+                let (t0, t1) = faces.clip_from(dist, rays[local].dir);
                 let (t0, t1) = (t0.max(spans[local].0), t1.min(spans[local].1));
                 if t1 > t0 {
                     visit(local, t0, t1, tet.density);
@@ -589,7 +628,7 @@ pub fn clip_tet(
     } else {
         // Parallel rays: each face's crossing t is an affine function of the
         // pixel position, so a pixel costs a few multiply-adds, no division.
-        let lin = planes.linear(&frame.screen);
+        let lin = Planes::new(tet).linear(&frame.screen);
         for y in y0..=y1 {
             let Some((xa, xb)) = row_span(y) else {
                 continue;

@@ -488,6 +488,76 @@ fn fast_projection_equals_full_ray_clipping() {
     }
 }
 
+/// Perspective views take the per-pixel clips of `for_each_crossing` (the
+/// faces in lanes; an outline only for tets over a few pixels): the same
+/// planes and rays as the full clip of every pixel of each tet's
+/// rectangle, so the same images — from far (sub-pixel tets, no outline)
+/// and from near (tets over many pixels, outlines).
+#[test]
+fn perspective_crossings_equal_full_ray_clipping() {
+    let g = folded_sheet(8, 37);
+    let v = TetVolume::new(&g, &TetSettings::default(), 0).unwrap();
+    let perspective = voxless_core::Projection::Perspective { fov_y_deg: 40.0 };
+    for (eye, size) in [
+        (Vec3::new(1.6, 1.3, -0.8), 24),
+        (Vec3::new(0.9, 0.7, -0.1), 96),
+    ] {
+        let cam =
+            Camera::look_at(eye, Vec3::splat(0.5), Vec3::new(0.0, 1.0, 0.0), perspective).unwrap();
+        let image = |clip_only| {
+            let options = TetOptions {
+                clip_only,
+                ..Default::default()
+            };
+            render::project(&v.mesh, &cam, size, size, options, &Control::new()).unwrap()
+        };
+        let (fast, slow) = (image(false), image(true));
+        let scale = slow.iter().copied().fold(0.0f32, f32::max);
+        assert!(scale > 0.0);
+        // An outline can only drop a pixel whose ray grazes a tet's edge
+        // within rounding; every pixel here agrees to 1e-6 of the peak.
+        for (p, (a, b)) in fast.iter().zip(&slow).enumerate() {
+            assert!(
+                (a - b).abs() <= 1e-6 * scale,
+                "eye {eye:?}, pixel {p}: {a} vs {b}"
+            );
+        }
+    }
+}
+
+/// Eight points projected in lanes are [`raster::Screen::project`]'s
+/// coordinates bit for bit, and the lanes say when one is behind the eye.
+#[test]
+fn perspective_points_project_as_one_point_does() {
+    let mut rng = Lcg(5);
+    let cam = Camera::look_at(
+        Vec3::new(0.3, -2.0, 0.4),
+        Vec3::new(0.5, 0.5, 0.5),
+        Vec3::new(0.0, 0.0, 1.0),
+        voxless_core::Projection::Perspective { fov_y_deg: 35.0 },
+    )
+    .unwrap();
+    let screen = raster::Screen::new(&cam, 750, 500);
+    let mut behind = 0;
+    for case in 0..5_000 {
+        let spread = if case % 3 == 0 { 8.0 } else { 1.0 };
+        let p = [(); 8].map(|_| (Vec3::new(rng.f(), rng.f(), rng.f()) - Vec3::splat(0.5)) * spread);
+        let (px, py, front) = screen.perspective_points(&p);
+        let one: Vec<_> = p.iter().map(|&q| screen.project(q)).collect();
+        assert_eq!(front, one.iter().all(Option::is_some), "{p:?}");
+        behind += usize::from(!front);
+        for (k, q) in one.iter().enumerate() {
+            if let Some((x, y)) = q {
+                assert_eq!(
+                    (x.to_bits(), y.to_bits()),
+                    (px[k].to_bits(), py[k].to_bits())
+                );
+            }
+        }
+    }
+    assert!(behind > 100, "{behind} sets reach behind the eye");
+}
+
 mod area;
 mod lean;
 mod ortho;
