@@ -565,10 +565,18 @@ pub fn for_each_crossing_jittered(
     });
 }
 
+/// Pixels in a tet's rectangle up to which every pixel is clipped without
+/// the outline: for the sub-pixel tets of a distant view (a 256³ render:
+/// 55 % of the tets have at most two pixel centres in their rectangle) the
+/// outline's four projections and per-row edge crossings cost more than the
+/// clips they save (render ×0.82 with 16, ×0.90 with 2); on close-ups,
+/// where tets cover tens of pixels, it still pays (no outline at all:
+/// ×1.06 there).
 const SMALL_RECT: u32 = 16;
 
 /// The pixels of `rect` whose rays cross `tet`, by clipping each ray against
-/// the tet's planes (only pixels inside its projected outline are tried).
+/// the tet's planes (when the rectangle holds more than [`SMALL_RECT`]
+/// pixels, only those inside its projected outline are tried).
 pub fn clip_tet(
     frame: &Frame,
     tile: u32,
