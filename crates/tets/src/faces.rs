@@ -5,8 +5,9 @@
 //! the scalar [`Planes`](crate::raster::Planes) arithmetic in the same order
 //! (products and sums without fused multiply-adds, correctly rounded
 //! divisions), and the lanes' results are folded in face order with the
-//! same `min`/`max`, so a clip here equals [`Planes::clip_from`]
-//! (crate::raster::Planes::clip_from) bit for bit (tested). What the lanes
+//! same `min`/`max`, so a clip here equals [`Planes::clip`]
+//! (crate::raster::Planes::clip) of the ray from the same origin bit for
+//! bit (tested). What the lanes
 //! remove is the scalar code's four data-dependent branches per pixel (is
 //! the face entering, leaving or parallel to the ray?) and three of its four
 //! divisions: a sub-pixel tet covers one or two pixels, so these and the
@@ -112,7 +113,7 @@ impl FaceLanes {
 mod tests {
     use super::*;
     use crate::raster::Planes;
-    use voxless_core::SmallRng;
+    use voxless_core::{Ray, SmallRng};
 
     fn bits(t: (f32, f32)) -> (u32, u32) {
         (t.0.to_bits(), t.1.to_bits())
@@ -149,15 +150,10 @@ mod tests {
                 (v[0] * 0.25 + v[1] * 0.25 + v[2] * 0.25 + v[3] * 0.25) - eye,
             ];
             let (planes, lanes) = (Planes::new(&tet), FaceLanes::new(&tet));
-            let (d_scalar, d_lanes) = (planes.with_origin(eye), lanes.with_origin(eye));
-            assert_eq!(
-                d_scalar.map(f32::to_bits),
-                d_lanes.to_array().map(f32::to_bits),
-                "{v:?} from {eye:?}"
-            );
+            let dist = lanes.with_origin(eye);
             for dir in dirs {
-                let want = planes.clip_from(&d_scalar, dir);
-                let got = lanes.clip_from(d_lanes, dir);
+                let want = planes.clip(&Ray::new(eye, dir));
+                let got = lanes.clip_from(dist, dir);
                 assert_eq!(bits(want), bits(got), "{v:?} from {eye:?} along {dir:?}");
                 hits += usize::from(want.1 > want.0);
             }

@@ -145,13 +145,28 @@ impl Screen {
         v: &[Vec3; LANES],
         half: (f32, f32),
     ) -> ([f32; LANES], [f32; LANES]) {
-        let c = &self.camera;
-        let s = L::splat;
-        let x = L::from_array(v.map(|p| p.x)) - s(c.eye.x);
-        let y = L::from_array(v.map(|p| p.y)) - s(c.eye.y);
-        let z = L::from_array(v.map(|p| p.z)) - s(c.eye.z);
-        let dot = |d: Vec3| x * s(d.x) + y * s(d.y) + z * s(d.z);
+        let (c, s) = (&self.camera, L::splat);
+        let dot = self.eye_dots::<L>(v);
         let (sx, sy) = (dot(c.right) / s(half.0), dot(c.up) / s(half.1));
+        self.pixels(sx, sy)
+    }
+
+    /// `d ↦ (v − eye)·d` for the eight points in lanes, as
+    /// [`Screen::project`] takes the dot products.
+    #[inline(always)]
+    fn eye_dots<L: Lanes>(&self, v: &[Vec3; LANES]) -> impl Fn(Vec3) -> L {
+        let (e, s) = (self.camera.eye, L::splat);
+        let x = L::from_array(v.map(|p| p.x)) - s(e.x);
+        let y = L::from_array(v.map(|p| p.y)) - s(e.y);
+        let z = L::from_array(v.map(|p| p.z)) - s(e.z);
+        move |d: Vec3| x * s(d.x) + y * s(d.y) + z * s(d.z)
+    }
+
+    /// Continuous pixel coordinates of screen coordinates `(sx, sy)` in
+    /// `[-1, 1]²` (x right, y up), as [`Screen::project`] maps them.
+    #[inline(always)]
+    fn pixels<L: Lanes>(&self, sx: L, sy: L) -> ([f32; LANES], [f32; LANES]) {
+        let s = L::splat;
         let px = ((sx + s(1.0)) * s(0.5) * s(self.width as f32)).to_array();
         let py = ((s(1.0) - sy) * s(0.5) * s(self.height as f32)).to_array();
         (px, py)
@@ -169,18 +184,13 @@ impl Screen {
     /// the eye plane (else the coordinates of those behind are meaningless).
     #[inline(always)]
     fn perspective_lanes<L: Lanes>(&self, v: &[Vec3; LANES]) -> ([f32; LANES], [f32; LANES], bool) {
-        let c = &self.camera;
-        let s = L::splat;
-        let x = L::from_array(v.map(|p| p.x)) - s(c.eye.x);
-        let y = L::from_array(v.map(|p| p.y)) - s(c.eye.y);
-        let z = L::from_array(v.map(|p| p.z)) - s(c.eye.z);
-        let dot = |d: Vec3| x * s(d.x) + y * s(d.y) + z * s(d.z);
+        let (c, s) = (&self.camera, L::splat);
+        let dot = self.eye_dots::<L>(v);
         let depth = dot(c.forward);
         let behind = depth.le(s(1e-6)).any();
         let sx = dot(c.right) / (depth * s(self.tan_half) * s(self.aspect));
         let sy = dot(c.up) / (depth * s(self.tan_half));
-        let px = ((sx + s(1.0)) * s(0.5) * s(self.width as f32)).to_array();
-        let py = ((s(1.0) - sy) * s(0.5) * s(self.height as f32)).to_array();
+        let (px, py) = self.pixels(sx, sy);
         (px, py, !behind)
     }
 
@@ -429,31 +439,6 @@ impl Planes {
             c[f] = normal.dot(a);
         }
         Planes { n, c }
-    }
-
-    /// [`Planes::clip`] for many rays sharing `origin` (a perspective camera):
-    /// the origin's distances to the planes are computed once.
-    #[inline]
-    pub fn with_origin(&self, origin: Vec3) -> [f32; 4] {
-        [0, 1, 2, 3].map(|f| self.c[f] - self.n[f].dot(origin))
-    }
-
-    /// Clip of a ray from the origin given to [`Planes::with_origin`].
-    #[inline]
-    #[allow(clippy::needless_range_loop)] // four faces over parallel arrays
-    pub fn clip_from(&self, dist: &[f32; 4], dir: Vec3) -> (f32, f32) {
-        let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
-        for f in 0..4 {
-            let nd = self.n[f].dot(dir);
-            if nd > 0.0 {
-                t1 = t1.min(dist[f] / nd);
-            } else if nd < 0.0 {
-                t0 = t0.max(dist[f] / nd);
-            } else if dist[f] < 0.0 {
-                return (1.0, 0.0);
-            }
-        }
-        (t0, t1)
     }
 
     /// Affine per-pixel crossings for the orthographic `screen`.
