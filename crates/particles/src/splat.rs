@@ -39,23 +39,30 @@
 //! practice, tested to 1e-6 of the peak). On a CPU with AVX-512 the SPH
 //! columns take sixteen lanes and their own polynomials (`splat_wide.rs`):
 //! within the polynomials' bound of the eight lanes' image, not its bits.
+//!
+//! **Placing.** Particles that share a radius are placed eight at a time
+//! (`Placer::place_batch`: their image-plane centres, rows and columns in
+//! lanes, f64 on eight lanes with AVX-512), the rest one at a time; both
+//! give the same splats bit for bit (tested).
 
 use rayon::prelude::*;
 use std::sync::Arc;
-use voxless_core::simd::{Lanes, Simd, WithLanes, dispatch};
+use voxless_core::simd::{Simd, dispatch};
 
 use voxless_core::{Aabb, Camera, Control, PixelIntegral, Projection, Vec3};
 
 use crate::ParticleError;
-use crate::kernel::area::{AreaTable, table_pixels};
+use crate::kernel::area::AreaTable;
 use crate::kernel::column_poly::{ColumnPoly, DEGREE, WIDE_DEGREE};
 use crate::kernel::{Column, Kernel};
-use crate::volume::images;
 
-/// Rows per band. A particle ~20 pixels across meets two bands of 32 rows
-/// on average; a band (32 rows of a 1024-wide image: 256 KB of f64 sums)
-/// stays in the core's L2 cache.
-pub const BAND: u32 = 32;
+/// Rows per band. A particle ~20 pixels across meets 1.3 bands of 64 rows
+/// on average (1.6 of 32: each visit costs the splat's set-up again); a
+/// band (64 rows of a 1024-wide image: 540 KB of f64 sums) stays in the
+/// core's L2 cache. Measured on the 2.1M-particle projection: 64 rows
+/// ×0.97 of 32 (128: slower, eight bands balance badly on two cores). The
+/// bits do not depend on it.
+pub const BAND: u32 = 64;
 
 /// Particles per chunk when a caller has no better size: each chunk's
 /// splats take ~100 bytes a particle, so 2¹⁶ of them cost ~7 MB.
@@ -238,23 +245,7 @@ impl Splatter {
         // do not depend on the number of threads.
         let on_device = self.device.is_some();
         let mut pieces = std::mem::take(&mut self.pieces);
-        let (w, h) = (self.width as f64, self.height as f64);
-        let placer = Placer {
-            basis: self.camera.basis_f64(),
-            size: (self.width, self.height),
-            pixel: (2.0 * self.half.0 / w, 2.0 * self.half.1 / h),
-            to_pixels: (0.5 * w / self.half.0, 0.5 * h / self.half.1),
-            kernel: self.kernel,
-            factor: self.kernel.support_factor(),
-            mode: self.mode,
-            periodic: match self.mode {
-                Periodic::No => None,
-                Periodic::OnAxis(b, _) | Periodic::OffAxis(b) => Some(b),
-            },
-            half: self.half,
-            area: self.area.is_some(),
-            lean: !on_device && self.kernel.column_poly().is_some(),
-        };
+        let placer = self.placer();
         let simd = self.simd;
         // (Pieces left from a larger chunk would be summed again.)
         pieces.resize_with(particles.len().div_ceil(PIECE), Piece::default);
@@ -345,6 +336,28 @@ impl Splatter {
         Ok(())
     }
 
+    /// What placing a particle needs of this splatter.
+    fn placer(&self) -> Placer {
+        let (w, h) = (self.width as f64, self.height as f64);
+        Placer {
+            basis: self.camera.basis_f64(),
+            size: (self.width, self.height),
+            pixel: (2.0 * self.half.0 / w, 2.0 * self.half.1 / h),
+            to_pixels: (0.5 * w / self.half.0, 0.5 * h / self.half.1),
+            kernel: self.kernel,
+            factor: self.kernel.support_factor(),
+            mode: self.mode,
+            periodic: match self.mode {
+                Periodic::No => None,
+                Periodic::OnAxis(b, _) | Periodic::OffAxis(b) => Some(b),
+            },
+            half: self.half,
+            area: self.area.is_some(),
+            lean: self.device.is_none() && self.kernel.column_poly().is_some(),
+            wide: self.wide,
+        }
+    }
+
     /// The image: column densities through every pixel centre, or
     /// averaged over every pixel (f32, row-major, row 0 at the top).
     /// Errors: the device's (see [`Splatter::with_device`]).
@@ -352,22 +365,37 @@ impl Splatter {
         let sum = std::mem::take(&mut self.sum);
         let (w, stride) = (self.width as usize, row_stride(self.width));
         let device = self.device.take().map(|d| d.finish()).transpose()?;
-        let mut image = Vec::with_capacity(w * self.height as usize);
-        for (y, row) in sum.chunks(stride).enumerate() {
-            let row = &row[..w];
-            match &device {
-                // The device's f32 sums added in f64, as the lanes' are.
-                Some(d) => image.extend(
-                    row.iter()
-                        .zip(&d[y * w..][..w])
-                        .map(|(&s, &d)| (s + d as f64) as f32),
-                ),
-                None => image.extend(row.iter().map(|&s| s as f32)),
-            }
-        }
-        if let Periodic::OnAxis(b, axis) = self.mode {
-            self.outside_shadow_to_zero(&b, axis, &mut image);
-        }
+        // Row by row on every core (a megapixel took ~5 ms on one).
+        let mut image = vec![0.0f32; w * self.height as usize];
+        let shadow = Shadow {
+            camera: &self.camera,
+            half: self.half,
+            size: (self.width, self.height),
+        };
+        let mode = self.mode;
+        image
+            .par_chunks_mut(w)
+            .zip(sum.par_chunks(stride))
+            .enumerate()
+            .for_each(|(y, (out, row))| {
+                let row = &row[..w];
+                match &device {
+                    // The device's f32 sums added in f64, as the lanes' are.
+                    Some(d) => {
+                        for ((o, &s), &d) in out.iter_mut().zip(row).zip(&d[y * w..][..w]) {
+                            *o = (s + d as f64) as f32;
+                        }
+                    }
+                    None => {
+                        for (o, &s) in out.iter_mut().zip(row) {
+                            *o = s as f32;
+                        }
+                    }
+                }
+                if let Periodic::OnAxis(b, axis) = mode {
+                    shadow.outside_to_zero(&b, axis, y, out);
+                }
+            });
         Ok(image)
     }
 
@@ -379,16 +407,25 @@ impl Splatter {
         self.wide = simd == Simd::Auto && splat_wide::available();
         self
     }
+}
 
-    /// Zeroes the pixels whose centre lies outside the shadow of the box
-    /// `b` along `axis` (their line misses the box).
-    fn outside_shadow_to_zero(&self, b: &Aabb, axis: usize, image: &mut [f32]) {
-        let (w, h) = (self.width as usize, self.height as usize);
+/// What a splatter's image needs to know of its pixels' lines of sight.
+struct Shadow<'a> {
+    camera: &'a Camera,
+    half: (f64, f64),
+    size: (u32, u32),
+}
+
+impl Shadow<'_> {
+    /// Zeroes the pixels of row `y` whose centre lies outside the shadow of
+    /// the box `b` along `axis` (their line misses the box).
+    fn outside_to_zero(&self, b: &Aabb, axis: usize, y: usize, row: &mut [f32]) {
+        let (w, h) = (self.size.0 as usize, self.size.1 as usize);
         let (hw, hh) = self.half;
-        let cam = &self.camera;
-        for (k, s) in image.iter_mut().enumerate() {
-            let uu = ((2 * (k % w) + 1) as f64 / w as f64 - 1.0) * hw;
-            let vv = (1.0 - (2 * (k / w) + 1) as f64 / h as f64) * hh;
+        let cam = self.camera;
+        let vv = (1.0 - (2 * y + 1) as f64 / h as f64) * hh;
+        for (x, s) in row.iter_mut().enumerate() {
+            let uu = ((2 * x + 1) as f64 / w as f64 - 1.0) * hw;
             let inside = (0..3).filter(|&a| a != axis).all(|a| {
                 let o = cam.eye[a] as f64 + cam.right[a] as f64 * uu + cam.up[a] as f64 * vv;
                 o >= b.min[a] as f64 && o <= b.max[a] as f64
@@ -399,194 +436,6 @@ impl Splatter {
         }
     }
 }
-
-/// What placing a particle needs of its splatter.
-#[derive(Clone, Copy)]
-struct Placer {
-    size: (u32, u32),
-    /// A pixel's width and height in the image plane.
-    pixel: (f64, f64),
-    kernel: Kernel,
-    /// The kernel's support over its radius.
-    factor: f32,
-    mode: Periodic,
-    /// The mode's periodic box.
-    periodic: Option<Aabb>,
-    half: (f64, f64),
-    /// Pixels per unit of the image plane along right and up (`W/2hw`,
-    /// `H/2hh`: the reciprocals of `pixel`), so that a particle takes
-    /// products, not divisions (four were 5 % of a 16.7M-particle
-    /// projection).
-    to_pixels: (f64, f64),
-    /// Pixel areas asked for.
-    area: bool,
-    /// SPH splats summed on the CPU's lanes are kept as [`Lean`] splats.
-    lean: bool,
-    /// The camera's eye, right, up and forward in f64.
-    basis: [[f64; 3]; 4],
-}
-
-/// [`Placer::place`] for each particle of `part`, the first being particle
-/// `first` of the whole set (run through [`dispatch`] for its compilation).
-struct PlaceAll<'a> {
-    placer: &'a Placer,
-    part: &'a [SplatParticle],
-    first: usize,
-    piece: &'a mut Piece,
-}
-
-impl WithLanes for PlaceAll<'_> {
-    type Output = Result<(), ParticleError>;
-    #[inline(always)]
-    fn run<L: Lanes>(self) -> Self::Output {
-        for (i, p) in self.part.iter().enumerate() {
-            self.placer.place(p, self.first + i, self.piece)?;
-        }
-        Ok(())
-    }
-}
-
-impl Placer {
-    /// Particle `p`'s periodic images as splats, in order, onto the
-    /// piece's splats (`index`: the particle's index in the whole set, for
-    /// errors).
-    #[inline(always)]
-    fn place(
-        &self,
-        p: &SplatParticle,
-        index: usize,
-        piece: &mut Piece,
-    ) -> Result<(), ParticleError> {
-        if !(p.radius > 0.0) || p.weight == 0.0 {
-            return Ok(());
-        }
-        let (w, h) = (self.size.0 as f64, self.size.1 as f64);
-        // Pixel coordinates of a point: x = (a / hw + 1)·W/2 with a its
-        // offset along `right` from the eye, y = (1 − b / hh)·H/2 along `up`.
-        let (pw, ph) = self.pixel;
-        let (kx, ky) = self.to_pixels;
-        // Read from `self` where used, not copied into locals: the copies
-        // were spilled and reloaded across the loop with a wider load than
-        // their store (a store-forwarding stall: ~20 % of placing).
-        let [eye, right, up, fwd] = &self.basis;
-        let dot = |d: [f64; 3], e: &[f64; 3]| d[0] * e[0] + d[1] * e[1] + d[2] * e[2];
-        let support = self.factor * p.radius;
-        // The piece's fields borrowed apart, so that the column is read in
-        // place while splats are pushed (a copy of it a particle, 72 bytes,
-        // was ~20 % of placing).
-        let Piece {
-            found,
-            column: cache,
-            lean: leans,
-            splats,
-            ..
-        } = piece;
-        images(self.periodic.as_ref(), p.center, support, index, found)?;
-        // Neighbours often share a radius (a global one always).
-        if cache.as_ref().is_some_and(|(r, _)| *r != p.radius) {
-            *cache = None;
-        }
-        let (_, column) =
-            &*cache.get_or_insert_with(|| (p.radius, self.kernel.column(p.radius as f64)));
-        let s = support as f64;
-        for &(shift, q) in found.iter() {
-            let clip = match self.mode {
-                Periodic::No => false,
-                // Images shifted along the view repeat the particle's own chord.
-                Periodic::OnAxis(_, axis) if shift[axis] != 0 => continue,
-                Periodic::OnAxis(..) => false,
-                Periodic::OffAxis(b) => {
-                    !(0..3).all(|k| q[k] - support >= b.min[k] && q[k] + support <= b.max[k])
-                }
-            };
-            let d = [
-                q.x as f64 - eye[0],
-                q.y as f64 - eye[1],
-                q.z as f64 - eye[2],
-            ];
-            let (a, b) = (dot(d, right), dot(d, up));
-            let cx = a * kx + 0.5 * w;
-            let cy = 0.5 * h - b * ky;
-            let (rx, ry) = (s * kx, s * ky);
-            // Nothing of a support a pixel or more outside the image.
-            if cx + rx + 1.0 < 0.0 || cx - rx - 1.0 > w || cy + ry + 1.0 < 0.0 || cy - ry - 1.0 > h
-            {
-                continue;
-            }
-            // Supports narrower than table_pixels take the area table;
-            // wider ones are sampled at pixel centres.
-            let area = self.area && rx.min(ry) < table_pixels(self.kernel);
-            let (rows, cols) = if area || (clip && self.area) {
-                // Averages over pixel areas: every pixel the support
-                // overlaps, and one more against rounding.
-                (
-                    (floor_in(cy - ry - 1.5, h), ceil_in(cy + ry + 0.5, h)),
-                    (floor_in(cx - rx - 1.5, w), ceil_in(cx + rx + 0.5, w)),
-                )
-            } else {
-                // Pixel centres only: those strictly inside the support's
-                // square, |k + 0.5 − c| < r, and `CENTRE_SLACK` more. A
-                // centre outside has |dx| ≥ r: table position ≥ L, where
-                // every column is exactly 0 (`column_poly`, tested; the
-                // Gaussians' `Column::at` alike), and it is below 1e-7 of
-                // its peak from L − 64 on, so no rounding of the lanes'
-                // offsets can lose a contribution. (The pixel of margin the
-                // areas take made a support 8 pixels wide span 10–11
-                // columns: two lane groups where one does.)
-                (
-                    (
-                        ceil_in(cy - ry - 0.5 - CENTRE_SLACK, h),
-                        floor_in(cy + ry + 0.5 + CENTRE_SLACK, h),
-                    ),
-                    (
-                        ceil_in(cx - rx - 0.5 - CENTRE_SLACK, w),
-                        floor_in(cx + rx + 0.5 + CENTRE_SLACK, w),
-                    ),
-                )
-            };
-            if rows.0 >= rows.1 || cols.0 >= cols.1 {
-                continue;
-            }
-            let lean = Lean {
-                cx,
-                cy,
-                // Table position per pixel² along y and x.
-                ay: column.to_index() * ph * ph,
-                ax: (column.to_index() * pw * pw) as f32,
-                scale: (column.scale() * p.weight as f64) as f32,
-                rows,
-                cols,
-            };
-            if self.lean && !clip && !area {
-                leans.push(lean);
-                continue;
-            }
-            let mut splat = Splat {
-                lean,
-                pixel: (pw, ph),
-                weight: p.weight as f64,
-                column: *column,
-                a,
-                b,
-                depth: dot(d, fwd),
-                clip,
-                area,
-                cells: SubCells::centres(self.size, self.half),
-                clip_scale: p.weight as f64,
-            };
-            if clip && self.area {
-                splat.cells = SubCells::new(&splat, self.size, self.half);
-                splat.clip_scale = splat.cells.scale(&splat);
-            }
-            splats.push(splat);
-        }
-        Ok(())
-    }
-}
-
-/// Pixels of slack around a support's square of pixel centres (see
-/// `Placer::place`).
-const CENTRE_SLACK: f64 = 1e-4;
 
 /// The distance between the sums' rows for an image `width` wide: whole
 /// 64-byte lines, and never within 256 bytes of a multiple of 4 KiB. Rows
@@ -617,36 +466,6 @@ fn row_stride(width: u32) -> usize {
 /// projection's samples at 1024², in the kernel's TLB flushes).
 fn written_zeros(n: usize) -> Vec<f64> {
     rayon::iter::repeat_n(0.0, n).collect()
-}
-
-/// `⌊x⌋` clamped to `0..=hi` (`hi` a whole number below 2³²; NaN gives
-/// 0): the clamp first, then a truncation, which is the floor of a value
-/// ≥ 0 and needs no call into libm (the default x86-64 target has no
-/// SSE4.1 rounding instruction). `max`/`min` and an unchecked truncation,
-/// not `clamp` and `as`: `clamp` keeps NaN and asserts its bounds, `as`
-/// saturates (four of these a splat were 7 % of a 16.7M-particle
-/// projection's samples).
-#[inline(always)]
-fn floor_in(x: f64, hi: f64) -> u32 {
-    truncate(x.max(0.0).min(hi))
-}
-
-/// `⌈x⌉` clamped to `0..=hi`, as [`floor_in`].
-#[inline(always)]
-fn ceil_in(x: f64, hi: f64) -> u32 {
-    let x = x.max(0.0).min(hi);
-    let t = truncate(x);
-    t + ((t as f64) < x) as u32
-}
-
-/// `x` (in `[0, hi]` for a `hi` below 2³², as [`floor_in`] clamps it)
-/// truncated.
-#[inline(always)]
-fn truncate(x: f64) -> u32 {
-    debug_assert!((0.0..4294967296.0).contains(&x));
-    // SAFETY: the callers clamp `x` to `[0, hi]` (`max` drops NaN), so its
-    // truncation is a u32.
-    unsafe { x.to_int_unchecked::<u32>() }
 }
 
 /// What a device sums of splat `p` (see [`PlainSplat`]).
@@ -748,7 +567,7 @@ impl Lean {
 /// The polynomials of the kernels that have none (the Gaussians).
 static NO_POLY: ColumnPoly = ColumnPoly {
     lanes8: [[0.0; 8]; DEGREE + 1],
-    wide: [[0.0; 16]; WIDE_DEGREE + 1],
+    wide: [[0.0; 32]; WIDE_DEGREE + 1],
 };
 
 /// Particles a piece holds: the chunk is placed and binned in pieces of
@@ -851,10 +670,13 @@ impl<'a> BandSplats<'a> {
 mod band;
 #[path = "splat_pixels.rs"]
 mod pixels;
+#[path = "splat_place.rs"]
+mod place;
 #[path = "splat_wide.rs"]
 mod splat_wide;
 use band::SplatBand;
 use pixels::{SubCells, area_band, clipped};
+use place::{BATCH, BatchLanes, CENTRE_SLACK, PlaceAll, Placer};
 
 #[cfg(test)]
 #[path = "splat_tests.rs"]

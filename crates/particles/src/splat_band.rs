@@ -64,6 +64,12 @@ impl WithLanes for SplatBand<'_> {
                 }
             }
         }
+        #[cfg(target_arch = "x86_64")]
+        if self.wide {
+            // SAFETY: `wide` is set only where the CPU has AVX-512F.
+            unsafe { splat_wide::band(splats, self.y, self.stride, self.poly, last, self.out) };
+            return;
+        }
         for p in splats.lean() {
             self.lean_rows::<L>(p, &c, last);
         }

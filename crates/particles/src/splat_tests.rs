@@ -3,6 +3,7 @@
 //! values against a fine quadrature).
 
 use super::*;
+use crate::kernel::area::table_pixels;
 use voxless_core::SmallRng;
 
 fn particles(n: usize) -> Vec<SplatParticle> {
@@ -410,6 +411,93 @@ fn padded_rows_hold_the_exact_columns() {
                     "{kernel:?} {simd:?} pixel {k}: {v} vs {}",
                     exact[k]
                 );
+            }
+        }
+    }
+}
+
+/// Particles sharing a radius are placed eight at a time in lanes
+/// (`Placer::place_batch`), others one at a time (`Placer::place`): the
+/// same splats, bit for bit. Chunks of 13 put every particle in a batch in
+/// one run and on its own in the other (a piece's tail), over supports
+/// off the image, crossing it and the periodic box's faces, and weights
+/// of 0, on every lane backend.
+#[test]
+fn batches_place_as_one_particle_at_a_time() {
+    let mut rng = SmallRng(23);
+    let p: Vec<SplatParticle> = (0..3000)
+        .map(|i| SplatParticle {
+            center: Vec3::new(1.3 * rng.f() - 0.15, 1.3 * rng.f() - 0.15, rng.f()),
+            // A shared radius, broken now and then (a batch with another
+            // radius takes the particles one at a time).
+            radius: if i % 97 == 0 { 0.031 } else { 0.02 },
+            weight: if i % 29 == 0 { 0.0 } else { 0.5 + rng.f() },
+        })
+        .collect();
+    let cam = Camera::axis_projection(&Aabb::new(Vec3::splat(0.0), Vec3::splat(1.0)), 2).unwrap();
+    let boxed = Some(Aabb::new(Vec3::splat(-0.1), Vec3::splat(1.1)));
+    for simd in [Simd::Portable, Simd::Avx2, Simd::Auto] {
+        if !simd.available() {
+            continue;
+        }
+        for periodic in [None, boxed] {
+            let run = |chunk: usize| {
+                let mut s = Splatter::new(&cam, 90, 61, Kernel::WendlandC2, periodic)
+                    .unwrap()
+                    .on(simd);
+                for (k, c) in p.chunks(chunk).enumerate() {
+                    s.add(c, k * chunk, &Control::new()).unwrap();
+                }
+                s.finish().unwrap()
+            };
+            let whole = run(p.len());
+            assert!(whole.iter().any(|&v| v > 0.0));
+            assert_eq!(whole, run(13), "{simd:?}, {periodic:?}");
+        }
+    }
+}
+
+/// The sixteen lanes' placement (`splat_wide::place_lanes`) gives the
+/// portable lanes' centres, rows, columns and masks bit for bit.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn placement_lanes_equal_the_portable_lanes() {
+    if !splat_wide::available() {
+        println!("note: this CPU has no AVX-512F; the sixteen-lane placement is not run here");
+        return;
+    }
+    let mut rng = SmallRng(29);
+    let unit = Aabb::new(Vec3::splat(0.0), Vec3::splat(1.0));
+    let views = [
+        Camera::axis_projection(&unit, 2).unwrap(),
+        Camera::axis_projection(&unit, 0).unwrap(),
+    ];
+    for cam in views {
+        for periodic in [None, Some(unit)] {
+            let s = Splatter::new(&cam, 77, 130, Kernel::CubicSpline, periodic).unwrap();
+            let placer = s.placer();
+            for _ in 0..500 {
+                let batch: [SplatParticle; BATCH] = std::array::from_fn(|_| SplatParticle {
+                    center: Vec3::new(1.4 * rng.f() - 0.2, 1.4 * rng.f() - 0.2, rng.f()),
+                    radius: 0.03,
+                    weight: 1.0,
+                });
+                let support = placer.factor * 0.03 * (0.5 + rng.f());
+                let r = (
+                    support as f64 * placer.to_pixels.0,
+                    support as f64 * placer.to_pixels.1,
+                );
+                let (mut a, mut b) = (BatchLanes::default(), BatchLanes::default());
+                placer.lanes(&batch, support, r, &mut a);
+                // SAFETY: AVX-512F is available.
+                unsafe { splat_wide::place_lanes(&placer, &batch, support, r, &mut b) };
+                assert_eq!((a.only, a.keep), (b.only, b.keep));
+                assert_eq!(
+                    (a.row0, a.row1, a.col0, a.col1),
+                    (b.row0, b.row1, b.col0, b.col1)
+                );
+                assert_eq!(a.cx.map(f64::to_bits), b.cx.map(f64::to_bits));
+                assert_eq!(a.cy.map(f64::to_bits), b.cy.map(f64::to_bits));
             }
         }
     }

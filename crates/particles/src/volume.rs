@@ -20,7 +20,7 @@ mod periodic;
 mod splat;
 
 pub use device::DeviceParticles;
-pub use periodic::{MAX_PERIODS, images, wrap};
+pub use periodic::{INSIDE, MAX_PERIODS, images, only_image, wrap};
 
 pub use part::{FieldStatistics, RANGE_PROBES, check_data, median, probe_stride, support_box};
 

@@ -39,16 +39,20 @@
 //! instead of one a pixel); the bound above then holds relative to the
 //! scaled peak, plus one f32 rounding.
 //!
-//! **Sixteen lanes.** AVX-512's permute reads a sixteen-entry table from
-//! one register, so the sixteen-lane splats ([`ColumnPoly::wide`]) halve
-//! each octave at its mantissa's top bit (the segment is `(t' bits >> 22)
-//! & 15`, the variable `x = m' − 1.25`, `m' ∈ [1, 1.5)` the mantissa
-//! without that bit) and hold a quintic on each half, evaluated by Horner's
-//! scheme (five fused multiply-adds, [`ColumnPoly::at_wide`]): 2.0e-7–
-//! 5.3e-7 of the peak over the six kernels, against 1.8e-7–6.9e-7 for the
-//! septics on octaves (degree 6 on octaves reached 1.9e-6, degree 4 on
-//! half-octaves 5e-6). On AVX2 a sixteen-entry read takes two permutes and
-//! a blend, so the eight lanes keep the octaves.
+//! **Sixteen lanes.** AVX-512's two-table permute reads a 32-entry table
+//! from two registers in one instruction, so the sixteen-lane splats
+//! ([`ColumnPoly::wide`]) quarter each octave at its mantissa's top two
+//! bits (the segment is `(t' bits >> 21) & 31`, the variable `x = m' −
+//! 1.125`, `m' ∈ [1, 1.25)` the mantissa without those bits) and hold a
+//! quartic on each quarter, evaluated by Horner's scheme (four fused
+//! multiply-adds, [`ColumnPoly::at_wide`]): 1.2e-7–2.5e-7 of the peak over
+//! the six kernels, against 1.8e-7–6.9e-7 for the septics on octaves.
+//! (Quintics on half-octaves, one-table permutes: 2.0e-7–5.3e-7, one
+//! permute and one multiply-add more a lane group, ×1.03 on the 2.1M
+//! projection; degree 6 on octaves reached 1.9e-6, degree 4 on
+//! half-octaves 5e-6; Estrin's scheme for the quartic, one product more:
+//! no faster.) On AVX2 a wide read takes two permutes and a blend, so the
+//! eight lanes keep the octaves.
 //!
 //! **Fit.** Interpolation at the Chebyshev nodes of each segment (within a
 //! small factor of the best polynomial), in Newton's form in f64, expanded
@@ -65,7 +69,7 @@ use super::sph::COLUMN_TABLE;
 pub const DEGREE: usize = 7;
 
 /// Polynomial degree per half-octave on sixteen lanes.
-pub const WIDE_DEGREE: usize = 5;
+pub const WIDE_DEGREE: usize = 4;
 
 /// Added to the table position before its octave is taken.
 pub const OFFSET: f32 = 64.0;
@@ -87,10 +91,10 @@ pub struct ColumnPoly {
     /// three bits.
     pub lanes8: [[f32; 8]; DEGREE + 1],
     /// The sixteen lanes' polynomials (see "Sixteen lanes" above):
-    /// coefficient `k` (highest degree first) of half-octave `h` of octave
-    /// `s` at position `((133 + s) & 7)·2 + h`, the permute index being
-    /// the low four bits of `(t + 64)`'s bits shifted right by 22.
-    pub wide: [[f32; 16]; WIDE_DEGREE + 1],
+    /// coefficient `k` (highest degree first) of quarter `h` of octave `s`
+    /// at position `((133 + s) & 7)·4 + h`, the permute index being the
+    /// low five bits of `(t + 64)`'s bits shifted right by 21.
+    pub wide: [[f32; 32]; WIDE_DEGREE + 1],
 }
 
 impl ColumnPoly {
@@ -140,13 +144,13 @@ impl ColumnPoly {
         Self::eval(&self.lanes::<PortableLanes>(), PortableLanes::splat(t)).to_array()[0]
     }
 
-    /// `P(t)` in f32 as the sixteen lanes evaluate it (the half-octaves'
-    /// quintics, see [`ColumnPoly::wide`]), `c` their coefficients (times a
+    /// `P(t)` in f32 as the sixteen lanes evaluate it (the quarter-octaves'
+    /// quartics, see [`ColumnPoly::wide`]), `c` their coefficients (times a
     /// scale, as the splatter takes them).
-    pub fn at_wide(c: &[[f32; 16]; WIDE_DEGREE + 1], t: f32) -> f32 {
+    pub fn at_wide(c: &[[f32; 32]; WIDE_DEGREE + 1], t: f32) -> f32 {
         let tp = (t + OFFSET).to_bits();
-        let at = ((tp >> 22) & 15) as usize;
-        let x = f32::from_bits((tp & 0x003f_ffff) | 0x3f80_0000) - 1.25;
+        let at = ((tp >> 21) & 31) as usize;
+        let x = f32::from_bits((tp & 0x001f_ffff) | 0x3f80_0000) - 1.125;
         let p = c[1..].iter().fold(c[0][at], |p, c| p.mul_add(x, c[at]));
         p.max(0.0)
     }
@@ -156,7 +160,7 @@ impl ColumnPoly {
         let last = (COLUMN_TABLE - 1) as f64;
         let offset = OFFSET as f64;
         let mut lanes8 = [[0.0f32; 8]; DEGREE + 1];
-        let mut wide = [[0.0f32; 16]; WIDE_DEGREE + 1];
+        let mut wide = [[0.0f32; 32]; WIDE_DEGREE + 1];
         for s in 0..8u32 {
             let e = FIRST_EXPONENT + s;
             // The octave of t', `lo·m` for m in [1, 2); eight lanes: x = m − 1.5.
@@ -165,17 +169,17 @@ impl ColumnPoly {
             for (k, c) in coef.iter().enumerate() {
                 lanes8[k][(e & 7) as usize] = *c as f32;
             }
-            // Its halves m in [1, 1.5) and [1.5, 2); sixteen lanes:
-            // x = m − 1.25 − h/2.
-            for h in 0..2u32 {
-                let base = 1.25 + 0.5 * h as f64;
-                if lo * (base - 0.25) >= last + offset {
+            // Its quarters m in [1 + h/4, 1.25 + h/4); sixteen lanes:
+            // x = m − 1.125 − h/4.
+            for h in 0..4u32 {
+                let base = 1.125 + 0.25 * h as f64;
+                if lo * (base - 0.125) >= last + offset {
                     // Never reached (t ≤ ZERO_UNTIL): zeros.
                     continue;
                 }
-                let coef = segment(&f, lo, base, 1.5 + 0.5 * h as f64, WIDE_DEGREE);
+                let coef = segment(&f, lo, base, 1.25 + 0.25 * h as f64, WIDE_DEGREE);
                 for (k, c) in coef.iter().enumerate() {
-                    wide[k][((e & 7) * 2 + h) as usize] = *c as f32;
+                    wide[k][((e & 7) * 4 + h) as usize] = *c as f32;
                 }
             }
         }

@@ -169,23 +169,35 @@ pub fn images(
     if !(support > 0.0) {
         return Ok(());
     }
-    let (s, size) = (support, b.extent());
+    if only_image(b, c, support) {
+        // (+ 0 as the loop below adds it: a −0 coordinate becomes +0.)
+        out.push(([0; 3], c + Vec3::splat(0.0)));
+        return Ok(());
+    }
+    images_near_faces(b, c, support, index, out)
+}
+
+/// How far inside (−1, 1) [`only_image`]'s quotients must lie.
+pub const INSIDE: f32 = 1.0 - 1.0 / (1 << 20) as f32;
+
+/// Whether the particle at `c` with support radius `s > 0` is its own only
+/// image in the box `b` (its support reaches no face; [`images`] then
+/// gives `c + 0`). No branch, so that a batch of particles takes it in
+/// lanes.
+#[inline(always)]
+pub fn only_image(b: &Aabb, c: Vec3, s: f32) -> bool {
     // Shifts k along each axis with [c + kL − s, c + kL + s] ∩ [lo, hi] ≠ ∅:
     // from ⌈(lo − c − s)/L⌉ to ⌊(hi − c + s)/L⌋. Most particles reach no
     // face: both quotients lie in (−1, 1) on every axis, so the particle
     // is its only image. Tested without the divisions (six were 8 % of a
     // 16.7M-particle projection) and a hair inside (−1, 1), so that a
     // quotient this passes is in (−1, 1) however it rounds; the few it
-    // leaves take the divisions below, as before.
-    const INSIDE: f32 = 1.0 - 1.0 / (1 << 20) as f32;
-    if (0..3)
-        .all(|a| b.min[a] - c[a] - s > -INSIDE * size[a] && b.max[a] - c[a] + s < INSIDE * size[a])
-    {
-        // (+ 0 as the loop below adds it: a −0 coordinate becomes +0.)
-        out.push(([0; 3], c + Vec3::splat(0.0)));
-        return Ok(());
-    }
-    images_near_faces(b, c, s, index, out)
+    // leaves take the divisions of `images_near_faces`.
+    let size = b.extent();
+    let axis = |a: usize| {
+        (b.min[a] - c[a] - s > -INSIDE * size[a]) & (b.max[a] - c[a] + s < INSIDE * size[a])
+    };
+    axis(0) & axis(1) & axis(2)
 }
 
 /// [`images`] of a particle whose support may reach a face of `b` (kept
