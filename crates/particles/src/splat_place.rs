@@ -42,7 +42,7 @@ pub(super) struct Placer {
 }
 
 /// [`Placer::place`] for each particle of `part`, the first being particle
-/// `first` of the whole set (run through [`dispatch`] for its compilation).
+/// `first` of the whole set (run through `dispatch` for its compilation).
 pub(super) struct PlaceAll<'a> {
     pub(super) placer: &'a Placer,
     pub(super) part: &'a [SplatParticle],
@@ -100,8 +100,9 @@ impl Placer {
     /// the same lean splats in the same order with the same bits, computed
     /// lane by lane without branches where the particles share a radius
     /// and each is its own only image (the usual case): one pass of
-    /// arithmetic the compiler vectorises, then the pushes. Anything else
-    /// takes `place`. Only where `place` would keep every splat lean (no
+    /// arithmetic in lanes (`splat_wide::place_lanes` on AVX-512, else
+    /// [`Placer::lanes`], which the compiler vectorises), then the pushes.
+    /// Anything else takes `place`. Only where `place` would keep every splat lean (no
     /// pixel areas, no device, not clipped off axis).
     #[inline(always)]
     pub(super) fn place_batch(
