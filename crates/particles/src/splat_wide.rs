@@ -293,15 +293,15 @@ fn column(
 ) -> (std::arch::x86_64::__m512d, std::arch::x86_64::__m512d) {
     use std::arch::x86_64::*;
     let tp = _mm512_castps_si512(t);
-    // The exponent's low three bits and the mantissa's top bit pick the
-    // half-octave; the rest of the mantissa is the variable.
+    // The exponent's low three bits and the mantissa's top two bits pick
+    // the quarter-octave; the rest of the mantissa is the variable.
     let at = _mm512_srli_epi32::<21>(tp);
     let mantissa = _mm512_and_si512(tp, _mm512_set1_epi32(0x001f_ffff));
     let x = _mm512_sub_ps(
         _mm512_castsi512_ps(_mm512_or_si512(mantissa, _mm512_set1_epi32(0x3f80_0000))),
         _mm512_set1_ps(1.125),
     );
-    // Horner's scheme: five fused multiply-adds on the permuted
+    // Horner's scheme: four fused multiply-adds on the permuted
     // coefficients (the chain's latency is hidden by the other groups).
     let mut v = _mm512_permutex2var_ps(c[0][0], at, c[0][1]);
     for c in &c[1..] {
@@ -455,7 +455,7 @@ mod tests {
 
     /// The lanes' evaluation is `ColumnPoly::at_wide`'s, bit for bit (the
     /// bound is tested on the latter), at table positions through every
-    /// half-octave, past the support and at the clamp.
+    /// quarter-octave, past the support and at the clamp.
     #[test]
     fn the_lanes_evaluate_at_wide() {
         if !available() {

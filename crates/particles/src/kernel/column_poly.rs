@@ -68,7 +68,7 @@ use super::sph::COLUMN_TABLE;
 /// Polynomial degree per segment.
 pub const DEGREE: usize = 7;
 
-/// Polynomial degree per half-octave on sixteen lanes.
+/// Polynomial degree per quarter-octave on sixteen lanes.
 pub const WIDE_DEGREE: usize = 4;
 
 /// Added to the table position before its octave is taken.
@@ -292,7 +292,7 @@ mod tests {
             let ts = (0..=6000)
                 .map(|i| last * i as f64 / 6000.0)
                 .chain((0..200).map(|i| 64.0 * 0.9f64.powi(i)));
-            // The eight lanes' octaves and the sixteen lanes' half-octaves.
+            // The eight lanes' octaves and the sixteen lanes' quarter-octaves.
             let (mut worst, mut worst_wide): (f64, f64) = (0.0, 0.0);
             for t in ts {
                 let t = t as f32;
