@@ -374,24 +374,15 @@ fn stream(
         load::prepare_arrays(&mut data, p, fd_kernel, world.scale)?;
         check_data(&data, offset).map_err(|e| load::blame(main_file, &files, e))?;
         particles.clear();
-        // (The volume wraps its local positions once more.)
-        let centre = |c: Vec3| local_box.map_or(c, |b| voxless_particles::wrap(&b, c));
-        match (&data.radii, &data.weights) {
-            // A global radius and unit weights: nothing per particle to
-            // look up (the lookups' branches were most of this pass).
-            (None, None) => particles.extend(data.positions.iter().map(|&c| SplatParticle {
-                center: centre(c),
-                radius,
-                weight: 1.0,
-            })),
-            (radii, weights) => {
-                particles.extend((0..data.positions.len()).map(|i| SplatParticle {
-                    center: centre(data.positions[i]),
-                    radius: radii.as_ref().map_or(radius, |r| r[i]),
-                    weight: weights.as_ref().map_or(1.0, |w| w[i]),
-                }))
+        particles.extend((0..data.positions.len()).map(|i| {
+            let c = data.positions[i];
+            SplatParticle {
+                // The volume wraps its local positions once more.
+                center: local_box.map_or(c, |b| voxless_particles::wrap(&b, c)),
+                radius: data.radii.as_ref().map_or(radius, |r| r[i]),
+                weight: data.weights.as_ref().map_or(1.0, |w| w[i]),
             }
-        }
+        }));
         Ok(Prepared {
             particles,
             local: data.positions,

@@ -174,12 +174,9 @@ impl Placer {
         (rx, ry): (f64, f64),
         l: &mut BatchLanes,
     ) {
-        let (w, h) = (self.size.0 as f64, self.size.1 as f64);
-        let (kx, ky) = self.to_pixels;
         let [eye, right, up, _] = &self.basis;
         let dot = |d: [f64; 3], e: &[f64; 3]| d[0] * e[0] + d[1] * e[1] + d[2] * e[2];
-        // One array a quantity (a pair's array, written lane by lane and
-        // read a pair at a time, stalled every read on store forwarding).
+        // One array a quantity, each written and read a lane at a time.
         let mut only = [true; BATCH];
         let (mut cx, mut cy) = ([0.0f64; BATCH], [0.0f64; BATCH]);
         let (mut row0, mut row1) = ([0u32; BATCH], [0u32; BATCH]);
@@ -196,18 +193,11 @@ impl Placer {
                 q.y as f64 - eye[1],
                 q.z as f64 - eye[2],
             ];
-            let (a, b) = (dot(d, right), dot(d, up));
-            let (x, y) = (a * kx + 0.5 * w, 0.5 * h - b * ky);
-            let seen = !((x + rx + 1.0 < 0.0)
-                | (x - rx - 1.0 > w)
-                | (y + ry + 1.0 < 0.0)
-                | (y - ry - 1.0 > h));
-            row0[k] = ceil_in(y - ry - 0.5 - CENTRE_SLACK, h);
-            row1[k] = floor_in(y + ry + 0.5 + CENTRE_SLACK, h);
-            col0[k] = ceil_in(x - rx - 0.5 - CENTRE_SLACK, w);
-            col1[k] = floor_in(x + rx + 0.5 + CENTRE_SLACK, w);
-            keep[k] = seen & (row0[k] < row1[k]) & (col0[k] < col1[k]);
-            (cx[k], cy[k]) = (x, y);
+            let c = self.pixel_of(dot(d, right), dot(d, up));
+            let ((r0, r1), (c0, c1)) = self.centre_rect(c, (rx, ry));
+            (row0[k], row1[k], col0[k], col1[k]) = (r0, r1, c0, c1);
+            keep[k] = self.seen(c, (rx, ry)) & (r0 < r1) & (c0 < c1);
+            (cx[k], cy[k]) = c;
         }
         let mask = |b: [bool; BATCH]| (0..BATCH).fold(0u8, |m, k| m | ((b[k] as u8) << k));
         *l = BatchLanes {
@@ -220,6 +210,48 @@ impl Placer {
             col0,
             col1,
         };
+    }
+
+    /// Pixel coordinates of the image-plane point at offsets `(a, b)` from
+    /// the eye along right and up: x = (a / hw + 1)·W/2, y = (1 − b / hh)·H/2.
+    #[inline(always)]
+    fn pixel_of(&self, a: f64, b: f64) -> (f64, f64) {
+        let (w, h) = (self.size.0 as f64, self.size.1 as f64);
+        let (kx, ky) = self.to_pixels;
+        (a * kx + 0.5 * w, 0.5 * h - b * ky)
+    }
+
+    /// Whether a support `r` pixels wide around `c` comes within a pixel
+    /// of the image (nothing of one further out is drawn). No branch, so
+    /// that batches take it in lanes.
+    #[inline(always)]
+    fn seen(&self, (cx, cy): (f64, f64), (rx, ry): (f64, f64)) -> bool {
+        let (w, h) = (self.size.0 as f64, self.size.1 as f64);
+        !((cx + rx + 1.0 < 0.0) | (cx - rx - 1.0 > w) | (cy + ry + 1.0 < 0.0) | (cy - ry - 1.0 > h))
+    }
+
+    /// The rows and columns of the pixel centres a support `r` pixels wide
+    /// around `c` may touch: those strictly inside the support's square,
+    /// |k + 0.5 − c| < r, and `CENTRE_SLACK` more. A centre outside has
+    /// |dx| ≥ r: table position ≥ L, where every column is exactly 0
+    /// (`column_poly`, tested; the Gaussians' `Column::at` alike), and it
+    /// is below 1e-7 of its peak from L − 64 on, so no rounding of the
+    /// lanes' offsets can lose a contribution. (The pixel of margin the
+    /// pixel areas take made a support 8 pixels wide span 10–11 columns:
+    /// two lane groups where one does.)
+    #[inline(always)]
+    fn centre_rect(&self, (cx, cy): (f64, f64), (rx, ry): (f64, f64)) -> ((u32, u32), (u32, u32)) {
+        let (w, h) = (self.size.0 as f64, self.size.1 as f64);
+        (
+            (
+                ceil_in(cy - ry - 0.5 - CENTRE_SLACK, h),
+                floor_in(cy + ry + 0.5 + CENTRE_SLACK, h),
+            ),
+            (
+                ceil_in(cx - rx - 0.5 - CENTRE_SLACK, w),
+                floor_in(cx + rx + 0.5 + CENTRE_SLACK, w),
+            ),
+        )
     }
 
     /// Particle `p`'s periodic images as splats, in order, onto the
@@ -236,8 +268,6 @@ impl Placer {
             return Ok(());
         }
         let (w, h) = (self.size.0 as f64, self.size.1 as f64);
-        // Pixel coordinates of a point: x = (a / hw + 1)·W/2 with a its
-        // offset along `right` from the eye, y = (1 − b / hh)·H/2 along `up`.
         let (pw, ph) = self.pixel;
         let (kx, ky) = self.to_pixels;
         // Read from `self` where used, not copied into locals: the copies
@@ -280,12 +310,9 @@ impl Placer {
                 q.z as f64 - eye[2],
             ];
             let (a, b) = (dot(d, right), dot(d, up));
-            let cx = a * kx + 0.5 * w;
-            let cy = 0.5 * h - b * ky;
+            let (cx, cy) = self.pixel_of(a, b);
             let (rx, ry) = (s * kx, s * ky);
-            // Nothing of a support a pixel or more outside the image.
-            if cx + rx + 1.0 < 0.0 || cx - rx - 1.0 > w || cy + ry + 1.0 < 0.0 || cy - ry - 1.0 > h
-            {
+            if !self.seen((cx, cy), (rx, ry)) {
                 continue;
             }
             // Supports narrower than table_pixels take the area table;
@@ -299,25 +326,7 @@ impl Placer {
                     (floor_in(cx - rx - 1.5, w), ceil_in(cx + rx + 0.5, w)),
                 )
             } else {
-                // Pixel centres only: those strictly inside the support's
-                // square, |k + 0.5 − c| < r, and `CENTRE_SLACK` more. A
-                // centre outside has |dx| ≥ r: table position ≥ L, where
-                // every column is exactly 0 (`column_poly`, tested; the
-                // Gaussians' `Column::at` alike), and it is below 1e-7 of
-                // its peak from L − 64 on, so no rounding of the lanes'
-                // offsets can lose a contribution. (The pixel of margin the
-                // areas take made a support 8 pixels wide span 10–11
-                // columns: two lane groups where one does.)
-                (
-                    (
-                        ceil_in(cy - ry - 0.5 - CENTRE_SLACK, h),
-                        floor_in(cy + ry + 0.5 + CENTRE_SLACK, h),
-                    ),
-                    (
-                        ceil_in(cx - rx - 0.5 - CENTRE_SLACK, w),
-                        floor_in(cx + rx + 0.5 + CENTRE_SLACK, w),
-                    ),
-                )
+                self.centre_rect((cx, cy), (rx, ry))
             };
             if rows.0 >= rows.1 || cols.0 >= cols.1 {
                 continue;
