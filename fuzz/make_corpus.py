@@ -14,6 +14,7 @@ import os
 import re
 import shutil
 import struct
+import zlib
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -288,8 +289,28 @@ def vtk_seeds():
          '<VTKFile type="UnstructuredGrid"><UnstructuredGrid>'
          f'<Piece NumberOfPoints="0" NumberOfCells="0"><CellData>{array}</CellData>{points}'
          "</Piece></UnstructuredGrid></VTKFile>\n")
+    vtk_zlib_bomb()
     # One PolyData file, for the "not an UnstructuredGrid" path.
     shutil.copyfile(VTK_DATA / "points_binary_u32.vtp", CORPUS / "vtu_mesh" / "points_binary_u32.vtp")
+
+
+def vtk_zlib_bomb():
+    """The regression input of crates/io/tests/readers/vtk.rs
+    (vtk_compressed_header_declaring_gigabytes_is_refused): a 500-byte file
+    whose zlib header declares 1.1 GB from a 17-byte block (found by the
+    `vtu_mesh` fuzzer in CI: the reader reserved the 1.1 GB before checking
+    the block's size against what zlib can expand)."""
+    import base64
+    block = zlib.compress(b"\0" * 1000, 9)
+    header = struct.pack("<4Q", 1, 1_100_000_000, 0, len(block))
+    data = base64.b64encode(header).decode() + base64.b64encode(block).decode()
+    seed("vtu_mesh", "regress_zlib_bomb.vtu",
+         '<VTKFile type="UnstructuredGrid" byte_order="LittleEndian" header_type="UInt64" '
+         'compressor="vtkZLibDataCompressor"><UnstructuredGrid>'
+         '<Piece NumberOfPoints="100000000" NumberOfCells="0"><Points>'
+         '<DataArray type="Float32" NumberOfComponents="3" format="appended" offset="0"/>'
+         f'</Points></Piece></UnstructuredGrid><AppendedData encoding="base64">_{data}'
+         "</AppendedData></VTKFile>\n")
 
 
 def main():

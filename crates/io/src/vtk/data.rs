@@ -196,18 +196,29 @@ fn decompress(
             "last block size {last_size} is larger than the block size {block_size}"
         ));
     }
-    // What the blocks inflate to, checked against what the array needs and
-    // reserved up front: a bomb is refused, not inflated, and memory that
-    // cannot be had is an error rather than an abort.
-    let total: u64 = (0..blocks as u64)
-        .map(|i| {
-            if i + 1 == blocks as u64 && last_size != 0 {
-                last_size
-            } else {
-                block_size
-            }
-        })
-        .fold(0u64, u64::saturating_add);
+    // What each block inflates to, checked against what zlib can make of its
+    // compressed bytes, and the sum against what the array needs, before
+    // anything is reserved: a bomb (a few bytes declaring gigabytes) is
+    // refused, not allocated, and memory that cannot be had is an error
+    // rather than an abort.
+    let expected_size = |i: usize| {
+        if i + 1 == blocks && last_size != 0 {
+            last_size
+        } else {
+            block_size
+        }
+    };
+    let mut total = 0u64;
+    for (i, &c) in compressed.iter().enumerate() {
+        let expected = expected_size(i);
+        if expected > c.saturating_mul(MAX_ZLIB_RATIO) + 64 {
+            return Err(format!(
+                "block {i} claims {expected} bytes from {c} compressed bytes, more than zlib \
+                 can expand"
+            ));
+        }
+        total = total.saturating_add(expected);
+    }
     if let Some(limit) = limit
         && total > limit
     {
@@ -223,17 +234,7 @@ fn decompress(
         .ok_or_else(|| format!("the inflated data, {total} bytes, does not fit in memory"))?;
     let mut pos = header_len;
     for (i, &c) in compressed.iter().enumerate() {
-        let expected = if i + 1 == blocks && last_size != 0 {
-            last_size
-        } else {
-            block_size
-        };
-        if expected > c.saturating_mul(MAX_ZLIB_RATIO) + 64 {
-            return Err(format!(
-                "block {i} claims {expected} bytes from {c} compressed bytes, more than zlib \
-                 can expand"
-            ));
-        }
+        let expected = expected_size(i);
         let input = &blob[pos..pos + c as usize];
         pos += c as usize;
         let before = out.len();
@@ -420,5 +421,24 @@ mod tests {
         );
         assert!(convert(&[0; 5], Scalar::U32, ByteOrder::Little, None).is_err());
         assert!(convert(&[0; 8], Scalar::U32, ByteOrder::Little, Some(3)).is_err());
+    }
+
+    #[test]
+    fn a_block_claiming_more_than_zlib_can_expand_is_refused_before_reserving() {
+        // Header [1 block, 2^62 bytes, last 0, 17 compressed bytes], no
+        // limit: the claim is refused by the zlib ratio, before the reserve
+        // (which would say "does not fit in memory").
+        let mut blob = Vec::new();
+        for w in [1u64, 1 << 62, 0, 17] {
+            blob.extend_from_slice(&w.to_le_bytes());
+        }
+        blob.extend_from_slice(&[0; 17]);
+        let word = |i: usize| {
+            Ok(u64::from_le_bytes(
+                blob[i * 8..i * 8 + 8].try_into().unwrap(),
+            ))
+        };
+        let msg = decompress(&blob, 8, &word, None).unwrap_err();
+        assert!(msg.contains("more than zlib can expand"), "{msg}");
     }
 }

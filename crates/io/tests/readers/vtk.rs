@@ -418,3 +418,23 @@ fn vtk_huge_component_count_without_tuples() {
     assert_eq!(table.len(), 0);
     assert_eq!(table.column("a_1"), Some(&[][..]));
 }
+
+/// A 500-byte file whose zlib header declares 1.1 GB from a 17-byte block
+/// (found by the `vtu_mesh` fuzzer) is refused by the size check, naming the
+/// file and the array, before anything is reserved for it. The same bytes are
+/// the fuzz seed `regress_zlib_bomb.vtu`, where libFuzzer's 1 GiB allocation
+/// limit fails the run if the reserve comes first.
+#[test]
+fn vtk_compressed_header_declaring_gigabytes_is_refused() {
+    let dir = TempDir::new("vtk-zlib-bomb");
+    let seed = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fuzz/corpus/vtu_mesh/regress_zlib_bomb.vtu");
+    let bytes = std::fs::read(&seed).unwrap_or_else(|e| panic!("{}: {e}", seed.display()));
+    let path = dir.write("bomb.vtu", &bytes);
+    let msg = error_message(read_vtu_mesh(&path), &path);
+    assert!(msg.contains("<Points>"), "{msg}");
+    assert!(
+        msg.contains("claims 1100000000 bytes from 17 compressed bytes"),
+        "{msg}"
+    );
+}
