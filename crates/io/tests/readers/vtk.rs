@@ -285,8 +285,13 @@ fn vtk_malformed_inputs() {
         ),
         (
             "zip-bomb-claim",
+            raw_vtu(true, &u32s(&[1, 50_000, 0, 48]), &points, tet),
+            "declares 50000 bytes once inflated, but the array holds 48",
+        ),
+        (
+            "zip-bomb-ratio",
             raw_vtu(true, &u32s(&[1, 1 << 30, 0, 48]), &points, tet),
-            "declares 1073741824 bytes once inflated, but the array holds 48",
+            "claims 1073741824 bytes from 48 compressed bytes, more than zlib can expand",
         ),
         (
             "not-zlib",
