@@ -595,6 +595,22 @@ impl ProjectionView {
         (self.width[0] / w as f64) * (self.width[1] / h as f64)
     }
 
+    /// `Σ column × pixel area` of a `w`×`h` image: the mass (or the field's
+    /// integral) the projection holds. Summed in f64 on eight running sums
+    /// (one sum in order was a chain of a million dependent adds, ~1–4 ms
+    /// at the end of every 1024² projection; eight are as accurate).
+    pub fn integral(&self, column: &[f32], w: u32, h: u32) -> f64 {
+        let mut sums = [0.0f64; 8];
+        let lanes = column.chunks_exact(8);
+        let rest: f64 = lanes.remainder().iter().map(|&c| c as f64).sum();
+        for c in lanes {
+            for (s, &c) in sums.iter_mut().zip(c) {
+                *s += c as f64;
+            }
+        }
+        (sums.iter().sum::<f64>() + rest) * self.pixel_area(w, h)
+    }
+
     /// The world position of pixel (`row`, `col`)'s centre in a `w`×`h`
     /// image, on the plane through the image centre.
     pub fn pixel_center(&self, row: u32, col: u32, w: u32, h: u32) -> [f64; 3] {

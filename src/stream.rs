@@ -360,6 +360,7 @@ fn stream(
                 local: Vec::new(),
                 offset: fd.offset,
                 scan,
+                mass: 0.0,
             });
         }
         // The loader's wrap (`periodic::settle` of a share: no region, no
@@ -383,11 +384,17 @@ fn stream(
                 weight: data.weights.as_ref().map_or(1.0, |w| w[i]),
             }
         }));
+        let mass = particles
+            .iter()
+            .filter(|q| q.radius > 0.0)
+            .map(|q| q.weight as f64 * kernel.integral(q.radius as f64))
+            .sum::<f64>();
         Ok(Prepared {
             particles,
             local: data.positions,
             offset,
             scan,
+            mass,
         })
     };
 
@@ -455,12 +462,7 @@ fn stream(
                                 return Ok(());
                             }
                         }
-                        mass += c
-                            .particles
-                            .iter()
-                            .filter(|q| q.radius > 0.0)
-                            .map(|q| q.weight as f64 * kernel.integral(q.radius as f64))
-                            .sum::<f64>();
+                        mass += c.mass;
                         splatter.add(&c.particles, c.offset, control).map_err(|e| {
                             let field = match e {
                                 voxless_particles::ParticleError::Device(_) => "device",
@@ -627,6 +629,10 @@ struct Prepared {
     offset: usize,
     /// With a periodic box: what pass 1 would have learned of the chunk.
     scan: Option<Scan>,
+    /// The chunk's `∫ field dV`, summed in its order (while the chunk is
+    /// prepared: on the core that prepares it, not on the splatting
+    /// path).
+    mass: f64,
 }
 
 /// The particle description of a scene that may stream (module docs;

@@ -672,7 +672,7 @@ fn project(
     }
     let written = column.map_or(Ok(()), |column| {
         write_map(output, desc, base, frame, &view, (w, h), &column)?;
-        let integral: f64 = column.iter().map(|&c| c as f64).sum::<f64>() * view.pixel_area(w, h);
+        let integral = view.integral(&column, w, h);
         let exact = data.total_mass();
         let mass = exact
             .map(|m| format!(", exact ∫ field dV = {m:.6e}"))
@@ -708,7 +708,7 @@ fn write_streamed(
     t: Instant,
 ) -> Result<()> {
     write_map(output, desc, base, frame, &s.view, (w, h), &s.column)?;
-    let integral: f64 = s.column.iter().map(|&c| c as f64).sum::<f64>() * s.view.pixel_area(w, h);
+    let integral = s.view.integral(&s.column, w, h);
     // A streamed projection splats: on the GPU whenever it is open (one
     // process only).
     let on = if device.is_gpu() && matches!(placement, Placement::Process) {

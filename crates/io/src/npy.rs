@@ -213,14 +213,17 @@ pub fn write_npy_f32_to<W: Write>(
     let header = npy_header("<f4", shape);
     let mut write = |bytes: &[u8]| out.write_all(bytes).map_err(|e| IoError::io(name, e));
     write(&header)?;
-    // Convert in blocks to keep the number of write calls small.
-    let mut block = Vec::with_capacity(4 * 4096);
-    for chunk in data.chunks(4096) {
-        block.clear();
-        for v in chunk {
-            block.extend_from_slice(&v.to_le_bytes());
+    // Converted in blocks of 256 KiB, each value's bytes copied in place
+    // (a loop the compiler turns into wide copies; pushed a value at a
+    // time, and written 16 KiB at a time, a 1024² image took ~2 ms).
+    const BLOCK: usize = 1 << 16;
+    let mut block = vec![0u8; 4 * BLOCK.min(data.len())];
+    for chunk in data.chunks(BLOCK) {
+        let bytes = &mut block[..4 * chunk.len()];
+        for (b, v) in bytes.chunks_exact_mut(4).zip(chunk) {
+            b.copy_from_slice(&v.to_le_bytes());
         }
-        write(&block)?;
+        write(bytes)?;
     }
     out.flush().map_err(|e| IoError::io(name, e))
 }

@@ -431,7 +431,6 @@ pub struct Column {
     /// `b²` to a table position.
     scale: f64,
     to_index: f64,
-    table: &'static [f32; PROJ_Q2_TABLE],
     /// SPH kernels: `norm · r` of their partial chords.
     partial_norm: Option<f64>,
 }
@@ -457,10 +456,17 @@ impl Kernel {
     /// The projected-kernel table an SPH kernel's [`Column`] reads (over
     /// `q² ∈ [0, Q²]`, `Q` the support factor); `None` for the Gaussians.
     pub fn sph_table(&self) -> Option<&'static [f32]> {
+        self.is_sph().then(|| &self.table()[..])
+    }
+
+    /// [`Kernel::sph_table`], or zeros for the Gaussians (built on first
+    /// use).
+    #[inline]
+    fn table(&self) -> &'static [f32; PROJ_Q2_TABLE] {
         match self.sph() {
-            _ if *self == Kernel::CubicSpline => Some(projected_m4_q2_table()),
-            Some(s) => Some(s.column_table()),
-            None => None,
+            _ if *self == Kernel::CubicSpline => projected_m4_q2_table(),
+            Some(s) => s.column_table(),
+            None => &NO_TABLE,
         }
     }
 
@@ -468,13 +474,13 @@ impl Kernel {
     pub fn column(&self, r: f64) -> Column {
         let factor = self.support_factor() as f64;
         let support = factor * r;
-        let (table, scale) = match self.sph() {
-            _ if *self == Kernel::CubicSpline => (
-                projected_m4_q2_table(),
-                1.0 / (std::f64::consts::PI * r * r),
-            ),
-            Some(s) => (s.column_table(), s.sigma() / (r * r)),
-            None => (&NO_TABLE, 0.0),
+        // (The table is looked up where it is read, not here: the lanes'
+        // splats never read it, and building it took ~4 ms of both cores
+        // at the start of every projection.)
+        let scale = match self.sph() {
+            _ if *self == Kernel::CubicSpline => 1.0 / (std::f64::consts::PI * r * r),
+            Some(s) => s.sigma() / (r * r),
+            None => 0.0,
         };
         Column {
             kernel: *self,
@@ -483,7 +489,6 @@ impl Kernel {
             scale,
             // For the cubic spline (N − 1)/4 is exact, as before.
             to_index: 1.0 / (r * r) * ((PROJ_Q2_TABLE - 1) as f64 / (factor * factor)),
-            table,
             partial_norm: self.partial_norm(r),
         }
     }
@@ -549,7 +554,8 @@ impl Column {
         let x = (b2 * self.to_index).min(LAST);
         let i = (x as usize).min(PROJ_Q2_TABLE - 2);
         let s = (x - i as f64) as f32;
-        let f = self.table[i] * (1.0 - s) + self.table[i + 1] * s;
+        let table = self.kernel.table();
+        let f = table[i] * (1.0 - s) + table[i + 1] * s;
         self.scale * f as f64
     }
 

@@ -15,17 +15,25 @@
 //! process ×0.85.
 //!
 //! Where the time goes (AMD Zen 5, 2.1M particles, 20-pixel supports, 33
-//! lane groups a particle's ~330 pixels): a group's ~21 instructions take
-//! ~9 cycles, bound by the pipes the permutes, multiply-adds and
-//! widenings share (an f32 sum into f64 costs two widenings and an
-//! extract: summing batches of splats in f32 first and flushing them into
-//! f64 was tried, but consecutive particles of a cosmological box drift
-//! ~4 pixels apart in projection, so batches held ~5 splats and the
-//! flushes cost what the widenings did). The batches of particles are also
-//! placed here, on eight f64 lanes ([`place_lanes`]).
+//! lane groups a particle's ~330 pixels): a group took ~21 instructions
+//! in ~9 cycles, bound by the pipe the permutes share with the widenings
+//! to f64 (two conversions and an extract; measured by taking each out:
+//! ~8–10 ms of the 2.1M projection per instruction on that pipe). Three
+//! changes (2026-12-02) took the group to ~17 and the process to ×0.86:
+//! the f32s widened by shifts and ANDs into f64s `2⁻⁸⁹⁶` times their
+//! value, the scale and `2⁸⁹⁶` applied by the image's fused multiply-add
+//! ([`widen`]); the polynomials' variable left uncentred (no subtraction);
+//! and no clamp of `t` (octaves of `t + 128`, see `column_poly`). The
+//! lanes' order (`2j`, `2j + 1`: column `j` of the upper and the lower
+//! row) is what lets a 64-bit lane hold both rows' values. (Summing
+//! batches of splats in f32 first and flushing them into f64 was tried:
+//! consecutive particles of a cosmological box drift ~4 pixels apart in
+//! projection, so batches held ~5 splats and the flushes cost what the
+//! widenings did.) The batches of particles are also placed here, on
+//! eight f64 lanes ([`place_lanes`]).
 
 use super::{BATCH, BandSplats, BatchLanes, CENTRE_SLACK, Lean, Placer, SplatParticle};
-use crate::kernel::column_poly::{ColumnPoly, OFFSET, WIDE_DEGREE, ZERO_UNTIL};
+use crate::kernel::column_poly::{ColumnPoly, WIDE_DEGREE, WIDE_OFFSET as OFFSET, ZERO_UNTIL};
 use crate::volume::INSIDE;
 
 /// Whether the sixteen-lane path can run on this CPU.
@@ -40,10 +48,11 @@ pub(super) fn available() -> bool {
     }
 }
 
-/// `ZERO_UNTIL + OFFSET`: the rows' positions are kept offset, so that a
-/// group's `t + OFFSET` (the polynomials' variable) is one add, `tx + (ty +
-/// OFFSET)`, where it took two (one f32 rounding more or less in `t`, far
-/// below the polynomials' bound; −1 of the group's ~24 instructions).
+/// `ZERO_UNTIL + OFFSET` (the sixteen lanes' offset, `WIDE_OFFSET`): the
+/// rows' positions are kept offset, so that a group's `t + OFFSET` (the
+/// polynomials' variable) is one add, `tx + (ty + OFFSET)`, where it took
+/// two (one f32 rounding more or less in `t`, far below the polynomials'
+/// bound; −1 of the group's ~24 instructions).
 const TOP: f32 = ZERO_UNTIL + OFFSET;
 
 /// [`sph_rows`] of every lean splat of a band, in order (one loop with
@@ -96,15 +105,14 @@ pub(super) unsafe fn sph_rows(
     if first >= end || rows.is_empty() {
         return;
     }
-    // The coefficients times the scale.
-    let scale = _mm512_set1_ps(p.scale);
+    // The coefficients as they are: the splat's scale multiplies each
+    // value as it is added (see [`widen`]). (Scaled coefficients are each
+    // rounded once more, and the quartics' terms cancel: for particles
+    // sharing a scale that moved their mass by ~2e-7, all one way.)
     // SAFETY: each table is thirty-two f32s.
     let c: [[__m512; 2]; WIDE_DEGREE + 1] = std::array::from_fn(|k| unsafe {
         let at = poly.wide[k].as_ptr();
-        [
-            _mm512_mul_ps(_mm512_loadu_ps(at), scale),
-            _mm512_mul_ps(_mm512_loadu_ps(at.add(16)), scale),
-        ]
+        [_mm512_loadu_ps(at), _mm512_loadu_ps(at.add(16))]
     });
     // Each row's table position once, before the loop over its groups (a
     // row's ~5 scalar f64 operations run on the port the lanes' arithmetic
@@ -123,6 +131,7 @@ pub(super) unsafe fn sph_rows(
         dx0: _mm512_set1_ps((first as f64 + 0.5 - p.cx) as f32),
         lanes_end: _mm512_set1_ps((end - first) as f32),
         ax: _mm512_set1_ps(p.ax),
+        unbias: _mm512_set1_pd(p.scale as f64 * UNBIAS),
     };
     // Spans of at most four groups, each the pairs' loop unrolled over its
     // groups, their `dx²·ax` in registers (no exit to mispredict per
@@ -193,7 +202,7 @@ struct Pairs<'a> {
     first_row: usize,
     /// The distance between rows (the image's width and its padding).
     width: usize,
-    /// The coefficients times the splat's scale.
+    /// The coefficients (not scaled).
     c: &'a [[std::arch::x86_64::__m512; 2]; WIDE_DEGREE + 1],
     /// The splat's first column, the offset of its centre from that
     /// column's centre, its columns' count and `ax` in every lane.
@@ -201,6 +210,9 @@ struct Pairs<'a> {
     dx0: std::arch::x86_64::__m512,
     lanes_end: std::arch::x86_64::__m512,
     ax: std::arch::x86_64::__m512,
+    /// The splat's scale times [`UNBIAS`] (exact, and finite for every
+    /// finite f32 scale: below `2¹²⁸·2⁸⁹⁶`).
+    unbias: std::arch::x86_64::__m512d,
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -214,30 +226,32 @@ impl Pairs<'_> {
     #[inline]
     unsafe fn add<const N: usize>(&self, span: usize, out: &mut [f64]) {
         use std::arch::x86_64::*;
-        // Lanes 0–7: columns `k..k + 8` of a pair's upper row; 8–15: the
-        // same columns of its lower row.
+        // Lanes `2j` and `2j + 1`: column `k + j` of a pair's upper row and
+        // of its lower row (one 64-bit lane a column, see [`widen`]).
         let iota = _mm512_setr_ps(
-            0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0,
+            0.0, 0.0, 1.0, 1.0, 2.0, 2.0, 3.0, 3.0, 4.0, 4.0, 5.0, 5.0, 6.0, 6.0, 7.0, 7.0,
         );
         // As on the eight lanes: each group's `dx²·ax` once a span; lanes
-        // past the row's end at `ZERO_UNTIL`, and `t` clamped to `TOP`,
-        // where the polynomial is exactly 0 (tested), so that no lane needs
-        // a mask (×0.92–0.94 on the 2.1M and 16.7M projections). Rows past
-        // the support (at `TOP`) are summed too: their +0 costs less than a
-        // test a pair.
+        // past the row's end at `ZERO_UNTIL` and the others at most there,
+        // so that a lane's `t` is below `2·ZERO_UNTIL`, where the
+        // polynomial is exactly 0 past the support (tested): no lane needs
+        // a mask (×0.92–0.94 on the 2.1M and 16.7M projections) or a clamp
+        // a group (×0.97). Rows past the support (at `TOP`) are summed too:
+        // their +0 costs less than a test a pair.
         let zero = _mm512_set1_ps(ZERO_UNTIL);
         let tx: [__m512; N] = std::array::from_fn(|g| {
             let kk = _mm512_add_ps(iota, _mm512_set1_ps((span - self.first + g * 8) as f32));
             let dx = _mm512_add_ps(self.dx0, kk);
             let inside = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(kk, self.lanes_end);
-            _mm512_mask_blend_ps(inside, zero, _mm512_mul_ps(_mm512_mul_ps(dx, dx), self.ax))
+            let tx = _mm512_min_ps(_mm512_mul_ps(_mm512_mul_ps(dx, dx), self.ax), zero);
+            _mm512_mask_blend_ps(inside, zero, tx)
         });
         let (c, width, rows) = (self.c, self.width, self.ty.len() - 1);
-        let top = _mm512_set1_ps(TOP);
+        let unbias = self.unbias;
         let n = N * 8;
         for k in (0..rows).step_by(2) {
             let (t0, t1) = (self.ty[k], self.ty[k + 1]);
-            let ty = _mm512_mask_blend_ps(0xff00, _mm512_set1_ps(t0), _mm512_set1_ps(t1));
+            let ty = _mm512_mask_blend_ps(0xaaaa, _mm512_set1_ps(t0), _mm512_set1_ps(t1));
             let up = out[(self.first_row + k) * width..]
                 .as_mut_ptr()
                 .wrapping_add(span);
@@ -247,19 +261,19 @@ impl Pairs<'_> {
             if lower && span + n <= width {
                 // The common case: every group inside both rows.
                 for (g, &tx) in tx.iter().enumerate() {
-                    let (lo, hi) = column(c, _mm512_min_ps(_mm512_add_ps(tx, ty), top));
+                    let (lo, hi) = widen(column(c, _mm512_add_ps(tx, ty)));
                     // SAFETY: `span + n <= width` and the lower row is in
                     // the band.
                     unsafe {
                         let (u, d) = (up.add(g * 8), down.add(g * 8));
-                        _mm512_storeu_pd(u, _mm512_add_pd(_mm512_loadu_pd(u), lo));
-                        _mm512_storeu_pd(d, _mm512_add_pd(_mm512_loadu_pd(d), hi));
+                        _mm512_storeu_pd(u, _mm512_fmadd_pd(lo, unbias, _mm512_loadu_pd(u)));
+                        _mm512_storeu_pd(d, _mm512_fmadd_pd(hi, unbias, _mm512_loadu_pd(d)));
                     }
                 }
                 continue;
             }
             for (g, &tx) in tx.iter().enumerate() {
-                let (lo, hi) = column(c, _mm512_min_ps(_mm512_add_ps(tx, ty), top));
+                let (lo, hi) = widen(column(c, _mm512_add_ps(tx, ty)));
                 let room = width - (span + g * 8);
                 let m_up: __mmask8 = if room >= 8 {
                     0xff
@@ -270,9 +284,9 @@ impl Pairs<'_> {
                 // SAFETY: the masks keep the lanes inside the rows of the band.
                 unsafe {
                     let (u, d) = (up.wrapping_add(g * 8), down.wrapping_add(g * 8));
-                    let sum = _mm512_add_pd(_mm512_maskz_loadu_pd(m_up, u), lo);
+                    let sum = _mm512_fmadd_pd(lo, unbias, _mm512_maskz_loadu_pd(m_up, u));
                     _mm512_mask_storeu_pd(u, m_up, sum);
-                    let sum = _mm512_add_pd(_mm512_maskz_loadu_pd(m_down, d), hi);
+                    let sum = _mm512_fmadd_pd(hi, unbias, _mm512_maskz_loadu_pd(m_down, d));
                     _mm512_mask_storeu_pd(d, m_down, sum);
                 }
             }
@@ -280,27 +294,23 @@ impl Pairs<'_> {
     }
 }
 
-/// The column at offset table positions `t + OFFSET` (clamped to
-/// [`TOP`]) on sixteen lanes, as [`ColumnPoly::at_wide`] computes it from
-/// `t + OFFSET`, widened to f64: the upper row's eight lanes and the lower
-/// row's.
+/// The column at offset table positions `t + OFFSET` (`t` below
+/// `2·ZERO_UNTIL`) on sixteen lanes, as [`ColumnPoly::at_wide`] computes
+/// it from `t + OFFSET`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 #[inline]
 fn column(
     c: &[[std::arch::x86_64::__m512; 2]; WIDE_DEGREE + 1],
     t: std::arch::x86_64::__m512,
-) -> (std::arch::x86_64::__m512d, std::arch::x86_64::__m512d) {
+) -> std::arch::x86_64::__m512 {
     use std::arch::x86_64::*;
     let tp = _mm512_castps_si512(t);
     // The exponent's low three bits and the mantissa's top two bits pick
     // the quarter-octave; the rest of the mantissa is the variable.
     let at = _mm512_srli_epi32::<21>(tp);
     let mantissa = _mm512_and_si512(tp, _mm512_set1_epi32(0x001f_ffff));
-    let x = _mm512_sub_ps(
-        _mm512_castsi512_ps(_mm512_or_si512(mantissa, _mm512_set1_epi32(0x3f80_0000))),
-        _mm512_set1_ps(1.125),
-    );
+    let x = _mm512_castsi512_ps(_mm512_or_si512(mantissa, _mm512_set1_epi32(0x3f80_0000)));
     // Horner's scheme: four fused multiply-adds on the permuted
     // coefficients (the chain's latency is hidden by the other groups).
     let mut v = _mm512_permutex2var_ps(c[0][0], at, c[0][1]);
@@ -308,13 +318,34 @@ fn column(
         v = _mm512_fmadd_ps(v, x, _mm512_permutex2var_ps(c[0], at, c[1]));
     }
     // Never below 0, as `ColumnPoly::at_wide`.
-    let v = _mm512_max_ps(v, _mm512_setzero_ps());
-    // Summed in f64: one rounding per add.
-    let upper = _mm512_cvtps_pd(_mm512_castps512_ps256(v));
-    let lower = _mm512_cvtps_pd(_mm256_castpd_ps(_mm512_extractf64x4_pd::<1>(
-        _mm512_castps_pd(v),
-    )));
-    (upper, lower)
+    _mm512_max_ps(v, _mm512_setzero_ps())
+}
+
+/// `2⁸⁹⁶`: what [`widen`]'s lanes are scaled by (exactly).
+const UNBIAS: f64 = f64::from_bits((1023 + 896) << 52);
+
+/// The even and the odd f32 lanes of `v` (non-negative, not NaN) as f64
+/// lanes, each `2⁻⁸⁹⁶` times its value, exactly: an f32's bits moved to
+/// an f64's exponent and mantissa fields keep its exponent's bias (127,
+/// not 1023), which is the same number times `2⁻⁸⁹⁶` (subnormal f32s
+/// included, and 0 stays 0). The adds into the image are fused
+/// multiply-adds by the splat's scale times [`UNBIAS`]: the exact product
+/// of the column and the scale, added with one rounding. (Two shifts and
+/// two ANDs run where the conversions and the upper half's extract took
+/// the permutes' pipe: ×0.92 on the 2.1M-particle projection.)
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn widen(v: std::arch::x86_64::__m512) -> (std::arch::x86_64::__m512d, std::arch::x86_64::__m512d) {
+    use std::arch::x86_64::*;
+    let v = _mm512_castps_si512(v);
+    // Bits 0–31 (even lane) and 32–63 (odd lane) to bits 29–60.
+    let even = _mm512_srli_epi64::<3>(_mm512_slli_epi64::<32>(v));
+    let odd = _mm512_and_si512(
+        _mm512_srli_epi64::<3>(v),
+        _mm512_set1_epi64(0x1fff_ffff_e000_0000),
+    );
+    (_mm512_castsi512_pd(even), _mm512_castsi512_pd(odd))
 }
 
 /// [`Placer::lanes`] on eight f64 lanes: the same operations in the same
@@ -471,29 +502,104 @@ mod tests {
             while t <= ZERO_UNTIL {
                 let ts: [f32; 16] = std::array::from_fn(|k| (t + k as f32 * 0.37).min(ZERO_UNTIL));
                 // SAFETY: AVX-512F is available; sixteen f32s each.
-                let (lo, hi) = unsafe {
+                // SAFETY: AVX-512F is available; sixteen f32s each.
+                let got = unsafe {
                     let c = wide.map(|c| {
                         [
                             _mm512_loadu_ps(c.as_ptr()),
                             _mm512_loadu_ps(c.as_ptr().add(16)),
                         ]
                     });
-                    column(
+                    let v = column(
                         &c,
                         _mm512_add_ps(_mm512_loadu_ps(ts.as_ptr()), _mm512_set1_ps(OFFSET)),
-                    )
+                    );
+                    let mut got = [0.0f32; 16];
+                    _mm512_storeu_ps(got.as_mut_ptr(), v);
+                    got
                 };
-                let mut got = [0.0f64; 16];
-                // SAFETY: sixteen f64s.
-                unsafe {
-                    _mm512_storeu_pd(got.as_mut_ptr(), lo);
-                    _mm512_storeu_pd(got.as_mut_ptr().add(8), hi);
-                }
                 for (g, &t) in got.iter().zip(&ts) {
                     let want = ColumnPoly::at_wide(&wide, t);
-                    assert_eq!(*g, want as f64, "{kernel:?} at {t}");
+                    assert_eq!(g.to_bits(), want.to_bits(), "{kernel:?} at {t}");
                 }
                 t = t * 1.01 + 0.1;
+            }
+        }
+    }
+
+    /// The widened lanes times a scale times `UNBIAS`, added by a fused
+    /// multiply-add, are the f32s converted, multiplied by the scale and
+    /// added with one rounding: the same bits, for zeros, subnormals, the
+    /// largest f32s and values across every exponent, scales from the
+    /// smallest f32 to the largest, to sums of every size.
+    #[test]
+    fn widened_lanes_add_as_converted_ones() {
+        if !available() {
+            return;
+        }
+        use std::arch::x86_64::*;
+        let mut state = 11u64;
+        let mut bits = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 32) as u32
+        };
+        let special = [
+            0.0f32,
+            f32::from_bits(1),
+            f32::from_bits(0x007f_ffff),
+            f32::MIN_POSITIVE,
+            f32::MAX,
+            1.0,
+        ];
+        for round in 0..20_000 {
+            let v: [f32; 16] = std::array::from_fn(|k| {
+                if round < 6 && k % 3 == 0 {
+                    special[round]
+                } else {
+                    f32::from_bits(bits() & 0x7f7f_ffff)
+                }
+            });
+            let base: [f64; 16] = std::array::from_fn(|k| {
+                if k % 4 == 0 {
+                    0.0
+                } else {
+                    (bits() as f64 / 4e9 - 0.3) * 10f64.powi((bits() % 80) as i32 - 40)
+                }
+            });
+            let scale = match round % 4 {
+                0 => 1.0f32,
+                1 => [f32::from_bits(1), f32::MIN_POSITIVE, f32::MAX][round % 3],
+                _ => f32::from_bits(bits() & 0x7f7f_ffff),
+            };
+            let (mut even, mut odd) = ([0.0f64; 8], [0.0f64; 8]);
+            // SAFETY: AVX-512F is available; sixteen f32s, eight f64s each.
+            unsafe {
+                let (e, o) = widen(_mm512_loadu_ps(v.as_ptr()));
+                let unbias = _mm512_set1_pd(scale as f64 * UNBIAS);
+                let e = _mm512_fmadd_pd(e, unbias, _mm512_loadu_pd(base.as_ptr()));
+                let o = _mm512_fmadd_pd(o, unbias, _mm512_loadu_pd(base.as_ptr().add(8)));
+                _mm512_storeu_pd(even.as_mut_ptr(), e);
+                _mm512_storeu_pd(odd.as_mut_ptr(), o);
+            }
+            for j in 0..8 {
+                let add = |base: f64, v: f32| (v as f64).mul_add(scale as f64, base);
+                let want = (add(base[j], v[2 * j]), add(base[8 + j], v[2 * j + 1]));
+                assert_eq!(
+                    even[j].to_bits(),
+                    want.0.to_bits(),
+                    "{:e} + {:e}",
+                    base[j],
+                    v[2 * j]
+                );
+                assert_eq!(
+                    odd[j].to_bits(),
+                    want.1.to_bits(),
+                    "{:e} + {:e}",
+                    base[8 + j],
+                    v[2 * j + 1]
+                );
             }
         }
     }

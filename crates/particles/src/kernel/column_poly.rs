@@ -41,22 +41,39 @@
 //!
 //! **Sixteen lanes.** AVX-512's two-table permute reads a 32-entry table
 //! from two registers in one instruction, so the sixteen-lane splats
-//! ([`ColumnPoly::wide`]) quarter each octave at its mantissa's top two
-//! bits (the segment is `(t' bits >> 21) & 31`, the variable `x = m' −
-//! 1.125`, `m' ∈ [1, 1.25)` the mantissa without those bits) and hold a
-//! quartic on each quarter, evaluated by Horner's scheme (four fused
-//! multiply-adds, [`ColumnPoly::at_wide`]): 1.2e-7–2.5e-7 of the peak over
-//! the six kernels, against 1.8e-7–6.9e-7 for the septics on octaves.
-//! (Quintics on half-octaves, one-table permutes: 2.0e-7–5.3e-7, one
-//! permute and one multiply-add more a lane group, ×1.03 on the 2.1M
-//! projection; degree 6 on octaves reached 1.9e-6, degree 4 on
-//! half-octaves 5e-6; Estrin's scheme for the quartic, one product more:
-//! no faster.) On AVX2 a wide read takes two permutes and a blend, so the
-//! eight lanes keep the octaves.
+//! ([`ColumnPoly::wide`]) take the octaves of `t' = t + 128`
+//! ([`WIDE_OFFSET`]), quarter each at its mantissa's top two bits (the
+//! segment is `(t' bits >> 21) & 31`, the variable `x = m'`, `m' ∈ [1,
+//! 1.25)` the mantissa without those bits: one bit operation, no
+//! subtraction) and hold a quartic on each quarter, evaluated by Horner's
+//! scheme (four fused multiply-adds, [`ColumnPoly::at_wide`]): 2.3e-7–
+//! 4.4e-7 of the peak over the six kernels (1.2e-7–2.5e-7 with `x`
+//! centred, `m' − 1.125`, one subtraction more a lane group), against
+//! 1.8e-7–6.9e-7 for the septics on octaves. The support ends in the
+//! seventh octave, so the eighth's slots are zeros and a sum of two table
+//! positions past the support (up to `2·ZERO_UNTIL`) needs no clamp: its
+//! octave's slots are the seventh's sliver or zeros (tested up to `t' =
+//! 2¹⁵`). The lanes never scale the coefficients: they multiply each value
+//! by the particle's scale as they add it (rounded coefficients of an
+//! uncentred variable cancel, and scaled ones moved the mass of particles
+//! sharing a scale by ~2e-7, all one way). (Quintics on half-octaves,
+//! one-table permutes: 2.0e-7–5.3e-7, one permute and one multiply-add
+//! more a lane group, ×1.03 on the 2.1M projection; degree 6 on octaves
+//! reached 1.9e-6, degree 4 on half-octaves 5e-6, cubics on quarter-octaves
+//! 3.5e-6–5e-6 and on eighth-octaves of `t + 1024` 2.3e-5; Estrin's scheme
+//! for the quartic, one product more: no faster.) On AVX2 a wide read
+//! takes two permutes and a blend, so the eight lanes keep the octaves.
 //!
 //! **Fit.** Interpolation at the Chebyshev nodes of each segment (within a
 //! small factor of the best polynomial), in Newton's form in f64, expanded
-//! to coefficients in `x` and rounded to f32.
+//! to coefficients in `x` and rounded to f32; the quartics' constant term
+//! then moved by the mean of what is left over the segment (a
+//! projection's mass within ~4e-8 over random positions).
+//!
+//! **Mass.** Over random sub-pixel positions the sixteen lanes' columns
+//! sum to the kernel's mass within 1e-8–4e-8 (six kernels, supports ten
+//! pixels wide; the exact columns sampled at the same pixels: 2e-10–
+//! 1.5e-8).
 
 use std::sync::OnceLock;
 
@@ -83,6 +100,14 @@ pub const ZERO_UNTIL: f32 = (COLUMN_TABLE - 1 + 32) as f32;
 /// The biased f32 exponent of `OFFSET` (segment 0).
 const FIRST_EXPONENT: u32 = 133;
 
+/// The sixteen lanes' [`OFFSET`]: their octaves of `t + 128` reach the
+/// support in seven (`t' < 8192 + 128`), so that the eighth octave's slots
+/// are zeros and take every `t' ∈ [2¹⁴, 2¹⁵)` (see [`ColumnPoly::wide`]).
+pub const WIDE_OFFSET: f32 = 128.0;
+
+/// The biased f32 exponent of [`WIDE_OFFSET`].
+const WIDE_FIRST_EXPONENT: u32 = 134;
+
 /// One SPH kernel's column as eight polynomials (see the module docs).
 #[derive(Clone, Debug)]
 pub struct ColumnPoly {
@@ -92,8 +117,9 @@ pub struct ColumnPoly {
     pub lanes8: [[f32; 8]; DEGREE + 1],
     /// The sixteen lanes' polynomials (see "Sixteen lanes" above):
     /// coefficient `k` (highest degree first) of quarter `h` of octave `s`
-    /// at position `((133 + s) & 7)·4 + h`, the permute index being the
-    /// low five bits of `(t + 64)`'s bits shifted right by 21.
+    /// at position `((134 + s) & 7)·4 + h`, the permute index being the
+    /// low five bits of `(t + 128)`'s bits shifted right by 21 (octave 7,
+    /// `t' ∈ [2¹⁴, 2¹⁵)`, all zeros).
     pub wide: [[f32; 32]; WIDE_DEGREE + 1],
 }
 
@@ -145,12 +171,11 @@ impl ColumnPoly {
     }
 
     /// `P(t)` in f32 as the sixteen lanes evaluate it (the quarter-octaves'
-    /// quartics, see [`ColumnPoly::wide`]), `c` their coefficients (times a
-    /// scale, as the splatter takes them).
+    /// quartics, see [`ColumnPoly::wide`]), `c` their coefficients.
     pub fn at_wide(c: &[[f32; 32]; WIDE_DEGREE + 1], t: f32) -> f32 {
-        let tp = (t + OFFSET).to_bits();
+        let tp = (t + WIDE_OFFSET).to_bits();
         let at = ((tp >> 21) & 31) as usize;
-        let x = f32::from_bits((tp & 0x001f_ffff) | 0x3f80_0000) - 1.125;
+        let x = f32::from_bits((tp & 0x001f_ffff) | 0x3f80_0000);
         let p = c[1..].iter().fold(c[0][at], |p, c| p.mul_add(x, c[at]));
         p.max(0.0)
     }
@@ -158,26 +183,37 @@ impl ColumnPoly {
     /// Fits `f(t)` over `t ∈ [0, L]`.
     fn fit(f: impl Fn(f64) -> f64) -> ColumnPoly {
         let last = (COLUMN_TABLE - 1) as f64;
-        let offset = OFFSET as f64;
         let mut lanes8 = [[0.0f32; 8]; DEGREE + 1];
         let mut wide = [[0.0f32; 32]; WIDE_DEGREE + 1];
         for s in 0..8u32 {
             let e = FIRST_EXPONENT + s;
             // The octave of t', `lo·m` for m in [1, 2); eight lanes: x = m − 1.5.
-            let lo = offset * (1u32 << s) as f64;
-            let coef = segment(&f, lo, 1.5, 2.0, DEGREE);
+            let lo = OFFSET as f64 * (1u32 << s) as f64;
+            let coef = segment(&f, (lo, OFFSET), 1.5, (1.0, 2.0), DEGREE);
             for (k, c) in coef.iter().enumerate() {
                 lanes8[k][(e & 7) as usize] = *c as f32;
             }
-            // Its quarters m in [1 + h/4, 1.25 + h/4); sixteen lanes:
-            // x = m − 1.125 − h/4.
+        }
+        // Sixteen lanes: the octaves of `t + WIDE_OFFSET` (seven reach the
+        // support; the eighth's slots stay 0), each in quarters m in [1 +
+        // h/4, 1.25 + h/4), x = m − h/4 in [1, 1.25).
+        let offset = WIDE_OFFSET as f64;
+        for s in 0..8u32 {
+            let e = WIDE_FIRST_EXPONENT + s;
+            let lo = offset * (1u32 << s) as f64;
             for h in 0..4u32 {
-                let base = 1.125 + 0.25 * h as f64;
-                if lo * (base - 0.125) >= last + offset {
-                    // Never reached (t ≤ ZERO_UNTIL): zeros.
+                let shift = 0.25 * h as f64;
+                if lo * (1.0 + shift) >= last + offset {
+                    // Never reached below the support: zeros.
                     continue;
                 }
-                let coef = segment(&f, lo, base, 1.25 + 0.25 * h as f64, WIDE_DEGREE);
+                let coef = segment(
+                    &f,
+                    (lo, WIDE_OFFSET),
+                    shift,
+                    (1.0 + shift, 1.25 + shift),
+                    WIDE_DEGREE,
+                );
                 for (k, c) in coef.iter().enumerate() {
                     wide[k][((e & 7) * 4 + h) as usize] = *c as f32;
                 }
@@ -187,16 +223,21 @@ impl ColumnPoly {
     }
 }
 
-/// The polynomial of degree `degree` in `x = m − base` for `f(t)` at
-/// `t' = lo·m` (`t = t' − 64`), over the segment from `m = base − (end −
-/// base)` to `m = end` (the part of it inside the table), highest degree
-/// first.
-fn segment(f: impl Fn(f64) -> f64, lo: f64, base: f64, end: f64, degree: usize) -> Vec<f64> {
+/// The polynomial of degree `degree` in `x = m − shift` for `f(t)` at
+/// `t' = lo·m` (`t = t' − offset`), over the segment `m ∈ [m0, m1)` (the part
+/// of it inside the table), highest degree first.
+fn segment(
+    f: impl Fn(f64) -> f64,
+    (lo, offset): (f64, f32),
+    shift: f64,
+    (m0, m1): (f64, f64),
+    degree: usize,
+) -> Vec<f64> {
     let last = (COLUMN_TABLE - 1) as f64;
-    let offset = OFFSET as f64;
-    let t_of = |x: f64| (x + base) * lo - offset;
-    let (xa, xb) = (base - end, (end * lo).min(last + offset) / lo - base);
-    if end * lo > last + offset {
+    let offset = offset as f64;
+    let t_of = |x: f64| (x + shift) * lo - offset;
+    let (xa, xb) = (m0 - shift, (m1 * lo).min(last + offset) / lo - shift);
+    if m1 * lo > last + offset {
         // The last sliver: a line from the column to 0 one table position
         // before L, so that rounded to f32 it is ≤ 0 from L on (the clamp
         // then gives exactly 0 there; the column is below 1e-7 of its peak
@@ -207,9 +248,40 @@ fn segment(f: impl Fn(f64) -> f64, lo: f64, base: f64, end: f64, degree: usize) 
         c[degree - 1] = slope;
         c[degree] = y0 - slope * xa;
         c
+    } else if degree == WIDE_DEGREE {
+        rounded_fit(|x| f(t_of(x)), xa, xb, degree)
     } else {
         interpolate(|x| f(t_of(x)), xa, xb, degree)
     }
+}
+
+/// [`interpolate`] with coefficients that f32 holds exactly, the constant
+/// term then moved by the mean of what is left of `g` over the segment
+/// (the quartics' variable is not centred, `x ∈ [1, 1.25)`, so their
+/// terms cancel, and rounding them moved each segment by up to ~1e-7 of
+/// the peak, all one way: a bias of ~3e-7 in a projection's mass). The
+/// mean is uniform in `x`, as a projection's area is in the table
+/// position (eight-point Gauss–Legendre).
+fn rounded_fit(g: impl Fn(f64) -> f64, a: f64, b: f64, degree: usize) -> Vec<f64> {
+    const NODES: [(f64, f64); 4] = [
+        (0.183_434_642_495_649_8, 0.362_683_783_378_362),
+        (0.525_532_409_916_329, 0.313_706_645_877_887_3),
+        (0.796_666_477_413_626_7, 0.222_381_034_453_374_5),
+        (0.960_289_856_497_536_3, 0.101_228_536_290_376_3),
+    ];
+    let mut c: Vec<f64> = interpolate(&g, a, b, degree)
+        .into_iter()
+        .map(|c| c as f32 as f64)
+        .collect();
+    let left = |x: f64| g(x) - c.iter().fold(0.0, |acc, c| acc * x + c);
+    let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
+    let mean = NODES
+        .iter()
+        .map(|&(x, w)| w * (left(mid - half * x) + left(mid + half * x)))
+        .sum::<f64>()
+        / 2.0;
+    c[degree] = (c[degree] + mean) as f32 as f64;
+    c
 }
 
 /// The polynomial of degree `degree` through `g` at the Chebyshev nodes
@@ -316,9 +388,10 @@ mod tests {
         assert!(Kernel::Gaussian3.column_poly().is_none());
     }
 
-    /// Past the support, up to `ZERO_UNTIL`, the evaluation gives exactly
-    /// 0 (what the splatter's clamp of `t` relies on), whatever the scale
-    /// the coefficients are multiplied by.
+    /// Past the support, up to `ZERO_UNTIL`, the eight lanes' evaluation
+    /// gives exactly 0 (what the splatter's clamp of `t` relies on),
+    /// whatever the scale the coefficients are multiplied by; the sixteen
+    /// lanes' past the support wherever their sums can reach.
     #[test]
     fn the_column_is_exactly_zero_past_the_support() {
         let last = (COLUMN_TABLE - 1) as f32;
@@ -328,23 +401,30 @@ mod tests {
                 let c = poly
                     .lanes::<PortableLanes>()
                     .map(|c| c * PortableLanes::splat(scale));
-                let wide = poly.wide.map(|c| c.map(|c| c * scale));
                 let mut t = last;
                 while t <= ZERO_UNTIL {
                     let at = |t: f32| ColumnPoly::eval(&c, PortableLanes::splat(t)).to_array()[0];
                     assert_eq!(at(t).to_bits(), 0, "{kernel:?} × {scale}: {} at {t}", at(t));
-                    let on_16 = ColumnPoly::at_wide(&wide, t);
-                    assert_eq!(
-                        on_16.to_bits(),
-                        0,
-                        "{kernel:?} × {scale}, 16: {on_16} at {t}"
-                    );
                     t = if t < last + 1.0 {
                         t.next_up()
                     } else {
                         t + 0.25
                     };
                 }
+            }
+            // The sixteen lanes' coefficients are never scaled (the lanes
+            // multiply their values), and their sums of two table positions
+            // reach `2·ZERO_UNTIL` unclamped: every t' from the support up
+            // to 2¹⁵ (the eighth octave's zeros take [2¹⁴, 2¹⁵)).
+            let mut t = last;
+            while t + WIDE_OFFSET < 32768.0 {
+                let on_16 = ColumnPoly::at_wide(&poly.wide, t);
+                assert_eq!(on_16.to_bits(), 0, "{kernel:?}, 16: {on_16} at {t}");
+                t = if t < last + 1.0 {
+                    t.next_up()
+                } else {
+                    t + 0.25
+                };
             }
         }
     }
