@@ -213,6 +213,18 @@ fn pixel_centres_and_areas() {
     // Row 0 at the top: the pixel (0, 0) of a 4×2 image is at (0.5, 1.5).
     assert!(close(view.pixel_center(0, 0, 4, 2), [0.5, 1.5, 0.5]));
     assert!(close(view.pixel_center(1, 3, 4, 2), [3.5, 0.5, 0.5]));
+    // The integral on eight running sums against one sum in order, for
+    // counts past and between multiples of eight.
+    let mut rng = voxless_core::SmallRng(5);
+    for n in [0, 1, 7, 8, 13, 1003] {
+        let column: Vec<f32> = (0..n).map(|_| 1e3 * rng.f() + 1e-3).collect();
+        let want = column.iter().map(|&c| c as f64).sum::<f64>() * view.pixel_area(4, 2);
+        let got = view.integral(&column, 4, 2);
+        assert!(
+            (got - want).abs() <= 1e-12 * want.max(1.0),
+            "{n}: {got} vs {want}"
+        );
+    }
 }
 
 #[test]
