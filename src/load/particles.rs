@@ -336,7 +336,10 @@ pub(crate) fn npy_rows(
         return Ok(None);
     };
     let (a, _) = voxless_io::read_npy_rows(&path, rows.clone())?;
-    let positions = a.data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    // The rows as triples in place (a chunk's 1.5 MB were copied), or
+    // copied where the buffer's capacity is not a whole number of triples.
+    let positions = bytemuck::allocation::try_cast_vec::<f64, [f64; 3]>(a.data)
+        .unwrap_or_else(|(_, data)| data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect());
     Ok(Some(FrameData {
         positions,
         data: ParticleData {
