@@ -15,11 +15,12 @@
 //! process ×0.85.
 //!
 //! Where the time goes (AMD Zen 5, 2.1M particles, 20-pixel supports, 33
-//! lane groups a particle's ~330 pixels): a group took ~21 instructions
-//! in ~9 cycles, bound by the pipe the permutes share with the widenings
-//! to f64 (two conversions and an extract; measured by taking each out:
-//! ~8–10 ms of the 2.1M projection per instruction on that pipe). Three
-//! changes (2026-12-02) took the group to ~17 and the process to ×0.86:
+//! lane groups a particle's ~330 pixels): a group took 20 vector
+//! instructions in ~9 cycles, bound by the pipe the permutes share with
+//! the widenings to f64 (two conversions and an extract; measured by
+//! taking each out: ~8–10 ms of the 2.1M projection per instruction on
+//! that pipe). Three changes (2026-12-02) took the group to 19, only 5 of
+//! them on that pipe (was 8), and the process to ×0.86:
 //! the f32s widened by shifts and ANDs into f64s `2⁻⁸⁹⁶` times their
 //! value, the scale and `2⁸⁹⁶` applied by the image's fused multiply-add
 //! ([`widen`]); the polynomials' variable left uncentred (no subtraction);
@@ -501,7 +502,6 @@ mod tests {
             let mut t = 0.0f32;
             while t <= ZERO_UNTIL {
                 let ts: [f32; 16] = std::array::from_fn(|k| (t + k as f32 * 0.37).min(ZERO_UNTIL));
-                // SAFETY: AVX-512F is available; sixteen f32s each.
                 // SAFETY: AVX-512F is available; sixteen f32s each.
                 let got = unsafe {
                     let c = wide.map(|c| {

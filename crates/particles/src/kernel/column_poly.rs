@@ -189,7 +189,7 @@ impl ColumnPoly {
             let e = FIRST_EXPONENT + s;
             // The octave of t', `lo·m` for m in [1, 2); eight lanes: x = m − 1.5.
             let lo = OFFSET as f64 * (1u32 << s) as f64;
-            let coef = segment(&f, (lo, OFFSET), 1.5, (1.0, 2.0), DEGREE);
+            let coef = segment(&f, (lo, OFFSET), 1.5, (1.0, 2.0), (DEGREE, interpolate));
             for (k, c) in coef.iter().enumerate() {
                 lanes8[k][(e & 7) as usize] = *c as f32;
             }
@@ -212,7 +212,7 @@ impl ColumnPoly {
                     (lo, WIDE_OFFSET),
                     shift,
                     (1.0 + shift, 1.25 + shift),
-                    WIDE_DEGREE,
+                    (WIDE_DEGREE, rounded_fit),
                 );
                 for (k, c) in coef.iter().enumerate() {
                     wide[k][((e & 7) * 4 + h) as usize] = *c as f32;
@@ -223,15 +223,19 @@ impl ColumnPoly {
     }
 }
 
+/// A fit of degree `degree` to `g` over `[a, b]`, as coefficients of
+/// `x^degree … x^0` ([`interpolate`] or [`rounded_fit`]).
+type Fit = fn(&dyn Fn(f64) -> f64, f64, f64, usize) -> Vec<f64>;
+
 /// The polynomial of degree `degree` in `x = m − shift` for `f(t)` at
-/// `t' = lo·m` (`t = t' − offset`), over the segment `m ∈ [m0, m1)` (the part
-/// of it inside the table), highest degree first.
+/// `t' = lo·m` (`t = t' − offset`), over the segment `m ∈ [m0, m1)` (the
+/// part of it inside the table) by `fit`, highest degree first.
 fn segment(
     f: impl Fn(f64) -> f64,
     (lo, offset): (f64, f32),
     shift: f64,
     (m0, m1): (f64, f64),
-    degree: usize,
+    (degree, fit): (usize, Fit),
 ) -> Vec<f64> {
     let last = (COLUMN_TABLE - 1) as f64;
     let offset = offset as f64;
@@ -248,28 +252,27 @@ fn segment(
         c[degree - 1] = slope;
         c[degree] = y0 - slope * xa;
         c
-    } else if degree == WIDE_DEGREE {
-        rounded_fit(|x| f(t_of(x)), xa, xb, degree)
     } else {
-        interpolate(|x| f(t_of(x)), xa, xb, degree)
+        fit(&|x| f(t_of(x)), xa, xb, degree)
     }
 }
 
 /// [`interpolate`] with coefficients that f32 holds exactly, the constant
 /// term then moved by the mean of what is left of `g` over the segment
-/// (the quartics' variable is not centred, `x ∈ [1, 1.25)`, so their
-/// terms cancel, and rounding them moved each segment by up to ~1e-7 of
-/// the peak, all one way: a bias of ~3e-7 in a projection's mass). The
-/// mean is uniform in `x`, as a projection's area is in the table
-/// position (eight-point Gauss–Legendre).
-fn rounded_fit(g: impl Fn(f64) -> f64, a: f64, b: f64, degree: usize) -> Vec<f64> {
+/// (for the quartics, whose variable is not centred, `x ∈ [1, 1.25)`:
+/// their terms cancel, and rounding them moved whole segments one way, a
+/// projection's mass by up to 1.6e-7 (quintic spline; 4e-8 with the
+/// mean taken out, over random sub-pixel positions). The mean is uniform
+/// in `x`, as a projection's area is in the table position (eight-point
+/// Gauss–Legendre).
+fn rounded_fit(g: &dyn Fn(f64) -> f64, a: f64, b: f64, degree: usize) -> Vec<f64> {
     const NODES: [(f64, f64); 4] = [
         (0.183_434_642_495_649_8, 0.362_683_783_378_362),
         (0.525_532_409_916_329, 0.313_706_645_877_887_3),
         (0.796_666_477_413_626_7, 0.222_381_034_453_374_5),
         (0.960_289_856_497_536_3, 0.101_228_536_290_376_3),
     ];
-    let mut c: Vec<f64> = interpolate(&g, a, b, degree)
+    let mut c: Vec<f64> = interpolate(g, a, b, degree)
         .into_iter()
         .map(|c| c as f32 as f64)
         .collect();
@@ -286,7 +289,7 @@ fn rounded_fit(g: impl Fn(f64) -> f64, a: f64, b: f64, degree: usize) -> Vec<f64
 
 /// The polynomial of degree `degree` through `g` at the Chebyshev nodes
 /// of `[a, b]`, as coefficients of `x^degree … x^0`.
-fn interpolate(g: impl Fn(f64) -> f64, a: f64, b: f64, degree: usize) -> Vec<f64> {
+fn interpolate(g: &dyn Fn(f64) -> f64, a: f64, b: f64, degree: usize) -> Vec<f64> {
     let n = degree + 1;
     let nodes: Vec<f64> = (0..n)
         .map(|k| {
@@ -436,7 +439,7 @@ mod tests {
         for degree in [DEGREE, WIDE_DEGREE] {
             let want = &want[DEGREE - degree..];
             let p = |x: f64| want.iter().fold(0.0, |acc, c| acc * x + c);
-            let got = interpolate(p, -0.5, 0.5, degree);
+            let got = interpolate(&p, -0.5, 0.5, degree);
             assert_eq!(got.len(), degree + 1);
             for (g, w) in got.iter().zip(want) {
                 assert!((g - w).abs() < 1e-9, "{got:?}");
